@@ -1,0 +1,34 @@
+# Set-up and everyday commands. On a CPU-only machine the default TORCH_SPEC installs the
+# locally available CPU build; elsewhere pass e.g. `make setup TORCH_SPEC=torch`.
+PYTHON ?= python3
+VENV ?= .venv
+TORCH_SPEC ?= torch==2.13.0
+BIN := $(VENV)/bin
+
+.PHONY: setup quickstart test lint bench clean
+
+$(BIN)/cpg-actor: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	$(BIN)/pip install --quiet "$(TORCH_SPEC)"
+	$(BIN)/pip install --quiet -e ".[test]"
+	touch $@
+
+setup: $(BIN)/cpg-actor
+
+quickstart: setup
+	$(BIN)/cpg-actor train --run-dir runs/quickstart --overwrite
+
+test: setup
+	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/python -m pytest -q
+
+lint: setup
+	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/ruff format --check src tests benchmarks
+
+bench: setup
+	$(BIN)/python benchmarks/cpg_step.py
+
+clean:
+	rm -rf $(VENV) build *.egg-info src/*.egg-info

@@ -1,0 +1,7 @@
+"""cpg-actor: Central Pattern Generators trained with deep reinforcement learning.
+
+Implements *CPG-Actor: Reinforcement Learning for Central Pattern Generators*
+(Campanaro et al.): differentiable Hopf-oscillator CPGs used as the actor of PPO.
+"""
+
+__version__ = "0.1.0"

@@ -1,0 +1,136 @@
+"""`CPGNetwork`: the trainable Hopf CPG of eq. 3 as a PyTorch module with no hidden state."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+
+import torch
+from torch import Tensor, nn
+
+from cpg_actor.cpg.hopf import CPGOutput, CPGState, OscillatorParameters, hopf_step
+from cpg_actor.cpg.parametrisation import Entry, Parametrisation, symmetric_coupling_ties
+from cpg_actor.cpg.topology import Topology
+
+
+def _check_finite(name: str, value: Tensor | float) -> None:
+    if isinstance(value, Tensor):
+        if not torch.isfinite(value).all():
+            raise ValueError(f"{name} contains NaN or inf")
+    elif value != value or value in (float("inf"), float("-inf")):
+        raise ValueError(f"{name} is {value}; a finite number is required")
+
+
+class CPGNetwork(nn.Module):
+    """A batched, differentiable network of N coupled Hopf oscillators (paper eq. 1-3).
+
+    The module owns only the trainable vector V (see :class:`Parametrisation`) and the time
+    step; the CPG state is an input and an output of :meth:`forward`, never stored, so a
+    rollout can save it and an update can replay one step from it (section III-B).
+
+    Args:
+        topology: which oscillator couples to which (Lambda).
+        dt: integration time step in seconds (> 0).
+        initial: physical initial values, see :class:`Parametrisation`.
+        frozen: fields or entries that are not trained.
+        ties: extra groups of entries sharing one trainable value.
+        symmetric_coupling: tie w_ij = w_ji and phi_ji = -phi_ij for pairs coupled both ways.
+        initial_phase: phase of each oscillator in :meth:`initial_state` (``(N,)`` or a
+            scalar). Starting all phases equal with a phase bias of pi sits on an unstable
+            equilibrium of the coupling, so presets start at their intended phase lags.
+        check_inputs: validate shapes and finiteness on every call (a host sync on CUDA).
+    """
+
+    def __init__(
+        self,
+        topology: Topology,
+        dt: float,
+        initial: Mapping[str, float | Sequence | Tensor],
+        frozen: Mapping[str, bool | Sequence | Tensor] | None = None,
+        ties: Iterable[Sequence[Entry]] = (),
+        symmetric_coupling: bool = True,
+        initial_phase: float | Sequence[float] = 0.0,
+        check_inputs: bool = True,
+    ) -> None:
+        super().__init__()
+        if not isinstance(dt, (int, float)) or not dt > 0 or dt == float("inf"):
+            raise ValueError(f"dt must be a positive finite number of seconds, got {dt!r}")
+        ties = list(ties)
+        if symmetric_coupling:
+            ties += symmetric_coupling_ties(topology)
+        self.topology = topology
+        self.dt = float(dt)
+        self.check_inputs = check_inputs
+        self.parametrisation = Parametrisation(topology, initial, frozen, ties)
+        phase = torch.as_tensor(initial_phase, dtype=torch.float32)
+        if phase.dim() > 1 or phase.numel() not in (1, topology.num_oscillators):
+            raise ValueError(
+                f"initial_phase must be a scalar or have {topology.num_oscillators} entries"
+            )
+        self.register_buffer("initial_phase", phase.expand(topology.num_oscillators).clone())
+
+    @property
+    def num_oscillators(self) -> int:
+        return self.topology.num_oscillators
+
+    def oscillator_parameters(self, drive: Tensor | float = 0.0) -> OscillatorParameters:
+        return self.parametrisation.oscillator_parameters(drive)
+
+    def initial_state(
+        self,
+        batch_size: int,
+        amplitude: float | Tensor = 0.0,
+        phase: float | Tensor | None = None,
+    ) -> CPGState:
+        """A state at rest (derivatives zero) on this module's device and dtype.
+
+        ``phase`` defaults to the network's ``initial_phase``.
+        """
+        vector = self.parametrisation.vector
+        if phase is None:
+            phase = self.initial_phase
+        return CPGState.initial(
+            batch_size, self.num_oscillators, amplitude, phase, vector.dtype, vector.device
+        )
+
+    def forward(
+        self,
+        state: CPGState,
+        drive: Tensor | float = 0.0,
+        xi: Tensor | float = 0.0,
+        kappa: Tensor | float = 0.0,
+    ) -> tuple[CPGOutput, CPGState]:
+        """One step: ``(state, drive, xi, kappa) -> (CPGOutput(x, x_dot), next_state)``."""
+        if self.check_inputs:
+            self._validate(state, drive, xi, kappa)
+        params = self.parametrisation.oscillator_parameters(drive)
+        return hopf_step(params, state, self.parametrisation.coupling, self.dt, xi, kappa)
+
+    def _validate(self, state: CPGState, drive, xi, kappa) -> None:
+        if not isinstance(state, CPGState):
+            raise ValueError(f"state must be a CPGState, got {type(state).__name__}")
+        n = self.num_oscillators
+        shape = state.phase.shape
+        if len(shape) != 2 or shape[1] != n:
+            raise ValueError(f"CPG state fields must have shape (B, {n}), got {tuple(shape)}")
+        for name, value in zip(state._fields, state, strict=True):
+            if value.shape != shape:
+                raise ValueError(
+                    f"state.{name} has shape {tuple(value.shape)}, expected {tuple(shape)}"
+                )
+            _check_finite(f"state.{name}", value)
+        for name, value in (("drive", drive), ("xi", xi), ("kappa", kappa)):
+            if isinstance(value, Tensor) and value.dim() > 0:
+                if value.shape not in ((n,), shape):
+                    raise ValueError(
+                        f"{name} must be a scalar, ({n},) or {tuple(shape)}, "
+                        f"got {tuple(value.shape)}"
+                    )
+            _check_finite(name, value)
+        if (torch.as_tensor(drive) < 0).any():
+            raise ValueError("drive must be >= 0 (nu and rho grow linearly with it)")
+
+    def extra_repr(self) -> str:
+        return (
+            f"oscillators={self.topology.names}, edges={self.topology.edges}, dt={self.dt}, "
+            f"trainable={self.parametrisation.num_parameters}"
+        )

@@ -1,0 +1,234 @@
+"""The trainable vector V of the paper's eq. 3 and its map to nu, rho, a, W and Phi.
+
+Eq. 3 writes every oscillator parameter as a function of one vector V in R^M (``A V``,
+``W V``, ``Phi V``, ``C_nu(V, D)``, ``P(V, D)``). Here each entry of each parameter field is
+either
+
+* **trainable**: ``transform(sign * V[k])`` for an index ``k`` (entries that share ``k`` are
+  tied: symmetric or shared parameters), or
+* **frozen**: a fixed physical value that never changes.
+
+Fields and their transforms (positivity is built in, so nu, rho and a stay positive):
+
+=================== ======= ============ =========================================
+field               shape   transform    meaning
+=================== ======= ============ =========================================
+``frequency``       (N,)    exp          c_nu0, intrinsic frequency at zero drive, Hz
+``frequency_gain``  (N,)    exp          c_nu1, Hz per unit drive (>= 0)
+``amplitude``       (N,)    exp          c_R0, intrinsic amplitude at zero drive
+``amplitude_gain``  (N,)    exp          c_R1, amplitude per unit drive (>= 0)
+``convergence``     (N,)    exp          a, amplitude convergence rate, 1/s
+``coupling_weight`` (N, N)  identity     w_ij
+``phase_bias``      (N, N)  identity     phi_ij, rad
+=================== ======= ============ =========================================
+
+With the drive law of Ijspeert et al. 2007, ``nu(d) = c_nu1 d + c_nu0`` and
+``rho(d) = c_R1 d + c_R0``, and a drive ``d >= 0`` (checked), nu and rho are positive.
+A gain of exactly 0 cannot be written as ``exp(v)``: freeze it (the default), or start it
+above 0 to train it. Coupling entries outside the topology are always frozen at 0.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+
+import torch
+from torch import Tensor, nn
+
+from cpg_actor.cpg.hopf import OscillatorParameters
+from cpg_actor.cpg.topology import Topology
+
+POSITIVE_FIELDS = ("frequency", "frequency_gain", "amplitude", "amplitude_gain", "convergence")
+MATRIX_FIELDS = ("coupling_weight", "phase_bias")
+FIELDS = POSITIVE_FIELDS + MATRIX_FIELDS
+
+# A tie: entries (field, index) that share one entry of V, each with a sign (+1 or -1).
+Entry = tuple[str, tuple[int, ...], float]
+
+
+def _field_shape(field: str, n: int) -> tuple[int, ...]:
+    return (n, n) if field in MATRIX_FIELDS else (n,)
+
+
+class Parametrisation(nn.Module):
+    """Holds V (``self.vector``) and maps it to the oscillator parameters of eq. 1.
+
+    Args:
+        topology: the coupling graph (Lambda).
+        initial: physical initial values per field; a scalar is broadcast to the field's shape.
+            Missing fields default to 0 for gains, weights and phase biases; ``frequency``,
+            ``amplitude`` and ``convergence`` are required.
+        frozen: per field, ``True`` (freeze all entries) or a boolean mask of the field's shape.
+            Gains are frozen by default; pass ``frozen={"frequency_gain": False}`` to train them.
+        ties: groups of entries that share one trainable value, each entry
+            ``(field, index, sign)``; the sign may be -1 only for identity-transformed fields
+            (e.g. ``phi_ji = -phi_ij``). The first entry's initial value is used; the others must
+            agree with it.
+    """
+
+    def __init__(
+        self,
+        topology: Topology,
+        initial: Mapping[str, float | Sequence | Tensor],
+        frozen: Mapping[str, bool | Sequence | Tensor] | None = None,
+        ties: Iterable[Sequence[Entry]] = (),
+    ) -> None:
+        super().__init__()
+        self.topology = topology
+        n = topology.num_oscillators
+        unknown = set(initial) - set(FIELDS)
+        if unknown:
+            raise ValueError(f"unknown CPG parameter fields {sorted(unknown)}; accepted: {FIELDS}")
+        for required in ("frequency", "amplitude", "convergence"):
+            if required not in initial:
+                raise ValueError(f"an initial value for '{required}' is required")
+        frozen = {"frequency_gain": True, "amplitude_gain": True, **(frozen or {})}
+        unknown = set(frozen) - set(FIELDS)
+        if unknown:
+            raise ValueError(f"unknown fields in frozen: {sorted(unknown)}; accepted: {FIELDS}")
+
+        adjacency = topology.adjacency(torch.float64).bool()
+        values: dict[str, Tensor] = {}
+        masks: dict[str, Tensor] = {}
+        for field in FIELDS:
+            shape = _field_shape(field, n)
+            value = torch.as_tensor(initial.get(field, 0.0), dtype=torch.float64)
+            try:
+                value = value.expand(shape).clone()
+            except RuntimeError:
+                raise ValueError(
+                    f"'{field}' must be a scalar or have shape {shape}, got {tuple(value.shape)}"
+                ) from None
+            if not torch.isfinite(value).all():
+                raise ValueError(f"'{field}' has non-finite initial values: {value.tolist()}")
+            mask = torch.as_tensor(frozen.get(field, False), dtype=torch.bool)
+            try:
+                mask = mask.expand(shape).clone()
+            except RuntimeError:
+                raise ValueError(
+                    f"frozen['{field}'] must be a bool or a mask of shape {shape}"
+                ) from None
+            if field in MATRIX_FIELDS:
+                mask |= ~adjacency  # no coupling where Lambda is 0
+                value = torch.where(adjacency, value, torch.zeros_like(value))
+            values[field], masks[field] = value, mask
+        self._check_positive(values, masks)
+
+        # Assign an index of V to every trainable entry; ties share one index.
+        index = {f: torch.full(_field_shape(f, n), -1, dtype=torch.long) for f in FIELDS}
+        sign = {f: torch.ones(_field_shape(f, n), dtype=torch.float64) for f in FIELDS}
+        raw: list[float] = []
+        for group in ties:
+            group = list(group)
+            if not group:
+                continue
+            k = len(raw)
+            first_field, first_idx, first_sign = self._check_entry(group[0], n, masks)
+            raw.append(self._to_raw(first_field, first_sign * values[first_field][first_idx]))
+            for entry in group:
+                field, idx, s = self._check_entry(entry, n, masks)
+                if index[field][idx] >= 0:
+                    raise ValueError(f"entry {field}{list(idx)} appears in more than one tie")
+                expected = s * first_sign * values[first_field][first_idx]
+                if not torch.isclose(values[field][idx], expected, rtol=1e-6, atol=1e-9):
+                    raise ValueError(
+                        f"tied entries disagree: {field}{list(idx)} = {values[field][idx].item()}"
+                        f" but the tie implies {expected.item()}"
+                    )
+                index[field][idx] = k
+                sign[field][idx] = s
+        for field in FIELDS:
+            for idx in zip(*torch.nonzero(~masks[field], as_tuple=True), strict=True):
+                idx = tuple(int(i) for i in idx)
+                if index[field][idx] < 0:
+                    index[field][idx] = len(raw)
+                    raw.append(self._to_raw(field, values[field][idx]))
+
+        self.vector = nn.Parameter(torch.tensor(raw, dtype=torch.float32))
+        for field in FIELDS:
+            self.register_buffer(f"{field}_index", index[field].clamp(min=0), persistent=False)
+            self.register_buffer(f"{field}_trainable", index[field] >= 0, persistent=False)
+            self.register_buffer(f"{field}_sign", sign[field].float(), persistent=False)
+            self.register_buffer(f"{field}_fixed", values[field].float(), persistent=False)
+        self.register_buffer("coupling", adjacency.float(), persistent=False)
+
+    # -- construction helpers -------------------------------------------------------------
+    @staticmethod
+    def _to_raw(field: str, value: Tensor) -> float:
+        return math.log(float(value)) if field in POSITIVE_FIELDS else float(value)
+
+    @staticmethod
+    def _check_positive(values: dict[str, Tensor], masks: dict[str, Tensor]) -> None:
+        for field in POSITIVE_FIELDS:
+            value, mask = values[field], masks[field]
+            strictly = field in ("frequency", "amplitude", "convergence")
+            bad = (value <= 0) if strictly else ((value < 0) | ((value <= 0) & ~mask))
+            if bad.any():
+                need = "> 0" if strictly else ">= 0 (and > 0 when trainable: freeze a zero gain)"
+                raise ValueError(f"'{field}' must be {need}, got {value.tolist()}")
+
+    @staticmethod
+    def _check_entry(entry: Entry, n: int, masks: dict[str, Tensor]) -> Entry:
+        try:
+            field, idx, s = entry
+        except (TypeError, ValueError):
+            raise ValueError(f"a tie entry must be (field, index, sign), got {entry!r}") from None
+        if field not in FIELDS:
+            raise ValueError(f"unknown field '{field}' in tie; accepted: {FIELDS}")
+        idx = tuple(int(i) for i in (idx if isinstance(idx, Sequence) else (idx,)))
+        shape = _field_shape(field, n)
+        if len(idx) != len(shape) or any(not 0 <= i < d for i, d in zip(idx, shape, strict=True)):
+            raise ValueError(f"index {list(idx)} is out of range for '{field}' of shape {shape}")
+        if s not in (1, -1, 1.0, -1.0):
+            raise ValueError(f"tie sign must be +1 or -1, got {s!r}")
+        if s < 0 and field in POSITIVE_FIELDS:
+            raise ValueError(f"'{field}' is positive; a tie with sign -1 is not possible")
+        if masks[field][idx]:
+            raise ValueError(f"{field}{list(idx)} is frozen (or outside the topology); cannot tie")
+        return field, idx, float(s)
+
+    # -- the map V -> parameters ------------------------------------------------------------
+    @property
+    def num_parameters(self) -> int:
+        """M, the number of trainable CPG parameters."""
+        return self.vector.numel()
+
+    def field(self, name: str) -> Tensor:
+        """The physical value of one field, differentiable in V."""
+        if name not in FIELDS:
+            raise ValueError(f"unknown field '{name}'; accepted: {FIELDS}")
+        fixed = getattr(self, f"{name}_fixed")
+        if self.vector.numel() == 0:
+            return fixed.to(self.vector.dtype)
+        raw = getattr(self, f"{name}_sign") * self.vector[getattr(self, f"{name}_index")]
+        value = torch.exp(raw) if name in POSITIVE_FIELDS else raw
+        return torch.where(getattr(self, f"{name}_trainable"), value, fixed.to(value.dtype))
+
+    def values(self) -> dict[str, Tensor]:
+        """All fields, physical values (for logging and figures)."""
+        return {name: self.field(name) for name in FIELDS}
+
+    def oscillator_parameters(self, drive: Tensor | float = 0.0) -> OscillatorParameters:
+        """nu(d) = c_nu1 d + c_nu0, rho(d) = c_R1 d + c_R0 (Ijspeert et al. 2007), a, W, Phi.
+
+        ``drive`` is a scalar, ``(N,)`` or ``(B, N)`` and must be >= 0.
+        """
+        return OscillatorParameters(
+            frequency=self.field("frequency_gain") * drive + self.field("frequency"),
+            amplitude=self.field("amplitude_gain") * drive + self.field("amplitude"),
+            convergence=self.field("convergence"),
+            coupling_weight=self.field("coupling_weight"),
+            phase_bias=self.field("phase_bias"),
+        )
+
+
+def symmetric_coupling_ties(topology: Topology) -> list[list[Entry]]:
+    """Ties making w_ij = w_ji and phi_ji = -phi_ij for every pair coupled both ways."""
+    edges = set(topology.edges)
+    ties: list[list[Entry]] = []
+    for i, j in sorted(edges):
+        if i < j and (j, i) in edges:
+            ties.append([("coupling_weight", (i, j), 1.0), ("coupling_weight", (j, i), 1.0)])
+            ties.append([("phase_bias", (i, j), 1.0), ("phase_bias", (j, i), -1.0)])
+    return ties
