@@ -3,7 +3,8 @@
 One step maps (oscillator parameters, previous state, feedback) to (output, next state):
 
     eq. 1   theta_dot_i^t = 2 pi nu_i(d^t) + zeta_i^t + xi_i^t
-            zeta_i^t      = sum_j Lambda_ij r_j^{t-1} w_ij sin(theta_j^{t-1} - theta_i^{t-1} - phi_ij)
+            zeta_i^t      = sum_j Lambda_ij r_j^{t-1} w_ij sin(theta_j^{t-1} - theta_i^{t-1}
+                                                                - phi_ij)
             r_ddot_i^t    = a_i (a_i / 4 (rho_i(d^t) - r_i^{t-1}) - r_dot_i^{t-1}) + kappa_i^t
             x_i^t         = r_i^t cos(theta_i^t)
 
@@ -16,12 +17,15 @@ The desired velocity sent with x is its exact time derivative given the new stat
 
 Order of accuracy. In eq. 1 the derivatives labelled ``t`` are computed from the state at
 ``t-1``, so the update of eq. 2 for the phase and for ``r_dot`` is
-``y_n+1 = y_n + dt/2 (f(y_n-1) + f(y_n))``: the mean of the slopes at t-1 and t-2,
-centred half a step too early. Its local error is ``dt^2 y''/2 + O(dt^3)`` and the method
-is zero-stable (characteristic roots 1 and 0), so the global error is first order, O(dt),
-not the second order of the classic trapezoidal rule (tests/cpg/test_convergence.py
-measures it). The update of ``r`` from ``r_dot`` is trapezoidal, but it inherits the O(dt)
-error of ``r_dot``.
+``y_n+1 = y_n + dt/2 (f(y_n-1) + f(y_n))``: the mean of the slopes at the two previous
+states, centred at ``t_n-1/2`` instead of the ``t_n+1/2`` of the step, one step too early.
+Taylor expansion gives the local error ``y(t+dt) - y(t) - dt/2 (y'(t) + y'(t-dt))
+= dt^2 y'' + O(dt^3)``; the method is consistent and zero-stable (characteristic
+polynomial ``z^2 - z``, roots 1 and 0), so the global error is first order, O(dt), not the
+second order of the classic trapezoidal rule (tests/cpg/test_convergence.py measures it).
+The update of ``r`` from ``r_dot`` is trapezoidal, but it inherits the O(dt) error of
+``r_dot``. A state built by :meth:`CPGState.initial` is "at rest" (theta_dot = r_ddot = 0),
+which adds a one-off O(dt) error in the first step: also first order.
 
 Shapes: batch first. State fields are ``(B, N)``; ``nu``/``rho`` are ``(B, N)`` or ``(N,)``;
 ``a`` is ``(N,)`` or ``(B, N)``; ``w``, ``phi`` and ``coupling`` (Lambda) are ``(N, N)``, with
@@ -36,7 +40,13 @@ from typing import NamedTuple
 import torch
 from torch import Tensor
 
-STATE_FIELDS = ("phase", "phase_velocity", "amplitude", "amplitude_velocity", "amplitude_acceleration")
+STATE_FIELDS = (
+    "phase",
+    "phase_velocity",
+    "amplitude",
+    "amplitude_velocity",
+    "amplitude_acceleration",
+)
 
 
 class CPGState(NamedTuple):
@@ -109,7 +119,9 @@ def coupling_term(state: CPGState, weight: Tensor, phase_bias: Tensor, coupling:
     """zeta_i = sum_j Lambda_ij r_j w_ij sin(theta_j - theta_i - phi_ij) (eq. 1; Z 1 of eq. 3)."""
     theta = state.phase
     phase_difference = theta.unsqueeze(-2) - theta.unsqueeze(-1)  # [..., i, j] = theta_j - theta_i
-    terms = coupling * weight * state.amplitude.unsqueeze(-2) * torch.sin(phase_difference - phase_bias)
+    terms = (
+        coupling * weight * state.amplitude.unsqueeze(-2) * torch.sin(phase_difference - phase_bias)
+    )
     return terms.sum(dim=-1)
 
 

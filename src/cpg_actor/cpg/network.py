@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+import numbers
 from collections.abc import Iterable, Mapping, Sequence
 
 import torch
@@ -16,8 +18,25 @@ def _check_finite(name: str, value: Tensor | float) -> None:
     if isinstance(value, Tensor):
         if not torch.isfinite(value).all():
             raise ValueError(f"{name} contains NaN or inf")
-    elif value != value or value in (float("inf"), float("-inf")):
+    elif isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ValueError(
+            f"{name} must be a real number or a torch.Tensor, got {type(value).__name__}"
+        )
+    elif not math.isfinite(value):
         raise ValueError(f"{name} is {value}; a finite number is required")
+
+
+def _check_like(name: str, value: Tensor, reference: Tensor) -> None:
+    """Same dtype and device as the network (mixing would silently promote or fail later)."""
+    if value.device != reference.device:
+        raise ValueError(
+            f"{name} is on {value.device} but the CPG network is on {reference.device}"
+        )
+    if value.dtype != reference.dtype:
+        raise ValueError(
+            f"{name} has dtype {value.dtype} but the CPG network uses {reference.dtype}; "
+            f"convert it with .to({reference.dtype})"
+        )
 
 
 class CPGNetwork(nn.Module):
@@ -37,7 +56,8 @@ class CPGNetwork(nn.Module):
         initial_phase: phase of each oscillator in :meth:`initial_state` (``(N,)`` or a
             scalar). Starting all phases equal with a phase bias of pi sits on an unstable
             equilibrium of the coupling, so presets start at their intended phase lags.
-        check_inputs: validate shapes and finiteness on every call (a host sync on CUDA).
+        check_inputs: validate shapes, dtypes, devices and finiteness on every call (a host
+            sync on CUDA). Tensor inputs must have the network's dtype and device.
     """
 
     def __init__(
@@ -52,16 +72,20 @@ class CPGNetwork(nn.Module):
         check_inputs: bool = True,
     ) -> None:
         super().__init__()
-        if not isinstance(dt, (int, float)) or not dt > 0 or dt == float("inf"):
+        if (
+            isinstance(dt, bool)
+            or not isinstance(dt, numbers.Real)
+            or not (dt > 0 and math.isfinite(dt))
+        ):
             raise ValueError(f"dt must be a positive finite number of seconds, got {dt!r}")
         ties = list(ties)
         if symmetric_coupling:
-            ties += symmetric_coupling_ties(topology)
+            ties += symmetric_coupling_ties(topology, frozen)
         self.topology = topology
         self.dt = float(dt)
         self.check_inputs = check_inputs
         self.parametrisation = Parametrisation(topology, initial, frozen, ties)
-        phase = torch.as_tensor(initial_phase, dtype=torch.float32)
+        phase = torch.as_tensor(initial_phase, dtype=torch.get_default_dtype())
         if phase.dim() > 1 or phase.numel() not in (1, topology.num_oscillators):
             raise ValueError(
                 f"initial_phase must be a scalar or have {topology.num_oscillators} entries"
@@ -109,6 +133,10 @@ class CPGNetwork(nn.Module):
         if not isinstance(state, CPGState):
             raise ValueError(f"state must be a CPGState, got {type(state).__name__}")
         n = self.num_oscillators
+        reference = self.parametrisation.vector
+        for name, value in zip(state._fields, state, strict=True):
+            if not isinstance(value, Tensor):
+                raise ValueError(f"state.{name} must be a torch.Tensor, got {type(value).__name__}")
         shape = state.phase.shape
         if len(shape) != 2 or shape[1] != n:
             raise ValueError(f"CPG state fields must have shape (B, {n}), got {tuple(shape)}")
@@ -117,14 +145,16 @@ class CPGNetwork(nn.Module):
                 raise ValueError(
                     f"state.{name} has shape {tuple(value.shape)}, expected {tuple(shape)}"
                 )
+            _check_like(f"state.{name}", value, reference)
             _check_finite(f"state.{name}", value)
         for name, value in (("drive", drive), ("xi", xi), ("kappa", kappa)):
-            if isinstance(value, Tensor) and value.dim() > 0:
-                if value.shape not in ((n,), shape):
+            if isinstance(value, Tensor):
+                if value.dim() > 0 and value.shape not in ((n,), shape):
                     raise ValueError(
                         f"{name} must be a scalar, ({n},) or {tuple(shape)}, "
                         f"got {tuple(value.shape)}"
                     )
+                _check_like(name, value, reference)
             _check_finite(name, value)
         if (torch.as_tensor(drive) < 0).any():
             raise ValueError("drive must be >= 0 (nu and rho grow linearly with it)")

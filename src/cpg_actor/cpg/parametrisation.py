@@ -145,13 +145,17 @@ class Parametrisation(nn.Module):
                     index[field][idx] = len(raw)
                     raw.append(self._to_raw(field, values[field][idx]))
 
-        self.vector = nn.Parameter(torch.tensor(raw, dtype=torch.float32))
+        # Created in the default dtype (float32 unless changed), like any nn.Module; build under
+        # torch.set_default_dtype(torch.float64) to keep the initial values exact in float64
+        # (.double() afterwards converts values already rounded to float32).
+        dtype = torch.get_default_dtype()
+        self.vector = nn.Parameter(torch.tensor(raw, dtype=dtype))
         for field in FIELDS:
             self.register_buffer(f"{field}_index", index[field].clamp(min=0), persistent=False)
             self.register_buffer(f"{field}_trainable", index[field] >= 0, persistent=False)
-            self.register_buffer(f"{field}_sign", sign[field].float(), persistent=False)
-            self.register_buffer(f"{field}_fixed", values[field].float(), persistent=False)
-        self.register_buffer("coupling", adjacency.float(), persistent=False)
+            self.register_buffer(f"{field}_sign", sign[field].to(dtype), persistent=False)
+            self.register_buffer(f"{field}_fixed", values[field].to(dtype), persistent=False)
+        self.register_buffer("coupling", adjacency.to(dtype), persistent=False)
 
     # -- construction helpers -------------------------------------------------------------
     @staticmethod
@@ -223,12 +227,38 @@ class Parametrisation(nn.Module):
         )
 
 
-def symmetric_coupling_ties(topology: Topology) -> list[list[Entry]]:
-    """Ties making w_ij = w_ji and phi_ji = -phi_ij for every pair coupled both ways."""
+def symmetric_coupling_ties(
+    topology: Topology, frozen: Mapping[str, bool | Sequence | Tensor] | None = None
+) -> list[list[Entry]]:
+    """Ties making w_ij = w_ji and phi_ji = -phi_ij for every pair coupled both ways.
+
+    A pair whose two entries are both ``frozen`` (same format as :class:`Parametrisation`) is
+    left out: frozen entries keep their fixed values and cannot be tied. A pair with only one
+    frozen side is a contradiction and raises ``ValueError``.
+    """
+    n = topology.num_oscillators
+    frozen_masks: dict[str, Tensor] = {}
+    for field in MATRIX_FIELDS:
+        try:
+            mask = torch.as_tensor((frozen or {}).get(field, False), dtype=torch.bool)
+            frozen_masks[field] = mask.expand(n, n)
+        except (RuntimeError, TypeError, ValueError):
+            frozen_masks[field] = torch.zeros(n, n, dtype=torch.bool)  # Parametrisation complains
     edges = set(topology.edges)
     ties: list[list[Entry]] = []
     for i, j in sorted(edges):
         if i < j and (j, i) in edges:
-            ties.append([("coupling_weight", (i, j), 1.0), ("coupling_weight", (j, i), 1.0)])
-            ties.append([("phase_bias", (i, j), 1.0), ("phase_bias", (j, i), -1.0)])
+            for field, sign in (("coupling_weight", 1.0), ("phase_bias", -1.0)):
+                frozen_ij, frozen_ji = (
+                    bool(frozen_masks[field][i, j]),
+                    bool(frozen_masks[field][j, i]),
+                )
+                if frozen_ij and frozen_ji:
+                    continue
+                if frozen_ij or frozen_ji:
+                    raise ValueError(
+                        f"{field}[{i}, {j}] and {field}[{j}, {i}] are tied by symmetric coupling "
+                        "but only one of them is frozen: freeze both, or disable symmetric coupling"
+                    )
+                ties.append([(field, (i, j), 1.0), (field, (j, i), sign)])
     return ties

@@ -63,7 +63,7 @@ class JointMap(nn.Module):
         self, offset: Sequence[float] = HOPPER_NOMINAL_POSE, learnable_offset: bool = False
     ) -> None:
         super().__init__()
-        offset_tensor = torch.as_tensor(offset, dtype=torch.float32)
+        offset_tensor = torch.as_tensor(offset, dtype=torch.get_default_dtype())
         if learnable_offset:
             self.offset = nn.Parameter(offset_tensor)
         else:
