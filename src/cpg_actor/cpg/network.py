@@ -58,6 +58,7 @@ class CPGNetwork(nn.Module):
             equilibrium of the coupling, so presets start at their intended phase lags.
         check_inputs: validate shapes, dtypes, devices and finiteness on every call (a host
             sync on CUDA). Tensor inputs must have the network's dtype and device.
+        dtype: floating dtype of the parameters (default: torch's default dtype).
     """
 
     def __init__(
@@ -70,6 +71,7 @@ class CPGNetwork(nn.Module):
         symmetric_coupling: bool = True,
         initial_phase: float | Sequence[float] = 0.0,
         check_inputs: bool = True,
+        dtype: torch.dtype | None = None,
     ) -> None:
         super().__init__()
         if (
@@ -84,8 +86,9 @@ class CPGNetwork(nn.Module):
         self.topology = topology
         self.dt = float(dt)
         self.check_inputs = check_inputs
-        self.parametrisation = Parametrisation(topology, initial, frozen, ties)
-        phase = torch.as_tensor(initial_phase, dtype=torch.get_default_dtype())
+        dtype = dtype or torch.get_default_dtype()
+        self.parametrisation = Parametrisation(topology, initial, frozen, ties, dtype)
+        phase = torch.as_tensor(initial_phase, dtype=dtype)
         if phase.dim() > 1 or phase.numel() not in (1, topology.num_oscillators):
             raise ValueError(
                 f"initial_phase must be a scalar or have {topology.num_oscillators} entries"

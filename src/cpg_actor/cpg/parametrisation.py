@@ -61,6 +61,7 @@ class Parametrisation(nn.Module):
             ``amplitude`` and ``convergence`` are required.
         frozen: per field, ``True`` (freeze all entries) or a boolean mask of the field's shape.
             Gains are frozen by default; pass ``frozen={"frequency_gain": False}`` to train them.
+        dtype: floating dtype of V and the buffers (default: torch's default dtype).
         ties: groups of entries that share one trainable value, each entry
             ``(field, index, sign)``; the sign may be -1 only for identity-transformed fields
             (e.g. ``phi_ji = -phi_ij``). The first entry's initial value is used; the others must
@@ -73,6 +74,7 @@ class Parametrisation(nn.Module):
         initial: Mapping[str, float | Sequence | Tensor],
         frozen: Mapping[str, bool | Sequence | Tensor] | None = None,
         ties: Iterable[Sequence[Entry]] = (),
+        dtype: torch.dtype | None = None,
     ) -> None:
         super().__init__()
         self.topology = topology
@@ -145,10 +147,10 @@ class Parametrisation(nn.Module):
                     index[field][idx] = len(raw)
                     raw.append(self._to_raw(field, values[field][idx]))
 
-        # Created in the default dtype (float32 unless changed), like any nn.Module; build under
-        # torch.set_default_dtype(torch.float64) to keep the initial values exact in float64
-        # (.double() afterwards converts values already rounded to float32).
-        dtype = torch.get_default_dtype()
+        # Created in ``dtype`` (default: torch's default dtype, float32 unless changed). Pass
+        # dtype=torch.float64 to keep the initial values exact in float64: .double() afterwards
+        # converts values already rounded to float32.
+        dtype = dtype or torch.get_default_dtype()
         self.vector = nn.Parameter(torch.tensor(raw, dtype=dtype))
         for field in FIELDS:
             self.register_buffer(f"{field}_index", index[field].clamp(min=0), persistent=False)

@@ -32,6 +32,7 @@ def hopper_cpg(
     initial: Mapping[str, float | Sequence | Tensor] | None = None,
     frozen: Mapping[str, bool | Sequence | Tensor] | None = None,
     check_inputs: bool = True,
+    dtype: torch.dtype | None = None,
 ) -> CPGNetwork:
     """The hopper's CPG: HFE and KFE oscillators coupled both ways (w symmetric, phi antisymmetric).
 
@@ -48,6 +49,7 @@ def hopper_cpg(
         symmetric_coupling=True,
         initial_phase=(0.0, math.pi),
         check_inputs=check_inputs,
+        dtype=dtype,
     )
 
 

@@ -1,0 +1,48 @@
+"""The paper's test bed: one ANYmal leg hopping on a vertical rail, on MuJoCo and PyBullet.
+
+Gymnasium ids (registered on import): ``cpg_actor/AnymalHopper-v0`` (MuJoCo, the default) and
+``cpg_actor/AnymalHopper-pybullet-v0``; ``sim=`` chooses the simulator on either. See
+``docs/hopper.md``.
+"""
+
+from __future__ import annotations
+
+import gymnasium
+
+from cpg_actor.envs.config import HopperConfig
+from cpg_actor.envs.hopper import HopperEnv
+from cpg_actor.envs.reward import REWARD_TERMS, reward_terms
+from cpg_actor.envs.simulation import OBS_NAMES
+from cpg_actor.envs.vector import HopperVectorEnv, make_vector_env
+from cpg_actor.envs.video import write_video
+
+ENV_ID = "cpg_actor/AnymalHopper-v0"
+PYBULLET_ENV_ID = "cpg_actor/AnymalHopper-pybullet-v0"
+
+
+def _register() -> None:
+    for env_id, sim in ((ENV_ID, "mujoco"), (PYBULLET_ENV_ID, "pybullet")):
+        if env_id in gymnasium.registry:
+            continue
+        gymnasium.register(
+            id=env_id,
+            entry_point="cpg_actor.envs.hopper:HopperEnv",
+            vector_entry_point="cpg_actor.envs.vector:HopperVectorEnv",
+            kwargs={"sim": sim},
+        )
+
+
+_register()
+
+__all__ = [
+    "ENV_ID",
+    "OBS_NAMES",
+    "PYBULLET_ENV_ID",
+    "REWARD_TERMS",
+    "HopperConfig",
+    "HopperEnv",
+    "HopperVectorEnv",
+    "make_vector_env",
+    "reward_terms",
+    "write_video",
+]

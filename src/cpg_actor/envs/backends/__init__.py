@@ -1,0 +1,27 @@
+"""Simulator backends behind one small interface (:class:`Backend`): MuJoCo and PyBullet."""
+
+from __future__ import annotations
+
+from cpg_actor.envs.backends.base import Backend
+
+
+def make_backend(config, num_robots: int = 1, num_threads: int | None = None) -> Backend:
+    """The backend named by ``config.sim`` for ``num_robots`` hoppers (imported on demand)."""
+    kwargs = dict(
+        physics_dt=config.physics_dt,
+        foot_friction=config.foot_friction,
+        num_robots=num_robots,
+        num_threads=num_threads,
+    )
+    if config.sim == "mujoco":
+        from cpg_actor.envs.backends.mujoco_backend import MujocoBackend
+
+        return MujocoBackend(**kwargs)
+    if config.sim == "pybullet":
+        from cpg_actor.envs.backends.pybullet_backend import PybulletBackend
+
+        return PybulletBackend(**kwargs)
+    raise ValueError(f"unknown simulator {config.sim!r}; use 'mujoco' or 'pybullet'")
+
+
+__all__ = ["Backend", "make_backend"]

@@ -1,0 +1,69 @@
+"""The small interface both simulators implement: K hoppers stepped together.
+
+Generalised coordinates, in this order everywhere: ``[hip_height, HFE, KFE]`` (positions,
+``qpos``) and ``[hip_velocity, HFE velocity, KFE velocity]`` (``qvel``). A single
+environment is a batch of one.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+
+
+class Backend(ABC):
+    """K hoppers in one simulator. ``qpos`` / ``qvel`` are (K, 3) float64 arrays kept current
+    by updating them in place, so views of them stay valid."""
+
+    name: str = ""
+    num_robots: int
+    qpos: np.ndarray  # (K, 3): hip height (m), HFE, KFE (rad)
+    qvel: np.ndarray  # (K, 3): hip velocity (m/s), HFE, KFE velocity (rad/s)
+
+    @property
+    def joint_pos(self) -> np.ndarray:
+        return self.qpos[:, 1:3]
+
+    @property
+    def joint_vel(self) -> np.ndarray:
+        return self.qvel[:, 1:3]
+
+    @property
+    def hip_height(self) -> np.ndarray:
+        return self.qpos[:, 0]
+
+    @property
+    def hip_velocity(self) -> np.ndarray:
+        return self.qvel[:, 0]
+
+    @abstractmethod
+    def reset_robots(self, index: np.ndarray, qpos: np.ndarray, qvel: np.ndarray) -> None:
+        """Put robots ``index`` (k,) in state ``qpos``, ``qvel`` (k, 3), at rest otherwise."""
+
+    @abstractmethod
+    def step(self, joint_torque: np.ndarray) -> None:
+        """One physics substep of all robots with ``joint_torque`` (K, 2) N m on HFE, KFE."""
+
+    @abstractmethod
+    def unstable(self) -> np.ndarray:
+        """(K,) bool: robots the simulator found unstable since their last reset."""
+
+    @abstractmethod
+    def foot_state(self) -> tuple[np.ndarray, np.ndarray]:
+        """World position and velocity (K, 3) of the foot sphere centre, read from the simulator."""
+
+    @abstractmethod
+    def contact(self) -> np.ndarray:
+        """(K,) bool: the foot touches the ground."""
+
+    @abstractmethod
+    def total_mass(self) -> float:
+        """Mass of one robot's moving links, kg, as the simulator loaded it."""
+
+    @abstractmethod
+    def render(self, index: int, width: int, height: int) -> np.ndarray:
+        """An RGB image (height, width, 3) uint8 of robot ``index``, side view."""
+
+    def close(self) -> None:  # noqa: B027 - optional
+        """Release simulator resources."""

@@ -1,0 +1,176 @@
+"""MuJoCo backend: K hoppers as K rows of one state array, stepped by ``mujoco.rollout``.
+
+One ``MjModel``; each physics substep is one call of ``mujoco.rollout`` with ``nstep=1``: the
+C++ side loops over the K robots on its own thread pool (GIL released), doing per robot
+``mj_setState`` -> joint torques into ``qfrc_applied`` -> ``mj_step`` -> ``mj_getState``. The
+state of all robots therefore lives in one contiguous numpy array, so the PD law of
+:mod:`cpg_actor.envs.actuator` runs vectorised over all K robots between substeps with no
+per-robot Python. A single environment is the same code with K = 1 on the calling thread, so
+the vector env and N single envs compute bit-identical trajectories.
+
+The solver warm start (``qacc_warmstart``) is zero at every substep: ``rollout`` does not
+return it. The constraint solver converges to its tolerance either way.
+
+Headless rendering: ``MUJOCO_GL`` must be chosen before ``mujoco`` is first imported. On Linux
+without a ``DISPLAY`` this module defaults it to ``egl`` (GPU or Mesa EGL); set
+``MUJOCO_GL=osmesa`` yourself for pure software rendering where EGL is missing.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+    os.environ.setdefault("MUJOCO_GL", "egl")
+
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+from mujoco import rollout as mj_rollout  # noqa: E402
+
+from cpg_actor.envs.backends.base import Backend  # noqa: E402
+from cpg_actor.envs.robot import MJCF_PATH  # noqa: E402
+
+STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS.value  # [time, qpos, qvel, (act, ...)]
+CONTROL_SPEC = mujoco.mjtState.mjSTATE_QFRC_APPLIED.value  # joint torques
+CLOCK_START = 1000.0  # s, simulation time of every robot after a reset (see reset_robots)
+
+
+def load_model(physics_dt: float, foot_friction: float) -> mujoco.MjModel:
+    """The hopper's MjModel with the configured timestep and foot-ground friction."""
+    model = mujoco.MjModel.from_xml_path(str(MJCF_PATH))
+    model.opt.timestep = physics_dt
+    for name in ("foot", "ground"):
+        model.geom_friction[model.geom(name).id, 0] = foot_friction
+    return model
+
+
+def default_threads(num_robots: int) -> int:
+    """Threads for K robots: the cores this process may use, at least 16 robots per thread."""
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        cores = os.cpu_count() or 1
+    return max(1, min(cores, num_robots // 16))
+
+
+class MujocoBackend(Backend):
+    name = "mujoco"
+
+    def __init__(
+        self,
+        physics_dt: float,
+        foot_friction: float,
+        num_robots: int = 1,
+        num_threads: int | None = None,
+    ) -> None:
+        self.model = load_model(physics_dt, foot_friction)
+        self.num_robots = int(num_robots)
+        self.num_threads = default_threads(num_robots) if num_threads is None else int(num_threads)
+        if self.num_threads < 1:
+            raise ValueError(f"num_threads must be >= 1, got {num_threads}")
+        self.num_threads = min(self.num_threads, self.num_robots)
+        # rollout's pool: 0 threads means "run on the calling thread"
+        pool = self.num_threads if self.num_threads > 1 else 0
+        self._rollout = mj_rollout.Rollout(nthread=pool)
+        self._datas = [mujoco.MjData(self.model) for _ in range(max(1, self.num_threads))]
+        self._models = [self.model] * self.num_robots
+        # 4 jobs per thread: a thread slowed by a busy neighbour process hands work to the others
+        self._chunk = max(1, -(-self.num_robots // (4 * self.num_threads)))
+        nq, nv = self.model.nq, self.model.nv
+        self.nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
+        self._state = np.zeros((self.num_robots, self.nstate))
+        self._next = np.zeros((self.num_robots, 1, self.nstate))
+        self._next_state = self._next.reshape(self.num_robots, self.nstate)
+        self._control = np.zeros((self.num_robots, 1, nv))
+        self.qpos = self._state[:, 1 : 1 + nq]
+        self.qvel = self._state[:, 1 + nq : 1 + nq + nv]
+        self._time = self._state[:, 0]
+        self._foot_site = self.model.site("foot").id
+        self._foot_geom = self.model.geom("foot").id
+        self._renderer: mujoco.Renderer | None = None
+        self._camera: mujoco.MjvCamera | None = None
+
+    # -- state -----------------------------------------------------------------------------
+    def reset_robots(self, index: np.ndarray, qpos: np.ndarray, qvel: np.ndarray) -> None:
+        self._state[index] = 0.0
+        # The clock starts at CLOCK_START, not 0: MuJoCo's reset-on-instability sets the time
+        # to 0 (and qpos to qpos0) and carries on, so a clock behind CLOCK_START reveals it.
+        self._time[index] = CLOCK_START
+        self.qpos[index] = qpos
+        self.qvel[index] = qvel
+
+    def step(self, joint_torque: np.ndarray) -> None:
+        self._control[:, 0, 1:3] = joint_torque
+        self._rollout.rollout(
+            self._models, self._datas, self._state, self._control,
+            control_spec=CONTROL_SPEC, skip_checks=True, nstep=1, initial_warmstart=None,
+            state=self._next, sensordata=None, chunk_size=self._chunk,
+        )  # fmt: skip
+        np.copyto(self._state, self._next_state)
+
+    def unstable(self) -> np.ndarray:
+        # a robot MuJoCo reset since its last reset_robots has a clock restarted from 0
+        return self._time < CLOCK_START
+
+    def _load(self, index: int) -> mujoco.MjData:
+        data = self._datas[0]
+        mujoco.mj_setState(self.model, data, self._state[index], STATE_SPEC)
+        data.qfrc_applied[:] = 0.0
+        mujoco.mj_forward(self.model, data)
+        return data
+
+    def foot_state(self) -> tuple[np.ndarray, np.ndarray]:
+        pos = np.zeros((self.num_robots, 3))
+        vel = np.zeros((self.num_robots, 3))
+        velocity6 = np.zeros(6)
+        for i in range(self.num_robots):
+            data = self._load(i)
+            pos[i] = data.site_xpos[self._foot_site]
+            mujoco.mj_objectVelocity(
+                self.model, data, mujoco.mjtObj.mjOBJ_SITE, self._foot_site, velocity6, 0
+            )
+            vel[i] = velocity6[3:]
+        return pos, vel
+
+    def contact(self) -> np.ndarray:
+        touching = np.zeros(self.num_robots, dtype=bool)
+        for i in range(self.num_robots):
+            data = self._load(i)
+            touching[i] = any(
+                self._foot_geom in (c.geom1, c.geom2) for c in data.contact[: data.ncon]
+            )
+        return touching
+
+    def total_mass(self) -> float:
+        return float(self.model.body_mass[1:].sum())
+
+    # -- rendering ---------------------------------------------------------------------------
+    def render(self, index: int, width: int, height: int) -> np.ndarray:
+        if self._renderer is None or (self._renderer.width, self._renderer.height) != (
+            width,
+            height,
+        ):
+            if self._renderer is not None:
+                self._renderer.close()
+            self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, width)
+            self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, height)
+            self._renderer = mujoco.Renderer(self.model, height=height, width=width)
+            camera = mujoco.MjvCamera()
+            camera.type = mujoco.mjtCamera.mjCAMERA_FREE
+            camera.lookat[:] = (0.12, 0.0, 0.38)
+            camera.distance = 1.5
+            camera.azimuth = 90.0  # look along +y: the leg's sagittal plane, side view
+            camera.elevation = -8.0
+            self._camera = camera
+        data = self._load(index)
+        self._renderer.update_scene(data, camera=self._camera)
+        return self._renderer.render().copy()
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+        if getattr(self, "_rollout", None) is not None:
+            self._rollout.close()
+            self._rollout = None

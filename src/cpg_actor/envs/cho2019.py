@@ -1,0 +1,205 @@
+"""The CPG inside the environment (Cho et al. 2019; the paper's Fig. 2b baseline).
+
+At every control step the policy's action is a set of CPG parameters; this wrapper steps the
+same Hopf network as the CPG-Actor (:func:`cpg_actor.cpg.hopf_step`, eq. 1-2) with them, with
+no feedback (xi = kappa = 0) and no gradients, and sends ``nominal pose + x`` to the hopper as
+desired joint positions. The CPG state lives here and is reset with each env's episode.
+
+Action, float32 ``(5,)`` in ``[-1, 1]`` (finite values outside are clipped; NaN/inf raise),
+mapped affinely onto the parameter ranges of :data:`PARAMETER_RANGES`:
+
+==== ============================ ================= ==========================================
+ #   parameter                    range             why
+==== ============================ ================= ==========================================
+ 0   nu_HFE, Hz                   0.5 .. 4          hopping rhythms of a 3.4 kg leg: ~1-3 Hz
+ 1   nu_KFE, Hz                   0.5 .. 4
+ 2   rho_HFE, rad                 0.02 .. 0.6       positive; within the joint stops
+ 3   rho_KFE, rad                 0.02 .. 0.8       the knee swings farther than the hip
+ 4   phi_HFE,KFE, rad             -pi .. pi         hip-knee coordination (phi_KFE,HFE = -phi)
+==== ============================ ================= ==========================================
+
+Frequency and amplitude per oscillator are what Cho et al. adapt; the phase bias is added
+because on a two-joint leg the hip-knee phase lag decides whether the motion is a hop at all.
+The convergence rate ``a`` and the coupling weight ``w`` stay at the hopper preset's values:
+they shape transients, not the gait, and leaving them out keeps the action small.
+
+Observation, float32 ``(16,)``: the hopper's 8 observations (``OBS_NAMES``), then the CPG state
+the environment now owns: ``cos(theta)`` (2), ``sin(theta)`` (2), ``r`` (2), ``r_dot`` (2).
+``info`` adds ``cpg_parameters`` (N, 5, physical units), ``theta_dot``, ``r_ddot``,
+``cpg_position`` (x) and ``desired_velocity`` (x_dot), each (N, 2).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import torch
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from cpg_actor.cpg import HOPPER_NOMINAL_POSE, CPGState, OscillatorParameters, hopf_step, hopper_cpg
+from cpg_actor.envs.config import HopperConfig
+from cpg_actor.envs.simulation import OBS_BOUND, OBS_NAMES
+from cpg_actor.envs.vector import HopperVectorEnv
+
+PARAMETER_NAMES = ("nu_HFE", "nu_KFE", "rho_HFE", "rho_KFE", "phi_HFE_KFE")
+PARAMETER_RANGES = np.array(
+    [[0.5, 4.0], [0.5, 4.0], [0.02, 0.6], [0.02, 0.8], [-math.pi, math.pi]], dtype=np.float64
+)
+CPG_OBS_NAMES = (
+    "cos_theta_HFE", "cos_theta_KFE", "sin_theta_HFE", "sin_theta_KFE",
+    "r_HFE", "r_KFE", "r_dot_HFE", "r_dot_KFE",
+)  # fmt: skip
+
+
+def action_to_parameters(action: np.ndarray) -> np.ndarray:
+    """Map actions in [-1, 1] (clipped) to physical CPG parameters, ``(..., 5)``."""
+    unit = (np.clip(action, -1.0, 1.0) + 1.0) / 2.0
+    low, high = PARAMETER_RANGES[:, 0], PARAMETER_RANGES[:, 1]
+    return low + unit * (high - low)
+
+
+def parameters_to_action(parameters: np.ndarray) -> np.ndarray:
+    """Inverse of :func:`action_to_parameters` (inside the ranges)."""
+    parameters = np.asarray(parameters, dtype=np.float64)
+    low, high = PARAMETER_RANGES[:, 0], PARAMETER_RANGES[:, 1]
+    if np.any(parameters < low) or np.any(parameters > high):
+        raise ValueError(
+            f"CPG parameters {parameters.tolist()} are outside the ranges "
+            f"{dict(zip(PARAMETER_NAMES, PARAMETER_RANGES.tolist(), strict=True))}"
+        )
+    return 2.0 * (parameters - low) / (high - low) - 1.0
+
+
+class CPGParameterVectorEnv(VectorEnv):
+    """N hoppers driven by N CPGs whose parameters are the actions (SAME_STEP autoreset).
+
+    Args:
+        num_envs: N.
+        config: the hopper's :class:`HopperConfig` (or dict); the CPG runs at its control rate.
+        num_threads: passed to :class:`HopperVectorEnv`.
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+
+    def __init__(
+        self,
+        num_envs: int,
+        config: HopperConfig | dict | None = None,
+        num_threads: int | None = None,
+    ) -> None:
+        self.env = HopperVectorEnv(num_envs, config=config, num_threads=num_threads)
+        self.config = self.env.config
+        self.num_envs = self.env.num_envs
+        # The hopper preset supplies a, w, the topology and the initial phases; its trainable
+        # vector is never used for gradients here.
+        self.cpg = hopper_cpg(self.config.control_dt, dtype=torch.float64)
+        values = self.cpg.parametrisation.values()
+        self._convergence = values["convergence"].detach()
+        self._coupling_weight = values["coupling_weight"].detach()
+        self._coupling = self.cpg.parametrisation.coupling
+        self._offset = torch.as_tensor(HOPPER_NOMINAL_POSE, dtype=torch.float64)
+        bound = np.full(len(OBS_NAMES) + len(CPG_OBS_NAMES), OBS_BOUND, dtype=np.float32)
+        self.single_observation_space = spaces.Box(-bound, bound, dtype=np.float32)
+        self.single_action_space = spaces.Box(-1.0, 1.0, shape=(5,), dtype=np.float32)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.metadata = {**self.metadata, "render_fps": self.env.metadata["render_fps"]}
+        self.state = self._initial_state(self.num_envs)
+
+    # -- CPG -----------------------------------------------------------------------------------
+    def _initial_state(self, count: int) -> CPGState:
+        return self.cpg.initial_state(count)
+
+    def oscillator_parameters(self, parameters: np.ndarray) -> OscillatorParameters:
+        """Physical parameters ``(N, 5)`` -> the :class:`OscillatorParameters` of eq. 1."""
+        p = torch.as_tensor(parameters, dtype=torch.float64)
+        phase_bias = torch.zeros(p.shape[0], 2, 2, dtype=torch.float64)
+        phase_bias[:, 0, 1] = p[:, 4]
+        phase_bias[:, 1, 0] = -p[:, 4]
+        return OscillatorParameters(
+            frequency=p[:, 0:2],
+            amplitude=p[:, 2:4],
+            convergence=self._convergence,
+            coupling_weight=self._coupling_weight,
+            phase_bias=phase_bias,
+        )
+
+    def _cpg_observation(self, state: CPGState) -> np.ndarray:
+        features = torch.cat(
+            [torch.cos(state.phase), torch.sin(state.phase), state.amplitude,
+             state.amplitude_velocity], dim=-1,
+        )  # fmt: skip
+        return features.numpy()
+
+    def _observation(self, env_obs: np.ndarray, state: CPGState) -> np.ndarray:
+        obs = np.concatenate([env_obs, self._cpg_observation(state)], axis=-1)
+        return np.clip(obs, -OBS_BOUND, OBS_BOUND).astype(np.float32)
+
+    def _reset_state_rows(self, rows: np.ndarray) -> None:
+        fresh = self._initial_state(len(rows))
+        index = torch.as_tensor(rows, dtype=torch.long)
+        self.state = CPGState(
+            *(field.index_copy(0, index, new) for field, new in zip(self.state, fresh, strict=True))
+        )
+
+    # -- VectorEnv API ---------------------------------------------------------------------------
+    def reset(
+        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        env_obs, info = self.env.reset(seed=seed, options=options)
+        self.state = self._initial_state(self.num_envs)
+        return self._observation(env_obs, self.state), info
+
+    def step(
+        self, actions: Any
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        try:
+            array = np.asarray(actions, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise ValueError(f"actions must be numbers of shape ({self.num_envs}, 5)") from None
+        if array.shape != (self.num_envs, 5):
+            raise ValueError(
+                f"actions must have shape ({self.num_envs}, 5) (CPG parameters "
+                f"{', '.join(PARAMETER_NAMES)} in [-1, 1]), got {array.shape}"
+            )
+        if not np.isfinite(array).all():
+            raise ValueError("actions contain NaN or inf; CPG parameters must be finite")
+        parameters = action_to_parameters(array)
+        with torch.no_grad():
+            output, next_state = hopf_step(
+                self.oscillator_parameters(parameters), self.state, self._coupling,
+                self.config.control_dt,
+            )  # fmt: skip
+            desired = (output.position + self._offset).numpy()
+        env_obs, reward, terminated, truncated, info = self.env.step(desired)
+        done = terminated | truncated
+        final_state = next_state
+        self.state = next_state
+        info = dict(info)
+        info["final_obs"] = self._observation(info["final_obs"], final_state)
+        if done.any():
+            self._reset_state_rows(np.flatnonzero(done))
+        info.update(
+            cpg_parameters=parameters,
+            theta_dot=next_state.phase_velocity.numpy().copy(),
+            r_ddot=next_state.amplitude_acceleration.numpy().copy(),
+            cpg_position=output.position.numpy().copy(),
+            desired_velocity=output.velocity.numpy().copy(),
+        )
+        return self._observation(env_obs, self.state), reward, terminated, truncated, info
+
+    def close_extras(self, **kwargs: Any) -> None:
+        if getattr(self, "env", None) is not None:
+            self.env.close()
+            self.env = None
+
+
+def make_cpg_parameter_env(
+    num_envs: int, config: HopperConfig | dict | None = None, num_threads: int | None = None
+) -> CPGParameterVectorEnv:
+    """Factory with the hopper env's signature (for the agent registry)."""
+    return CPGParameterVectorEnv(num_envs, config=config, num_threads=num_threads)

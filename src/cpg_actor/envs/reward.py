@@ -1,0 +1,52 @@
+"""The hopper's reward, paper eq. 4: five terms, weighted by c1 >= 0 and c2..c5 <= 0.
+
+::
+
+    r1 = (c1 * max(v_h, 0))^2            upward hip velocity: hop
+    r2 = c2 * sum_j (p_d_j - p_m_j)^2    tracking error of the desired positions
+    r3 = c3 * sum_j (v_m_j)^2            joint velocity
+    r4 = c4 * sum_j (tau_d_j)^2          joint torque
+    r5 = c5 * ||v_foot^{x,y}||           foot slip (the hip is on a rail: horizontal foot velocity)
+
+The paper typesets r2..r4 as ``sum (c * x)^2``, which would make every penalty positive
+whatever the sign of c; we read them as ``c * sum x^2`` so that c2..c4 <= 0 give penalties,
+as the paper says they do. r1 is as printed (c1 >= 0, so the square only rescales it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+REWARD_TERMS = ("r1", "r2", "r3", "r4", "r5")
+REWARD_TERM_MEANING = {
+    "r1": "upward hip velocity (c1 * max(v_h, 0))^2",
+    "r2": "tracking error c2 * sum (p_d - p_m)^2",
+    "r3": "joint velocity c3 * sum v_m^2",
+    "r4": "joint torque c4 * sum tau_d^2",
+    "r5": "foot slip c5 * |v_foot_xy|",
+}
+
+
+def reward_terms(
+    weights: tuple[float, float, float, float, float],
+    hip_velocity: np.ndarray,
+    desired_position: np.ndarray,
+    measured_position: np.ndarray,
+    joint_velocity: np.ndarray,
+    joint_torque: np.ndarray,
+    foot_velocity_xy: np.ndarray,
+) -> dict[str, np.ndarray]:
+    """The five terms of eq. 4, batched: scalars ``(...)``, per-joint / x-y pairs ``(..., 2)``."""
+    c1, c2, c3, c4, c5 = weights
+    return {
+        "r1": np.square(c1 * np.maximum(hip_velocity, 0.0)),
+        "r2": c2 * np.sum(np.square(desired_position - measured_position), axis=-1),
+        "r3": c3 * np.sum(np.square(joint_velocity), axis=-1),
+        "r4": c4 * np.sum(np.square(joint_torque), axis=-1),
+        "r5": c5 * np.linalg.norm(foot_velocity_xy, axis=-1),
+    }
+
+
+def total_reward(terms: dict[str, np.ndarray]) -> np.ndarray:
+    """r = r1 + r2 + r3 + r4 + r5."""
+    return terms["r1"] + terms["r2"] + terms["r3"] + terms["r4"] + terms["r5"]

@@ -1,0 +1,55 @@
+"""The hopper's robot description: one Python data module, written out as MJCF and URDF.
+
+``python -m cpg_actor.envs.robot`` regenerates ``cpg_actor/envs/assets/anymal_hopper.{xml,urdf}``
+(``--check`` only verifies they are up to date).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from cpg_actor.envs.robot import description
+from cpg_actor.envs.robot.mjcf import mjcf_text
+from cpg_actor.envs.robot.urdf import urdf_text
+
+ASSETS_DIR = Path(__file__).resolve().parent.parent / "assets"
+MJCF_PATH = ASSETS_DIR / f"{description.ROBOT_NAME}.xml"
+URDF_PATH = ASSETS_DIR / f"{description.ROBOT_NAME}.urdf"
+
+
+def generated_assets() -> dict[Path, str]:
+    """Each shipped robot file and the text the description generates for it."""
+    return {MJCF_PATH: mjcf_text(), URDF_PATH: urdf_text()}
+
+
+def stale_assets() -> list[Path]:
+    """Shipped robot files that differ from what the description generates."""
+    return [
+        path
+        for path, text in generated_assets().items()
+        if not path.exists() or path.read_text() != text
+    ]
+
+
+def write_assets() -> list[Path]:
+    """(Re)write the robot files; returns those that changed."""
+    changed = stale_assets()
+    for path, text in generated_assets().items():
+        if path in changed:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_suffix(path.suffix + ".tmp")
+            tmp.write_text(text)
+            tmp.replace(path)
+    return changed
+
+
+__all__ = [
+    "MJCF_PATH",
+    "URDF_PATH",
+    "description",
+    "generated_assets",
+    "mjcf_text",
+    "stale_assets",
+    "urdf_text",
+    "write_assets",
+]

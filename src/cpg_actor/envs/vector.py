@@ -1,0 +1,154 @@
+"""`HopperVectorEnv`: N hoppers stepped in one call, a Gymnasium ``VectorEnv`` (SAME_STEP reset).
+
+* MuJoCo: the N robots are rows of one state array; every physics substep is one
+  ``mujoco.rollout`` call that steps them on a C++ thread pool (``num_threads``, default: the
+  usable cores, at least 16 robots per thread), and the PD law runs vectorised in numpy between
+  substeps (see :mod:`cpg_actor.envs.backends.mujoco_backend`).
+* PyBullet: the N robots share one world, collision-filtered so that they never touch each
+  other; ``num_threads`` is ignored (PyBullet holds the GIL).
+
+Autoreset (``AutoresetMode.SAME_STEP``): when env i ends (terminated or truncated) its row of
+the returned ``obs`` is already the first observation of its next episode; the last observation
+of the finished episode is in ``info["final_obs"][i]`` (rows of envs that did not end hold
+their current observation) and ``info["_final_obs"]`` marks the rows that ended.
+
+Seeding: ``reset(seed=s)`` seeds env i with ``s + i`` (Gymnasium's convention), exactly as
+``HopperEnv.reset(seed=s + i)`` would, so env i of the vector env and a single ``HopperEnv``
+given the same seed and actions follow the same trajectory. Later autoresets continue each
+env's own random stream, as ``HopperEnv.reset()`` without a seed does.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from cpg_actor.envs.config import HopperConfig
+from cpg_actor.envs.hopper import action_space, check_actions, observation_space, resolve_config
+from cpg_actor.envs.simulation import NOMINAL_POSE, HopperSimulation
+
+
+class HopperVectorEnv(VectorEnv):
+    """N independent hoppers with batched stepping.
+
+    Args:
+        num_envs: N.
+        config: a :class:`HopperConfig` (or a dict of its keys); defaults if None.
+        num_threads: MuJoCo stepping threads; None: the usable cores (>= 16 robots each).
+        sim: ``"mujoco"`` or ``"pybullet"``, overrides ``config.sim``.
+        **overrides: any :class:`HopperConfig` field.
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+
+    def __init__(
+        self,
+        num_envs: int,
+        config: HopperConfig | dict | None = None,
+        num_threads: int | None = None,
+        sim: str | None = None,
+        **overrides: Any,
+    ) -> None:
+        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
+            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        if num_envs < 1:
+            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        if num_threads is not None and (
+            isinstance(num_threads, bool) or not isinstance(num_threads, int) or num_threads < 1
+        ):
+            raise ValueError(f"num_threads must be a positive integer or None, got {num_threads!r}")
+        self.config = resolve_config(config, sim, overrides)
+        self.num_envs = int(num_envs)
+        self.single_observation_space = observation_space()
+        self.single_action_space = action_space()
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.config.control_dt)}
+        self.sim = HopperSimulation(self.config, self.num_envs, num_threads)
+        self._rngs: list[np.random.Generator] | None = None
+        self._needs_reset = True
+
+    @property
+    def num_threads(self) -> int:
+        return self.sim.backend.num_threads
+
+    @property
+    def env_rngs(self) -> list[np.random.Generator] | None:
+        """Each env's random generator (reset noise), as ``HopperEnv.np_random``."""
+        return self._rngs
+
+    def reset(
+        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Reset every env. ``seed``: an int s (env i gets s + i), a list of N ints, or None."""
+        if seed is None:
+            if self._rngs is None:
+                self._rngs = [seeding.np_random(None)[0] for _ in range(self.num_envs)]
+        else:
+            if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+                seeds = [int(seed) + i for i in range(self.num_envs)]
+            elif isinstance(seed, (list, tuple)) and len(seed) == self.num_envs:
+                seeds = [int(s) for s in seed]
+            else:
+                raise ValueError(
+                    f"seed must be an int or a list of {self.num_envs} ints, got {seed!r}"
+                )
+            self._rngs = [seeding.np_random(s)[0] for s in seeds]
+            self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
+        index = np.arange(self.num_envs)
+        noise = np.stack([self.sim.sample_noise(rng) for rng in self._rngs])
+        self.sim.reset_robots(index, noise)
+        self._needs_reset = False
+        info = {
+            "hip_height": self.sim.backend.hip_height.copy(),
+            "foot_height": self.sim.foot_height(),
+            "desired_position": np.tile(NOMINAL_POSE, (self.num_envs, 1)),
+            "measured_position": self.sim.backend.joint_pos.copy(),
+        }
+        return self.sim.observation(), info
+
+    def step(
+        self, actions: Any
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        desired = check_actions(actions, (self.num_envs, 2))
+        if self._needs_reset:
+            raise RuntimeError("call reset() before step()")
+        result = self.sim.step(desired)
+        obs = result.obs
+        done = result.terminated | result.truncated
+        final_obs = obs.copy()
+        if done.any():
+            ended = np.flatnonzero(done)
+            noise = np.stack([self.sim.sample_noise(self._rngs[i]) for i in ended])
+            self.sim.reset_robots(ended, noise)
+            obs[ended] = self.sim.observation()[ended]
+        info = {
+            "reward_terms": result.reward_terms,
+            "hip_height": result.hip_height,
+            "foot_height": result.foot_height,
+            "joint_torque": result.joint_torque,
+            "desired_position": result.desired_position,
+            "measured_position": result.measured_position,
+            "final_obs": final_obs,
+            "_final_obs": done,
+        }
+        return obs, result.reward, result.terminated, result.truncated, info
+
+    def close_extras(self, **kwargs: Any) -> None:
+        if getattr(self, "sim", None) is not None:
+            self.sim.close()
+            self.sim = None
+
+
+def make_vector_env(
+    num_envs: int,
+    config: HopperConfig | dict | None = None,
+    num_threads: int | None = None,
+    **overrides: Any,
+) -> HopperVectorEnv:
+    """``HopperVectorEnv(num_envs, config, num_threads, **overrides)``."""
+    return HopperVectorEnv(num_envs, config=config, num_threads=num_threads, **overrides)

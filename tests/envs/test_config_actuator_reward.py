@@ -1,0 +1,168 @@
+"""HopperConfig validation, the actuator law, and each reward term on constructed states."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from cpg_actor.envs import REWARD_TERMS, HopperConfig, HopperEnv, reward_terms
+from cpg_actor.envs.actuator import Actuator
+from cpg_actor.envs.reward import total_reward
+
+# -- config ---------------------------------------------------------------------------------
+
+
+def test_defaults_and_control_dt():
+    config = HopperConfig()
+    assert config.sim == "mujoco"
+    assert config.control_dt == pytest.approx(0.01)
+    assert config.episode_steps * config.control_dt == pytest.approx(5.0)
+    assert (config.torque_limit, config.velocity_limit) == (40.0, 15.0)
+    assert config.c1 >= 0 and all(c <= 0 for c in config.reward_weights[1:])
+
+
+def test_from_dict_round_trip_and_int_coercion():
+    config = HopperConfig(kp=100.0, sim="pybullet")
+    assert HopperConfig.from_dict(config.to_dict()) == config
+    assert HopperConfig.from_dict({"kp": 90}).kp == 90.0  # YAML writes 90.0 as 90
+    assert isinstance(HopperConfig.from_dict({"kp": 90}).kp, float)
+
+
+def test_unknown_keys_are_listed_with_the_accepted_ones():
+    with pytest.raises(ValueError) as error:
+        HopperConfig.from_dict({"kp": 80.0, "kpp": 1, "gains": 2})
+    message = str(error.value)
+    assert "gains, kpp" in message
+    for field in dataclasses.fields(HopperConfig):
+        assert field.name in message
+
+
+@pytest.mark.parametrize(
+    "changes, fragment",
+    [
+        ({"c1": -1.0}, "c1 must be >= 0"),
+        ({"c2": 0.5}, "c2 must be <= 0"),
+        ({"c3": 1e-3}, "c3 must be <= 0"),
+        ({"c4": 1.0}, "c4 must be <= 0"),
+        ({"c5": 0.1}, "c5 must be <= 0"),
+        ({"sim": "gazebo"}, "sim must be one of"),
+        ({"physics_dt": 0.0}, "physics_dt must be > 0"),
+        ({"physics_dt": 0.01}, "physics_dt must be <= 0.005"),
+        ({"decimation": 2.5}, "decimation must be an integer"),
+        ({"kp": "high"}, "kp must be a number"),
+        ({"kd": float("nan")}, "kd must be finite"),
+        ({"kd": -1.0}, "kd must be >= 0"),
+        ({"saturation_torque": 20.0}, "saturation_torque"),
+        ({"episode_steps": True}, "episode_steps must be an integer"),
+    ],
+)
+def test_bad_values_are_clear_errors(changes, fragment):
+    with pytest.raises(ValueError, match=fragment):
+        HopperConfig(**changes)
+    with pytest.raises(ValueError, match=fragment):
+        HopperEnv(**changes)  # before any simulator is created
+
+
+# -- actuator -------------------------------------------------------------------------------
+
+
+def test_pd_law_inside_the_limits():
+    actuator = Actuator.from_config(HopperConfig(kp=80.0, kd=2.0))
+    tau = actuator(np.array([0.5, -0.7]), np.array([0.4, -0.8]), np.array([1.0, -2.0]))
+    np.testing.assert_allclose(tau, [80 * 0.1 - 2 * 1.0, 80 * 0.1 + 2 * 2.0])
+
+
+def test_torque_is_clipped_to_40_nm():
+    actuator = Actuator.from_config(HopperConfig())
+    tau = actuator(np.array([[2.0, -2.0]]), np.zeros((1, 2)), np.zeros((1, 2)))
+    np.testing.assert_allclose(tau, [[40.0, -40.0]])
+
+
+def test_torque_speed_curve_models_the_velocity_limit():
+    actuator = Actuator.from_config(HopperConfig())  # tau_sat 80, v_max 15, tau_max 40
+    push = np.array([10.0])  # a huge position error: the PD law asks for +800 N m
+    for velocity, expected in [(0.0, 40.0), (7.5, 40.0), (11.25, 20.0), (15.0, 0.0), (20.0, 0.0)]:
+        tau = actuator(push, np.zeros(1), np.array([velocity]))
+        assert tau[0] == pytest.approx(expected), velocity
+    # moving the other way, the same push is braking: never limited below 40 N m
+    for velocity in (-5.0, -15.0, -30.0):
+        assert actuator(push, np.zeros(1), np.array([velocity]))[0] == pytest.approx(40.0)
+    # beyond the limit the drive still brakes: negative torque at +20 rad/s
+    lower, upper = actuator.torque_bounds(np.array([20.0]))
+    assert upper[0] == 0.0 and lower[0] == -40.0
+    # symmetric for the negative direction
+    lower, upper = actuator.torque_bounds(np.array([-11.25]))
+    assert (lower[0], upper[0]) == (-20.0, 40.0)
+
+
+def test_actuator_is_elementwise_on_batches():
+    actuator = Actuator.from_config(HopperConfig())
+    rng = np.random.default_rng(0)
+    desired, pos, vel = rng.normal(size=(3, 64, 2))
+    vel = 20.0 * vel  # reach the torque-speed limits too
+    batch = actuator(desired, pos, vel)
+    rows = np.stack([actuator(d, p, v) for d, p, v in zip(desired, pos, vel, strict=True)])
+    np.testing.assert_array_equal(batch, rows)
+
+
+# -- reward ---------------------------------------------------------------------------------
+
+
+def test_each_reward_term_on_a_constructed_state():
+    weights = (2.0, -3.0, -0.5, -0.01, -4.0)
+    terms = reward_terms(
+        weights,
+        hip_velocity=np.array([0.5, -0.5]),
+        desired_position=np.array([[0.5, -0.7], [0.4, -0.8]]),
+        measured_position=np.array([[0.4, -0.9], [0.4, -0.8]]),
+        joint_velocity=np.array([[1.0, -2.0], [0.0, 3.0]]),
+        joint_torque=np.array([[10.0, -20.0], [0.0, 0.0]]),
+        foot_velocity_xy=np.array([[0.3, 0.4], [-0.1, 0.0]]),
+    )
+    assert tuple(terms) == REWARD_TERMS
+    np.testing.assert_allclose(terms["r1"], [(2.0 * 0.5) ** 2, 0.0])  # only upwards counts
+    np.testing.assert_allclose(terms["r2"], [-3.0 * (0.1**2 + 0.2**2), 0.0])
+    np.testing.assert_allclose(terms["r3"], [-0.5 * (1 + 4), -0.5 * 9])
+    np.testing.assert_allclose(terms["r4"], [-0.01 * (100 + 400), 0.0])
+    np.testing.assert_allclose(terms["r5"], [-4.0 * 0.5, -4.0 * 0.1])
+    np.testing.assert_allclose(total_reward(terms), sum(terms[k] for k in REWARD_TERMS), rtol=1e-12)
+
+
+def test_penalties_are_never_positive_with_valid_weights():
+    rng = np.random.default_rng(1)
+    terms = reward_terms(
+        HopperConfig().reward_weights, rng.normal(size=100), *rng.normal(size=(5, 100, 2))
+    )
+    assert (terms["r1"] >= 0).all()
+    for name in ("r2", "r3", "r4", "r5"):
+        assert (terms[name] <= 0).all(), name
+
+
+def episode_return(env, amplitude, frequency=2.0, steps=200):
+    env.reset(seed=0)
+    total, terms = 0.0, dict.fromkeys(REWARD_TERMS, 0.0)
+    for i in range(steps):
+        s = np.sin(2 * np.pi * frequency * i * env.config.control_dt)
+        _, reward, terminated, _, info = env.step(
+            np.array([0.4 + amplitude * s, -0.8 - 2 * amplitude * s])
+        )
+        assert not terminated
+        total += reward
+        for name in REWARD_TERMS:
+            terms[name] += info["reward_terms"][name]
+    return total, terms
+
+
+def test_default_weights_make_hopping_beat_standing_still():
+    """2 s of a 2 Hz squat-and-extend (short hops) against holding the nominal pose."""
+    env = HopperEnv()
+    standing, _ = episode_return(env, amplitude=0.0)
+    small, _ = episode_return(env, amplitude=0.15)  # the CPG preset's amplitudes
+    hopping, terms = episode_return(env, amplitude=0.3)
+    env.close()
+    assert standing < 0.0 < small < hopping
+    assert hopping > 50.0
+    penalties = -(terms["r2"] + terms["r3"] + terms["r4"] + terms["r5"])
+    assert 0.05 * terms["r1"] < penalties < 0.5 * terms["r1"]  # penalties shape, r1 drives

@@ -1,0 +1,122 @@
+"""The one robot description: shipped MJCF and URDF are generated from it and load identically."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from cpg_actor.envs.backends.mujoco_backend import MujocoBackend
+from cpg_actor.envs.backends.pybullet_backend import FOOT_LINK, PybulletBackend
+from cpg_actor.envs.robot import description as robot
+from cpg_actor.envs.robot import kinematics, stale_assets
+
+LINKS = ("hip", "thigh", "shank", "adapter")  # PyBullet link index = position here
+POSES = [(0.4, -0.8), (0.0, 0.0), (1.2, -1.6), (-0.4, 0.05)]
+
+
+@pytest.fixture(scope="module")
+def mj():
+    backend = MujocoBackend(physics_dt=0.001, foot_friction=0.8)
+    yield backend.model
+    backend.close()
+
+
+@pytest.fixture(scope="module")
+def pb():
+    backend = PybulletBackend(physics_dt=0.001, foot_friction=0.8)
+    yield backend.handle(0)
+    backend.close()
+
+
+def test_shipped_files_are_generated_from_the_description():
+    assert stale_assets() == [], "run `python -m cpg_actor.envs.robot` to regenerate"
+
+
+def test_total_moving_mass_is_the_paper_s():
+    assert robot.TOTAL_MASS == pytest.approx(3.407, abs=1e-3)
+    assert robot.TOTAL_MASS == pytest.approx(3.42, rel=0.01)  # paper: 3.42 kg
+
+
+def test_masses_coms_and_inertias_agree(mj, pb):
+    client, body = pb
+    for index, name in enumerate(LINKS):
+        link = robot.LINKS[name]
+        mj_id = mj.body(name).id
+        assert mj.body_mass[mj_id] == pytest.approx(link.mass, abs=1e-9)
+        np.testing.assert_allclose(mj.body_ipos[mj_id], link.com, atol=1e-9)
+        np.testing.assert_allclose(mj.body_inertia[mj_id], link.inertia, rtol=1e-6)
+        np.testing.assert_allclose(mj.body_iquat[mj_id], [1, 0, 0, 0], atol=1e-9)
+        info = client.getDynamicsInfo(body, index)
+        assert info[0] == pytest.approx(link.mass, abs=1e-9)
+        np.testing.assert_allclose(info[2], link.inertia, rtol=1e-6)
+        np.testing.assert_allclose(info[3], link.com, atol=1e-9)
+        np.testing.assert_allclose(info[4], [0, 0, 0, 1], atol=1e-9)
+
+
+def test_joint_types_axes_and_limits_agree(mj, pb):
+    client, body = pb
+    for index, joint in enumerate(robot.JOINTS[:3]):
+        mj_joint = mj.joint(joint.name)
+        info = client.getJointInfo(body, index)
+        assert info[1].decode() == joint.name
+        assert info[2] == {"prismatic": 1, "revolute": 0}[joint.kind]
+        assert mj_joint.type[0] == {"prismatic": 2, "revolute": 3}[joint.kind]
+        np.testing.assert_allclose(mj_joint.axis, joint.axis)
+        np.testing.assert_allclose(info[13], joint.axis)
+        np.testing.assert_allclose(mj_joint.range, joint.limits)
+        np.testing.assert_allclose((info[8], info[9]), joint.limits)
+    assert robot.JOINT_LIMITS["HFE"][0] < robot.NOMINAL_POSE[0] < robot.JOINT_LIMITS["HFE"][1]
+    assert robot.JOINT_LIMITS["KFE"][0] < robot.NOMINAL_POSE[1] < robot.JOINT_LIMITS["KFE"][1]
+
+
+def test_foot_contact_geometry_agrees(mj, pb):
+    client, body = pb
+    foot = mj.geom("foot")
+    assert foot.size[0] == pytest.approx(0.031)
+    assert foot.friction[0] == pytest.approx(0.8)
+    np.testing.assert_allclose(foot.pos, robot.FOOT_CENTER)
+    shapes = client.getCollisionShapeData(body, FOOT_LINK)
+    assert len(shapes) == 1
+    assert shapes[0][3][0] == pytest.approx(0.031)  # sphere radius
+    assert client.getDynamicsInfo(body, FOOT_LINK)[1] == pytest.approx(0.8)  # lateral friction
+    for link in range(FOOT_LINK):  # only the foot collides
+        assert client.getCollisionShapeData(body, link) == ()
+
+
+@pytest.mark.parametrize("pose", POSES)
+def test_link_frames_and_coms_agree_in_every_pose(mj, pb, pose):
+    """World frames and COMs of all links (this checks every joint frame) and the foot."""
+    client, body = pb
+    data = mujoco.MjData(mj)
+    data.qpos[:] = (0.7, *pose)
+    mujoco.mj_kinematics(mj, data)
+    client.resetJointState(body, 0, 0.7)
+    client.resetJointState(body, 1, pose[0])
+    client.resetJointState(body, 2, pose[1])
+    for index, name in enumerate(LINKS):
+        state = client.getLinkState(body, index, computeForwardKinematics=1)
+        np.testing.assert_allclose(state[4], data.xpos[mj.body(name).id], atol=1e-7)
+        np.testing.assert_allclose(state[0], data.xipos[mj.body(name).id], atol=1e-7)
+    # and the hand-written planar kinematics (x, z relative to the hip)
+    foot = kinematics.foot_position(np.array(pose))
+    site = data.site_xpos[mj.site("foot").id]
+    np.testing.assert_allclose([site[0], site[2] - 0.7], foot, atol=1e-9)
+    knee = kinematics.knee_position(np.array(pose))
+    anchor = data.xanchor[mj.joint("KFE").id]
+    np.testing.assert_allclose([anchor[0], anchor[2] - 0.7], knee, atol=1e-9)
+    for name, (x, z) in kinematics.com_positions(pose).items():
+        com = data.xipos[mj.body(name).id]
+        np.testing.assert_allclose([com[0], com[2] - 0.7], [x, z], atol=1e-9)
+
+
+def test_nominal_pose_puts_the_foot_under_the_hip_with_the_knee_bent():
+    hfe_x = kinematics.HFE_ORIGIN[0]
+    foot = kinematics.foot_position(np.array(robot.NOMINAL_POSE))
+    knee = kinematics.knee_position(np.array(robot.NOMINAL_POSE))
+    lean = np.degrees(np.arctan2(foot[0] - hfe_x, -foot[1]))
+    assert 0.0 < lean < 20.0  # foot slightly in front of the hip, 0.47 m below it
+    assert -0.48 < foot[1] < -0.45
+    assert knee[0] < hfe_x and knee[0] < foot[0]  # knee points backwards: bent
+    # positive HFE swings the leg backwards (the sign convention in description.py)
+    assert kinematics.foot_position(np.array([0.6, -0.8]))[0] < foot[0]
