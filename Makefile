@@ -16,8 +16,12 @@ $(BIN)/cpg-actor: pyproject.toml
 
 setup: $(BIN)/cpg-actor
 
+# A new run directory each time: nothing earlier is overwritten.
+QUICKSTART_STAMP := $(shell date +%Y%m%d-%H%M%S)
+QUICKSTART_DIR ?= runs/quickstart-$(QUICKSTART_STAMP)
 quickstart: setup
-	$(BIN)/cpg-actor train --run-dir runs/quickstart --overwrite
+	$(BIN)/cpg-actor train --run-dir $(QUICKSTART_DIR)
+	$(BIN)/cpg-actor eval $(QUICKSTART_DIR)
 
 test: setup
 	$(BIN)/ruff check src tests benchmarks

@@ -13,6 +13,9 @@ import sys
 # command name -> module in cpg_actor.commands
 COMMANDS: dict[str, str] = {
     "cpg-demo": "cpg_demo",
+    "train": "train",
+    "eval": "eval",
+    "cho2019-reference": "cho2019_reference",
 }
 
 

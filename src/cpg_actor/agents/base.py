@@ -1,0 +1,145 @@
+"""The agent interface shared by every actor-critic, stateful (CPG) or not.
+
+An agent maps a *normalised* observation and its recurrent state to a Gaussian over actions
+(desired joint positions for the hopper) and a value. The recurrent state is an explicit
+input and output, packed as one tensor ``(B, *state_shape)``: ``(B, 5, N)`` for a CPG of N
+oscillators (:meth:`CPGState.as_tensor`), ``(B, 0)`` for stateless agents, so the runner and
+the rollout storage treat every agent the same way.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import torch
+from torch import Tensor, nn
+
+
+@dataclass
+class AgentConfig:
+    """Network sizes and initialisation; used by every registered agent (unused parts ignored).
+
+    ``activation`` applies to the hidden layers of the actor MLP, the feedback MLP and the
+    critic. The feedback MLP's outputs are scaled: ``xi = xi_scale * out[:N]`` (rad/s) and
+    ``kappa = kappa_scale * out[N:]`` (rad/s^2), and its last layer is initialised orthogonally
+    with gain ``output_gain`` so that the CPG-Actor starts as the open-loop CPG.
+    """
+
+    actor_hidden: tuple[int, ...] = (64, 64)
+    critic_hidden: tuple[int, ...] = (64, 64)
+    activation: str = "tanh"  # tanh | elu
+    init_std: float = 0.1  # initial action standard deviation (rad of desired position)
+    output_gain: float = 0.01  # orthogonal gain of the actor's / feedback's last layer
+    xi_scale: float = 1.0  # rad/s per unit of feedback output (docs/training.md: why)
+    kappa_scale: float = 10.0  # rad/s^2 per unit of feedback output
+    cpg_initial: dict = field(default_factory=dict)  # overrides of cpg.HOPPER_INITIAL
+
+    def validate(self) -> None:
+        if self.activation not in ACTIVATIONS:
+            raise ValueError(
+                f"agent_config.activation must be one of {sorted(ACTIVATIONS)}, "
+                f"got {self.activation!r}"
+            )
+        for name in ("actor_hidden", "critic_hidden"):
+            sizes = getattr(self, name)
+            if not sizes or any(not isinstance(s, int) or s < 1 for s in sizes):
+                raise ValueError(f"agent_config.{name} must be positive layer sizes, got {sizes!r}")
+        for name in ("init_std", "output_gain", "xi_scale", "kappa_scale"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"agent_config.{name} must be > 0, got {getattr(self, name)!r}")
+
+
+ACTIVATIONS = {"tanh": nn.Tanh, "elu": nn.ELU}
+
+
+def mlp(sizes: list[int], activation: str, output_gain: float) -> nn.Sequential:
+    """Linear layers with ``activation`` between them; orthogonal init (CleanRL)."""
+    layers: list[nn.Module] = []
+    for i in range(len(sizes) - 1):
+        last = i == len(sizes) - 2
+        layer = nn.Linear(sizes[i], sizes[i + 1])
+        nn.init.orthogonal_(layer.weight, output_gain if last else 2**0.5)
+        nn.init.zeros_(layer.bias)
+        layers.append(layer)
+        if not last:
+            layers.append(ACTIVATIONS[activation]())
+    return nn.Sequential(*layers)
+
+
+class ActorOutput(NamedTuple):
+    """Gaussian over actions for a batch, the next recurrent state and diagnostics."""
+
+    mean: Tensor  # (B, A)
+    std: Tensor  # (B, A)
+    next_state: Tensor  # (B, *state_shape)
+    extras: dict[str, Tensor]  # e.g. xi, kappa, theta_dot, r_ddot, desired_velocity
+
+
+class ActStep(NamedTuple):
+    action: Tensor
+    log_prob: Tensor
+    value: Tensor
+    mean: Tensor
+    std: Tensor
+    next_state: Tensor
+    extras: dict[str, Tensor]
+
+
+class Agent(nn.Module):
+    """Base class: subclasses implement :meth:`actor`, :meth:`critic_features` and
+    :meth:`initial_state`, and set ``state_shape``."""
+
+    state_shape: tuple[int, ...] = (0,)
+
+    def __init__(
+        self, obs_dim: int, action_dim: int, config: AgentConfig, critic_state_features: int = 0
+    ) -> None:
+        super().__init__()
+        self.obs_dim = obs_dim
+        self.action_dim = action_dim
+        self.log_std = nn.Parameter(torch.full((action_dim,), math.log(config.init_std)))
+        critic_in = obs_dim + critic_state_features
+        self.critic = mlp([critic_in, *config.critic_hidden, 1], config.activation, 1.0)
+
+    # -- to implement ---------------------------------------------------------------------
+    def initial_state(self, batch_size: int) -> Tensor:
+        return torch.zeros(batch_size, *self.state_shape)
+
+    def actor(self, obs: Tensor, state: Tensor) -> ActorOutput:
+        raise NotImplementedError
+
+    def state_features(self, state: Tensor) -> Tensor:
+        """What the critic sees of the recurrent state, ``(B, critic_state_features)``."""
+        return state.reshape(state.shape[0], 0)
+
+    # -- shared ------------------------------------------------------------------------------
+    def value(self, obs: Tensor, state: Tensor) -> Tensor:
+        features = torch.cat([obs, self.state_features(state)], dim=-1)
+        return self.critic(features).squeeze(-1)
+
+    def act(self, obs: Tensor, state: Tensor, deterministic: bool = False) -> ActStep:
+        """Sample (or take the mean) action for a batch; no gradients needed by callers."""
+        out = self.actor(obs, state)
+        dist = torch.distributions.Normal(out.mean, out.std)
+        action = out.mean if deterministic else dist.sample()
+        log_prob = dist.log_prob(action).sum(-1)
+        return ActStep(
+            action, log_prob, self.value(obs, state), out.mean, out.std, out.next_state, out.extras
+        )
+
+    def evaluate(self, obs: Tensor, state: Tensor, actions: Tensor) -> tuple[Tensor, ...]:
+        """Replay one step from stored (obs, state): ``(log_prob, entropy, value, mean, std)``."""
+        out = self.actor(obs, state)
+        dist = torch.distributions.Normal(out.mean, out.std)
+        return (
+            dist.log_prob(actions).sum(-1),
+            dist.entropy().sum(-1),
+            self.value(obs, state),
+            out.mean,
+            out.std,
+        )
+
+    def std(self, batch_size: int) -> Tensor:
+        return self.log_std.exp().expand(batch_size, self.action_dim)

@@ -1,0 +1,79 @@
+"""The CPG-Actor (paper section III, Fig. 2): feedback MLP -> (xi, kappa) -> one CPG step.
+
+The CPG state is an input of the actor and its next state an output (section III-B): the
+runner carries it between control steps, the rollout storage keeps the state *before* each
+step, and the PPO update replays one CPG step from it, so the gradient reaches the CPG
+parameters V and the feedback MLP together with no backpropagation through time.
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import Tensor
+
+from cpg_actor.agents.base import ActorOutput, Agent, AgentConfig, mlp
+from cpg_actor.cpg import CPGNetwork, CPGState, JointMap, hopper_cpg
+
+
+class CPGActorAgent(Agent):
+    """Gaussian policy whose mean is ``JointMap(x)``, x the CPG output of eq. 1.
+
+    * ``feedback=True`` (``cpg-actor``): ``[xi, kappa] = scale * MLP(obs)``, per oscillator.
+    * ``feedback=False`` (``cpg-actor-open-loop``): ``xi = kappa = 0``; only the CPG vector V
+      and the log-std are trained.
+
+    The critic sees the observation and the CPG state as ``cos(phase), sin(phase), amplitude``.
+    The CPG state is reset to :meth:`CPGNetwork.initial_state` (rest, amplitude 0, the preset
+    phases) at each episode start.
+    """
+
+    def __init__(
+        self,
+        obs_dim: int,
+        action_dim: int,
+        config: AgentConfig,
+        control_dt: float,
+        feedback: bool = True,
+    ) -> None:
+        cpg = hopper_cpg(control_dt, initial=config.cpg_initial or None, check_inputs=False)
+        n = cpg.num_oscillators
+        if n != action_dim:
+            raise ValueError(f"the CPG has {n} oscillators but the action has {action_dim} entries")
+        super().__init__(obs_dim, action_dim, config, critic_state_features=3 * n)
+        self.cpg: CPGNetwork = cpg
+        self.joint_map = JointMap()
+        self.state_shape = (5, n)
+        self.xi_scale = config.xi_scale
+        self.kappa_scale = config.kappa_scale
+        self.feedback = (
+            mlp([obs_dim, *config.actor_hidden, 2 * n], config.activation, config.output_gain)
+            if feedback
+            else None
+        )
+
+    def initial_state(self, batch_size: int) -> Tensor:
+        return self.cpg.initial_state(batch_size).as_tensor()
+
+    def state_features(self, state: Tensor) -> Tensor:
+        cpg_state = CPGState.from_tensor(state)
+        phase = cpg_state.phase
+        return torch.cat([torch.cos(phase), torch.sin(phase), cpg_state.amplitude], dim=-1)
+
+    def actor(self, obs: Tensor, state: Tensor) -> ActorOutput:
+        n = self.cpg.num_oscillators
+        if self.feedback is not None:
+            out = self.feedback(obs)
+            xi, kappa = self.xi_scale * out[:, :n], self.kappa_scale * out[:, n:]
+        else:
+            xi = kappa = torch.zeros(obs.shape[0], n, dtype=obs.dtype, device=obs.device)
+        output, next_state = self.cpg(CPGState.from_tensor(state), 0.0, xi, kappa)
+        mean = self.joint_map(output.position)
+        extras = {
+            "xi": xi,
+            "kappa": kappa,
+            "theta_dot": next_state.phase_velocity,
+            "r_ddot": next_state.amplitude_acceleration,
+            "desired_velocity": output.velocity,
+            "cpg_position": output.position,
+        }
+        return ActorOutput(mean, self.std(obs.shape[0]), next_state.as_tensor(), extras)

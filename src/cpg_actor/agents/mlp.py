@@ -1,0 +1,33 @@
+"""The classic actor-critic baseline: an MLP actor on desired joint positions."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import torch
+from torch import Tensor
+
+from cpg_actor.agents.base import ActorOutput, Agent, AgentConfig, mlp
+
+
+class MLPAgent(Agent):
+    """``mean = nominal_pose + MLP(obs)`` (hidden ``actor_hidden``), state-independent log-std.
+
+    The last layer starts small (gain ``output_gain``), so the initial mean is the nominal
+    standing pose. Stateless: its recurrent state is ``(B, 0)``.
+    """
+
+    state_shape = (0,)
+
+    def __init__(
+        self, obs_dim: int, action_dim: int, config: AgentConfig, nominal_pose: Sequence[float]
+    ) -> None:
+        super().__init__(obs_dim, action_dim, config)
+        self.actor_mlp = mlp(
+            [obs_dim, *config.actor_hidden, action_dim], config.activation, config.output_gain
+        )
+        self.register_buffer("nominal_pose", torch.as_tensor(nominal_pose, dtype=torch.float32))
+
+    def actor(self, obs: Tensor, state: Tensor) -> ActorOutput:
+        mean = self.nominal_pose + self.actor_mlp(obs)
+        return ActorOutput(mean, self.std(obs.shape[0]), state, {})

@@ -1,0 +1,80 @@
+"""Agents selectable by name. An entry names both the network and the environment it acts on.
+
+A later baseline (e.g. ``cho2019``: an MLP actor acting on a wrapped env whose actions are CPG
+parameters) registers an :class:`AgentSpec` with its own ``make_env``; the runner needs
+nothing else.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from cpg_actor.agents.base import Agent, AgentConfig
+from cpg_actor.agents.cpg_actor import CPGActorAgent
+from cpg_actor.agents.mlp import MLPAgent
+from cpg_actor.cpg import HOPPER_NOMINAL_POSE
+
+
+def make_hopper_env(num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
+    """The plain hopper vector env: actions are desired joint positions [HFE, KFE]."""
+    from cpg_actor.envs import HopperVectorEnv
+
+    return HopperVectorEnv(num_envs, config=env_config, num_threads=num_threads)
+
+
+@dataclass(frozen=True)
+class AgentSpec:
+    """``build(agent_config, obs_dim, action_dim, env_config) -> Agent`` and
+    ``make_env(num_envs, env_config, num_threads) -> vector env`` (the hopper env contract)."""
+
+    name: str
+    description: str
+    build: Callable[[AgentConfig, int, int, Any], Agent]
+    make_env: Callable[..., Any] = make_hopper_env
+
+
+AGENTS: dict[str, AgentSpec] = {}
+
+
+def register_agent(spec: AgentSpec) -> AgentSpec:
+    if spec.name in AGENTS:
+        raise ValueError(f"an agent named '{spec.name}' is already registered")
+    AGENTS[spec.name] = spec
+    return spec
+
+
+def get_agent_spec(name: str) -> AgentSpec:
+    if name not in AGENTS:
+        raise ValueError(f"unknown agent '{name}'; available: {', '.join(sorted(AGENTS))}")
+    return AGENTS[name]
+
+
+register_agent(
+    AgentSpec(
+        "mlp",
+        "classic actor-critic: MLP actor on desired joint positions",
+        lambda cfg, obs_dim, action_dim, env_cfg: MLPAgent(
+            obs_dim, action_dim, cfg, HOPPER_NOMINAL_POSE
+        ),
+    )
+)
+register_agent(
+    AgentSpec(
+        "cpg-actor",
+        "CPG-Actor: feedback MLP -> (xi, kappa) -> Hopf CPG -> desired joint positions",
+        lambda cfg, obs_dim, action_dim, env_cfg: CPGActorAgent(
+            obs_dim, action_dim, cfg, env_cfg.control_dt, feedback=True
+        ),
+    )
+)
+register_agent(
+    AgentSpec(
+        "cpg-actor-open-loop",
+        "CPG-Actor without feedback (xi = kappa = 0): only the CPG parameters are trained",
+        lambda cfg, obs_dim, action_dim, env_cfg: CPGActorAgent(
+            obs_dim, action_dim, cfg, env_cfg.control_dt, feedback=False
+        ),
+    )
+)

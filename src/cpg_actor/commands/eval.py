@@ -1,0 +1,247 @@
+"""`cpg-actor eval`: deterministic evaluation of a trained run; traces (and a video) on disk."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+HELP = "evaluate a trained run deterministically; save per-step traces (and a video)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("run_dir", help="a run directory written by `cpg-actor train`")
+    parser.add_argument(
+        "--checkpoint", default=None, help="checkpoint file (default RUN_DIR/checkpoints/last.pt)"
+    )
+    parser.add_argument(
+        "--episodes", type=int, default=5, help="episodes, run in parallel (default 5)"
+    )
+    parser.add_argument(
+        "--sim",
+        default=None,
+        choices=("mujoco", "pybullet"),
+        help="physics backend (default: the run's)",
+    )
+    parser.add_argument("--seed", type=int, default=1000, help="environment seed (default 1000)")
+    parser.add_argument("--video", default=None, help="write an mp4 of the first episode here")
+    parser.add_argument(
+        "--output", default=None, help="traces file (default RUN_DIR/eval/traces.npz)"
+    )
+    parser.add_argument("--overwrite", action="store_true", help="replace existing traces / video")
+
+
+def run(args: argparse.Namespace) -> int:
+    from cpg_actor.config import TrainConfig
+    from cpg_actor.runner import Runner
+
+    run_dir = Path(args.run_dir)
+    config_path = run_dir / "config.yaml"
+    if not config_path.is_file():
+        raise FileNotFoundError(
+            f"{config_path} does not exist; is {run_dir} a training run directory?"
+        )
+    if args.episodes < 1:
+        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
+    checkpoint = Path(args.checkpoint) if args.checkpoint else run_dir / "checkpoints" / "last.pt"
+    output = Path(args.output) if args.output else run_dir / "eval" / "traces.npz"
+    for path in (output, Path(args.video) if args.video else None):
+        if path is not None and path.exists() and not args.overwrite:
+            raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
+
+    config = TrainConfig.load(config_path)
+    config.num_envs = args.episodes
+    if args.sim is not None:
+        config.env.sim = args.sim
+    runner = Runner(config, run_dir=None, tensorboard=False)
+    try:
+        runner.load_checkpoint(checkpoint, restore_training=False)
+        traces = evaluate(runner, seed=args.seed)
+    finally:
+        runner.close()
+
+    output.parent.mkdir(parents=True, exist_ok=True)
+    np.savez(output, **traces)
+    for i in range(args.episodes):
+        print(
+            f"episode {i}: return {traces['episode_return'][i]:.3f}, hop height "
+            f"{traces['hop_height'][i]:.3f} m, {traces['length'][i]} steps"
+        )
+    print(
+        f"mean return {traces['episode_return'].mean():.3f}, mean hop height "
+        f"{traces['hop_height'].mean():.3f} m over {args.episodes} episodes; traces in {output}"
+    )
+    figures = plot_training_curves(run_dir / "metrics.jsonl", output.parent / "training_curves.png")
+    figures += plot_traces(traces, output.parent / "traces.png")
+    for figure in figures:
+        print(f"figure {figure}")
+    if args.video:
+        record_video(config, checkpoint, Path(args.video), args.seed, args.overwrite)
+        print(f"video in {args.video}")
+    return 0
+
+
+def evaluate(runner, seed: int) -> dict[str, np.ndarray]:
+    """Run every env to the end of its first episode with the mean action; return traces
+    ``(T, E, ...)`` (rows after an env's episode ended are NaN)."""
+    import torch
+
+    from cpg_actor.runner import HIP_HEIGHT
+
+    agent, env, config = runner.agent, runner.env, runner.config
+    num_envs = config.num_envs
+    dt = float(config.env.control_dt)
+    obs, _ = env.reset(seed=seed)
+    obs = np.asarray(obs, dtype=np.float32)
+    standing = float(obs[:, HIP_HEIGHT].mean())
+    state = agent.initial_state(num_envs)
+    previous_desired = obs[:, 4:6].copy()
+    active = np.ones(num_envs, dtype=bool)
+    length = np.zeros(num_envs, dtype=np.int64)
+    records: dict[str, list[np.ndarray]] = {}
+    max_steps = int(getattr(config.env, "episode_steps", 10_000)) + 1
+    for _ in range(max_steps):
+        with torch.no_grad():
+            obs_n = runner.normalize(torch.as_tensor(obs), update=False)
+            step = agent.act(obs_n, state, deterministic=True)
+        desired = np.clip(step.action.numpy(), runner.action_low, runner.action_high)
+        next_obs, reward, terminated, truncated, info = env.step(desired)
+        done = np.logical_or(terminated, truncated)
+        measured = np.asarray(next_obs, dtype=np.float32).copy()
+        if done.any():
+            measured[done] = np.asarray(info["final_obs"], dtype=np.float32)[done]
+        row = {
+            "desired_position": desired,
+            "measured_position": measured[:, 0:2],
+            "measured_velocity": measured[:, 2:4],
+            "hip_height": measured[:, HIP_HEIGHT],
+            "foot_height": np.asarray(info.get("foot_height", np.full(num_envs, np.nan))),
+            "reward": np.asarray(reward, dtype=np.float64),
+        }
+        if "desired_velocity" in step.extras:
+            row["desired_velocity"] = step.extras["desired_velocity"].numpy()
+        else:  # the MLP has no analytic velocity: finite difference of its desired positions
+            row["desired_velocity"] = (desired - previous_desired) / dt
+        for key in ("theta_dot", "r_ddot", "xi", "kappa"):
+            if key in step.extras:
+                row[key] = step.extras[key].numpy()
+        for key, value in row.items():
+            value = np.asarray(value, dtype=np.float64).copy()
+            value[~active] = np.nan
+            records.setdefault(key, []).append(value)
+        length += active
+        active &= ~done
+        previous_desired = desired
+        state = step.next_state
+        obs = np.asarray(next_obs, dtype=np.float32)
+        if not active.any():
+            break
+    traces = {key: np.stack(values) for key, values in records.items()}
+    traces["time"] = dt * np.arange(1, len(records["reward"]) + 1)
+    traces["length"] = length
+    traces["episode_return"] = np.nansum(traces["reward"], axis=0)
+    traces["hop_height"] = np.maximum(0.0, np.nanmax(traces["hip_height"], axis=0) - standing)
+    traces["standing_hip_height"] = np.array(standing)
+    traces["control_dt"] = np.array(dt)
+    traces["agent"] = np.array(config.agent)
+    return traces
+
+
+def record_video(config, checkpoint: Path, path: Path, seed: int, overwrite: bool) -> None:
+    """One deterministic episode in a single ``HopperEnv`` rendered as ``rgb_array``."""
+    import torch
+
+    from cpg_actor.envs import HopperEnv, write_video
+    from cpg_actor.runner import Runner
+
+    config.num_envs = 1
+    runner = Runner(config, run_dir=None, tensorboard=False)
+    env = HopperEnv(config.env, render_mode="rgb_array")
+    try:
+        runner.load_checkpoint(checkpoint, restore_training=False)
+        agent = runner.agent
+        obs, _ = env.reset(seed=seed)
+        state = agent.initial_state(1)
+        frames = [env.render()]
+        for _ in range(int(config.env.episode_steps)):
+            with torch.no_grad():
+                obs_n = runner.normalize(torch.as_tensor(obs)[None], update=False)
+                step = agent.act(obs_n, state, deterministic=True)
+            action = np.clip(step.action.numpy()[0], runner.action_low, runner.action_high)
+            obs, _, terminated, truncated, _ = env.step(action)
+            frames.append(env.render())
+            state = step.next_state
+            if terminated or truncated:
+                break
+    finally:
+        env.close()
+        runner.close()
+    write_video(frames, path, fps=round(1.0 / config.env.control_dt), overwrite=overwrite)
+
+
+def plot_training_curves(metrics: Path, path: Path) -> list[Path]:
+    """Episode return and hop height against training steps, from ``metrics.jsonl``."""
+    import json
+
+    if not metrics.is_file():
+        return []
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rows = [json.loads(line) for line in metrics.read_text().splitlines() if line.strip()]
+    steps = np.array([r["global_step"] for r in rows], dtype=float)
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
+    for ax, key, label in (
+        (axes[0], "charts/episode_return", "mean episode return"),
+        (axes[1], "charts/hop_height", "mean hop height (m)"),
+    ):
+        values = np.array([np.nan if r.get(key) is None else r[key] for r in rows], dtype=float)
+        ax.plot(steps, values)
+        ax.set_xlabel("control steps")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    fig.suptitle(str(metrics.parent.name))
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return [path]
+
+
+def plot_traces(traces: dict[str, np.ndarray], path: Path) -> list[Path]:
+    """Episode 0: desired vs measured positions, desired velocities, heights (paper Fig. 6-7)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    t = traces["time"]
+    panels = [
+        ("position (rad)", "desired_position", "measured_position"),
+        ("desired velocity (rad/s)", "desired_velocity", None),
+    ]
+    if "theta_dot" in traces:
+        panels += [("theta_dot (rad/s)", "theta_dot", None), ("r_ddot (rad/s^2)", "r_ddot", None)]
+    fig, axes = plt.subplots(len(panels) + 1, 1, figsize=(9, 2.2 * (len(panels) + 1)), sharex=True)
+    for ax, (label, key, measured) in zip(axes, panels, strict=False):
+        for j, joint in enumerate(("HFE", "KFE")):
+            ax.plot(
+                t, traces[key][:, 0, j], label=joint if measured is None else f"{joint} desired"
+            )
+            if measured is not None:
+                ax.plot(t, traces[measured][:, 0, j], "--", label=f"{joint} measured")
+        ax.set_ylabel(label)
+        ax.legend(fontsize=7, loc="upper right")
+        ax.grid(alpha=0.3)
+    axes[-1].plot(t, traces["hip_height"][:, 0], label="hip")
+    axes[-1].plot(t, traces["foot_height"][:, 0], ":", label="foot")
+    axes[-1].set_ylabel("height (m)")
+    axes[-1].set_xlabel("time (s)")
+    axes[-1].legend(fontsize=7, loc="upper right")
+    axes[-1].grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return [path]

@@ -1,0 +1,207 @@
+"""`cpg-actor train`: train an agent with PPO on the hopper; resumable run directory."""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import sys
+from pathlib import Path
+
+from cpg_actor.config import TrainConfig, apply_dict, parse_override, parse_steps
+
+HELP = "train an agent (cpg-actor, cpg-actor-open-loop, mlp) with PPO on the hopper"
+
+DEFAULT_RUN_DIR = "runs/{agent}_{sim}_seed{seed}"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from cpg_actor.agents import AGENTS
+
+    parser.add_argument(
+        "--agent", default=None, help=f"one of {', '.join(sorted(AGENTS))} (default cpg-actor)"
+    )
+    parser.add_argument(
+        "--sim",
+        default=None,
+        choices=("mujoco", "pybullet"),
+        help="physics backend (default mujoco)",
+    )
+    parser.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
+    parser.add_argument(
+        "--total-steps",
+        default=None,
+        help=f"control steps over all envs, e.g. 300k or 20M (default {TrainConfig.total_steps:,})",
+    )
+    parser.add_argument(
+        "--num-envs", type=int, default=None, help=f"parallel envs (default {TrainConfig.num_envs})"
+    )
+    parser.add_argument(
+        "--run-dir", default=None, help=f"output directory (default {DEFAULT_RUN_DIR})"
+    )
+    parser.add_argument(
+        "--config", default=None, help="YAML file with config values (nested like config.yaml)"
+    )
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a config value on its dotted path, e.g. ppo.learning_rate=1e-4 (repeatable)",
+    )
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the run in --run-dir from its last checkpoint",
+    )
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace an existing run directory"
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def build_config(args: argparse.Namespace) -> TrainConfig:
+    """Defaults, then --config, then the flags, then each --set, in that order."""
+    config = TrainConfig()
+    if args.config:
+        path = Path(args.config)
+        if not path.is_file():
+            raise FileNotFoundError(f"config file {path} does not exist")
+        config = TrainConfig.load(path)
+    flags: dict = {}
+    if args.agent is not None:
+        flags["agent"] = args.agent
+    if args.seed is not None:
+        flags["seed"] = args.seed
+    if args.total_steps is not None:
+        flags["total_steps"] = parse_steps(args.total_steps)
+    if args.num_envs is not None:
+        flags["num_envs"] = args.num_envs
+    if args.sim is not None:
+        flags["env"] = {"sim": args.sim}
+    apply_dict(config, flags, prefix="")
+    for text in args.overrides:
+        apply_dict(config, parse_override(text), prefix="")
+    config.validate()
+    return config
+
+
+def prepare_run_dir(run_dir: Path, overwrite: bool) -> None:
+    """Create ``run_dir``; an existing non-empty one is replaced only with ``overwrite`` and only
+    if it looks like a run directory (holds a config.yaml)."""
+    if run_dir.exists() and any(run_dir.iterdir()):
+        if not overwrite:
+            raise FileExistsError(
+                f"run directory {run_dir} already exists; pass --resume to continue it or "
+                "--overwrite to replace it"
+            )
+        if not (run_dir / "config.yaml").is_file():
+            raise FileExistsError(
+                f"{run_dir} is not empty and is not a run directory (no config.yaml); "
+                "refusing to delete it"
+            )
+        shutil.rmtree(run_dir)
+    run_dir.mkdir(parents=True, exist_ok=True)
+
+
+def run(args: argparse.Namespace) -> int:
+    from cpg_actor.runner import Runner, TrainingDiverged
+
+    if args.resume:
+        if args.run_dir is None:
+            raise ValueError("--resume needs --run-dir")
+        given = [
+            flag
+            for flag, value in (
+                ("--agent", args.agent),
+                ("--sim", args.sim),
+                ("--seed", args.seed),
+                ("--num-envs", args.num_envs),
+                ("--config", args.config),
+                ("--set", args.overrides or None),
+            )
+            if value is not None
+        ]
+        if given:
+            raise ValueError(
+                f"a resumed run uses its saved config.yaml; only --total-steps may change "
+                f"(got {', '.join(given)})"
+            )
+        if args.overwrite:
+            raise ValueError("--resume and --overwrite exclude each other")
+        run_dir = Path(args.run_dir)
+        config_path = run_dir / "config.yaml"
+        if not config_path.is_file():
+            raise FileNotFoundError(f"{config_path} does not exist; nothing to resume")
+        checkpoint = run_dir / "checkpoints" / "last.pt"
+        if not checkpoint.is_file():
+            raise FileNotFoundError(f"{checkpoint} does not exist; nothing to resume")
+        config = TrainConfig.load(config_path)
+        if args.total_steps is not None:
+            config.total_steps = parse_steps(args.total_steps)
+        config.validate()
+        runner = Runner(config, run_dir, progress=not args.no_progress)
+        try:
+            runner.load_checkpoint(checkpoint)
+        except (ValueError, FileNotFoundError):
+            runner.close()
+            raise
+        if runner.iteration >= config.num_iterations:
+            runner.close()
+            raise ValueError(
+                f"the run is already at iteration {runner.iteration} "
+                f"({runner.global_step:,} steps); pass a larger --total-steps to continue"
+            )
+        config.save(config_path)
+        _truncate_metrics(run_dir / "metrics.jsonl", runner.iteration)
+        print(f"resuming {run_dir} at iteration {runner.iteration} ({runner.global_step:,} steps)")
+    else:
+        config = build_config(args)
+        run_dir = Path(
+            args.run_dir
+            or DEFAULT_RUN_DIR.format(agent=config.agent, sim=config.env.sim, seed=config.seed)
+        )
+        if run_dir.exists() and any(run_dir.iterdir()) and not args.overwrite:
+            prepare_run_dir(run_dir, overwrite=False)  # raises before anything is built
+        runner = Runner(config, run_dir, progress=not args.no_progress)
+        prepare_run_dir(run_dir, args.overwrite)
+        config.save(run_dir / "config.yaml")
+        print(
+            f"training {config.agent} on {config.env.sim} for {config.total_steps:,} steps "
+            f"({config.num_iterations} iterations of {config.steps_per_iteration} steps), "
+            f"run directory {run_dir}"
+        )
+    try:
+        runner.learn()
+    except TrainingDiverged as error:
+        print(f"cpg-actor train: training stopped: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(
+            f"cpg-actor train: interrupted at iteration {runner.iteration}; last checkpoint "
+            f"{runner.last_checkpoint_path()}; continue with --resume --run-dir {run_dir}",
+            file=sys.stderr,
+        )
+        return 130
+    finally:
+        runner.close()
+    row = getattr(runner, "last_row", {})
+    nan = float("nan")
+    print(
+        f"done: {runner.global_step:,} steps, mean episode return "
+        f"{row.get('charts/episode_return', nan):.3f}, hop height "
+        f"{row.get('charts/hop_height', nan):.3f} m; checkpoint {runner.last_checkpoint_path()}"
+    )
+    return 0
+
+
+def _truncate_metrics(path: Path, iteration: int) -> None:
+    """Drop metric rows logged after the checkpoint a run resumes from."""
+    if not path.is_file():
+        return
+    import json
+
+    lines = [line for line in path.read_text().splitlines() if line.strip()]
+    kept = [line for line in lines if json.loads(line).get("iteration", 0) <= iteration]
+    if len(kept) != len(lines):
+        path.write_text("".join(line + "\n" for line in kept))

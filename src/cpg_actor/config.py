@@ -1,0 +1,230 @@
+"""`TrainConfig`: everything a training run needs, saved as YAML next to the run.
+
+Every value can be overridden on dotted paths (``ppo.learning_rate=1e-4``, ``env.sim=pybullet``,
+``agent_config.actor_hidden=[128,128]``); unknown keys are errors listing the valid ones.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+import types
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from cpg_actor.agents.base import AgentConfig
+from cpg_actor.ppo.config import PPOConfig
+
+
+def _default_env_config() -> Any:
+    from cpg_actor.envs import HopperConfig
+
+    return HopperConfig()
+
+
+@dataclass
+class TrainConfig:
+    """One training run. ``total_steps`` counts control steps summed over all environments."""
+
+    agent: str = "cpg-actor"  # a name in cpg_actor.agents.AGENTS
+    seed: int = 0
+    num_envs: int = 64
+    total_steps: int = 1_000_000  # about 2 minutes on 2 cores (the quick start)
+    checkpoint_interval: int = 50  # iterations between checkpoints (and one at the end)
+    log_interval: int = 1  # iterations between TensorBoard / metrics.csv rows
+    histogram_interval: int = 10  # iterations between parameter histograms
+    torch_threads: int = 1  # torch intra-op threads (the simulator uses the other cores)
+    env_threads: int | None = None  # simulator threads, None: the env's default
+    agent_config: AgentConfig = field(default_factory=AgentConfig)
+    ppo: PPOConfig = field(default_factory=PPOConfig)
+    env: Any = field(default_factory=_default_env_config)  # cpg_actor.envs.HopperConfig
+
+    @property
+    def steps_per_iteration(self) -> int:
+        return self.num_envs * self.ppo.num_steps
+
+    @property
+    def num_iterations(self) -> int:
+        return max(1, math.ceil(self.total_steps / self.steps_per_iteration))
+
+    def validate(self) -> None:
+        from cpg_actor.agents import get_agent_spec
+
+        get_agent_spec(self.agent)
+        for name in (
+            "num_envs",
+            "total_steps",
+            "checkpoint_interval",
+            "log_interval",
+            "histogram_interval",
+            "torch_threads",
+        ):
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+                raise ValueError(f"{name} must be a positive integer, got {value!r}")
+        if not isinstance(self.seed, int) or self.seed < 0:
+            raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
+        self.agent_config.validate()
+        self.ppo.validate()
+        if self.steps_per_iteration < self.ppo.num_minibatches:
+            raise ValueError("num_envs * ppo.num_steps must be >= ppo.num_minibatches")
+
+    # -- (de)serialisation -------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        return _to_plain(self)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
+        config = cls()
+        apply_dict(config, data, prefix="")
+        return config
+
+    def save(self, path: Path) -> None:
+        path.write_text(yaml.safe_dump(self.to_dict(), sort_keys=False))
+
+    @classmethod
+    def load(cls, path: Path) -> TrainConfig:
+        try:
+            data = yaml.safe_load(Path(path).read_text()) or {}
+        except yaml.YAMLError as error:
+            raise ValueError(f"{path} is not valid YAML: {error}") from None
+        if not isinstance(data, dict):
+            raise ValueError(f"{path} must hold a mapping of config keys")
+        return cls.from_dict(data)
+
+
+def _to_plain(value: Any) -> Any:
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: _to_plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, (tuple, list)):
+        return [_to_plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _to_plain(v) for k, v in value.items()}
+    return value
+
+
+def _field_types(obj: Any) -> dict[str, Any]:
+    try:
+        return typing.get_type_hints(type(obj))
+    except Exception:  # a type hint that cannot be resolved: fall back to the current values
+        return {f.name: type(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+
+
+def _coerce(value: Any, annotation: Any, key: str) -> Any:
+    """Convert a YAML value to the field's annotated type, or raise a clear ValueError."""
+    origin = typing.get_origin(annotation)
+    args = typing.get_args(annotation)
+    if origin in (typing.Union, types.UnionType):
+        if value is None and type(None) in args:
+            return None
+        errors = []
+        for arg in args:
+            if arg is type(None):
+                continue
+            try:
+                return _coerce(value, arg, key)
+            except ValueError as error:
+                errors.append(str(error))
+        raise ValueError(errors[0] if errors else f"{key}: invalid value {value!r}")
+    if annotation is Any:
+        return value
+    if annotation is bool:
+        if isinstance(value, bool):
+            return value
+        raise ValueError(f"{key} must be true or false, got {value!r}")
+    if annotation is int:
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value:
+            raise ValueError(f"{key} must be an integer, got {value!r}")
+        return int(value)
+    if annotation is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ValueError(f"{key} must be a number, got {value!r}")
+        return float(value)
+    if annotation is str:
+        if not isinstance(value, str):
+            raise ValueError(f"{key} must be a string, got {value!r}")
+        return value
+    if origin in (tuple, list) or annotation in (tuple, list):
+        if not isinstance(value, (list, tuple)):
+            raise ValueError(f"{key} must be a list, got {value!r}")
+        item = args[0] if args else Any
+        items = [_coerce(v, item, f"{key}[{i}]") for i, v in enumerate(value)]
+        return tuple(items) if (origin or annotation) is tuple else items
+    if origin is dict or annotation is dict:
+        if not isinstance(value, dict):
+            raise ValueError(f"{key} must be a mapping, got {value!r}")
+        return value
+    return value
+
+
+def apply_dict(obj: Any, data: dict[str, Any], prefix: str) -> None:
+    """Set fields of the dataclass ``obj`` from a nested mapping, validating keys and types."""
+    names = {f.name: f for f in dataclasses.fields(obj)}
+    hints = _field_types(obj)
+    for key, value in data.items():
+        path = f"{prefix}{key}"
+        if key not in names:
+            raise ValueError(
+                f"unknown config key '{path}'; valid keys here: {', '.join(sorted(names))}"
+            )
+        current = getattr(obj, key)
+        if dataclasses.is_dataclass(current):
+            if not isinstance(value, dict):
+                raise ValueError(f"'{path}' is a section; give a mapping of its keys")
+            if hasattr(type(current), "from_dict") and prefix == "" and key == "env":
+                merged = {**_to_plain(current), **value}
+                try:
+                    setattr(obj, key, type(current).from_dict(merged))
+                except (TypeError, ValueError) as error:
+                    raise ValueError(f"invalid env config: {error}") from None
+            else:
+                apply_dict(current, value, prefix=f"{path}.")
+        else:
+            setattr(obj, key, _coerce(value, hints.get(key, Any), path))
+
+
+_ASSIGNMENT = re.compile(r"^([A-Za-z_][\w.]*)=(.*)$", re.DOTALL)
+
+
+def parse_override(text: str) -> dict[str, Any]:
+    """``"ppo.learning_rate=1e-4"`` -> ``{"ppo": {"learning_rate": 1e-4}}`` (value read as YAML)."""
+    match = _ASSIGNMENT.match(text.strip())
+    if not match:
+        raise ValueError(f"--set expects KEY=VALUE with a dotted key, got {text!r}")
+    key, raw = match.groups()
+    try:
+        value = yaml.safe_load(raw) if raw.strip() else None
+    except yaml.YAMLError:
+        value = raw
+    if isinstance(value, str) and re.fullmatch(r"[-+]?\d*\.?\d+[eE][-+]?\d+", value):
+        value = float(value)  # YAML 1.1 reads 1e-4 as a string
+    nested: dict[str, Any] = {}
+    node = nested
+    parts = key.split(".")
+    for part in parts[:-1]:
+        node = node.setdefault(part, {})
+    node[parts[-1]] = value
+    return nested
+
+
+_SUFFIXES = {"k": 1_000, "m": 1_000_000, "g": 1_000_000_000, "b": 1_000_000_000}
+
+
+def parse_steps(text: str | int) -> int:
+    """``"20M"`` -> 20_000_000, ``"500k"`` -> 500_000, ``"1e6"`` -> 1_000_000; must be > 0."""
+    raw = str(text).strip().lower().replace("_", "")
+    try:
+        if raw and raw[-1] in _SUFFIXES:
+            value = float(raw[:-1]) * _SUFFIXES[raw[-1]]
+        else:
+            value = float(raw)
+    except ValueError:
+        raise ValueError(f"invalid step count {text!r}; use e.g. 300000, 500k or 20M") from None
+    if not math.isfinite(value) or value != int(value) or value <= 0:
+        raise ValueError(f"the step count must be a positive integer, got {text!r}")
+    return int(value)

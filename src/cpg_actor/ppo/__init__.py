@@ -1,0 +1,16 @@
+"""PPO written out: rollout storage with the CPG state, GAE, running normalisation, update."""
+
+from cpg_actor.ppo.algorithm import PPO, NonFiniteLossError, gaussian_kl
+from cpg_actor.ppo.config import PPOConfig
+from cpg_actor.ppo.normalizer import RunningNormalizer
+from cpg_actor.ppo.storage import RolloutStorage, compute_gae
+
+__all__ = [
+    "PPO",
+    "NonFiniteLossError",
+    "PPOConfig",
+    "RolloutStorage",
+    "RunningNormalizer",
+    "compute_gae",
+    "gaussian_kl",
+]

@@ -1,0 +1,51 @@
+"""Running observation normalisation (mean and variance over everything seen so far)."""
+
+from __future__ import annotations
+
+import torch
+from torch import Tensor, nn
+
+
+class RunningNormalizer(nn.Module):
+    """``(x - mean) / sqrt(var + eps)``, clipped to ``+-clip``, with running statistics.
+
+    Statistics are merged batch by batch with the parallel algorithm of Chan et al. (exact for
+    the population mean and variance of all samples seen). They are buffers, so they are part
+    of ``state_dict()`` and travel with checkpoints. :meth:`update` is called by the runner
+    during rollouts only; the PPO update never touches it (the stored observations are already
+    normalised), so the normaliser is frozen while gradients are computed.
+    """
+
+    def __init__(self, size: int, epsilon: float = 1e-8, clip: float = 10.0) -> None:
+        super().__init__()
+        self.epsilon = epsilon
+        self.clip = clip
+        self.register_buffer("mean", torch.zeros(size, dtype=torch.float64))
+        self.register_buffer("var", torch.ones(size, dtype=torch.float64))
+        self.register_buffer("count", torch.zeros((), dtype=torch.float64))
+
+    @torch.no_grad()
+    def update(self, x: Tensor) -> None:
+        """Merge a batch ``(B, size)`` into the running statistics."""
+        x = x.to(torch.float64).reshape(-1, self.mean.shape[0])
+        batch_count = x.shape[0]
+        if batch_count == 0:
+            return
+        batch_mean = x.mean(dim=0)
+        batch_var = x.var(dim=0, unbiased=False)
+        total = self.count + batch_count
+        delta = batch_mean - self.mean
+        m2 = (
+            self.var * self.count
+            + batch_var * batch_count
+            + delta**2 * self.count * batch_count / total
+        )
+        self.mean += delta * batch_count / total
+        self.var.copy_(m2 / total)
+        self.count.copy_(total)
+
+    def forward(self, x: Tensor) -> Tensor:
+        """Normalise ``x`` (any leading shape); does not update the statistics."""
+        std = torch.sqrt(self.var + self.epsilon)
+        y = (x.to(torch.float64) - self.mean) / std
+        return y.clamp(-self.clip, self.clip).to(x.dtype)

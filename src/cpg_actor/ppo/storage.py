@@ -1,0 +1,145 @@
+"""Rollout storage and generalised advantage estimation (GAE).
+
+The storage keeps, per control step and environment, the *normalised* observation the agent
+acted on and the agent's recurrent state *before* the step (the CPG state of section III-B;
+an empty ``(0,)`` tensor for stateless agents). The PPO update replays one step of the agent
+from exactly these two inputs, so no backpropagation through time is needed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import torch
+from torch import Tensor
+
+
+def compute_gae(
+    rewards: Tensor,
+    values: Tensor,
+    terminated: Tensor,
+    truncated: Tensor,
+    final_values: Tensor,
+    last_values: Tensor,
+    gamma: float,
+    gae_lambda: float,
+) -> tuple[Tensor, Tensor]:
+    """GAE (Schulman et al. 2016) with time-limit bootstrapping; all inputs ``(T, N)`` float.
+
+    ``delta_t = r_t + gamma * V_next_t - V_t`` where ``V_next_t`` is
+
+    * ``V(s_{t+1})`` (``values[t+1]``, or ``last_values`` after the last step) if the episode
+      goes on,
+    * ``final_values[t]`` = ``V(final observation)`` if the episode was *truncated* at ``t``
+      (a time limit is not a real end: bootstrap),
+    * ``0`` if it *terminated* at ``t``.
+
+    ``A_t = delta_t + gamma * lambda * (1 - done_t) * A_{t+1}`` with ``done = terminated or
+    truncated`` (the next row belongs to a new episode). Returns ``(advantages, returns)``
+    with ``returns = advantages + values``.
+    """
+    num_steps = rewards.shape[0]
+    done = torch.maximum(terminated, truncated)
+    advantages = torch.zeros_like(rewards)
+    next_advantage = torch.zeros_like(last_values)
+    for t in reversed(range(num_steps)):
+        next_values = last_values if t == num_steps - 1 else values[t + 1]
+        bootstrap = (1.0 - done[t]) * next_values + truncated[t] * (
+            1.0 - terminated[t]
+        ) * final_values[t]
+        delta = rewards[t] + gamma * bootstrap - values[t]
+        next_advantage = delta + gamma * gae_lambda * (1.0 - done[t]) * next_advantage
+        advantages[t] = next_advantage
+    return advantages, advantages + values
+
+
+class RolloutStorage:
+    """Fixed-size buffers ``(T, N, ...)`` for one iteration's rollout."""
+
+    FIELDS = (
+        "observations",
+        "states",
+        "actions",
+        "log_probs",
+        "values",
+        "action_mean",
+        "action_std",
+        "rewards",
+        "terminated",
+        "truncated",
+        "final_values",
+    )
+
+    def __init__(
+        self,
+        num_steps: int,
+        num_envs: int,
+        obs_dim: int,
+        action_dim: int,
+        state_shape: tuple[int, ...],
+    ) -> None:
+        t, n = num_steps, num_envs
+        self.num_steps, self.num_envs = num_steps, num_envs
+        self.observations = torch.zeros(t, n, obs_dim)
+        self.states = torch.zeros(t, n, *state_shape)
+        self.actions = torch.zeros(t, n, action_dim)
+        self.log_probs = torch.zeros(t, n)
+        self.values = torch.zeros(t, n)
+        self.action_mean = torch.zeros(t, n, action_dim)
+        self.action_std = torch.zeros(t, n, action_dim)
+        self.rewards = torch.zeros(t, n)
+        self.terminated = torch.zeros(t, n)
+        self.truncated = torch.zeros(t, n)
+        self.final_values = torch.zeros(t, n)
+        self.advantages = torch.zeros(t, n)
+        self.returns = torch.zeros(t, n)
+        self.step = 0
+
+    def add(self, **fields: Tensor) -> None:
+        """Store one control step; every field of :attr:`FIELDS` is required."""
+        if self.step >= self.num_steps:
+            raise RuntimeError("rollout storage is full; call clear() first")
+        missing = set(self.FIELDS) - set(fields)
+        if missing:
+            raise ValueError(f"missing rollout fields: {sorted(missing)}")
+        for name, value in fields.items():
+            getattr(self, name)[self.step].copy_(value)
+        self.step += 1
+
+    def clear(self) -> None:
+        self.step = 0
+
+    def compute_returns(self, last_values: Tensor, gamma: float, gae_lambda: float) -> None:
+        self.advantages, self.returns = compute_gae(
+            self.rewards,
+            self.values,
+            self.terminated,
+            self.truncated,
+            self.final_values,
+            last_values,
+            gamma,
+            gae_lambda,
+        )
+
+    def minibatches(self, num_minibatches: int) -> Iterator[dict[str, Tensor]]:
+        """Flatten ``(T, N)`` and yield random minibatches (torch's global RNG: reproducible)."""
+        batch_size = self.num_steps * self.num_envs
+        if num_minibatches > batch_size:
+            raise ValueError(f"{num_minibatches} minibatches for a batch of {batch_size} samples")
+        flat = {
+            name: getattr(self, name).flatten(0, 1)
+            for name in (
+                "observations",
+                "states",
+                "actions",
+                "log_probs",
+                "values",
+                "action_mean",
+                "action_std",
+                "advantages",
+                "returns",
+            )
+        }
+        order = torch.randperm(batch_size)
+        for indices in order.chunk(num_minibatches):
+            yield {name: value[indices] for name, value in flat.items()}

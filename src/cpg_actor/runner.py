@@ -1,0 +1,515 @@
+"""The training loop: rollouts with the CPG state carried per environment, PPO updates,
+logging (console, TensorBoard, metrics.jsonl) and atomic, resumable checkpoints.
+
+Reproducibility. Everything random is seeded from ``TrainConfig.seed``: torch (action noise,
+minibatch order, initialisation), numpy and python RNGs, and the environments'
+``reset(seed=...)``. After every checkpoint all environments restart their episodes with a
+seed derived from ``(seed, iteration)`` (the same happens when a run resumes from that
+checkpoint), so a resumed run reproduces the uninterrupted run exactly, without saving the
+simulator's state.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import random
+import time
+from collections import deque
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from cpg_actor.agents import get_agent_spec
+from cpg_actor.config import TrainConfig
+from cpg_actor.ppo import PPO, NonFiniteLossError, RolloutStorage, RunningNormalizer
+
+CHECKPOINT_FORMAT = "cpg-actor-checkpoint"
+CHECKPOINT_VERSION = 1
+HIP_HEIGHT = 6  # index of the hip height in the hopper observation
+
+
+class TrainingDiverged(RuntimeError):
+    """A loss became NaN/inf; the run stopped and the last good checkpoint was kept."""
+
+
+def derived_seed(seed: int, iteration: int) -> int:
+    """The environments' reset seed after ``iteration`` iterations of a run seeded ``seed``."""
+    return int(np.random.SeedSequence([seed, iteration]).generate_state(1)[0])
+
+
+def seed_everything(seed: int) -> None:
+    random.seed(seed)
+    np.random.seed(seed % 2**32)  # noqa: NPY002 (third-party code may use the global RNG)
+    torch.manual_seed(seed)
+
+
+def rng_state() -> dict[str, Any]:
+    kind, keys, pos, has_gauss, cached = np.random.get_state()  # noqa: NPY002
+    return {
+        "torch": torch.get_rng_state(),
+        "numpy": [kind, torch.from_numpy(keys.astype(np.int64)), pos, has_gauss, cached],
+        "python": random.getstate(),
+    }
+
+
+def set_rng_state(state: dict[str, Any]) -> None:
+    torch.set_rng_state(state["torch"])
+    kind, keys, pos, has_gauss, cached = state["numpy"]
+    np.random.set_state((kind, keys.numpy().astype(np.uint32), pos, has_gauss, cached))  # noqa: NPY002
+    random.setstate(state["python"])
+
+
+def atomic_save(obj: Any, path: Path) -> None:
+    """``torch.save`` to a temporary file in the same directory, fsync, then ``os.replace``."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    try:
+        with open(tmp, "wb") as f:
+            torch.save(obj, f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def load_checkpoint(path: Path) -> dict[str, Any]:
+    """Load and sanity-check a checkpoint; a clear ValueError if it is not one of ours."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"checkpoint {path} does not exist")
+    try:
+        data = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception as error:  # truncated, corrupt, or not a torch file at all
+        raise ValueError(
+            f"checkpoint {path} is corrupt or not a cpg-actor checkpoint "
+            f"({error.__class__.__name__})"
+        ) from None
+    if not isinstance(data, dict) or data.get("format") != CHECKPOINT_FORMAT:
+        raise ValueError(f"{path} is not a cpg-actor checkpoint")
+    if data.get("version") != CHECKPOINT_VERSION:
+        raise ValueError(
+            f"checkpoint {path} has version {data.get('version')}, expected {CHECKPOINT_VERSION}"
+        )
+    return data
+
+
+@dataclass
+class EpisodeStats:
+    """Per-environment accumulators of the episode in progress."""
+
+    returns: np.ndarray
+    lengths: np.ndarray
+    max_hip_height: np.ndarray
+    terms: dict[str, np.ndarray]
+
+    @classmethod
+    def zeros(cls, num_envs: int) -> EpisodeStats:
+        return cls(
+            np.zeros(num_envs), np.zeros(num_envs, dtype=np.int64), np.full(num_envs, -np.inf), {}
+        )
+
+
+class Runner:
+    """Builds env, agent, normaliser and PPO from a :class:`TrainConfig` and trains.
+
+    ``run_dir`` (optional) receives checkpoints, ``metrics.jsonl`` and TensorBoard events;
+    ``env`` replaces the agent spec's environment factory (tests).
+    """
+
+    def __init__(
+        self,
+        config: TrainConfig,
+        run_dir: Path | None = None,
+        env: Any = None,
+        progress: bool = False,
+        tensorboard: bool = True,
+    ) -> None:
+        config.validate()
+        self.config = config
+        self.run_dir = Path(run_dir) if run_dir is not None else None
+        self.show_progress = progress
+        self.use_tensorboard = tensorboard and self.run_dir is not None
+        torch.set_num_threads(config.torch_threads)
+        seed_everything(config.seed)
+        self.spec = get_agent_spec(config.agent)
+        self.env = (
+            env
+            if env is not None
+            else self.spec.make_env(config.num_envs, config.env, config.env_threads)
+        )
+        if self.env.num_envs != config.num_envs:
+            raise ValueError(
+                f"the env has {self.env.num_envs} sub-envs, the config {config.num_envs}"
+            )
+        action_space = self.env.single_action_space
+        self.action_low = np.asarray(action_space.low, dtype=np.float32)
+        self.action_high = np.asarray(action_space.high, dtype=np.float32)
+        obs_dim = int(self.env.single_observation_space.shape[0])
+        action_dim = int(action_space.shape[0])
+        self.agent = self.spec.build(config.agent_config, obs_dim, action_dim, config.env)
+        self.normalizer = RunningNormalizer(obs_dim)
+        self.ppo = PPO(self.agent, config.ppo)
+        self.storage = RolloutStorage(
+            config.ppo.num_steps,
+            config.num_envs,
+            obs_dim,
+            action_dim,
+            tuple(self.agent.state_shape),
+        )
+        self.iteration = 0
+        self.global_step = 0
+        self.env_seed: int | None = None
+        self.recent: dict[str, deque] = {}
+        self._writer = None
+        self._episodes_started = False
+
+    # -- episodes ----------------------------------------------------------------------------
+    def start_episodes(self) -> None:
+        """Reset every environment and every agent state (run start, after each checkpoint)."""
+        self.env_seed = derived_seed(self.config.seed, self.iteration)
+        obs, _ = self.env.reset(seed=self.env_seed)
+        self.obs = torch.as_tensor(np.asarray(obs, dtype=np.float32))
+        self.agent_state = self.agent.initial_state(self.config.num_envs)
+        self.episode = EpisodeStats.zeros(self.config.num_envs)
+        # hop height is measured from the hip height the hopper starts its episodes at
+        self.standing_height = float(self.obs[:, HIP_HEIGHT].mean())
+        self._episodes_started = True
+
+    def normalize(self, obs: torch.Tensor, update: bool) -> torch.Tensor:
+        if not self.config.ppo.normalize_observations:
+            return obs
+        if update:
+            self.normalizer.update(obs)
+        return self.normalizer(obs)
+
+    @torch.no_grad()
+    def collect(self) -> dict[str, float]:
+        """One rollout of ``ppo.num_steps`` control steps in every environment."""
+        cfg = self.config
+        self.storage.clear()
+        sim_time = 0.0
+        for _ in range(cfg.ppo.num_steps):
+            obs = self.normalize(self.obs, update=True)
+            state = self.agent_state
+            step = self.agent.act(obs, state)
+            action = np.clip(step.action.numpy(), self.action_low, self.action_high)
+            start = time.perf_counter()
+            next_obs, reward, terminated, truncated, info = self.env.step(action)
+            sim_time += time.perf_counter() - start
+
+            terminated_t = torch.as_tensor(np.asarray(terminated, dtype=np.float32))
+            truncated_t = torch.as_tensor(np.asarray(truncated, dtype=np.float32))
+            done = np.logical_or(terminated, truncated)
+            final_values = torch.zeros(cfg.num_envs)
+            bootstrap = np.logical_and(truncated, np.logical_not(terminated))
+            if bootstrap.any():
+                rows = torch.as_tensor(np.flatnonzero(bootstrap))
+                final_obs = torch.as_tensor(np.asarray(info["final_obs"], dtype=np.float32))[rows]
+                final_values[rows] = self.agent.value(
+                    self.normalize(final_obs, update=False), step.next_state[rows]
+                )
+            self.storage.add(
+                observations=obs,
+                states=state,
+                actions=step.action,
+                log_probs=step.log_prob,
+                values=step.value,
+                action_mean=step.mean,
+                action_std=step.std,
+                rewards=torch.as_tensor(np.asarray(reward, dtype=np.float32)),
+                terminated=terminated_t,
+                truncated=truncated_t,
+                final_values=final_values,
+            )
+            next_state = step.next_state.clone()
+            if done.any():
+                rows = torch.as_tensor(np.flatnonzero(done))
+                next_state[rows] = self.agent.initial_state(len(rows))
+            self.agent_state = next_state
+            self.obs = torch.as_tensor(np.asarray(next_obs, dtype=np.float32))
+            # the hip height reached by this step; for envs that ended it is in final_obs
+            hip = np.array(next_obs[:, HIP_HEIGHT], dtype=np.float64)
+            if done.any():
+                hip[done] = np.asarray(info["final_obs"])[done, HIP_HEIGHT]
+            self._track_episodes(reward, hip, done, info)
+
+        last_values = self.agent.value(self.normalize(self.obs, update=False), self.agent_state)
+        self.storage.compute_returns(last_values, cfg.ppo.gamma, cfg.ppo.gae_lambda)
+        return {"simulation_time": sim_time}
+
+    def _track_episodes(self, reward, hip, done, info) -> None:
+        ep = self.episode
+        ep.returns += np.asarray(reward, dtype=np.float64)
+        ep.lengths += 1
+        ep.max_hip_height = np.maximum(ep.max_hip_height, hip)
+        for name, value in info.get("reward_terms", {}).items():
+            ep.terms.setdefault(name, np.zeros_like(ep.returns))
+            ep.terms[name] += np.asarray(value, dtype=np.float64)
+        if not done.any():
+            return
+        for i in np.flatnonzero(done):
+            self._remember("return", ep.returns[i])
+            self._remember("length", ep.lengths[i])
+            if np.isfinite(ep.max_hip_height[i]):
+                self._remember("hop_height", max(0.0, ep.max_hip_height[i] - self.standing_height))
+            for name, value in ep.terms.items():
+                self._remember(f"reward_terms/{name}", value[i])
+        ep.returns[done] = 0.0
+        ep.lengths[done] = 0
+        ep.max_hip_height[done] = -np.inf
+        for value in ep.terms.values():
+            value[done] = 0.0
+
+    def _remember(self, key: str, value: float, window: int = 100) -> None:
+        self.recent.setdefault(key, deque(maxlen=window)).append(float(value))
+
+    def mean_recent(self, key: str) -> float:
+        values = self.recent.get(key)
+        return float(np.mean(values)) if values else math.nan
+
+    # -- training ----------------------------------------------------------------------------
+    def learn(self) -> None:
+        """Train to ``config.total_steps``; checkpoint every ``checkpoint_interval`` iterations."""
+        cfg = self.config
+        num_iterations = cfg.num_iterations
+        if self.run_dir is not None:
+            self.run_dir.mkdir(parents=True, exist_ok=True)
+        if not self._episodes_started:
+            self.start_episodes()
+        if self.run_dir is not None and self.iteration == 0:
+            self.save_checkpoint()  # the untrained agent: a "before" for evaluations
+        progress = self._make_progress(num_iterations)
+        try:
+            while self.iteration < num_iterations:
+                start = time.perf_counter()
+                self.ppo.schedule(self.iteration, num_iterations)
+                collect_info = self.collect()
+                collect_time = time.perf_counter() - start
+                start_learn = time.perf_counter()
+                try:
+                    stats = self.ppo.update(self.storage)
+                except NonFiniteLossError as error:
+                    raise TrainingDiverged(
+                        f"iteration {self.iteration + 1}: {error}. "
+                        f"Last good checkpoint: {self.last_checkpoint_path()}"
+                    ) from None
+                learn_time = time.perf_counter() - start_learn
+                self.iteration += 1
+                self.global_step += cfg.steps_per_iteration
+                sps = cfg.steps_per_iteration / (collect_time + learn_time)
+                timing = {
+                    "SPS": sps,
+                    "collection": collect_time,
+                    "simulation": collect_info["simulation_time"],
+                    "inference": collect_time - collect_info["simulation_time"],
+                    "learning": learn_time,
+                }
+                if self.iteration % cfg.log_interval == 0 or self.iteration == num_iterations:
+                    self.log(stats, timing)
+                if progress is not None:
+                    progress.update(
+                        self._task,
+                        completed=self.global_step,
+                        sps=f"{sps:,.0f}",
+                        ret=f"{self.mean_recent('return'):.2f}",
+                        hop=f"{self.mean_recent('hop_height'):.3f}",
+                    )
+                at_interval = self.iteration % cfg.checkpoint_interval == 0
+                if self.run_dir is not None and (at_interval or self.iteration == num_iterations):
+                    self.save_checkpoint()
+                if at_interval and self.iteration < num_iterations:
+                    self.start_episodes()
+        finally:
+            if progress is not None:
+                progress.stop()
+            if self._writer is not None:
+                self._writer.flush()
+
+    def _make_progress(self, num_iterations: int):
+        if not self.show_progress:
+            return None
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        progress = Progress(
+            TextColumn("[bold]{task.description}"),
+            BarColumn(bar_width=16),
+            MofNCompleteColumn(),
+            TextColumn("steps {task.fields[sps]} SPS"),
+            TimeElapsedColumn(),
+            TextColumn("ETA"),
+            TimeRemainingColumn(),
+            TextColumn("return {task.fields[ret]} hop {task.fields[hop]} m"),
+        )
+        total = num_iterations * self.config.steps_per_iteration
+        self._task = progress.add_task(
+            self.config.agent, total=total, completed=self.global_step, sps="-", ret="-", hop="-"
+        )
+        progress.start()
+        return progress
+
+    # -- logging -----------------------------------------------------------------------------
+    @property
+    def writer(self):
+        if self._writer is None and self.use_tensorboard:
+            from torch.utils.tensorboard import SummaryWriter
+
+            self._writer = SummaryWriter(log_dir=str(self.run_dir / "tensorboard"))
+        return self._writer
+
+    def scalars(self, stats: dict[str, float], timing: dict[str, float]) -> dict[str, float]:
+        row: dict[str, float] = {}
+        row["charts/episode_return"] = self.mean_recent("return")
+        row["charts/episode_length"] = self.mean_recent("length")
+        row["charts/hop_height"] = self.mean_recent("hop_height")
+        for key in sorted(self.recent):
+            if key.startswith("reward_terms/"):
+                row[key] = self.mean_recent(key)
+        row["charts/SPS"] = timing["SPS"]
+        row["charts/learning_rate"] = stats["learning_rate"]
+        for key in (
+            "policy_loss",
+            "value_loss",
+            "entropy",
+            "approx_kl",
+            "kl",
+            "clipfrac",
+            "explained_variance",
+        ):
+            if key in stats:
+                row[f"losses/{key}"] = stats[key]
+        for i, log_std in enumerate(self.agent.log_std.detach().tolist()):
+            row[f"policy/log_std_{i}"] = log_std
+        for key in ("collection", "simulation", "inference", "learning"):
+            row[f"time/{key}"] = timing[key]
+        row.update(self.cpg_scalars())
+        return row
+
+    def cpg_scalars(self) -> dict[str, float]:
+        cpg = getattr(self.agent, "cpg", None)
+        if cpg is None:
+            return {}
+        names = cpg.topology.names
+        values = {k: v.detach() for k, v in cpg.parametrisation.values().items()}
+        row = {}
+        for field, short in (("frequency", "nu"), ("amplitude", "rho"), ("convergence", "a")):
+            for i, name in enumerate(names):
+                row[f"cpg/{short}_{name}"] = float(values[field][i])
+        for i, j in cpg.topology.edges:
+            row[f"cpg/w_{names[i]}_{names[j]}"] = float(values["coupling_weight"][i, j])
+            row[f"cpg/phi_{names[i]}_{names[j]}"] = float(values["phase_bias"][i, j])
+        return row
+
+    def log(self, stats: dict[str, float], timing: dict[str, float]) -> None:
+        row = self.scalars(stats, timing)
+        self.last_row = row
+        if self.run_dir is None:
+            return
+        record = {"iteration": self.iteration, "global_step": self.global_step}
+        record.update({k: (None if not math.isfinite(v) else v) for k, v in row.items()})
+        with open(self.run_dir / "metrics.jsonl", "a") as f:
+            f.write(json.dumps(record) + "\n")
+        writer = self.writer
+        if writer is None:
+            return
+        for key, value in row.items():
+            if math.isfinite(value):
+                writer.add_scalar(key, value, self.global_step)
+        if self.iteration % self.config.histogram_interval == 0:
+            self.log_histograms(writer)
+
+    def log_histograms(self, writer) -> None:
+        """Paper Fig. 5: CPG parameters and the feedback network's output layer over time."""
+        cpg = getattr(self.agent, "cpg", None)
+        if cpg is not None:
+            values = torch.cat(
+                [v.detach().flatten() for v in cpg.parametrisation.values().values()]
+            )
+            writer.add_histogram("cpg/parameters", values, self.global_step)
+            writer.add_histogram(
+                "cpg/vector_V", cpg.parametrisation.vector.detach(), self.global_step
+            )
+        for group, name in (("feedback", "feedback"), ("actor", "actor_mlp")):
+            network = getattr(self.agent, name, None)
+            if network is not None:
+                last, step = network[-1], self.global_step
+                writer.add_histogram(f"{group}/output_weight", last.weight.detach(), step)
+                writer.add_histogram(f"{group}/output_bias", last.bias.detach(), step)
+
+    # -- checkpoints -------------------------------------------------------------------------
+    def checkpoint_dir(self) -> Path:
+        assert self.run_dir is not None
+        return self.run_dir / "checkpoints"
+
+    def last_checkpoint_path(self) -> Path | None:
+        if self.run_dir is None:
+            return None
+        path = self.checkpoint_dir() / "last.pt"
+        return path if path.exists() else None
+
+    def state_dict(self) -> dict[str, Any]:
+        return {
+            "format": CHECKPOINT_FORMAT,
+            "version": CHECKPOINT_VERSION,
+            "agent": self.config.agent,
+            "config": self.config.to_dict(),
+            "iteration": self.iteration,
+            "global_step": self.global_step,
+            "agent_state": self.agent.state_dict(),
+            "normalizer": self.normalizer.state_dict(),
+            "optimizer": self.ppo.optimizer.state_dict(),
+            "learning_rate": self.ppo.learning_rate,
+            "rng": rng_state(),
+            "env_seed": self.env_seed,
+            "recent": {k: list(v) for k, v in self.recent.items()},
+        }
+
+    def save_checkpoint(self) -> Path:
+        data = self.state_dict()
+        path = self.checkpoint_dir() / f"iter_{self.iteration:06d}.pt"
+        atomic_save(data, path)
+        atomic_save(data, self.checkpoint_dir() / "last.pt")
+        return path
+
+    def load_checkpoint(self, path: Path, restore_training: bool = True) -> None:
+        data = load_checkpoint(path)
+        if data["agent"] != self.config.agent:
+            raise ValueError(
+                f"checkpoint {path} was trained with agent '{data['agent']}', "
+                f"this run uses '{self.config.agent}'"
+            )
+        try:
+            self.agent.load_state_dict(data["agent_state"])
+            self.normalizer.load_state_dict(data["normalizer"])
+        except RuntimeError as error:
+            raise ValueError(
+                f"checkpoint {path} does not match this agent's networks: {error}"
+            ) from None
+        if not restore_training:
+            return
+        self.ppo.optimizer.load_state_dict(data["optimizer"])
+        self.ppo.set_learning_rate(data["learning_rate"])
+        self.iteration = data["iteration"]
+        self.global_step = data["global_step"]
+        self.recent = {k: deque(v, maxlen=100) for k, v in data["recent"].items()}
+        set_rng_state(data["rng"])
+        self.start_episodes()
+
+    def close(self) -> None:
+        if self._writer is not None:
+            self._writer.close()
+            self._writer = None
+        self.env.close()

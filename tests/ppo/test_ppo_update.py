@@ -1,0 +1,71 @@
+"""PPO update options: learning-rate schedules, target-KL early stop, loss pieces."""
+
+import pytest
+import torch
+
+from cpg_actor.config import TrainConfig
+from cpg_actor.ppo import PPO, PPOConfig, gaussian_kl
+from cpg_actor.runner import Runner
+
+from .fake_env import FakeConfig, FakeHopperVectorEnv
+
+
+def collected_runner(**ppo):
+    config = TrainConfig(
+        agent="mlp",
+        num_envs=4,
+        total_steps=4 * 16 * 10,
+        ppo=PPOConfig(num_steps=16, num_epochs=3, num_minibatches=2, **ppo),
+        env=FakeConfig(),
+    )
+    runner = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
+    runner.start_episodes()
+    runner.collect()
+    return runner
+
+
+def test_adaptive_schedule_moves_the_learning_rate_against_the_kl():
+    low = collected_runner(lr_schedule="adaptive", desired_kl=1e-12, min_learning_rate=1e-5)
+    low.ppo.update(low.storage)
+    assert low.ppo.learning_rate < 3e-4  # KL far above the target: lr / 1.5 per minibatch
+    high = collected_runner(lr_schedule="adaptive", desired_kl=10.0, max_learning_rate=1e-2)
+    high.ppo.update(high.storage)
+    assert high.ppo.learning_rate > 3e-4
+    assert high.ppo.optimizer.param_groups[0]["lr"] == high.ppo.learning_rate
+
+
+def test_linear_schedule_decays_to_zero_and_fixed_stays():
+    ppo = PPO(torch.nn.Linear(2, 2), PPOConfig(lr_schedule="linear", learning_rate=1e-3))
+    ppo.schedule(5, 10)
+    assert ppo.learning_rate == pytest.approx(5e-4)
+    fixed = PPO(torch.nn.Linear(2, 2), PPOConfig(lr_schedule="fixed", learning_rate=1e-3))
+    fixed.schedule(5, 10)
+    assert fixed.learning_rate == 1e-3
+
+
+def test_target_kl_stops_the_epochs_early():
+    runner = collected_runner(target_kl=1e-12)
+    stats = runner.ppo.update(runner.storage)
+    assert stats["early_stop"] == 1.0
+    assert stats["num_minibatch_updates"] < 3 * 2
+    runner = collected_runner()
+    assert runner.ppo.update(runner.storage)["num_minibatch_updates"] == 3 * 2
+
+
+def test_gaussian_kl_matches_torch():
+    mu0, s0, mu1, s1 = (
+        torch.randn(5, 2),
+        torch.rand(5, 2) + 0.1,
+        torch.randn(5, 2),
+        torch.rand(5, 2) + 0.1,
+    )
+    expected = torch.distributions.kl_divergence(
+        torch.distributions.Normal(mu0, s0), torch.distributions.Normal(mu1, s1)
+    ).sum(-1)
+    torch.testing.assert_close(gaussian_kl(mu0, s0, mu1, s1), expected)
+
+
+def test_invalid_ppo_values_are_rejected():
+    for bad in ({"gamma": 1.5}, {"num_epochs": 0}, {"lr_schedule": "cosine"}, {"clip_ratio": 0}):
+        with pytest.raises(ValueError, match="ppo"):
+            PPOConfig(**bad).validate()

@@ -1,0 +1,136 @@
+"""Runner: reproducibility, exact resume, checkpoint validation, NaN handling (fake env)."""
+
+import pytest
+import torch
+
+from cpg_actor.config import TrainConfig
+from cpg_actor.ppo import PPOConfig
+from cpg_actor.runner import Runner, TrainingDiverged, load_checkpoint
+
+from .fake_env import FakeConfig, FakeHopperVectorEnv
+
+NUM_ENVS, NUM_STEPS = 4, 16
+
+
+def config(iterations, agent="cpg-actor", seed=3, interval=2, **ppo):
+    return TrainConfig(
+        agent=agent,
+        seed=seed,
+        num_envs=NUM_ENVS,
+        total_steps=iterations * NUM_ENVS * NUM_STEPS,
+        checkpoint_interval=interval,
+        ppo=PPOConfig(num_steps=NUM_STEPS, num_epochs=2, num_minibatches=2, **ppo),
+        env=FakeConfig(episode_steps=11, fall_probability=0.05),
+    )
+
+
+def runner(cfg, run_dir=None, env=None):
+    return Runner(
+        cfg, run_dir, env=env or FakeHopperVectorEnv(cfg.num_envs, cfg.env), tensorboard=False
+    )
+
+
+def params(r):
+    return {k: v.clone() for k, v in {**r.agent.state_dict(), **r.normalizer.state_dict()}.items()}
+
+
+def assert_same(a, b):
+    assert a.keys() == b.keys()
+    for k in a:
+        assert torch.equal(a[k], b[k]), k
+
+
+def test_same_seed_gives_identical_numbers_and_other_seed_differs():
+    runs = []
+    for seed in (3, 3, 4):
+        r = runner(config(3, seed=seed))
+        r.learn()
+        runs.append((params(r), r.last_row))
+    assert_same(runs[0][0], runs[1][0])
+    assert runs[0][1]["losses/policy_loss"] == runs[1][1]["losses/policy_loss"]
+    assert not torch.equal(runs[0][0]["log_std"], runs[2][0]["log_std"])
+
+
+@pytest.mark.parametrize("agent", ["cpg-actor", "mlp"])
+def test_resume_equals_uninterrupted_run(tmp_path, agent):
+    straight = runner(config(4, agent=agent), tmp_path / "straight")
+    straight.learn()
+
+    first = runner(config(2, agent=agent), tmp_path / "split")
+    first.learn()
+    assert (tmp_path / "split" / "checkpoints" / "last.pt").is_file()
+    resumed = runner(config(4, agent=agent), tmp_path / "split")
+    resumed.load_checkpoint(tmp_path / "split" / "checkpoints" / "last.pt")
+    assert resumed.iteration == 2
+    resumed.learn()
+
+    assert_same(params(straight), params(resumed))
+    assert straight.ppo.learning_rate == resumed.ppo.learning_rate
+    opt_a = straight.ppo.optimizer.state_dict()["state"]
+    opt_b = resumed.ppo.optimizer.state_dict()["state"]
+    for k in opt_a:
+        assert torch.equal(opt_a[k]["exp_avg"], opt_b[k]["exp_avg"])
+    ckpt = load_checkpoint(tmp_path / "split" / "checkpoints" / "last.pt")
+    assert ckpt["iteration"] == 4 and ckpt["global_step"] == 4 * NUM_ENVS * NUM_STEPS
+
+
+def test_checkpoint_from_another_agent_and_corrupt_files_are_rejected(tmp_path):
+    r = runner(config(2, agent="mlp"), tmp_path / "mlp")
+    r.learn()
+    path = tmp_path / "mlp" / "checkpoints" / "last.pt"
+    other = runner(config(2, agent="cpg-actor"))
+    with pytest.raises(ValueError, match="agent 'mlp'"):
+        other.load_checkpoint(path)
+    corrupt = tmp_path / "corrupt.pt"
+    corrupt.write_bytes(path.read_bytes()[:100])
+    with pytest.raises(ValueError, match="corrupt"):
+        load_checkpoint(corrupt)
+    garbage = tmp_path / "garbage.pt"
+    garbage.write_text("not a checkpoint")
+    with pytest.raises(ValueError, match="corrupt or not"):
+        load_checkpoint(garbage)
+    with pytest.raises(FileNotFoundError):
+        load_checkpoint(tmp_path / "missing.pt")
+    wrong = tmp_path / "wrong.pt"
+    torch.save({"weights": torch.zeros(2)}, wrong)
+    with pytest.raises(ValueError, match="not a cpg-actor checkpoint"):
+        load_checkpoint(wrong)
+
+
+def test_nan_loss_stops_the_run_and_keeps_the_last_good_checkpoint(tmp_path):
+    cfg = config(6, interval=2)
+    env = FakeHopperVectorEnv(cfg.num_envs, cfg.env)
+    env.nan_at_step = 3 * NUM_STEPS + 5  # during the 4th iteration's rollout
+    r = runner(cfg, tmp_path / "run", env=env)
+    with pytest.raises(TrainingDiverged, match="non-finite") as info:
+        r.learn()
+    assert "last.pt" in str(info.value)
+    ckpt = load_checkpoint(tmp_path / "run" / "checkpoints" / "last.pt")
+    assert ckpt["iteration"] == 2
+    for value in ckpt["agent_state"].values():
+        assert torch.isfinite(value).all()
+    assert not (tmp_path / "run" / "checkpoints" / "iter_000004.pt").exists()
+
+
+def test_metrics_are_written_per_iteration(tmp_path):
+    r = runner(config(2), tmp_path / "run")
+    r.learn()
+    lines = (tmp_path / "run" / "metrics.jsonl").read_text().splitlines()
+    assert len(lines) == 2
+    import json
+
+    row = json.loads(lines[-1])
+    for key in (
+        "charts/episode_return",
+        "charts/hop_height",
+        "losses/approx_kl",
+        "losses/clipfrac",
+        "losses/explained_variance",
+        "cpg/nu_HFE",
+        "cpg/phi_HFE_KFE",
+        "reward_terms/r1",
+        "time/simulation",
+        "time/learning",
+        "policy/log_std_0",
+    ):
+        assert key in row, key

@@ -1,0 +1,207 @@
+"""`cpg-actor train` / `cpg-actor eval`: config handling, run directory safety, resume, traces."""
+
+import numpy as np
+import pytest
+import torch
+
+from cpg_actor.cli import main
+from cpg_actor.config import TrainConfig, apply_dict, parse_override, parse_steps
+from cpg_actor.runner import load_checkpoint
+
+# tiny runs: 2 envs x 8 steps per iteration
+TINY = [
+    "--num-envs",
+    "2",
+    "--set",
+    "ppo.num_steps=8",
+    "--set",
+    "ppo.num_minibatches=2",
+    "--set",
+    "ppo.num_epochs=1",
+    "--set",
+    "checkpoint_interval=1",
+    "--no-progress",
+]
+
+
+def test_step_counts_accept_suffixes_and_reject_bad_values():
+    assert parse_steps("20M") == 20_000_000
+    assert parse_steps("500k") == 500_000
+    assert parse_steps("1e6") == 1_000_000
+    assert parse_steps("1_000") == 1000
+    for bad in ("-5", "0", "abc", "1.5", "2.5k3"):
+        with pytest.raises(ValueError):
+            parse_steps(bad)
+
+
+def test_overrides_are_typed_and_unknown_keys_list_valid_ones():
+    config = TrainConfig()
+    apply_dict(config, parse_override("ppo.learning_rate=1e-4"), "")
+    apply_dict(config, parse_override("agent_config.actor_hidden=[32, 16]"), "")
+    apply_dict(config, parse_override("ppo.target_kl=null"), "")
+    apply_dict(config, parse_override("env.sim=pybullet"), "")
+    assert config.ppo.learning_rate == 1e-4
+    assert config.agent_config.actor_hidden == (32, 16)
+    assert config.ppo.target_kl is None
+    assert config.env.sim == "pybullet"
+    with pytest.raises(ValueError, match="valid keys here: .*learning_rate"):
+        apply_dict(config, parse_override("ppo.learning_rat=1"), "")
+    with pytest.raises(ValueError, match="must be an integer"):
+        apply_dict(config, parse_override("num_envs=2.5"), "")
+    with pytest.raises(ValueError, match="env"):
+        apply_dict(config, parse_override("env.no_such_key=1"), "")
+    with pytest.raises(ValueError, match="KEY=VALUE"):
+        parse_override("ppo.learning_rate")
+
+
+def test_config_round_trips_through_yaml(tmp_path):
+    config = TrainConfig(agent="mlp", seed=7)
+    config.ppo.lr_schedule = "linear"
+    config.save(tmp_path / "c.yaml")
+    loaded = TrainConfig.load(tmp_path / "c.yaml")
+    assert loaded.to_dict() == config.to_dict()
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--agent", "nope"], "unknown agent 'nope'"),
+        (["--total-steps", "-100"], "positive integer"),
+        (["--set", "ppo.gamma=2"], "ppo.gamma"),
+        (["--set", "bogus=1"], "unknown config key 'bogus'"),
+    ],
+)
+def test_bad_input_is_a_clear_error_and_creates_nothing(tmp_path, capsys, argv, message):
+    run_dir = tmp_path / "run"
+    assert main(["train", "--run-dir", str(run_dir), *argv]) == 2
+    assert message in capsys.readouterr().err
+    assert not run_dir.exists()
+
+
+def test_existing_run_dir_is_never_overwritten_without_overwrite(tmp_path, capsys):
+    run_dir = tmp_path / "run"
+    run_dir.mkdir()
+    (run_dir / "config.yaml").write_text("precious: true\n")
+    assert main(["train", "--run-dir", str(run_dir), *TINY]) == 2
+    assert "--overwrite" in capsys.readouterr().err
+    assert (run_dir / "config.yaml").read_text() == "precious: true\n"
+    other = tmp_path / "not_a_run"
+    other.mkdir()
+    (other / "notes.txt").write_text("keep")
+    assert main(["train", "--run-dir", str(other), "--overwrite", *TINY]) == 2
+    assert "refusing to delete" in capsys.readouterr().err
+    assert (other / "notes.txt").read_text() == "keep"
+
+
+def test_train_resume_equals_straight_run_and_eval_writes_traces(tmp_path, capsys):
+    straight, split = tmp_path / "straight", tmp_path / "split"
+    assert main(["train", "--run-dir", str(straight), "--total-steps", "64", *TINY]) == 0
+    assert main(["train", "--run-dir", str(split), "--total-steps", "32", *TINY]) == 0
+    assert main(["train", "--run-dir", str(split), "--resume", "--seed", "3"]) == 2
+    assert "only --total-steps may change" in capsys.readouterr().err
+    assert (
+        main(["train", "--run-dir", str(split), "--resume", "--total-steps", "64", "--no-progress"])
+        == 0
+    )
+    a = load_checkpoint(straight / "checkpoints" / "last.pt")
+    b = load_checkpoint(split / "checkpoints" / "last.pt")
+    assert a["iteration"] == b["iteration"] == 4
+    for key, value in a["agent_state"].items():
+        assert torch.equal(value, b["agent_state"][key]), key
+    for key in ("config.yaml", "metrics.jsonl", "tensorboard", "checkpoints/iter_000002.pt"):
+        assert (split / key).exists(), key
+    assert len((split / "metrics.jsonl").read_text().splitlines()) == 4
+
+    assert main(["eval", str(split), "--episodes", "2"]) == 0
+    traces = np.load(split / "eval" / "traces.npz")
+    for key in (
+        "desired_position",
+        "measured_position",
+        "desired_velocity",
+        "theta_dot",
+        "r_ddot",
+        "xi",
+        "kappa",
+        "hip_height",
+        "foot_height",
+        "episode_return",
+        "hop_height",
+        "length",
+    ):
+        assert key in traces, key
+    assert traces["desired_position"].shape[1:] == (2, 2)
+    assert main(["eval", str(split), "--episodes", "2"]) == 2  # refuses to overwrite
+    assert "--overwrite" in capsys.readouterr().err
+
+    # a checkpoint of another agent is rejected by eval
+    assert (
+        main(
+            [
+                "train",
+                "--run-dir",
+                str(tmp_path / "mlp"),
+                "--agent",
+                "mlp",
+                "--total-steps",
+                "16",
+                *TINY,
+            ]
+        )
+        == 0
+    )
+    assert (
+        main(
+            [
+                "eval",
+                str(split),
+                "--checkpoint",
+                str(tmp_path / "mlp" / "checkpoints" / "last.pt"),
+                "--output",
+                str(tmp_path / "x.npz"),
+            ]
+        )
+        == 2
+    )
+    assert "agent 'mlp'" in capsys.readouterr().err
+
+
+def test_nan_loss_exits_with_status_1_and_keeps_the_last_good_checkpoint(tmp_path, capsys):
+    from cpg_actor.agents import AGENTS, AgentSpec, MLPAgent, register_agent
+    from ppo.fake_env import FakeHopperVectorEnv  # tests/ppo; pytest puts tests/ on sys.path
+
+    def make_env(num_envs, env_config, num_threads=None):
+        env = FakeHopperVectorEnv(num_envs)
+        env.nan_at_step = 2 * 8 + 3  # in the third iteration's rollout
+        return env
+
+    register_agent(
+        AgentSpec(
+            "test-nan",
+            "MLP on an env whose rewards turn NaN",
+            lambda cfg, obs_dim, action_dim, env_cfg: MLPAgent(
+                obs_dim, action_dim, cfg, (0.4, -0.8)
+            ),
+            make_env,
+        )
+    )
+    try:
+        run_dir = tmp_path / "run"
+        argv = ["train", "--agent", "test-nan", "--run-dir", str(run_dir), "--total-steps", "96"]
+        assert main([*argv, *TINY]) == 1
+    finally:
+        del AGENTS["test-nan"]
+    err = capsys.readouterr().err
+    assert "training stopped" in err and "non-finite" in err and "last.pt" in err
+    assert load_checkpoint(run_dir / "checkpoints" / "last.pt")["iteration"] == 2
+
+
+def test_resume_from_a_corrupt_checkpoint_is_a_clear_error_and_changes_nothing(tmp_path, capsys):
+    run_dir = tmp_path / "run"
+    assert main(["train", "--run-dir", str(run_dir), "--total-steps", "32", *TINY]) == 0
+    last = run_dir / "checkpoints" / "last.pt"
+    last.write_bytes(last.read_bytes()[:200])
+    before = {p.name: p.read_bytes() for p in run_dir.rglob("*") if p.is_file()}
+    assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64"]) == 2
+    assert "corrupt" in capsys.readouterr().err
+    after = {p.name: p.read_bytes() for p in run_dir.rglob("*") if p.is_file()}
+    assert before == after
