@@ -18,6 +18,7 @@ from typing import Any
 import yaml
 
 from cpg_actor.agents.base import AgentConfig
+from cpg_actor.agents.warm_start import WarmStartConfig
 from cpg_actor.ppo.config import PPOConfig
 
 
@@ -42,6 +43,7 @@ class TrainConfig:
     env_threads: int | None = None  # simulator threads, None: the env's default
     agent_config: AgentConfig = field(default_factory=AgentConfig)
     ppo: PPOConfig = field(default_factory=PPOConfig)
+    warm_start: WarmStartConfig = field(default_factory=WarmStartConfig)  # cho2019-warm only
     env: Any = field(default_factory=_default_env_config)  # cpg_actor.envs.HopperConfig
 
     @property
@@ -71,6 +73,7 @@ class TrainConfig:
             raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
         self.agent_config.validate()
         self.ppo.validate()
+        self.warm_start.validate()
         if self.steps_per_iteration < self.ppo.num_minibatches:
             raise ValueError("num_envs * ppo.num_steps must be >= ppo.num_minibatches")
 

@@ -31,6 +31,7 @@ from cpg_actor.ppo import PPO, NonFiniteLossError, RolloutStorage, RunningNormal
 CHECKPOINT_FORMAT = "cpg-actor-checkpoint"
 CHECKPOINT_VERSION = 1
 HIP_HEIGHT = 6  # index of the hip height in the hopper observation
+WARM_START_SEED_KEY = 2**31  # derived_seed(seed, this) seeds the warm start's environments
 
 
 class TrainingDiverged(RuntimeError):
@@ -73,6 +74,17 @@ def atomic_save(obj: Any, path: Path) -> None:
             torch.save(obj, f)
             f.flush()
             os.fsync(f.fileno())
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def atomic_write_text(text: str, path: Path) -> None:
+    """Write ``text`` to a temporary file in the same directory, then ``os.replace``."""
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    try:
+        tmp.write_text(text)
         os.replace(tmp, path)
     finally:
         if tmp.exists():
@@ -281,10 +293,12 @@ class Runner:
         num_iterations = cfg.num_iterations
         if self.run_dir is not None:
             self.run_dir.mkdir(parents=True, exist_ok=True)
+        if self.iteration == 0 and self.spec.warm_start is not None:
+            self.run_warm_start()
         if not self._episodes_started:
             self.start_episodes()
         if self.run_dir is not None and self.iteration == 0:
-            self.save_checkpoint()  # the untrained agent: a "before" for evaluations
+            self.save_checkpoint()  # the untrained (or warm-started) agent: a "before"
         progress = self._make_progress(num_iterations)
         try:
             while self.iteration < num_iterations:
@@ -331,6 +345,31 @@ class Runner:
                 progress.stop()
             if self._writer is not None:
                 self._writer.flush()
+
+    def run_warm_start(self) -> list[float]:
+        """The agent's supervised warm start (e.g. cho2019-warm), before any PPO iteration.
+
+        Its environment seed is derived from ``(seed, WARM_START_SEED_KEY)``; the episodes it
+        ran are discarded (:meth:`start_episodes` resets every env afterwards). The loss of
+        each epoch goes to TensorBoard (``warm_start/loss``) and ``RUN_DIR/warm_start.json``.
+        """
+        cfg = self.config
+        seed = derived_seed(cfg.seed, WARM_START_SEED_KEY)
+        normalizer = self.normalizer if cfg.ppo.normalize_observations else None
+        losses = self.spec.warm_start(self.agent, normalizer, self.env, cfg.warm_start, seed)
+        self._episodes_started = False
+        if self.show_progress:
+            print(
+                f"warm start: {len(losses)} epochs, loss {losses[0]:.4g} -> {losses[-1]:.4g}",
+                flush=True,
+            )
+        if self.run_dir is not None:
+            self.run_dir.mkdir(parents=True, exist_ok=True)
+            atomic_write_text(json.dumps({"loss": losses}) + "\n", self.run_dir / "warm_start.json")
+            if self.use_tensorboard:
+                for epoch, loss in enumerate(losses):
+                    self.writer.add_scalar("warm_start/loss", loss, epoch)
+        return losses
 
     def _make_progress(self, num_iterations: int):
         if not self.show_progress:

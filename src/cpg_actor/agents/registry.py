@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from cpg_actor.agents.base import Agent, AgentConfig
+from cpg_actor.agents.cho2019 import build_cho2019, make_cpg_parameter_env, warm_start_cho2019
 from cpg_actor.agents.cpg_actor import CPGActorAgent
 from cpg_actor.agents.mlp import MLPAgent
 from cpg_actor.cpg import HOPPER_NOMINAL_POSE
@@ -26,13 +27,17 @@ def make_hopper_env(num_envs: int, env_config: Any, num_threads: int | None = No
 
 @dataclass(frozen=True)
 class AgentSpec:
-    """``build(agent_config, obs_dim, action_dim, env_config) -> Agent`` and
-    ``make_env(num_envs, env_config, num_threads) -> vector env`` (the hopper env contract)."""
+    """``build(agent_config, obs_dim, action_dim, env_config) -> Agent``,
+    ``make_env(num_envs, env_config, num_threads) -> vector env`` (the hopper env contract)
+    and an optional supervised warm start."""
 
     name: str
     description: str
     build: Callable[[AgentConfig, int, int, Any], Agent]
     make_env: Callable[..., Any] = make_hopper_env
+    # ``warm_start(agent, normalizer, env, WarmStartConfig, seed) -> losses``, run once before
+    # the first PPO iteration of a new run (not on resume)
+    warm_start: Callable[..., list[float]] | None = None
 
 
 AGENTS: dict[str, AgentSpec] = {}
@@ -76,5 +81,22 @@ register_agent(
         lambda cfg, obs_dim, action_dim, env_cfg: CPGActorAgent(
             obs_dim, action_dim, cfg, env_cfg.control_dt, feedback=False
         ),
+    )
+)
+register_agent(
+    AgentSpec(
+        "cho2019",
+        "Cho et al. 2019: MLP actor outputs CPG parameters; the CPG is inside the environment",
+        build_cho2019,
+        make_env=make_cpg_parameter_env,
+    )
+)
+register_agent(
+    AgentSpec(
+        "cho2019-warm",
+        "Cho et al. 2019 with the actor warm-started toward the reference hopping parameters",
+        build_cho2019,
+        make_env=make_cpg_parameter_env,
+        warm_start=warm_start_cho2019,
     )
 )

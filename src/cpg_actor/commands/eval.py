@@ -111,8 +111,11 @@ def evaluate(runner, seed: int) -> dict[str, np.ndarray]:
         measured = np.asarray(next_obs, dtype=np.float32).copy()
         if done.any():
             measured[done] = np.asarray(info["final_obs"], dtype=np.float32)[done]
+        # the desired positions the hopper tracked: the clipped action for agents acting on
+        # joint positions, the CPG's output for agents whose env holds the CPG (cho2019)
+        applied = np.asarray(info.get("desired_position", desired), dtype=np.float64)
         row = {
-            "desired_position": desired,
+            "desired_position": applied,
             "measured_position": measured[:, 0:2],
             "measured_velocity": measured[:, 2:4],
             "hip_height": measured[:, HIP_HEIGHT],
@@ -121,18 +124,22 @@ def evaluate(runner, seed: int) -> dict[str, np.ndarray]:
         }
         if "desired_velocity" in step.extras:
             row["desired_velocity"] = step.extras["desired_velocity"].numpy()
+        elif "desired_velocity" in info:  # CPG inside the environment
+            row["desired_velocity"] = np.asarray(info["desired_velocity"])
         else:  # the MLP has no analytic velocity: finite difference of its desired positions
-            row["desired_velocity"] = (desired - previous_desired) / dt
-        for key in ("theta_dot", "r_ddot", "xi", "kappa"):
+            row["desired_velocity"] = (applied - previous_desired) / dt
+        for key in ("theta_dot", "r_ddot", "xi", "kappa", "cpg_parameters"):
             if key in step.extras:
                 row[key] = step.extras[key].numpy()
+            elif key in info:
+                row[key] = np.asarray(info[key])
         for key, value in row.items():
             value = np.asarray(value, dtype=np.float64).copy()
             value[~active] = np.nan
             records.setdefault(key, []).append(value)
         length += active
         active &= ~done
-        previous_desired = desired
+        previous_desired = applied
         state = step.next_state
         obs = np.asarray(next_obs, dtype=np.float32)
         if not active.any():
@@ -149,33 +156,32 @@ def evaluate(runner, seed: int) -> dict[str, np.ndarray]:
 
 
 def record_video(config, checkpoint: Path, path: Path, seed: int, overwrite: bool) -> None:
-    """One deterministic episode in a single ``HopperEnv`` rendered as ``rgb_array``."""
+    """One deterministic episode in the agent's own environment (one env), rendered offscreen."""
     import torch
 
-    from cpg_actor.envs import HopperEnv, write_video
+    from cpg_actor.envs import write_video
     from cpg_actor.runner import Runner
 
     config.num_envs = 1
     runner = Runner(config, run_dir=None, tensorboard=False)
-    env = HopperEnv(config.env, render_mode="rgb_array")
+    env = runner.env
     try:
         runner.load_checkpoint(checkpoint, restore_training=False)
         agent = runner.agent
         obs, _ = env.reset(seed=seed)
         state = agent.initial_state(1)
-        frames = [env.render()]
+        frames = [env.render_frame(0)]
         for _ in range(int(config.env.episode_steps)):
             with torch.no_grad():
-                obs_n = runner.normalize(torch.as_tensor(obs)[None], update=False)
+                obs_n = runner.normalize(torch.as_tensor(obs), update=False)
                 step = agent.act(obs_n, state, deterministic=True)
-            action = np.clip(step.action.numpy()[0], runner.action_low, runner.action_high)
+            action = np.clip(step.action.numpy(), runner.action_low, runner.action_high)
             obs, _, terminated, truncated, _ = env.step(action)
-            frames.append(env.render())
+            if terminated[0] or truncated[0]:
+                break  # the env has already reset: the frame would show the next episode
+            frames.append(env.render_frame(0))
             state = step.next_state
-            if terminated or truncated:
-                break
     finally:
-        env.close()
         runner.close()
     write_video(frames, path, fps=round(1.0 / config.env.control_dt), overwrite=overwrite)
 

@@ -192,6 +192,10 @@ class CPGParameterVectorEnv(VectorEnv):
         )
         return self._observation(env_obs, self.state), reward, terminated, truncated, info
 
+    def render_frame(self, index: int = 0) -> np.ndarray:
+        """An RGB frame of env ``index`` (see :meth:`HopperVectorEnv.render_frame`)."""
+        return self.env.render_frame(index)
+
     def close_extras(self, **kwargs: Any) -> None:
         if getattr(self, "env", None) is not None:
             self.env.close()

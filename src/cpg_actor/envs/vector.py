@@ -138,6 +138,12 @@ class HopperVectorEnv(VectorEnv):
         }
         return obs, result.reward, result.terminated, result.truncated, info
 
+    def render_frame(self, index: int = 0) -> np.ndarray:
+        """An RGB frame ``(H, W, 3)`` of env ``index`` (headless; see docs/hopper.md)."""
+        if not 0 <= index < self.num_envs:
+            raise ValueError(f"index must be in 0..{self.num_envs - 1}, got {index}")
+        return self.sim.backend.render(index, self.config.render_width, self.config.render_height)
+
     def close_extras(self, **kwargs: Any) -> None:
         if getattr(self, "sim", None) is not None:
             self.sim.close()

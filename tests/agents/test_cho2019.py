@@ -1,0 +1,105 @@
+"""The Cho et al. 2019 agents: warm start toward the reference, end-to-end training."""
+
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from cpg_actor.agents.cho2019 import reference_action
+from cpg_actor.agents.warm_start import WarmStartConfig
+from cpg_actor.config import TrainConfig
+from cpg_actor.envs import HopperConfig
+from cpg_actor.envs.cho2019 import action_to_parameters
+from cpg_actor.envs.cho2019_reference import REFERENCE_PARAMETERS
+from cpg_actor.ppo import PPOConfig
+from cpg_actor.runner import Runner
+
+
+def config(agent, iterations=2, **warm):
+    return TrainConfig(
+        agent=agent,
+        seed=1,
+        num_envs=4,
+        total_steps=iterations * 4 * 16,
+        checkpoint_interval=100,
+        ppo=PPOConfig(num_steps=16, num_epochs=2, num_minibatches=2),
+        warm_start=WarmStartConfig(**{"rollout_steps": 100, "minibatch_size": 128, **warm}),
+        env=HopperConfig(episode_steps=100),
+    )
+
+
+def mean_action(runner, obs):
+    with torch.no_grad():
+        obs_n = runner.normalize(torch.as_tensor(obs), update=False)
+        return runner.agent.actor(obs_n, runner.agent.initial_state(len(obs))).mean.numpy()
+
+
+def test_reference_action_maps_back_to_the_reference_parameters():
+    np.testing.assert_allclose(
+        action_to_parameters(reference_action()), REFERENCE_PARAMETERS, rtol=1e-6
+    )
+
+
+def test_warm_start_brings_the_actor_mean_to_the_reference(tmp_path):
+    runner = Runner(config("cho2019-warm"), tmp_path / "run", tensorboard=False)
+    obs, _ = runner.env.reset(seed=123)
+    before = np.abs(mean_action(runner, obs) - reference_action()).max()
+    losses = runner.run_warm_start()
+    assert len(losses) == 100  # the paper's 100 epochs
+    assert losses[-1] < 1e-3 * losses[0]
+    # on observations of a different episode, driven by the reference itself
+    for _ in range(30):
+        obs, *_ = runner.env.step(np.tile(reference_action(), (4, 1)))
+    after = np.abs(mean_action(runner, obs) - reference_action()).max()
+    assert before > 0.3 and after < 0.05, (before, after)
+    assert json.loads((tmp_path / "run" / "warm_start.json").read_text())["loss"] == losses
+    runner.close()
+
+
+@pytest.mark.parametrize("agent", ["cho2019", "cho2019-warm"])
+def test_cho2019_agents_train_end_to_end(tmp_path, agent):
+    runner = Runner(config(agent, epochs=5), tmp_path / agent, tensorboard=False)
+    assert runner.env.single_action_space.shape == (5,)
+    assert runner.env.single_observation_space.shape == (16,)
+    start = {k: v.clone() for k, v in runner.agent.state_dict().items()}
+    runner.learn()
+    assert runner.iteration == 2
+    changed = [k for k, v in runner.agent.state_dict().items() if not torch.equal(v, start[k])]
+    assert any(k.startswith("actor_mlp") for k in changed) and "log_std" in changed
+    assert (tmp_path / agent / "warm_start.json").exists() == (agent == "cho2019-warm")
+    runner.close()
+
+
+def test_warm_start_runs_only_for_a_new_run(tmp_path, monkeypatch):
+    first = Runner(
+        config("cho2019-warm", iterations=1, epochs=3), tmp_path / "r", tensorboard=False
+    )
+    first.learn()
+    first.close()
+    calls = []
+    resumed = Runner(
+        config("cho2019-warm", iterations=2, epochs=3), tmp_path / "r", tensorboard=False
+    )
+    resumed.load_checkpoint(resumed.last_checkpoint_path())
+    monkeypatch.setattr(resumed, "run_warm_start", lambda: calls.append(1))
+    resumed.learn()
+    assert calls == [] and resumed.iteration == 2
+    resumed.close()
+
+
+def test_eval_traces_of_cho2019_hold_the_cpg_signals():
+    from cpg_actor.commands.eval import evaluate
+
+    runner = Runner(config("cho2019"), None, tensorboard=False)
+    traces = evaluate(runner, seed=5)
+    runner.close()
+    steps = traces["time"].shape[0]
+    assert steps == 100
+    for key in ("theta_dot", "r_ddot", "desired_velocity", "desired_position"):
+        assert traces[key].shape == (steps, 4, 2), key
+    # the untrained actor's mean is 0: the middle of each range, the same for every env
+    nu_mid = action_to_parameters(np.zeros(5))[0]
+    assert np.all(np.abs(traces["cpg_parameters"][:, :, 0] - nu_mid) < 0.2)
+    # desired positions are the CPG output around the nominal pose, not the raw action
+    assert np.all(traces["desired_position"][:, :, 1] < 0.1)
