@@ -9,7 +9,7 @@ from pathlib import Path
 
 from cpg_actor.config import TrainConfig, apply_dict, parse_override, parse_steps
 
-HELP = "train an agent (cpg-actor, cpg-actor-open-loop, mlp) with PPO on the hopper"
+HELP = "train an agent (cpg-actor, cpg-actor-open-loop, mlp, cho2019, cho2019-warm) with PPO"
 
 DEFAULT_RUN_DIR = "runs/{agent}_{sim}_seed{seed}"
 
