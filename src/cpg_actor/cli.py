@@ -16,6 +16,8 @@ COMMANDS: dict[str, str] = {
     "train": "train",
     "eval": "eval",
     "cho2019-reference": "cho2019_reference",
+    "reproduce": "reproduce",
+    "figures": "figures",
 }
 
 

@@ -34,6 +34,9 @@ class AgentConfig:
     output_gain: float = 0.01  # orthogonal gain of the actor's / feedback's last layer
     xi_scale: float = 1.0  # rad/s per unit of feedback output (docs/training.md: why)
     kappa_scale: float = 10.0  # rad/s^2 per unit of feedback output
+    # squash the feedback: xi = xi_scale * tanh(out), kappa = kappa_scale * tanh(out), so the
+    # scales are the largest feedback the MLP can give (bounds the phase and amplitude drive)
+    feedback_tanh: bool = False
     cpg_initial: dict = field(default_factory=dict)  # overrides of cpg.HOPPER_INITIAL
 
     def validate(self) -> None:

@@ -18,7 +18,8 @@ from cpg_actor.cpg import CPGNetwork, CPGState, JointMap, hopper_cpg
 class CPGActorAgent(Agent):
     """Gaussian policy whose mean is ``JointMap(x)``, x the CPG output of eq. 1.
 
-    * ``feedback=True`` (``cpg-actor``): ``[xi, kappa] = scale * MLP(obs)``, per oscillator.
+    * ``feedback=True`` (``cpg-actor``): ``[xi, kappa] = scale * MLP(obs)`` per oscillator, or
+      ``scale * tanh(MLP(obs))`` with ``feedback_tanh`` (bounded feedback).
     * ``feedback=False`` (``cpg-actor-open-loop``): ``xi = kappa = 0``; only the CPG vector V
       and the log-std are trained.
 
@@ -45,6 +46,7 @@ class CPGActorAgent(Agent):
         self.state_shape = (5, n)
         self.xi_scale = config.xi_scale
         self.kappa_scale = config.kappa_scale
+        self.feedback_tanh = config.feedback_tanh
         self.feedback = (
             mlp([obs_dim, *config.actor_hidden, 2 * n], config.activation, config.output_gain)
             if feedback
@@ -63,6 +65,8 @@ class CPGActorAgent(Agent):
         n = self.cpg.num_oscillators
         if self.feedback is not None:
             out = self.feedback(obs)
+            if self.feedback_tanh:
+                out = torch.tanh(out)
             xi, kappa = self.xi_scale * out[:, :n], self.kappa_scale * out[:, n:]
         else:
             xi = kappa = torch.zeros(obs.shape[0], n, dtype=obs.dtype, device=obs.device)

@@ -1,0 +1,24 @@
+"""`cpg-actor figures`: redraw the figures and the report of an existing results directory."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = "redraw the paper's figures and report.md from a `cpg-actor reproduce` results directory"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("out", help="results directory written by `cpg-actor reproduce`")
+
+
+def run(args: argparse.Namespace) -> int:
+    from cpg_actor.experiments.plan import SETTINGS_FILE
+    from cpg_actor.experiments.report import write_report
+
+    out = Path(args.out)
+    if not (out / SETTINGS_FILE).is_file() and not (out / "runs").is_dir():
+        raise FileNotFoundError(f"{out} is not a reproduce results directory (no {SETTINGS_FILE})")
+    report = write_report(out)
+    print(f"report {report}; figures in {out / 'figures'}")
+    return 0

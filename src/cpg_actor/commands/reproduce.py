@@ -1,0 +1,148 @@
+"""`cpg-actor reproduce`: the paper's comparison, variants x seeds in parallel, figures, report."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shlex
+import sys
+from pathlib import Path
+
+HELP = "reproduce the paper: train variants x seeds in parallel (or on Ray), figures and a report"
+
+DEFAULT_VARIANTS = "cpg-actor,cpg-actor-open-loop,cho2019-warm,cho2019,mlp"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--total-steps", default="20M", help="control steps per run, e.g. 50k or 20M (default 20M)"
+    )
+    parser.add_argument("--seeds", type=int, default=5, help="seeds 0..N-1 per variant (default 5)")
+    parser.add_argument(
+        "--variants",
+        default=DEFAULT_VARIANTS,
+        help=f"comma-separated agent names (default {DEFAULT_VARIANTS})",
+    )
+    parser.add_argument("--out", required=True, help="results directory, e.g. results/NAME")
+    parser.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help=f"parallel runs on this machine (default: the core count, {os.cpu_count()})",
+    )
+    parser.add_argument("--num-envs", type=int, default=None, help="parallel envs per run")
+    parser.add_argument("--sim", default=None, choices=("mujoco", "pybullet"))
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="training config override for every run (repeatable), as in `cpg-actor train`",
+    )
+    parser.add_argument(
+        "--eval-episodes", type=int, default=5, help="episodes per stage evaluation (default 5)"
+    )
+    parser.add_argument(
+        "--ray",
+        default=None,
+        metavar="ADDRESS",
+        help="run on the Ray cluster at ADDRESS ('auto', 'ray://host:10001'; 'local' starts a "
+        "local instance); OUT must be on a shared file system. Needs pip install cpg-actor[ray]",
+    )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace an OUT made with other settings (deletes it)",
+    )
+    parser.add_argument(
+        "--progress-interval",
+        type=float,
+        default=30.0,
+        help="seconds between progress blocks when not on a terminal (default 30)",
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no live table")
+
+
+def run(args: argparse.Namespace) -> int:
+    from cpg_actor.config import parse_steps
+    from cpg_actor.experiments import execute, plan
+    from cpg_actor.experiments.report import write_report
+
+    settings = plan.ReproduceSettings(
+        variants=plan.parse_variants(args.variants),
+        seeds=args.seeds,
+        total_steps=parse_steps(args.total_steps),
+        num_envs=args.num_envs,
+        sim=args.sim,
+        overrides=list(args.overrides),
+        eval_episodes=args.eval_episodes,
+    )
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    if workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {workers}")
+    if args.ray is not None:
+        execute.import_ray()  # a clear error before anything is written
+    out = Path(args.out)
+    tasks = plan.build_tasks(settings, out, workers)  # validates before anything is written
+    state = plan.prepare_out_dir(out, settings, args.overwrite)
+    command = (
+        ["cpg-actor", *sys.argv[1:]]
+        if sys.argv[1:2] == ["reproduce"]
+        else ["cpg-actor", "reproduce", *_as_argv(args)]
+    )
+    plan.write_settings_file(
+        out,
+        settings,
+        shlex.join(command),
+        {"workers": workers, "ray": args.ray, "runs": len(tasks)},
+    )
+    finished = sum(execute.run_is_finished(task) for task in tasks)
+    print(
+        f"reproduce: {len(settings.variants)} variant(s) x {settings.seeds} seed(s) = "
+        f"{len(tasks)} runs of {settings.total_steps:,} steps in {out} ({state}; {finished} "
+        f"already finished); "
+        + (f"Ray at {args.ray}" if args.ray else f"{workers} local worker(s)"),
+        flush=True,
+    )
+    live = not args.no_progress and sys.stdout.isatty()
+    progress = execute.Progress(tasks, args.progress_interval, live=live)
+    try:
+        if args.ray is not None:
+            results = execute.run_ray(tasks, args.ray, progress)
+        else:
+            results = execute.run_local(tasks, workers, progress)
+    except KeyboardInterrupt:
+        print(
+            "cpg-actor reproduce: interrupted; re-run the same command to resume",
+            file=sys.stderr,
+        )
+        return 130
+    for result in results:
+        line = f"  {result['name']}: {result['status']} ({result['action']})"
+        if result.get("error"):
+            line += f": {result['error']}"
+        print(line)
+    report = write_report(out, results)
+    print(f"report {report}; figures in {out / 'figures'}")
+    failed = [r for r in results if r["status"] == "failed"]
+    if failed:
+        print(
+            f"cpg-actor reproduce: {len(failed)} run(s) failed; re-run the same command to retry",
+            file=sys.stderr,
+        )
+        return 1
+    return 0
+
+
+def _as_argv(args: argparse.Namespace) -> list[str]:
+    """The command line of ``args`` (when ``run`` is called without ``sys.argv``)."""
+    argv = ["--total-steps", str(args.total_steps), "--seeds", str(args.seeds)]
+    argv += ["--variants", args.variants, "--out", str(args.out)]
+    if args.num_envs is not None:
+        argv += ["--num-envs", str(args.num_envs)]
+    if args.sim is not None:
+        argv += ["--sim", args.sim]
+    for text in args.overrides:
+        argv += ["--set", text]
+    return argv

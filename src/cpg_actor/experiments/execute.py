@@ -1,0 +1,406 @@
+"""Execute reproduction runs: one run = train (fresh or resumed) then staged evaluations.
+
+Each step is a ``cpg-actor`` subprocess (``python -m cpg_actor.cli``), so every run has its own
+torch / MuJoCo threads and a crash stays inside its run. Locally, ``workers`` threads each wait
+on one subprocess at a time; with Ray each run is a task with ``num_cpus=1`` and the results
+directory must be on a file system every node sees.
+
+A run is *finished* when ``RUN_DIR/reproduce_run.json`` exists with ``status: done``: the
+training reached its total steps and every stage evaluation was written. Anything less is
+continued: training from ``checkpoints/last.pt`` with ``cpg-actor train --resume``, missing
+evaluations are run.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+from typing import Any
+
+from cpg_actor.experiments.plan import RunTask
+
+MARKER = "reproduce_run.json"
+STAGES_FILE = "stages.json"
+_CHECKPOINT = re.compile(r"^iter_(\d+)\.pt$")
+
+Status = Callable[[str, str], None]  # (run name, state) -> None
+STOP = threading.Event()  # set on Ctrl-C: no new subprocess starts
+
+
+def _single_thread_env() -> dict[str, str]:
+    env = dict(os.environ)
+    for key in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        env[key] = "1"
+    return env
+
+
+def _cli(args: list[str], log_path: Path) -> int:
+    """Run ``cpg-actor ARGS`` in a subprocess, appending its output to ``log_path``."""
+    if STOP.is_set():
+        return 130
+    log_path.parent.mkdir(parents=True, exist_ok=True)
+    command = [sys.executable, "-m", "cpg_actor.cli", *args]
+    with open(log_path, "a") as log:
+        log.write(f"$ cpg-actor {' '.join(args)}\n")
+        log.flush()
+        return subprocess.call(
+            command, stdout=log, stderr=subprocess.STDOUT, env=_single_thread_env()
+        )
+
+
+def list_checkpoints(run_dir: Path) -> dict[int, Path]:
+    """``{iteration: path}`` of ``RUN_DIR/checkpoints/iter_XXXXXX.pt``."""
+    found = {}
+    directory = Path(run_dir) / "checkpoints"
+    if directory.is_dir():
+        for path in directory.iterdir():
+            match = _CHECKPOINT.match(path.name)
+            if match:
+                found[int(match.group(1))] = path
+    return found
+
+
+def select_stage_checkpoints(
+    checkpoints: dict[int, Path], num_iterations: int, fractions: tuple[float, ...]
+) -> list[tuple[float, int, Path]]:
+    """For each fraction of training, the checkpoint whose iteration is nearest to
+    ``fraction * num_iterations`` (ties: the later one): ``[(fraction, iteration, path)]``."""
+    if not checkpoints:
+        raise ValueError("no checkpoints to choose from")
+    chosen = []
+    for fraction in fractions:
+        target = fraction * num_iterations
+        iteration = min(checkpoints, key=lambda i: (abs(i - target), -i))
+        chosen.append((fraction, iteration, checkpoints[iteration]))
+    return chosen
+
+
+def trained_iteration(run_dir: Path) -> int | None:
+    """The iteration of ``checkpoints/last.pt`` (None when there is none or it is unreadable)."""
+    path = Path(run_dir) / "checkpoints" / "last.pt"
+    if not path.is_file():
+        return None
+    from cpg_actor.runner import load_checkpoint
+
+    try:
+        return int(load_checkpoint(path)["iteration"])
+    except (ValueError, FileNotFoundError, KeyError):
+        return None
+
+
+def run_is_finished(task: RunTask) -> bool:
+    marker = Path(task.run_dir) / MARKER
+    if not marker.is_file():
+        return False
+    try:
+        data = json.loads(marker.read_text())
+    except ValueError:
+        return False
+    return data.get("status") == "done" and data.get("total_steps") == task.total_steps
+
+
+def run_one(task: RunTask, status: Status | None = None) -> dict[str, Any]:
+    """Train (or resume) one run, then evaluate it at the stage checkpoints. Returns a summary
+    ``{"name", "status": skipped|done|failed, "action", "error"}``; never raises for a failed
+    subprocess (the error names the log file)."""
+    report = status or (lambda name, state: None)
+    run_dir, log = Path(task.run_dir), Path(task.log_path)
+    result: dict[str, Any] = {"name": task.name, "variant": task.variant, "seed": task.seed}
+    if run_is_finished(task):
+        report(task.name, "skipped")
+        return {**result, "status": "skipped", "action": "finished earlier"}
+
+    iteration = trained_iteration(run_dir)
+    if iteration is not None and (run_dir / "config.yaml").is_file():
+        if iteration < task.num_iterations:
+            action = f"resumed at iteration {iteration}"
+            report(task.name, "training")
+            args = ["train", "--resume", "--run-dir", str(run_dir)]
+            args += ["--total-steps", str(task.total_steps), "--no-progress"]
+            code = _cli(args, log)
+        else:
+            action, code = "evaluated (training was finished)", 0
+    else:
+        if run_dir.exists():  # started but no usable checkpoint: start again
+            shutil.rmtree(run_dir)
+        action = "trained"
+        report(task.name, "training")
+        code = _cli(["train", *task.train_args], log)
+    if code != 0:
+        report(task.name, "failed")
+        return {
+            **result,
+            "status": "failed",
+            "action": action,
+            "error": f"cpg-actor train exited with {code}; see {log}",
+        }
+
+    report(task.name, "evaluating")
+    try:
+        stages = evaluate_stages(task, log)
+    except (RuntimeError, ValueError) as error:
+        report(task.name, "failed")
+        return {**result, "status": "failed", "action": action, "error": str(error)}
+    marker = {
+        "status": "done",
+        "total_steps": task.total_steps,
+        "num_iterations": task.num_iterations,
+        "stages": stages,
+    }
+    (run_dir / MARKER).write_text(json.dumps(marker, indent=2) + "\n")
+    report(task.name, "done")
+    return {**result, "status": "done", "action": action}
+
+
+def evaluate_stages(task: RunTask, log: Path) -> list[dict[str, Any]]:
+    """Deterministic ``cpg-actor eval`` at the checkpoints nearest to each stage fraction;
+    traces in ``RUN_DIR/eval/stageK/traces.npz``, the choice in ``RUN_DIR/eval/stages.json``."""
+    run_dir = Path(task.run_dir)
+    chosen = select_stage_checkpoints(
+        list_checkpoints(run_dir), task.num_iterations, task.stage_fractions
+    )
+    previous = _read_stages(run_dir)
+    stages: list[dict[str, Any]] = []
+    for k, (fraction, iteration, checkpoint) in enumerate(chosen):
+        output = run_dir / "eval" / f"stage{k}" / "traces.npz"
+        entry = {
+            "stage": k,
+            "fraction": fraction,
+            "iteration": iteration,
+            "checkpoint": str(checkpoint.relative_to(run_dir)),
+            "traces": str(output.relative_to(run_dir)),
+        }
+        reuse = k < len(previous) and previous[k].get("iteration") == iteration
+        same = [stage for stage in stages if stage["iteration"] == iteration]
+        if output.is_file() and reuse:
+            pass
+        elif same:  # two stages on one checkpoint (a short run): the same traces
+            output.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(run_dir / same[0]["traces"], output)
+        else:
+            args = ["eval", str(run_dir), "--checkpoint", str(checkpoint)]
+            args += ["--output", str(output), "--episodes", str(task.eval_episodes), "--overwrite"]
+            code = _cli(args, log)
+            if code != 0:
+                raise RuntimeError(f"cpg-actor eval exited with {code}; see {log}")
+        stages.append(entry)
+        (run_dir / "eval" / STAGES_FILE).write_text(json.dumps(stages, indent=2) + "\n")
+    return stages
+
+
+def _read_stages(run_dir: Path) -> list[dict[str, Any]]:
+    path = run_dir / "eval" / STAGES_FILE
+    try:
+        return json.loads(path.read_text()) if path.is_file() else []
+    except ValueError:
+        return []
+
+
+# -- progress ---------------------------------------------------------------------------------
+def read_progress(run_dir: Path) -> tuple[int, float | None]:
+    """``(global_step, SPS)`` of the last row of ``RUN_DIR/metrics.jsonl`` (0, None if none)."""
+    path = Path(run_dir) / "metrics.jsonl"
+    if not path.is_file():
+        return 0, None
+    try:
+        with open(path, "rb") as f:
+            f.seek(0, os.SEEK_END)
+            size = f.tell()
+            f.seek(max(0, size - 16384))
+            lines = f.read().decode(errors="replace").splitlines()
+    except OSError:
+        return 0, None
+    for line in reversed(lines):
+        try:
+            row = json.loads(line)
+        except ValueError:
+            continue
+        return int(row.get("global_step", 0)), row.get("charts/SPS")
+    return 0, None
+
+
+class Progress:
+    """Per-run state (pending, training, evaluating, done, skipped, failed), steps and SPS read
+    from each run's ``metrics.jsonl``, and an overall ETA from the throughput of this session.
+    Shown as a rich live table on a terminal, otherwise as periodic blocks of lines."""
+
+    def __init__(self, tasks: list[RunTask], interval: float, live: bool) -> None:
+        self.tasks = tasks
+        self.interval = interval
+        self.state = {task.name: "pending" for task in tasks}
+        self.lock = threading.Lock()
+        self.start = time.monotonic()
+        self.start_steps = {task.name: read_progress(Path(task.run_dir))[0] for task in tasks}
+        self.live = None
+        if live:
+            from rich.live import Live
+
+            self.live = Live(self.table(), refresh_per_second=1, transient=False)
+
+    def set(self, name: str, state: str) -> None:
+        with self.lock:
+            self.state[name] = state
+        if self.live is None and state in ("done", "skipped", "failed", "training"):
+            print(f"[reproduce] {name}: {state}", flush=True)
+
+    def snapshot(self) -> tuple[list[tuple[RunTask, str, int, float | None]], str]:
+        rows, done_total, gained = [], 0, 0
+        for task in self.tasks:
+            steps, sps = read_progress(Path(task.run_dir))
+            with self.lock:
+                state = self.state[task.name]
+            if state in ("done", "skipped"):
+                steps = task.planned_steps
+            rows.append((task, state, steps, sps))
+            done_total += min(steps, task.planned_steps)
+            gained += max(0, steps - self.start_steps[task.name])
+        total = sum(task.planned_steps for task in self.tasks)
+        elapsed = time.monotonic() - self.start
+        rate = gained / elapsed if elapsed > 0 else 0.0
+        eta = _duration((total - done_total) / rate) if rate > 0 else "-"
+        overall = (
+            f"overall {done_total:,}/{total:,} steps ({100 * done_total / total:.1f}%), "
+            f"{rate:,.0f} steps/s, elapsed {_duration(elapsed)}, ETA {eta}"
+        )
+        return rows, overall
+
+    def lines(self) -> list[str]:
+        rows, overall = self.snapshot()
+        out = [
+            f"  {task.name:<32} {state:<10} {steps:>12,}/{task.planned_steps:,} steps"
+            + (f"  {sps:,.0f} SPS" if sps and state in ("training", "submitted") else "")
+            for task, state, steps, sps in rows
+        ]
+        return [*out, "  " + overall]
+
+    def table(self):
+        from rich.table import Table
+
+        rows, overall = self.snapshot()
+        table = Table(title="cpg-actor reproduce", caption=overall)
+        for column in ("run", "state", "steps", "%", "SPS"):
+            table.add_column(column, justify="right" if column != "run" else "left")
+        for task, state, steps, sps in rows:
+            table.add_row(
+                task.name,
+                state,
+                f"{steps:,}/{task.planned_steps:,}",
+                f"{100 * min(steps, task.planned_steps) / task.planned_steps:.0f}",
+                f"{sps:,.0f}" if sps and state in ("training", "submitted") else "-",
+            )
+        return table
+
+    def watch(self, finished: Callable[[], bool]) -> None:
+        """Refresh until ``finished()``; call from the main thread."""
+        if self.live is not None:
+            with self.live:
+                while not finished():
+                    self.live.update(self.table())
+                    time.sleep(0.5)
+                self.live.update(self.table())
+            return
+        last = time.monotonic()
+        while not finished():
+            time.sleep(0.2)
+            if time.monotonic() - last >= self.interval:
+                last = time.monotonic()
+                print("[reproduce] progress\n" + "\n".join(self.lines()), flush=True)
+        print("[reproduce] " + self.lines()[-1].strip(), flush=True)
+
+
+def _duration(seconds: float) -> str:
+    seconds = int(round(seconds))
+    hours, rest = divmod(seconds, 3600)
+    minutes, secs = divmod(rest, 60)
+    return f"{hours}:{minutes:02d}:{secs:02d}"
+
+
+# -- schedulers -------------------------------------------------------------------------------
+def run_local(tasks: list[RunTask], workers: int, progress: Progress) -> list[dict[str, Any]]:
+    """Run the tasks on ``workers`` threads, each driving one subprocess at a time."""
+    results: list[dict[str, Any]] = []
+    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+        futures = [pool.submit(run_one, task, progress.set) for task in tasks]
+        try:
+            progress.watch(lambda: all(f.done() for f in futures))
+        except KeyboardInterrupt:  # the running subprocesses got SIGINT too and checkpoint
+            STOP.set()
+            for future in futures:
+                future.cancel()
+            raise
+        for task, future in zip(tasks, futures, strict=True):
+            try:
+                results.append(future.result())
+            except Exception as error:  # a bug, not a failed subprocess: keep the others
+                results.append(
+                    {
+                        "name": task.name,
+                        "variant": task.variant,
+                        "seed": task.seed,
+                        "status": "failed",
+                        "action": "-",
+                        "error": repr(error),
+                    }
+                )
+    return results
+
+
+def import_ray():
+    try:
+        import ray
+    except ImportError:
+        raise ValueError(
+            "--ray needs Ray, which is not installed: pip install cpg-actor[ray]"
+        ) from None
+    return ray
+
+
+def run_ray(tasks: list[RunTask], address: str, progress: Progress) -> list[dict[str, Any]]:
+    """One Ray task (``num_cpus=1``) per run on the cluster at ``address`` ("local": start a
+    local Ray instance). ``OUT`` must be on a file system shared by every node."""
+    ray = import_ray()
+    if address == "local":
+        ray.init(include_dashboard=False, log_to_driver=False)
+    else:
+        ray.init(address=address, log_to_driver=False)
+    try:
+        remote = ray.remote(num_cpus=1, max_retries=0)(run_one)
+        pending = {remote.remote(task): task for task in tasks}
+        for task in tasks:
+            progress.set(task.name, "submitted")
+        results: list[dict[str, Any]] = []
+
+        def finished() -> bool:
+            if pending:
+                ready, _ = ray.wait(list(pending), num_returns=len(pending), timeout=0)
+                for ref in ready:
+                    task = pending.pop(ref)
+                    try:
+                        result = ray.get(ref)
+                    except Exception as error:  # the worker died or run_one raised
+                        result = {
+                            "name": task.name,
+                            "variant": task.variant,
+                            "seed": task.seed,
+                            "status": "failed",
+                            "action": "-",
+                            "error": repr(error),
+                        }
+                    progress.set(task.name, result["status"])
+                    results.append(result)
+            return not pending
+
+        progress.watch(finished)
+    finally:
+        ray.shutdown()
+    order = {task.name: i for i, task in enumerate(tasks)}
+    return sorted(results, key=lambda r: order[r["name"]])

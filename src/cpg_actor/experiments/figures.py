@@ -1,0 +1,446 @@
+"""The paper's figures from a results directory (matplotlib Agg; PNG and PDF).
+
+File names are the paper's LaTeX labels without ``fig:``. Every function takes the loaded
+:class:`~cpg_actor.experiments.results.Results` and the figure directory and returns
+``(written paths, notes)``; a variant that was not run (or has no eval traces) is left out of
+a figure with a note, and a figure with nothing to show is not written.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from cpg_actor.experiments.metrics import VELOCITY_LIMIT
+from cpg_actor.experiments.results import Results, Run, color, label
+
+JOINTS = ("HFE", "KFE")
+TRACE_WINDOW_S = 3.0  # seconds of an episode shown in the trace figures
+MAX_HISTORY = 8  # checkpoints drawn in the parameter-distribution figures
+FORMATS = ("png", "pdf")
+
+Output = tuple[list[Path], list[str]]
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _save(fig, directory: Path, name: str) -> list[Path]:
+    directory.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for ext in FORMATS:
+        path = directory / f"{name}.{ext}"
+        fig.savefig(path, dpi=130 if ext == "png" else None)
+        paths.append(path)
+    _plt().close(fig)
+    return paths
+
+
+# -- fig:ep_reward ------------------------------------------------------------------------------
+def ep_reward(results: Results, directory: Path) -> Output:
+    """Mean episode return against steps: mean over seeds, min-max band, one line per variant."""
+    plt = _plt()
+    notes: list[str] = []
+    fig, ax = plt.subplots(figsize=(6.4, 4.0))
+    drawn = 0
+    for variant in results.variants:
+        runs = results.runs.get(variant)
+        if not runs:
+            notes.append(f"ep_reward: {variant} was not run")
+            continue
+        curves = [run.curve("charts/episode_return") for run in runs]
+        curves = [(s, v) for s, v in curves if np.isfinite(v).any()]
+        if not curves:
+            notes.append(f"ep_reward: {variant} has no finished episodes logged")
+            continue
+        end = min(s[np.isfinite(v)].max() for s, v in curves)
+        start = max(s[np.isfinite(v)].min() for s, v in curves)
+        grid = np.linspace(start, end, 200) if end > start else np.array([end])
+        stacked = np.stack(
+            [np.interp(grid, s[np.isfinite(v)], v[np.isfinite(v)]) for s, v in curves]
+        )
+        mean = stacked.mean(axis=0)
+        x = grid / 1e6
+        ax.plot(x, mean, color=color(variant), label=f"{label(variant)} (n={len(curves)})")
+        if len(curves) > 1:
+            ax.fill_between(
+                x, stacked.min(axis=0), stacked.max(axis=0), color=color(variant), alpha=0.2
+            )
+        drawn += 1
+    if not drawn:
+        plt.close(fig)
+        return [], notes + ["ep_reward: nothing to draw"]
+    ax.set_xlabel("time steps (millions)")
+    ax.set_ylabel("mean episode return")
+    ax.set_title("Episode reward (mean over seeds, band: min-max)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return _save(fig, directory, "ep_reward"), notes
+
+
+# -- fig:cpg_output, fig:cpg_theta_dot, fig:cpg_r_dot_dot ------------------------------------------
+CPG_VARIANTS = ("cho2019", "cho2019-warm", "cpg-actor-open-loop", "cpg-actor")
+
+
+def _final_traces(
+    results: Results, variants: tuple[str, ...], key: str, name: str
+) -> tuple[list[tuple[str, Run, dict]], list[str]]:
+    """(variant, run, traces) of the lowest seed's final evaluation, for runs whose traces hold
+    ``key`` with one value per joint; notes for the others."""
+    found, notes = [], []
+    for variant in variants:
+        run = results.first(variant)
+        if run is None:
+            notes.append(f"{name}: {variant} was not run")
+            continue
+        traces = run.traces()
+        if traces is None:
+            notes.append(f"{name}: {variant} seed {run.seed} has no eval traces")
+            continue
+        if key not in traces or traces[key].ndim != 3 or traces[key].shape[-1] != len(JOINTS):
+            notes.append(f"{name}: {variant} traces have no per-joint '{key}'")
+            continue
+        found.append((variant, run, traces))
+    return found, notes
+
+
+def _joint_panels(
+    results: Results,
+    directory: Path,
+    variants: tuple[str, ...],
+    key: str,
+    name: str,
+    ylabel: str,
+    title: str,
+    limit_lines: float | None = None,
+) -> Output:
+    plt = _plt()
+    found, notes = _final_traces(results, variants, key, name)
+    if not found:
+        return [], notes + [f"{name}: nothing to draw"]
+    fig, axes = plt.subplots(len(JOINTS), 1, figsize=(7.0, 4.8), sharex=True)
+    for variant, _run, traces in found:
+        t = traces["time"]
+        window = t <= t[0] + TRACE_WINDOW_S
+        for j, ax in enumerate(axes):
+            ax.plot(
+                t[window], traces[key][window, 0, j], color=color(variant), label=label(variant)
+            )
+    for j, ax in enumerate(axes):
+        if limit_lines is not None:
+            for sign in (-1, 1):
+                ax.axhline(sign * limit_lines, color="red", lw=1.0, ls="--")
+        ax.set_ylabel(f"{JOINTS[j]} {ylabel}")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8, loc="upper right")
+    axes[0].set_title(f"{title} (seed {found[0][1].seed}, final checkpoint, episode 0)")
+    axes[-1].set_xlabel("time (s)")
+    fig.tight_layout()
+    return _save(fig, directory, name), notes
+
+
+def directory_of(results: Results) -> Path:
+    return results.out / "figures"
+
+
+def cpg_output(results: Results, directory: Path) -> Output:
+    return _joint_panels(
+        results,
+        directory,
+        CPG_VARIANTS,
+        "desired_position",
+        "cpg_output",
+        "desired position (rad)",
+        "Desired positions",
+    )
+
+
+def cpg_theta_dot(results: Results, directory: Path) -> Output:
+    return _joint_panels(
+        results,
+        directory,
+        CPG_VARIANTS,
+        "theta_dot",
+        "cpg_theta_dot",
+        "theta_dot (rad/s)",
+        "Phase velocity theta_dot (eq. 1)",
+    )
+
+
+def cpg_r_dot_dot(results: Results, directory: Path) -> Output:
+    return _joint_panels(
+        results,
+        directory,
+        CPG_VARIANTS,
+        "r_ddot",
+        "cpg_r_dot_dot",
+        "r_ddot (rad/s^2)",
+        "Amplitude acceleration r_ddot (eq. 1)",
+    )
+
+
+# -- fig:des_output (des_pos, des_vel) ---------------------------------------------------------
+def des_output(results: Results, directory: Path) -> Output:
+    """Desired positions and velocities of the MLP actor vs the CPG-Actor, +-15 rad/s lines."""
+    paths, notes = [], []
+    variants = ("mlp", "cpg-actor")
+    for key, name, ylabel, limit in (
+        ("desired_position", "des_pos", "desired position (rad)", None),
+        ("desired_velocity", "des_vel", "desired velocity (rad/s)", VELOCITY_LIMIT),
+    ):
+        title = "Desired " + ("positions" if limit is None else "velocities (red: motor limits)")
+        written, more = _joint_panels(results, directory, variants, key, name, ylabel, title, limit)
+        paths += written
+        notes += more
+    return paths, notes
+
+
+# -- fig:parameters_under_training ----------------------------------------------------------------
+def _kde(values: np.ndarray, grid: np.ndarray) -> np.ndarray:
+    """Gaussian kernel density estimate with Silverman's bandwidth (numpy only)."""
+    values = values[np.isfinite(values)]
+    std = values.std() if values.size > 1 else 0.0
+    span = grid[-1] - grid[0]
+    bandwidth = max(1.06 * std * values.size ** (-1 / 5), 0.02 * span, 1e-9)
+    z = (grid[:, None] - values[None, :]) / bandwidth
+    return np.exp(-0.5 * z**2).sum(axis=1) / (values.size * bandwidth * np.sqrt(2 * np.pi))
+
+
+def _history(run: Run, keys: tuple[str, ...]) -> list[tuple[int, int, dict[str, np.ndarray]]]:
+    """``[(iteration, global_step, {key: values})]`` for up to ``MAX_HISTORY`` checkpoints,
+    evenly spread over the run."""
+    from cpg_actor.runner import load_checkpoint
+
+    checkpoints = run.checkpoints()
+    iterations = sorted(checkpoints)
+    if len(iterations) > MAX_HISTORY:
+        picks = np.unique(np.round(np.linspace(0, len(iterations) - 1, MAX_HISTORY)).astype(int))
+        iterations = [iterations[i] for i in picks]
+    history = []
+    for iteration in iterations:
+        data = load_checkpoint(checkpoints[iteration])
+        state = data["agent_state"]
+        values = {k: state[k].detach().cpu().numpy().ravel() for k in keys if k in state}
+        history.append((iteration, int(data["global_step"]), values))
+    return history
+
+
+PARAMETER_PANELS = (
+    (
+        "cpg_param_training",
+        "cpg.parametrisation.vector",
+        "CPG parameters: change of vector V since the start",
+    ),
+    ("mlp_weight_feedback", "feedback.4.weight", "feedback MLP output-layer weights"),
+    ("mlp_bias_feedback", "feedback.4.bias", "feedback MLP output-layer biases"),
+)
+
+
+def _feedback_keys(run: Run) -> dict[str, str]:
+    """The state_dict keys of the feedback MLP's last linear layer (``feedback.K.weight``)."""
+    from cpg_actor.runner import load_checkpoint
+
+    checkpoints = run.checkpoints()
+    if not checkpoints:
+        return {}
+    state = load_checkpoint(checkpoints[max(checkpoints)])["agent_state"]
+    layers = sorted(
+        {int(k.split(".")[1]) for k in state if k.startswith("feedback.") and k.endswith("weight")}
+    )
+    if not layers:
+        return {}
+    return {"weight": f"feedback.{layers[-1]}.weight", "bias": f"feedback.{layers[-1]}.bias"}
+
+
+def parameters_under_training(results: Results, directory: Path) -> Output:
+    """Distributions of the CPG vector V and of the feedback MLP's output layer at checkpoints
+    spread over training, dark (early) to light (late); from the lowest seed of cpg-actor
+    (the CPG panel falls back to cpg-actor-open-loop)."""
+    plt = _plt()
+    notes: list[str] = []
+    run = results.first("cpg-actor")
+    feedback: dict[str, str] = {}
+    if run is None:
+        notes.append("parameters_under_training: cpg-actor was not run")
+        run = results.first("cpg-actor-open-loop")
+        if run is None:
+            return [], notes + ["parameters_under_training: no CPG-Actor run, nothing to draw"]
+        notes.append("parameters_under_training: CPG panel from cpg-actor-open-loop, no feedback")
+    else:
+        feedback = _feedback_keys(run)
+    panels = [
+        (
+            name,
+            {"weight": feedback.get("weight"), "bias": feedback.get("bias")}.get(kind, key),
+            title,
+        )
+        for (name, key, title), kind in zip(
+            PARAMETER_PANELS, ("cpg", "weight", "bias"), strict=True
+        )
+    ]
+    panels = [(name, key, title) for name, key, title in panels if key]
+    history = _history(run, tuple(key for _, key, _ in panels))
+    if not history:
+        return [], notes + ["parameters_under_training: the run has no checkpoints"]
+    # the 8 entries of V live on different scales (Hz, rad, 1/s, ...): their distribution hardly
+    # moves, so the CPG panel shows the change of each entry since the first checkpoint
+    cpg_key = PARAMETER_PANELS[0][1]
+    start = history[0][2].get(cpg_key)
+    if start is not None:
+        for _, _, values in history:
+            if cpg_key in values:
+                values[cpg_key] = values[cpg_key] - start
+    cmap = plt.get_cmap("viridis")
+    paths: list[Path] = []
+
+    def draw(ax, key: str, title: str) -> None:
+        stacks = [values[key] for _, _, values in history if key in values]
+        low = min(v.min() for v in stacks)
+        high = max(v.max() for v in stacks)
+        pad = 0.1 * (high - low) + 1e-3
+        grid = np.linspace(low - pad, high + pad, 300)
+        for i, (_, step, values) in enumerate(history):
+            shade = cmap(i / max(1, len(history) - 1))
+            density = _kde(values[key], grid)
+            ax.plot(grid, density, color=shade, lw=1.2, label=f"{step / 1e6:.3g}M")
+            ax.fill_between(grid, density, color=shade, alpha=0.08)
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel("value")
+        ax.set_ylabel("density")
+        ax.grid(alpha=0.3)
+
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.2 * len(panels), 3.6), squeeze=False)
+    for ax, (_, key, title) in zip(axes[0], panels, strict=True):
+        draw(ax, key, title)
+    axes[0][-1].legend(title="steps", fontsize=7, title_fontsize=7)
+    fig.suptitle(f"{label(run.variant)} seed {run.seed}: parameters over training (dark to light)")
+    fig.tight_layout()
+    paths += _save(fig, directory, "parameters_under_training")
+    for name, key, title in panels:
+        fig, ax = plt.subplots(figsize=(4.6, 3.6))
+        draw(ax, key, title)
+        ax.legend(title="steps", fontsize=7, title_fontsize=7)
+        fig.tight_layout()
+        paths += _save(fig, directory, name)
+    return paths, notes
+
+
+# -- fig:cpg_actor_training_over_time -------------------------------------------------------------
+def cpg_actor_training_over_time(results: Results, directory: Path) -> Output:
+    """Hip (solid) and foot (dotted) height, and desired HFE / KFE positions, at each stage of
+    training (lowest cpg-actor seed, eval episode 0)."""
+    plt = _plt()
+    name = "cpg_actor_training_over_time"
+    run = results.first("cpg-actor")
+    if run is None:
+        return [], [f"{name}: cpg-actor was not run"]
+    stages = []
+    for k, stage in enumerate(run.stages):
+        traces = run.traces(k)
+        if traces is not None:
+            stages.append((stage, traces))
+    if not stages:
+        return [], [f"{name}: cpg-actor seed {run.seed} has no stage evaluations"]
+    per_iteration = steps_per_iteration(run)
+    cmap = plt.get_cmap("viridis")
+
+    def stage_label(stage: dict) -> str:
+        if per_iteration:
+            return f"{stage['iteration'] * per_iteration / 1e6:.3g}M steps"
+        return f"iteration {stage['iteration']}"
+
+    def draw_heights(ax) -> None:
+        for i, (stage, traces) in enumerate(stages):
+            shade = cmap(i / max(1, len(stages) - 1) * 0.85)
+            t = traces["time"]
+            window = t <= t[0] + TRACE_WINDOW_S
+            ax.plot(
+                t[window],
+                traces["hip_height"][window, 0],
+                color=shade,
+                label=f"hip, {stage_label(stage)}",
+            )
+            ax.plot(t[window], traces["foot_height"][window, 0], ":", color=shade)
+        ax.set_ylabel("height (m); hip solid, foot dotted")
+        ax.set_title("The hopper progressively learns to jump", fontsize=9)
+
+    def draw_joint(ax, j: int) -> None:
+        for i, (stage, traces) in enumerate(stages):
+            shade = cmap(i / max(1, len(stages) - 1) * 0.85)
+            t = traces["time"]
+            window = t <= t[0] + TRACE_WINDOW_S
+            ax.plot(
+                t[window],
+                traces["desired_position"][window, 0, j],
+                color=shade,
+                label=stage_label(stage),
+            )
+        ax.set_ylabel(f"desired {JOINTS[j]} position (rad)")
+        ax.set_title(f"Desired {JOINTS[j]} positions across training", fontsize=9)
+
+    drawers: list[tuple[str, Callable]] = [
+        ("hopper_hip_foot_pos", draw_heights),
+        ("hfe_during_training", lambda ax: draw_joint(ax, 0)),
+        ("kfe_during_training", lambda ax: draw_joint(ax, 1)),
+    ]
+    paths: list[Path] = []
+    fig, axes = plt.subplots(1, 3, figsize=(14, 3.8))
+    for ax, (_, drawer) in zip(axes, drawers, strict=True):
+        drawer(ax)
+        ax.set_xlabel("time (s)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(f"CPG-Actor seed {run.seed} at the stages of training (eval episode 0)")
+    fig.tight_layout()
+    paths += _save(fig, directory, name)
+    for sub, drawer in drawers:
+        fig, ax = plt.subplots(figsize=(5.0, 3.8))
+        drawer(ax)
+        ax.set_xlabel("time (s)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        paths += _save(fig, directory, sub)
+    return paths, []
+
+
+def steps_per_iteration(run: Run) -> int | None:
+    for row in run.metrics:
+        if row.get("iteration"):
+            return int(row["global_step"]) // int(row["iteration"])
+    return None
+
+
+FIGURES: tuple[Callable[[Results, Path], Output], ...] = (
+    ep_reward,
+    cpg_output,
+    cpg_theta_dot,
+    cpg_r_dot_dot,
+    parameters_under_training,
+    des_output,
+    cpg_actor_training_over_time,
+)
+
+
+def make_figures(results: Results) -> Output:
+    """Every figure into ``OUT/figures``; a failing figure becomes a note, not an exception."""
+    directory = directory_of(results)
+    paths: list[Path] = []
+    notes: list[str] = []
+    for figure in FIGURES:
+        try:
+            written, more = figure(results, directory)
+        except Exception as error:  # one broken figure must not lose the report
+            written, more = [], [f"{figure.__name__}: failed ({error!r})"]
+        paths += written
+        notes += more
+    return paths, notes

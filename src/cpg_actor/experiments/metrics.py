@@ -1,0 +1,217 @@
+"""Numbers of the report: final return, smoothness, velocity share, bootstrap CIs, verdicts.
+
+Definitions (also in ``docs/reproduction.md`` and in each report):
+
+* **final return** of a run: the mean of the last ``FINAL_ROWS`` logged values of
+  ``charts/episode_return`` (each the mean return of the last 100 finished episodes) at or
+  before a step budget;
+* **smoothness** of desired positions: mean over steps, joints and episodes of the squared
+  second difference ``(p[t+1] - 2 p[t] + p[t-1])^2``, rad^2 per control step^2 (0 for a straight
+  line; a sine of amplitude A and period n steps gives about ``A^2 (2 pi / n)^4 / 2``; a
+  bang-bang signal switching between +-A gives up to ``4 A^2`` per switch);
+* **velocity share**: the share of desired joint velocities with ``|v| <= 15 rad/s`` (the
+  motor limit), over all steps, joints and episodes;
+* **p99 |v|**: the 99th percentile of ``|desired velocity|``;
+* **ratio of means with a bootstrap CI**: seeds resampled with replacement within each group,
+  ``B = 10,000`` resamples, percentile interval.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+FINAL_ROWS = 10
+VELOCITY_LIMIT = 15.0  # rad/s, the hopper's motor limit (paper section IV)
+SUPPORTED = "supported"
+NOT_SUPPORTED = "not supported"
+NOT_TESTED = "not tested in this run"
+
+
+def final_return(
+    steps: Sequence[float],
+    returns: Sequence[float | None],
+    at_step: float | None = None,
+    rows: int = FINAL_ROWS,
+) -> float:
+    """Mean of the last ``rows`` finite returns logged at or before ``at_step`` (NaN if none)."""
+    steps_a = np.asarray(steps, dtype=float)
+    values = np.array([np.nan if v is None else v for v in returns], dtype=float)
+    keep = np.isfinite(values)
+    if at_step is not None:
+        keep &= steps_a <= at_step
+    values = values[keep]
+    return float(values[-rows:].mean()) if values.size else float("nan")
+
+
+def smoothness(desired_position: np.ndarray) -> float:
+    """Mean squared second difference along axis 0 (time), rad^2; NaN rows are ignored."""
+    p = np.asarray(desired_position, dtype=float)
+    if p.shape[0] < 3:
+        return float("nan")
+    second = p[2:] - 2.0 * p[1:-1] + p[:-2]
+    second = second[np.isfinite(second)]
+    return float(np.mean(second**2)) if second.size else float("nan")
+
+
+def velocity_share(desired_velocity: np.ndarray, limit: float = VELOCITY_LIMIT) -> float:
+    """Share of finite desired velocities with ``|v| <= limit``."""
+    v = np.asarray(desired_velocity, dtype=float)
+    v = v[np.isfinite(v)]
+    return float(np.mean(np.abs(v) <= limit)) if v.size else float("nan")
+
+
+def velocity_p99(desired_velocity: np.ndarray) -> float:
+    v = np.asarray(desired_velocity, dtype=float)
+    v = v[np.isfinite(v)]
+    return float(np.percentile(np.abs(v), 99)) if v.size else float("nan")
+
+
+def mean_std(values: Sequence[float]) -> tuple[float, float]:
+    """Mean and (population) standard deviation of the finite values; NaNs if none."""
+    a = np.asarray(values, dtype=float)
+    a = a[np.isfinite(a)]
+    if a.size == 0:
+        return float("nan"), float("nan")
+    return float(a.mean()), float(a.std())
+
+
+@dataclass
+class Interval:
+    estimate: float
+    low: float
+    high: float
+
+    def __str__(self) -> str:
+        return f"{self.estimate:.3g} [{self.low:.3g}, {self.high:.3g}]"
+
+
+def bootstrap_ratio(
+    numerator: Sequence[float],
+    denominator: Sequence[float],
+    resamples: int = 10_000,
+    confidence: float = 0.95,
+    seed: int = 0,
+) -> Interval | None:
+    """``mean(numerator) / mean(denominator)`` with a percentile bootstrap CI over seeds.
+
+    None when it is undefined: a group is empty, or the denominator's mean (or any resampled
+    mean) is not positive (a ratio of returns is only meaningful for positive returns)."""
+    a = np.asarray(numerator, dtype=float)
+    b = np.asarray(denominator, dtype=float)
+    a, b = a[np.isfinite(a)], b[np.isfinite(b)]
+    if a.size == 0 or b.size == 0 or b.mean() <= 0:
+        return None
+    rng = np.random.default_rng(seed)
+    mean_a = a[rng.integers(0, a.size, (resamples, a.size))].mean(axis=1)
+    mean_b = b[rng.integers(0, b.size, (resamples, b.size))].mean(axis=1)
+    if np.any(mean_b <= 0):
+        return None
+    ratios = mean_a / mean_b
+    tail = 100 * (1 - confidence) / 2
+    low, high = np.percentile(ratios, [tail, 100 - tail])
+    return Interval(float(a.mean() / b.mean()), float(low), float(high))
+
+
+def bootstrap_difference(
+    first: Sequence[float],
+    second: Sequence[float],
+    resamples: int = 10_000,
+    confidence: float = 0.95,
+    seed: int = 0,
+) -> Interval | None:
+    """``mean(first) - mean(second)`` with a percentile bootstrap CI over seeds."""
+    a = np.asarray(first, dtype=float)
+    b = np.asarray(second, dtype=float)
+    a, b = a[np.isfinite(a)], b[np.isfinite(b)]
+    if a.size == 0 or b.size == 0:
+        return None
+    rng = np.random.default_rng(seed)
+    diff = a[rng.integers(0, a.size, (resamples, a.size))].mean(axis=1) - b[
+        rng.integers(0, b.size, (resamples, b.size))
+    ].mean(axis=1)
+    tail = 100 * (1 - confidence) / 2
+    low, high = np.percentile(diff, [tail, 100 - tail])
+    return Interval(float(a.mean() - b.mean()), float(low), float(high))
+
+
+# -- verdicts: (verdict, explanation) -----------------------------------------------------------
+Verdict = tuple[str, str]
+
+
+def verdict_reward_ratio(ratio: Interval | None, ran: bool, target: float = 6.0) -> Verdict:
+    """ "About 6x the reward of Cho et al. (warm)": supported when the ratio is within a factor 2
+    of ``target`` and its 95% CI lies above 1."""
+    if not ran:
+        return NOT_TESTED, "needs cpg-actor and cho2019-warm"
+    if ratio is None:
+        return NOT_SUPPORTED, "ratio undefined (Cho et al. (warm) return not positive)"
+    ok = target / 2 <= ratio.estimate <= target * 2 and ratio.low > 1
+    return (
+        SUPPORTED if ok else NOT_SUPPORTED,
+        f"ratio {ratio} (supported if within [{target / 2:g}, {target * 2:g}] and CI above 1)",
+    )
+
+
+def verdict_better(differences: dict[str, Interval | None], ran: bool) -> Verdict:
+    """ "Open-loop CPG-Actor beats Cho et al.": the 95% CI of the difference of mean final
+    returns lies above 0 for every Cho et al. variant that ran."""
+    if not ran or not differences:
+        return NOT_TESTED, (
+            "needs cpg-actor-open-loop and cho2019-warm or cho2019, with finished training "
+            "episodes logged"
+        )
+    parts, ok = [], True
+    for name, diff in differences.items():
+        if diff is None:
+            ok = False
+            parts.append(f"vs {name}: no data")
+            continue
+        ok &= diff.low > 0
+        parts.append(f"vs {name}: difference {diff}")
+    return SUPPORTED if ok else NOT_SUPPORTED, "; ".join(parts) + " (supported if CI above 0)"
+
+
+def verdict_smooth(cpg: float, mlp: float, factor: float = 10.0) -> Verdict:
+    """ "CPG outputs are smooth where the MLP is bang-bang": the CPG-Actor's smoothness measure is
+    at least ``factor`` times smaller than the MLP actor's."""
+    if not (np.isfinite(cpg) and np.isfinite(mlp)):
+        return NOT_TESTED, "needs cpg-actor and mlp with eval traces"
+    ok = cpg * factor <= mlp
+    return (
+        SUPPORTED if ok else NOT_SUPPORTED,
+        f"mean squared 2nd difference {cpg:.3g} (CPG-Actor) vs {mlp:.3g} rad^2 (MLP); "
+        f"supported if MLP / CPG-Actor >= {factor:g}",
+    )
+
+
+def verdict_near_limits(p99: float, share: float, limit: float = VELOCITY_LIMIT) -> Verdict:
+    """ "Desired velocities stay near the motor limits": the 99th percentile of |v| is within
+    [0.6, 1.2] x the limit (the range is used, and only just exceeded if at all)."""
+    if not np.isfinite(p99):
+        return NOT_TESTED, "needs cpg-actor eval traces"
+    ok = 0.6 * limit <= p99 <= 1.2 * limit
+    return (
+        SUPPORTED if ok else NOT_SUPPORTED,
+        f"p99 |v| = {p99:.3g} rad/s, {100 * share:.1f}% within +-{limit:g} rad/s; "
+        f"supported if p99 in [{0.6 * limit:g}, {1.2 * limit:g}]",
+    )
+
+
+def verdict_hop_doubles(early: float, final: float, threshold: float = 1.5) -> Verdict:
+    """ "The hop height about doubles with training": final / early hop height >= 1.5."""
+    if not (np.isfinite(early) and np.isfinite(final)):
+        return NOT_TESTED, "needs cpg-actor stage evaluations"
+    if early <= 0:
+        ok = final > 0
+        return (
+            SUPPORTED if ok else NOT_SUPPORTED,
+            f"hop height {early:.3g} m -> {final:.3g} m (no hop at the first stage)",
+        )
+    ratio = final / early
+    return (
+        SUPPORTED if ratio >= threshold else NOT_SUPPORTED,
+        f"hop height {early:.3g} m -> {final:.3g} m, x{ratio:.2f} (supported if >= x{threshold:g})",
+    )

@@ -1,0 +1,242 @@
+"""What a reproduction runs: settings, validation, per-run training arguments, ``reproduce.yaml``.
+
+Every (variant, seed) is an independent ``cpg-actor train`` run in ``OUT/runs/VARIANT/seedS``.
+The settings that decide the results (``IDENTITY_KEYS``) are saved in ``OUT/reproduce.yaml``;
+re-running with the same ones resumes, with different ones is refused unless ``--overwrite``.
+How the runs are executed (workers, Ray address) may change between invocations.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import shutil
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+# the paper's progressive-hopping figure: 1M, 20M and 60M of 60M steps
+STAGE_FRACTIONS: tuple[float, ...] = (1 / 60, 1 / 3, 1.0)
+STAGE_LABELS: tuple[str, ...] = ("1/60", "1/3", "1")
+# about this many checkpoints per run, so one lies near each stage and Fig. 5 has a history
+TARGET_CHECKPOINTS = 240
+SETTINGS_FILE = "reproduce.yaml"
+IDENTITY_KEYS = (
+    "variants",
+    "seeds",
+    "total_steps",
+    "num_envs",
+    "sim",
+    "overrides",
+    "eval_episodes",
+    "stage_fractions",
+)
+
+
+@dataclass
+class ReproduceSettings:
+    """The settings that decide a reproduction's results (see ``IDENTITY_KEYS``)."""
+
+    variants: list[str]
+    seeds: int
+    total_steps: int
+    num_envs: int | None = None
+    sim: str | None = None
+    overrides: list[str] = field(default_factory=list)
+    eval_episodes: int = 5
+    stage_fractions: list[float] = field(default_factory=lambda: list(STAGE_FRACTIONS))
+
+    def identity(self) -> dict[str, Any]:
+        data = asdict(self)
+        return {key: data[key] for key in IDENTITY_KEYS}
+
+
+@dataclass(frozen=True)
+class RunTask:
+    """One training run and its staged evaluations (picklable: sent to Ray workers)."""
+
+    variant: str
+    seed: int
+    run_dir: str
+    log_path: str
+    total_steps: int
+    num_iterations: int
+    planned_steps: int  # num_iterations x steps per iteration (>= total_steps)
+    train_args: tuple[str, ...]  # the arguments after `cpg-actor train` for a fresh run
+    stage_fractions: tuple[float, ...]
+    eval_episodes: int
+
+    @property
+    def name(self) -> str:
+        return f"{self.variant}/seed{self.seed}"
+
+
+def parse_variants(text: str) -> list[str]:
+    """``"cpg-actor,mlp"`` -> ``["cpg-actor", "mlp"]``; checked against the agent registry."""
+    from cpg_actor.agents import AGENTS
+
+    variants = [v.strip() for v in text.split(",") if v.strip()]
+    if not variants:
+        raise ValueError("--variants is empty; available: " + ", ".join(sorted(AGENTS)))
+    unknown = [v for v in variants if v not in AGENTS]
+    if unknown:
+        raise ValueError(
+            f"unknown variant(s) {', '.join(unknown)}; available: {', '.join(sorted(AGENTS))}"
+        )
+    if len(set(variants)) != len(variants):
+        raise ValueError(f"--variants lists a variant twice: {text}")
+    return variants
+
+
+def _override_keys(overrides: list[str]) -> set[str]:
+    return {text.split("=", 1)[0].strip() for text in overrides}
+
+
+def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
+    """The :class:`TrainConfig` ``cpg-actor train`` will build for one run (validates it)."""
+    from cpg_actor.commands.train import build_config
+
+    args = argparse.Namespace(
+        config=None,
+        agent=variant,
+        seed=seed,
+        total_steps=str(settings.total_steps),
+        num_envs=settings.num_envs,
+        sim=settings.sim,
+        overrides=list(settings.overrides),
+    )
+    return build_config(args)
+
+
+def checkpoint_interval(config) -> int:
+    """Iterations between checkpoints: about ``TARGET_CHECKPOINTS`` per run, but at least two
+    episodes per environment between checkpoints (every checkpoint restarts the episodes, and an
+    episode cut short is not counted in the statistics)."""
+    episode_steps = int(getattr(config.env, "episode_steps", 500))
+    at_least = math.ceil(2 * episode_steps / config.ppo.num_steps)
+    return max(1, at_least, config.num_iterations // TARGET_CHECKPOINTS)
+
+
+def validate(settings: ReproduceSettings) -> None:
+    if not isinstance(settings.seeds, int) or settings.seeds < 1:
+        raise ValueError(f"--seeds must be >= 1, got {settings.seeds}")
+    if settings.total_steps <= 0:
+        raise ValueError(f"--total-steps must be > 0, got {settings.total_steps}")
+    if settings.num_envs is not None and settings.num_envs < 1:
+        raise ValueError(f"--num-envs must be >= 1, got {settings.num_envs}")
+    if settings.eval_episodes < 1:
+        raise ValueError(f"--eval-episodes must be >= 1, got {settings.eval_episodes}")
+    if "agent" in _override_keys(settings.overrides) or "seed" in _override_keys(
+        settings.overrides
+    ):
+        raise ValueError("--set agent=... / seed=... is not allowed; use --variants / --seeds")
+
+
+def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[RunTask]:
+    """One :class:`RunTask` per (variant, seed); raises ValueError on an invalid config."""
+    validate(settings)
+    keys = _override_keys(settings.overrides)
+    tasks = []
+    for variant in settings.variants:
+        config = resolve_config(settings, variant)  # raises on unknown keys / bad values
+        extra: list[str] = []
+        if "checkpoint_interval" not in keys:
+            extra += ["--set", f"checkpoint_interval={checkpoint_interval(config)}"]
+        if "torch_threads" not in keys:
+            extra += ["--set", "torch_threads=1"]
+        if "env_threads" not in keys:
+            import os
+
+            threads = max(1, (os.cpu_count() or 1) // max(1, workers))
+            extra += ["--set", f"env_threads={threads}"]
+        for seed in range(settings.seeds):
+            run_dir = out / "runs" / variant / f"seed{seed}"
+            args = ["--agent", variant, "--seed", str(seed)]
+            args += ["--total-steps", str(settings.total_steps), "--run-dir", str(run_dir)]
+            if settings.num_envs is not None:
+                args += ["--num-envs", str(settings.num_envs)]
+            if settings.sim is not None:
+                args += ["--sim", settings.sim]
+            args += extra
+            for text in settings.overrides:
+                args += ["--set", text]
+            args.append("--no-progress")
+            tasks.append(
+                RunTask(
+                    variant=variant,
+                    seed=seed,
+                    run_dir=str(run_dir),
+                    log_path=str(out / "logs" / f"{variant}_seed{seed}.log"),
+                    total_steps=settings.total_steps,
+                    num_iterations=config.num_iterations,
+                    planned_steps=config.num_iterations * config.steps_per_iteration,
+                    train_args=tuple(args),
+                    stage_fractions=tuple(settings.stage_fractions),
+                    eval_episodes=settings.eval_episodes,
+                )
+            )
+    return tasks
+
+
+def load_settings_file(out: Path) -> dict[str, Any] | None:
+    path = out / SETTINGS_FILE
+    if not path.is_file():
+        return None
+    data = yaml.safe_load(path.read_text()) or {}
+    if not isinstance(data, dict):
+        raise ValueError(f"{path} is not a reproduce settings file")
+    return data
+
+
+def settings_from_file(out: Path) -> ReproduceSettings:
+    data = load_settings_file(out)
+    if data is None:
+        raise FileNotFoundError(f"{out / SETTINGS_FILE} does not exist; is {out} a results dir?")
+    return ReproduceSettings(**{key: data["settings"][key] for key in IDENTITY_KEYS})
+
+
+def prepare_out_dir(out: Path, settings: ReproduceSettings, overwrite: bool) -> str:
+    """Create ``out`` or check that it holds the same reproduction; returns "new", "resume"
+    or "overwrite". Refuses an existing directory made with other settings (or not made by
+    ``cpg-actor reproduce``) unless ``overwrite`` (which deletes it, only if it is ours)."""
+    saved = load_settings_file(out)
+    if out.exists() and any(out.iterdir()):
+        if saved is None:
+            raise FileExistsError(
+                f"{out} is not empty and was not written by `cpg-actor reproduce` "
+                f"(no {SETTINGS_FILE}); choose another --out"
+            )
+        if saved.get("settings") == settings.identity():
+            if overwrite:
+                shutil.rmtree(out)
+                out.mkdir(parents=True)
+                return "overwrite"
+            return "resume"
+        if not overwrite:
+            differences = [
+                f"{key}: {saved.get('settings', {}).get(key)!r} -> {value!r}"
+                for key, value in settings.identity().items()
+                if saved.get("settings", {}).get(key) != value
+            ]
+            raise FileExistsError(
+                f"{out} holds a reproduction with other settings ({'; '.join(differences)}); "
+                "pass --overwrite to replace it or choose another --out"
+            )
+        shutil.rmtree(out)
+        out.mkdir(parents=True)
+        return "overwrite"
+    out.mkdir(parents=True, exist_ok=True)
+    return "new"
+
+
+def write_settings_file(
+    out: Path, settings: ReproduceSettings, command: str, execution: dict[str, Any]
+) -> None:
+    data = {
+        "command": command,
+        "settings": settings.identity(),
+        "execution": execution,  # may differ between invocations (workers, Ray address)
+    }
+    (out / SETTINGS_FILE).write_text(yaml.safe_dump(data, sort_keys=False))

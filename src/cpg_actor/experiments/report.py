@@ -1,0 +1,458 @@
+"""``OUT/report.md`` and ``OUT/summary.json``: the numbers, the figures and the paper's claims."""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import subprocess
+from datetime import datetime, timezone
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cpg_actor.experiments import metrics as m
+from cpg_actor.experiments.figures import make_figures, steps_per_iteration
+from cpg_actor.experiments.plan import STAGE_LABELS, load_settings_file
+from cpg_actor.experiments.results import Results, label
+
+PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
+PAPER_STAGE_STEPS = (1_000_000, 20_000_000, 60_000_000)
+CHO_VARIANTS = ("cho2019-warm", "cho2019")
+
+
+def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str, list[float]]:
+    """Per-seed numbers of one variant (NaN where a run lacks the data)."""
+    out: dict[str, list[float]] = {
+        key: []
+        for key in (
+            "final_return",
+            "eval_return",
+            "hop_height",
+            "smoothness",
+            "velocity_share",
+            "velocity_p99",
+            "first_stage_hop_height",
+        )
+    }
+    for run in results.runs.get(variant, []):
+        steps, returns = run.curve("charts/episode_return")
+        out["final_return"].append(m.final_return(steps, returns, at_step=at_step))
+        traces = run.traces()
+        first = run.traces(0) if run.stages else None
+        nan = float("nan")
+        if traces is None:
+            for key in (
+                "eval_return",
+                "hop_height",
+                "smoothness",
+                "velocity_share",
+                "velocity_p99",
+            ):
+                out[key].append(nan)
+        else:
+            out["eval_return"].append(float(np.mean(traces["episode_return"])))
+            out["hop_height"].append(float(np.mean(traces["hop_height"])))
+            position = traces.get("desired_position")
+            velocity = traces.get("desired_velocity")
+            # per joint (T, E, 2); anything else (e.g. CPG parameters as actions) is not used
+            per_joint = position is not None and position.ndim == 3 and position.shape[-1] == 2
+            out["smoothness"].append(m.smoothness(position) if per_joint else nan)
+            per_joint = velocity is not None and velocity.ndim == 3 and velocity.shape[-1] == 2
+            out["velocity_share"].append(m.velocity_share(velocity) if per_joint else nan)
+            out["velocity_p99"].append(m.velocity_p99(velocity) if per_joint else nan)
+        out["first_stage_hop_height"].append(
+            float(np.mean(first["hop_height"])) if first is not None else nan
+        )
+    return out
+
+
+def _finite(values: list[float]) -> bool:
+    return bool(np.isfinite(np.asarray(values, dtype=float)).any())
+
+
+def _stages(results: Results, variant: str) -> list[dict[str, Any]]:
+    """Per stage of training: steps (of the lowest seed), eval return and hop height over
+    seeds."""
+    runs = results.runs.get(variant, [])
+    count = max((len(run.stages) for run in runs), default=0)
+    stages = []
+    for k in range(count):
+        hops, returns, steps = [], [], None
+        for run in runs:
+            traces = run.traces(k) if k < len(run.stages) else None
+            if traces is None:
+                continue
+            hops.append(float(np.mean(traces["hop_height"])))
+            returns.append(float(np.mean(traces["episode_return"])))
+            if steps is None:
+                per_iteration = steps_per_iteration(run)
+                if per_iteration:
+                    steps = run.stages[k]["iteration"] * per_iteration
+        fraction = runs[0].stages[k]["fraction"] if k < len(runs[0].stages) else float("nan")
+        stages.append(
+            {
+                "fraction": fraction,
+                "steps": steps,
+                "seeds": len(hops),
+                "hop_height": m.mean_std(hops),
+                "eval_return": m.mean_std(returns),
+            }
+        )
+    return stages
+
+
+def summarise(results: Results, total_steps: int) -> dict[str, Any]:
+    """Per-variant numbers (means and stds over seeds) and the claim verdicts."""
+    comparison_step = min(total_steps, PAPER_COMPARISON_STEPS)
+    variants: dict[str, Any] = {}
+    seeds: dict[str, dict[str, list[float]]] = {}
+    for variant in results.variants:
+        if not results.has(variant):
+            continue
+        seeds[variant] = _per_seed(results, variant, at_step=None)
+        at_comparison = _per_seed(results, variant, at_step=comparison_step)["final_return"]
+        seeds[variant]["return_at_comparison"] = at_comparison
+        variants[variant] = {
+            "seeds": len(results.runs[variant]),
+            "finished": sum(run.finished for run in results.runs[variant]),
+            **{key: m.mean_std(values) for key, values in seeds[variant].items()},
+            "per_seed": seeds[variant],
+            "stages": _stages(results, variant),
+        }
+
+    def has(*names: str) -> bool:
+        return all(name in variants for name in names)
+
+    claims: list[dict[str, str]] = []
+    # 1. about 6x the reward of Cho et al. (warm)
+    ran = has("cpg-actor", "cho2019-warm")
+    ratio = (
+        m.bootstrap_ratio(
+            seeds["cpg-actor"]["return_at_comparison"],
+            seeds["cho2019-warm"]["return_at_comparison"],
+        )
+        if ran
+        else None
+    )
+    verdict, detail = m.verdict_reward_ratio(ratio, ran)
+    if ran and not (
+        _finite(seeds["cpg-actor"]["return_at_comparison"])
+        and _finite(seeds["cho2019-warm"]["return_at_comparison"])
+    ):
+        verdict, detail = m.NOT_TESTED, "no finished training episodes logged"
+    claims.append(
+        {
+            "claim": "CPG-Actor reaches about 6x the reward of Cho et al. (warm) after 20M steps",
+            "verdict": verdict,
+            "detail": f"at {comparison_step:,} steps: {detail}",
+        }
+    )
+    # 2. open-loop CPG-Actor beats Cho et al.
+    differences = {
+        cho: m.bootstrap_difference(
+            seeds["cpg-actor-open-loop"]["final_return"], seeds[cho]["final_return"]
+        )
+        for cho in CHO_VARIANTS
+        if has("cpg-actor-open-loop", cho)
+        and _finite(seeds["cpg-actor-open-loop"]["final_return"])
+        and _finite(seeds[cho]["final_return"])
+    }
+    verdict, detail = m.verdict_better(differences, bool(differences))
+    claims.append(
+        {
+            "claim": "the open-loop CPG-Actor beats Cho et al.",
+            "verdict": verdict,
+            "detail": f"final returns: {detail}",
+        }
+    )
+    # 3. smooth vs bang-bang
+    nan = float("nan")
+    cpg_smooth = variants["cpg-actor"]["smoothness"][0] if has("cpg-actor") else nan
+    mlp_smooth = variants["mlp"]["smoothness"][0] if has("mlp") else nan
+    verdict, detail = m.verdict_smooth(cpg_smooth, mlp_smooth)
+    claims.append(
+        {
+            "claim": "CPG-Actor desired positions are smooth where the MLP actor is bang-bang",
+            "verdict": verdict,
+            "detail": detail,
+        }
+    )
+    # 4. near the motor limits
+    p99 = variants["cpg-actor"]["velocity_p99"][0] if has("cpg-actor") else nan
+    share = variants["cpg-actor"]["velocity_share"][0] if has("cpg-actor") else nan
+    verdict, detail = m.verdict_near_limits(p99, share)
+    claims.append(
+        {
+            "claim": "CPG-Actor desired velocities stay near (within) the +-15 rad/s motor limits",
+            "verdict": verdict,
+            "detail": detail,
+        }
+    )
+    # 5. the hop height about doubles
+    early = variants["cpg-actor"]["first_stage_hop_height"][0] if has("cpg-actor") else nan
+    final = variants["cpg-actor"]["hop_height"][0] if has("cpg-actor") else nan
+    verdict, detail = m.verdict_hop_doubles(early, final)
+    claims.append(
+        {
+            "claim": "the CPG-Actor's hop height about doubles with training (1M -> 60M in the "
+            "paper; here 1/60 of the budget -> the end)",
+            "verdict": verdict,
+            "detail": detail,
+        }
+    )
+    return {
+        "total_steps": total_steps,
+        "comparison_step": comparison_step,
+        "variants": variants,
+        "claims": claims,
+    }
+
+
+def environment() -> dict[str, Any]:
+    """Package versions, machine and git commit, for the report."""
+    versions = {"python": platform.python_version()}
+    for package in (
+        "cpg-actor",
+        "torch",
+        "numpy",
+        "mujoco",
+        "pybullet",
+        "gymnasium",
+        "matplotlib",
+        "ray",
+    ):
+        try:
+            versions[package] = metadata.version(package)
+        except metadata.PackageNotFoundError:
+            versions[package] = "not installed"
+    cpu = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    commit = "unknown"
+    try:
+        root = Path(__file__).resolve().parents[3]
+        head = subprocess.run(
+            ["git", "-C", str(root), "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=False,
+        )
+        dirty = subprocess.run(
+            ["git", "-C", str(root), "status", "--porcelain"],
+            capture_output=True,
+            text=True,
+            timeout=5,
+            check=False,
+        )
+        if head.returncode == 0:
+            commit = head.stdout.strip() + (" (uncommitted changes)" if dirty.stdout else "")
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return {
+        "versions": versions,
+        "machine": f"{cpu}, {os.cpu_count()} cores, {platform.system()} {platform.release()}",
+        "commit": commit,
+    }
+
+
+def _pm(value: tuple[float, float], digits: int = 3) -> str:
+    mean, std = value
+    if not np.isfinite(mean):
+        return "-"
+    return f"{mean:.{digits}g} +- {std:.2g}"
+
+
+def _pct(value: tuple[float, float]) -> str:
+    mean, std = value
+    return "-" if not np.isfinite(mean) else f"{100 * mean:.1f}% +- {100 * std:.1g}"
+
+
+def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> Path:
+    """Figures, ``summary.json`` and ``report.md`` for the results directory ``out``."""
+    out = Path(out)
+    saved = load_settings_file(out) or {}
+    settings = saved.get("settings", {})
+    variants = list(settings.get("variants") or [])
+    total_steps = int(settings.get("total_steps") or 0)
+    results = Results.load(out, variants or None)
+    if not total_steps:
+        total_steps = max(
+            (
+                int(run.curve("charts/episode_return")[0].max(initial=0))
+                for runs in results.runs.values()
+                for run in runs
+            ),
+            default=0,
+        )
+    figures, notes = make_figures(results)
+    for variant in variants:
+        if not results.has(variant):
+            notes.append(f"{variant}: no run directory")
+    summary = summarise(results, total_steps)
+    env = environment()
+    summary["environment"] = env
+    summary["notes"] = notes
+    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
+
+    lines = [
+        "# CPG-Actor reproduction report",
+        "",
+        f"Generated {datetime.now(timezone.utc).strftime('%Y-%m-%d %H:%M UTC')} by "
+        "`cpg-actor reproduce` / `cpg-actor figures`.",
+        "",
+        "## Setup",
+        "",
+        f"* command: `{saved.get('command', '(unknown)')}`",
+        f"* budget: **{total_steps:,} control steps per run**, "
+        f"{settings.get('seeds', '?')} seed(s) per variant; the paper compares at 20M steps "
+        "and shows the progressive hopping at 1M / 20M / 60M steps.",
+        f"* variants: {', '.join(variants) if variants else ', '.join(results.runs)}",
+        f"* overrides: {', '.join(settings.get('overrides') or []) or 'none'}; "
+        f"num_envs {settings.get('num_envs') or 'default'}, "
+        f"simulator {settings.get('sim') or 'default (mujoco)'}",
+        f"* stage evaluations at fractions {', '.join(STAGE_LABELS)} of the budget, "
+        f"{settings.get('eval_episodes', '?')} deterministic episodes each",
+        f"* machine: {env['machine']}",
+        f"* code: cpg-actor commit {env['commit']}",
+        "* versions: " + ", ".join(f"{k} {v}" for k, v in env["versions"].items()),
+        "",
+    ]
+    if run_results:
+        failed = [r for r in run_results if r.get("status") == "failed"]
+        lines += [
+            f"Runs this invocation: {len(run_results)} "
+            f"({sum(r['status'] == 'done' for r in run_results)} completed, "
+            f"{sum(r['status'] == 'skipped' for r in run_results)} skipped as finished, "
+            f"{len(failed)} failed).",
+            "",
+        ]
+        for r in failed:
+            lines.append(f"* **failed** {r['name']}: {r.get('error', '')}")
+        if failed:
+            lines.append("")
+
+    lines += [
+        "## Results per variant",
+        "",
+        "Mean +- standard deviation over seeds. *Final return*: mean of the last "
+        f"{m.FINAL_ROWS} logged values of `charts/episode_return` (each the mean return of the "
+        "last 100 training episodes). *Eval return*, *hop height*, *smoothness*, *|v| <= 15* "
+        "and *p99 |v|* come from the deterministic evaluation of the final checkpoint.",
+        "",
+        "| variant | seeds (finished) | final return | eval return | hop height (m) | "
+        "smoothness (rad^2) | desired vel. within +-15 rad/s | p99 desired \\|v\\| (rad/s) |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for variant, row in summary["variants"].items():
+        lines.append(
+            f"| {label(variant)} (`{variant}`) | {row['seeds']} ({row['finished']}) | "
+            f"{_pm(row['final_return'])} | {_pm(row['eval_return'])} | "
+            f"{_pm(row['hop_height'])} | {_pm(row['smoothness'])} | "
+            f"{_pct(row['velocity_share'])} | {_pm(row['velocity_p99'])} |"
+        )
+    lines += [""]
+    if "cpg-actor" in summary["variants"] and "cho2019-warm" in summary["variants"]:
+        ratio = m.bootstrap_ratio(
+            summary["variants"]["cpg-actor"]["per_seed"]["return_at_comparison"],
+            summary["variants"]["cho2019-warm"]["per_seed"]["return_at_comparison"],
+        )
+        text = (
+            str(ratio)
+            if ratio is not None
+            else "undefined (Cho et al. (warm) mean return is not positive)"
+        )
+        lines += [
+            f"Ratio of mean final returns CPG-Actor / Cho et al. (warm) at "
+            f"{summary['comparison_step']:,} steps, with its bootstrap 95% CI over seeds: "
+            f"**{text}**.",
+            "",
+        ]
+
+    lines += [
+        "## Stages of training",
+        "",
+        "Deterministic evaluation at the checkpoints nearest to 1/60, 1/3 and 1 of the budget "
+        "(the paper: 1M, 20M, 60M of 60M steps); mean +- std over seeds.",
+        "",
+        "| variant | stage | steps | eval return | hop height (m) |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for variant, row in summary["variants"].items():
+        for k, stage in enumerate(row["stages"]):
+            name = STAGE_LABELS[k] if k < len(STAGE_LABELS) else f"{stage['fraction']:.3g}"
+            steps = f"{stage['steps']:,}" if stage["steps"] is not None else "-"
+            lines.append(
+                f"| {label(variant)} | {name} | {steps} | {_pm(stage['eval_return'])} | "
+                f"{_pm(stage['hop_height'])} |"
+            )
+    lines += [
+        "",
+        "## The paper's claims",
+        "",
+        f"Verdicts computed from the numbers above, at a budget of {total_steps:,} steps per "
+        "run (the paper: 20M steps, 60M for the progressive hopping).",
+        "",
+        "| claim | verdict | evidence |",
+        "| --- | --- | --- |",
+    ]
+    for claim in summary["claims"]:
+        detail = claim["detail"].replace("|", "\\|")  # a | would end the table cell
+        lines.append(f"| {claim['claim']} | **{claim['verdict']}** | {detail} |")
+    lines += ["", "## Figures", ""]
+    by_name = {p.stem: p for p in figures if p.suffix == ".png"}
+    captions = {
+        "ep_reward": "fig:ep_reward - episode reward against steps (mean, min-max band)",
+        "cpg_output": "fig:cpg_output - desired positions, Cho et al. vs CPG-Actor",
+        "cpg_theta_dot": "fig:cpg_theta_dot - theta_dot over an episode",
+        "cpg_r_dot_dot": "fig:cpg_r_dot_dot - r_ddot over an episode",
+        "parameters_under_training": "fig:parameters_under_training - CPG vector V, feedback "
+        "output-layer weights and biases over training (dark to light)",
+        "des_pos": "fig:des_pos - desired positions, MLP actor vs CPG-Actor",
+        "des_vel": "fig:des_vel - desired velocities with the +-15 rad/s limits",
+        "cpg_actor_training_over_time": "fig:cpg_actor_training_over_time - hip / foot height "
+        "and desired HFE / KFE positions at the stages of training",
+    }
+    for stem, caption in captions.items():
+        if stem in by_name:
+            rel = by_name[stem].relative_to(out)
+            lines += [f"### {caption}", "", f"![{stem}]({rel.as_posix()})", ""]
+        else:
+            lines += [f"### {caption}", "", "*not drawn (see notes)*", ""]
+    lines += [
+        "Single panels are also saved: "
+        + ", ".join(f"`{p.name}`" for p in figures if p.suffix == ".png" and p.stem not in captions)
+        + " (and a PDF of every figure).",
+        "",
+    ]
+    lines += [
+        "## Definitions",
+        "",
+        "* smoothness: mean over steps, joints and eval episodes of the squared second "
+        "difference of the desired position, `(p[t+1] - 2 p[t] + p[t-1])^2`, in rad^2 (per "
+        "control step of 0.01 s); lower is smoother, a bang-bang signal scores high;",
+        "* velocity share: share of desired joint velocities (CPG agents: the CPG's `x_dot`; "
+        "MLP: finite difference of its desired positions) with `|v| <= 15 rad/s`;",
+        "* hop height: per eval episode, the maximum hip height minus the standing hip height;",
+        "* bootstrap CI: seeds resampled with replacement within each variant, 10,000 "
+        "resamples, 2.5 and 97.5 percentiles of the ratio (or difference) of the means;",
+        "* claim thresholds: reward ratio within [3, 12] with CI above 1; open-loop beats Cho "
+        "et al. if the CI of the difference of mean final returns is above 0 for each Cho "
+        "variant run; smooth vs bang-bang if the MLP's smoothness measure is >= 10x the "
+        "CPG-Actor's; near the limits if the 99th percentile of |desired velocity| lies in "
+        "[9, 18] rad/s; hop height doubles if final / first-stage hop height >= 1.5.",
+        "",
+    ]
+    if notes:
+        lines += ["## Notes", ""] + [f"* {note}" for note in notes] + [""]
+    path = out / "report.md"
+    path.write_text("\n".join(lines))
+    return path

@@ -1,0 +1,94 @@
+"""Figures and report from a constructed results directory (no training): variants that were
+not run are skipped with a note; progress lines read metrics.jsonl."""
+
+import json
+
+import numpy as np
+
+from cpg_actor.experiments.execute import Progress, read_progress
+from cpg_actor.experiments.figures import make_figures
+from cpg_actor.experiments.plan import RunTask
+from cpg_actor.experiments.report import write_report
+from cpg_actor.experiments.results import Results
+
+
+def _fake_run(out, variant, seed, bang_bang=False, steps=500):
+    run = out / "runs" / variant / f"seed{seed}"
+    (run / "eval" / "stage0").mkdir(parents=True)
+    rows = [
+        {"iteration": i, "global_step": 100 * i, "charts/episode_return": float(i + seed),
+         "charts/SPS": 1000.0}
+        for i in range(1, steps // 100 + 1)
+    ]  # fmt: skip
+    (run / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    t = 0.01 * np.arange(1, 201)
+    wave = np.sign(np.sin(4 * np.pi * t)) if bang_bang else np.sin(4 * np.pi * t)
+    position = np.stack([0.4 + 0.2 * wave, -0.8 + 0.3 * wave], axis=-1)[:, None, :]
+    traces = {
+        "time": t,
+        "desired_position": position,
+        "desired_velocity": np.gradient(position, 0.01, axis=0),
+        "hip_height": 0.5 + 0.05 * np.abs(np.sin(4 * np.pi * t))[:, None],
+        "foot_height": 0.02 * np.abs(np.sin(4 * np.pi * t))[:, None],
+        "episode_return": np.array([10.0]),
+        "hop_height": np.array([0.05]),
+    }
+    np.savez(run / "eval" / "stage0" / "traces.npz", **traces)
+    stages = [{"stage": 0, "fraction": 1.0, "iteration": 5, "checkpoint": "x",
+               "traces": "eval/stage0/traces.npz"}]  # fmt: skip
+    (run / "eval" / "stages.json").write_text(json.dumps(stages))
+    (run / "reproduce_run.json").write_text(json.dumps({"status": "done"}))
+    return run
+
+
+def test_missing_variants_are_skipped_with_notes(tmp_path):
+    out = tmp_path / "out"
+    for seed in (0, 1):
+        _fake_run(out, "mlp", seed, bang_bang=True)
+    results = Results.load(out, ["cpg-actor", "mlp"])
+    assert list(results.runs) == ["mlp"] and results.first("mlp").seed == 0
+    paths, notes = make_figures(results)
+    names = {p.name for p in paths}
+    assert {"ep_reward.png", "ep_reward.pdf", "des_pos.png", "des_vel.png"} <= names
+    assert "cpg_output.png" not in names
+    assert "ep_reward: cpg-actor was not run" in notes
+    assert any("cpg_actor_training_over_time: cpg-actor was not run" in n for n in notes)
+    assert any("parameters_under_training" in n for n in notes)
+
+    report = write_report(out).read_text()
+    assert "| MLP actor (`mlp`) | 2 (2) |" in report
+    assert report.count("not tested in this run") == 5
+    assert "cpg_actor_training_over_time: cpg-actor was not run" in report
+
+
+def test_report_verdicts_from_constructed_traces(tmp_path):
+    out = tmp_path / "out"
+    _fake_run(out, "mlp", 0, bang_bang=True)
+    _fake_run(out, "cpg-actor", 0)
+    write_report(out)
+    summary = json.loads((out / "summary.json").read_text())
+    verdicts = {c["claim"]: c["verdict"] for c in summary["claims"]}
+    assert len(verdicts) == 5
+    smooth = [v for claim, v in verdicts.items() if "bang-bang" in claim]
+    assert smooth == ["supported"]  # a sine vs a square wave
+    cho = [v for claim, v in verdicts.items() if "Cho" in claim]
+    assert cho == ["not tested in this run"] * 2
+    assert summary["variants"]["cpg-actor"]["seeds"] == 1
+    assert summary["variants"]["mlp"]["smoothness"][0] > 0
+
+
+def test_progress_lines_read_metrics(tmp_path):
+    run = _fake_run(tmp_path, "mlp", 0, steps=300)
+    assert read_progress(run) == (300, 1000.0)
+    assert read_progress(tmp_path / "nothing") == (0, None)
+    task = RunTask("mlp", 0, str(run), str(tmp_path / "log"), 600, 6, 600, (), (1.0,), 1)
+    progress = Progress([task], interval=1.0, live=False)
+    progress.set("mlp/seed0", "training")
+    lines = progress.lines()
+    assert "mlp/seed0" in lines[0] and "300/600 steps" in lines[0] and "1,000 SPS" in lines[0]
+    assert lines[-1].strip().startswith("overall 300/600 steps (50.0%)")
+    from rich.console import Console
+
+    console = Console(record=True, width=120)
+    console.print(progress.table())
+    assert "mlp/seed0" in console.export_text()

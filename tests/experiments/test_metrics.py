@@ -1,0 +1,159 @@
+"""Report metrics and claim verdicts on constructed data; stage checkpoint choice; planning."""
+
+import math
+
+import numpy as np
+import pytest
+
+from cpg_actor.experiments import metrics as m
+from cpg_actor.experiments.execute import select_stage_checkpoints
+from cpg_actor.experiments.plan import (
+    ReproduceSettings,
+    checkpoint_interval,
+    parse_variants,
+    prepare_out_dir,
+    resolve_config,
+    write_settings_file,
+)
+
+
+def test_smoothness_is_zero_for_a_line_and_large_for_bang_bang():
+    t = np.arange(100, dtype=float)
+    line = np.stack([0.01 * t, -0.02 * t], axis=1)[:, None, :]  # (T, E=1, joints=2)
+    assert m.smoothness(line) == pytest.approx(0.0, abs=1e-20)
+    bang = 0.5 * (-1.0) ** t  # +-A every step: second difference 4A
+    assert m.smoothness(bang) == pytest.approx(16 * 0.25)
+    # a slow sine of amplitude A and period n: about A^2 (2 pi / n)^4 / 2
+    amplitude, period = 0.3, 50
+    sine = amplitude * np.sin(2 * np.pi * np.arange(5000) / period)
+    expected = amplitude**2 * (2 * np.pi / period) ** 4 / 2
+    assert m.smoothness(sine) == pytest.approx(expected, rel=0.01)
+    assert m.smoothness(sine) * 1e4 < m.smoothness(bang)
+
+
+def test_smoothness_ignores_nan_after_an_episode_ends():
+    p = np.zeros((10, 2, 2))
+    p[5:, 1] = np.nan  # episode 1 ended after 5 steps
+    p[:, 0, 0] = np.arange(10) ** 2  # second difference 2 everywhere
+    value = m.smoothness(p)
+    # episode 0: 8 second differences per joint (4 and 0); episode 1: 3 per joint (0)
+    assert value == pytest.approx(8 * 4 / (8 * 2 + 3 * 2))
+    assert math.isnan(m.smoothness(np.zeros((2, 1, 2))))
+
+
+def test_velocity_share_and_p99():
+    v = np.array([0.0, 10.0, -15.0, 15.0, 16.0, -30.0, np.nan, np.nan])
+    assert m.velocity_share(v) == pytest.approx(4 / 6)
+    assert m.velocity_share(v, limit=20.0) == pytest.approx(5 / 6)
+    assert m.velocity_p99(np.linspace(-10, 10, 10001)) == pytest.approx(9.9, abs=1e-3)
+    assert math.isnan(m.velocity_share(np.full(3, np.nan)))
+
+
+def test_final_return_uses_the_last_rows_before_the_step():
+    steps = [100, 200, 300, 400, 500]
+    returns = [None, 1.0, 2.0, 3.0, 4.0]
+    assert m.final_return(steps, returns, rows=2) == pytest.approx(3.5)
+    assert m.final_return(steps, returns, at_step=300, rows=10) == pytest.approx(1.5)
+    assert math.isnan(m.final_return(steps, [None] * 5))
+
+
+def test_bootstrap_ratio_and_difference():
+    exact = m.bootstrap_ratio([6.0, 6.0, 6.0], [1.0, 1.0, 1.0])
+    assert (exact.estimate, exact.low, exact.high) == pytest.approx((6.0, 6.0, 6.0))
+    rng = np.random.default_rng(1)
+    a = 60 + rng.normal(0, 5, 5)
+    b = 10 + rng.normal(0, 1, 5)
+    ratio = m.bootstrap_ratio(a, b)
+    assert ratio.estimate == pytest.approx(a.mean() / b.mean())
+    assert ratio.low < ratio.estimate < ratio.high
+    assert 4 < ratio.low and ratio.high < 8
+    # wider with fewer seeds
+    narrow = m.bootstrap_ratio(a, b)
+    wide = m.bootstrap_ratio(a[:2], b[:2])
+    assert wide.high - wide.low > 0 and narrow is not None
+    assert m.bootstrap_ratio(a, [-1.0, -2.0]) is None  # ratio undefined for negative returns
+    assert m.bootstrap_ratio(a, [-1.0, 5.0]) is None  # a resampled mean can be negative
+    assert m.bootstrap_ratio([], b) is None
+    diff = m.bootstrap_difference(a, b)
+    assert diff.estimate == pytest.approx(a.mean() - b.mean())
+    assert diff.low > 0
+    same = m.bootstrap_difference(b, b + rng.normal(0, 1, 5))
+    assert same.low < 0 < same.high
+
+
+def test_claim_verdicts():
+    ok = m.Interval(6.2, 4.0, 8.0)
+    assert m.verdict_reward_ratio(ok, ran=True)[0] == m.SUPPORTED
+    assert m.verdict_reward_ratio(m.Interval(1.5, 1.1, 2.0), ran=True)[0] == m.NOT_SUPPORTED
+    assert m.verdict_reward_ratio(m.Interval(5.0, 0.5, 9.0), ran=True)[0] == m.NOT_SUPPORTED
+    assert m.verdict_reward_ratio(None, ran=True)[0] == m.NOT_SUPPORTED
+    assert m.verdict_reward_ratio(None, ran=False)[0] == m.NOT_TESTED
+
+    above, spans = m.Interval(3.0, 1.0, 5.0), m.Interval(1.0, -1.0, 3.0)
+    assert m.verdict_better({"cho2019-warm": above}, ran=True)[0] == m.SUPPORTED
+    verdict, detail = m.verdict_better({"cho2019-warm": above, "cho2019": spans}, ran=True)
+    assert verdict == m.NOT_SUPPORTED and "cho2019" in detail
+    assert m.verdict_better({}, ran=False)[0] == m.NOT_TESTED
+
+    assert m.verdict_smooth(1e-5, 1e-2)[0] == m.SUPPORTED
+    assert m.verdict_smooth(1e-3, 2e-3)[0] == m.NOT_SUPPORTED
+    assert m.verdict_smooth(float("nan"), 1.0)[0] == m.NOT_TESTED
+
+    assert m.verdict_near_limits(14.0, 0.99)[0] == m.SUPPORTED
+    assert m.verdict_near_limits(3.0, 1.0)[0] == m.NOT_SUPPORTED  # far below the limit
+    assert m.verdict_near_limits(40.0, 0.5)[0] == m.NOT_SUPPORTED  # far above it
+    assert m.verdict_near_limits(float("nan"), float("nan"))[0] == m.NOT_TESTED
+
+    assert m.verdict_hop_doubles(0.05, 0.11)[0] == m.SUPPORTED
+    assert m.verdict_hop_doubles(0.05, 0.06)[0] == m.NOT_SUPPORTED
+    assert m.verdict_hop_doubles(0.0, 0.02)[0] == m.SUPPORTED
+    assert m.verdict_hop_doubles(float("nan"), 0.1)[0] == m.NOT_TESTED
+
+
+def test_stage_checkpoints_are_the_nearest():
+    checkpoints = {i: f"iter_{i:06d}.pt" for i in (0, 40, 80, 120, 160, 200, 240)}
+    chosen = select_stage_checkpoints(checkpoints, 240, (1 / 60, 1 / 3, 1.0))
+    assert [iteration for _, iteration, _ in chosen] == [0, 80, 240]
+    chosen = select_stage_checkpoints({0: "a", 2: "b"}, 2, (1 / 60, 1 / 3, 1.0))
+    assert [iteration for _, iteration, _ in chosen] == [0, 0, 2]
+    with pytest.raises(ValueError):
+        select_stage_checkpoints({}, 10, (1.0,))
+
+
+def test_checkpoint_interval_is_dense_but_keeps_whole_episodes():
+    settings = ReproduceSettings(variants=["cpg-actor"], seeds=1, total_steps=20_000_000)
+    config = resolve_config(settings, "cpg-actor")
+    interval = checkpoint_interval(config)  # 9766 iterations of 64 x 32 steps
+    assert interval == config.num_iterations // 240
+    assert interval * config.ppo.num_steps >= 2 * config.env.episode_steps
+    # the 1M-step stage of a 60M run lies within one interval of a checkpoint
+    assert interval <= config.num_iterations / 60 / 4
+    short = resolve_config(ReproduceSettings(variants=["mlp"], seeds=1, total_steps=100_000), "mlp")
+    assert checkpoint_interval(short) * short.ppo.num_steps >= 2 * short.env.episode_steps
+
+
+def test_variants_are_checked_against_the_registry():
+    assert parse_variants("cpg-actor, mlp") == ["cpg-actor", "mlp"]
+    with pytest.raises(ValueError, match="available: .*cpg-actor"):
+        parse_variants("cpg-actor,nope")
+    with pytest.raises(ValueError, match="twice"):
+        parse_variants("mlp,mlp")
+
+
+def test_out_dir_with_other_settings_is_refused(tmp_path):
+    out = tmp_path / "out"
+    settings = ReproduceSettings(variants=["mlp"], seeds=2, total_steps=1000)
+    assert prepare_out_dir(out, settings, overwrite=False) == "new"
+    write_settings_file(out, settings, "cpg-actor reproduce", {"workers": 1})
+    assert prepare_out_dir(out, settings, overwrite=False) == "resume"
+    other = ReproduceSettings(variants=["mlp"], seeds=3, total_steps=1000)
+    with pytest.raises(FileExistsError, match="seeds: 2 -> 3"):
+        prepare_out_dir(out, other, overwrite=False)
+    (out / "keep").write_text("x")
+    assert prepare_out_dir(out, other, overwrite=True) == "overwrite"
+    assert not (out / "keep").exists()
+    foreign = tmp_path / "foreign"
+    foreign.mkdir()
+    (foreign / "data.txt").write_text("x")
+    with pytest.raises(FileExistsError, match="not written by"):
+        prepare_out_dir(foreign, settings, overwrite=True)

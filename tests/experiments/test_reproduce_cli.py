@@ -1,0 +1,100 @@
+"""`cpg-actor reproduce` end to end on a tiny budget: 2 variants x 2 seeds on 2 workers, the
+run directories, figures and report; a re-run skips finished runs and resumes an unfinished
+one; bad input is refused before anything is written. About 40 s on 2 cores."""
+
+import importlib.util
+import json
+import shutil
+
+import pytest
+
+from cpg_actor.cli import main
+
+# 3 iterations of 4 envs x 8 steps, 10-step episodes: episodes finish, evals are short
+TINY = [
+    "--total-steps", "96", "--num-envs", "4",
+    "--set", "ppo.num_steps=8", "--set", "ppo.num_minibatches=2", "--set", "ppo.num_epochs=1",
+    "--set", "env.episode_steps=10", "--eval-episodes", "2", "--no-progress",
+]  # fmt: skip
+
+
+def _checkpoint_times(out):
+    return {str(path): path.stat().st_mtime_ns for path in (out / "runs").rglob("checkpoints/*.pt")}
+
+
+def test_reproduce_runs_variants_and_seeds_then_skips_and_resumes(tmp_path, capsys):
+    out = tmp_path / "results"
+    argv = ["reproduce", *TINY, "--seeds", "2", "--variants", "cpg-actor,mlp"]
+    argv += ["--workers", "2", "--out", str(out)]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "4 runs of 96 steps" in text
+    for variant in ("cpg-actor", "mlp"):
+        for seed in (0, 1):
+            run = out / "runs" / variant / f"seed{seed}"
+            assert (run / "config.yaml").is_file()
+            assert (run / "checkpoints" / "last.pt").is_file()
+            marker = json.loads((run / "reproduce_run.json").read_text())
+            assert marker["status"] == "done" and len(marker["stages"]) == 3
+            for k in range(3):
+                assert (run / "eval" / f"stage{k}" / "traces.npz").is_file()
+    for name in (
+        "ep_reward", "cpg_output", "cpg_theta_dot", "cpg_r_dot_dot", "parameters_under_training",
+        "cpg_param_training", "mlp_weight_feedback", "mlp_bias_feedback", "des_pos", "des_vel",
+        "cpg_actor_training_over_time", "hopper_hip_foot_pos",
+    ):  # fmt: skip
+        assert (out / "figures" / f"{name}.png").is_file(), name
+        assert (out / "figures" / f"{name}.pdf").is_file(), name
+    report = (out / "report.md").read_text()
+    assert "| CPG-Actor (`cpg-actor`) | 2 (2) |" in report
+    assert "not tested in this run" in report  # no Cho et al. variant ran
+    assert "cho2019-warm" in report  # and the report says which variants were missing
+    settings = (out / "reproduce.yaml").read_text()
+    assert "--seeds 2" in settings and "total_steps: 96" in settings
+    summary = json.loads((out / "summary.json").read_text())
+    assert set(summary["variants"]) == {"cpg-actor", "mlp"}
+
+    # the same command again: nothing is trained or evaluated
+    before = _checkpoint_times(out)
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert text.count("skipped (finished earlier)") == 4
+    assert _checkpoint_times(out) == before
+
+    # an interrupted run: no marker, last.pt at iteration 0 -> resumed, the others skipped
+    run = out / "runs" / "mlp" / "seed1"
+    (run / "reproduce_run.json").unlink()
+    shutil.copyfile(run / "checkpoints" / "iter_000000.pt", run / "checkpoints" / "last.pt")
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "mlp/seed1: done (resumed at iteration 0)" in text
+    assert text.count("skipped (finished earlier)") == 3
+    assert json.loads((run / "reproduce_run.json").read_text())["status"] == "done"
+
+
+def test_reproduce_refuses_bad_input_before_writing(tmp_path, capsys):
+    out = tmp_path / "r"
+    base = ["reproduce", "--out", str(out), "--total-steps", "100"]
+    assert main([*base, "--variants", "cpg-actor,nope"]) == 2
+    assert "unknown variant(s) nope; available:" in capsys.readouterr().err
+    assert main([*base, "--variants", "mlp", "--seeds", "0"]) == 2
+    assert "--seeds must be >= 1" in capsys.readouterr().err
+    assert main(["reproduce", "--out", str(out), "--total-steps", "0", "--variants", "mlp"]) == 2
+    assert "positive" in capsys.readouterr().err
+    assert main([*base, "--variants", "mlp", "--set", "ppo.no_such_key=1"]) == 2
+    assert "unknown config key" in capsys.readouterr().err
+    assert not out.exists()
+    # an existing reproduction with other settings is kept unless --overwrite
+    out.mkdir()
+    (out / "reproduce.yaml").write_text(
+        "command: x\nsettings: {variants: [mlp], seeds: 3, total_steps: 100}\n"
+    )
+    assert main([*base, "--variants", "mlp"]) == 2
+    assert "other settings" in capsys.readouterr().err
+
+
+@pytest.mark.skipif(importlib.util.find_spec("ray") is not None, reason="ray is installed")
+def test_ray_missing_gives_install_hint(tmp_path, capsys):
+    argv = ["reproduce", "--out", str(tmp_path / "r"), "--variants", "mlp", "--ray", "auto"]
+    assert main(argv) == 2
+    assert "pip install cpg-actor[ray]" in capsys.readouterr().err
