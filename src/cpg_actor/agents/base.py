@@ -22,9 +22,10 @@ class AgentConfig:
     """Network sizes and initialisation; used by every registered agent (unused parts ignored).
 
     ``activation`` applies to the hidden layers of the actor MLP, the feedback MLP and the
-    critic. The feedback MLP's outputs are scaled: ``xi = xi_scale * out[:N]`` (rad/s) and
-    ``kappa = kappa_scale * out[N:]`` (rad/s^2), and its last layer is initialised orthogonally
-    with gain ``output_gain`` so that the CPG-Actor starts as the open-loop CPG.
+    critic. The feedback MLP's outputs are bounded and scaled: ``xi = xi_scale * tanh(out[:N])``
+    (rad/s) and ``kappa = kappa_scale * tanh(out[N:])`` (rad/s^2) (``feedback_tanh=False``:
+    ``scale * out``, unbounded), and its last layer is initialised orthogonally with gain
+    ``output_gain`` so that the CPG-Actor starts as the open-loop CPG.
     """
 
     actor_hidden: tuple[int, ...] = (64, 64)
@@ -32,11 +33,13 @@ class AgentConfig:
     activation: str = "tanh"  # tanh | elu
     init_std: float = 0.1  # initial action standard deviation (rad of desired position)
     output_gain: float = 0.01  # orthogonal gain of the actor's / feedback's last layer
-    xi_scale: float = 1.0  # rad/s per unit of feedback output (docs/training.md: why)
-    kappa_scale: float = 10.0  # rad/s^2 per unit of feedback output
-    # squash the feedback: xi = xi_scale * tanh(out), kappa = kappa_scale * tanh(out), so the
-    # scales are the largest feedback the MLP can give (bounds the phase and amplitude drive)
-    feedback_tanh: bool = False
+    # The feedback is bounded: xi = xi_scale * tanh(out[:N]) (rad/s), kappa = kappa_scale *
+    # tanh(out[N:]) (rad/s^2). Unbounded feedback (feedback_tanh=False: scale * out) learned a
+    # period-2 chatter of theta_dot through the observation loop and unstable returns; see
+    # docs/training.md, "Bounded feedback".
+    xi_scale: float = 4.0
+    kappa_scale: float = 25.0
+    feedback_tanh: bool = True
     cpg_initial: dict = field(default_factory=dict)  # overrides of cpg.HOPPER_INITIAL
 
     def validate(self) -> None:
