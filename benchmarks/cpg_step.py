@@ -26,25 +26,15 @@ import torch
 from torch.utils import benchmark
 
 from cpg_actor.cpg import CPGState, hopper_cpg
+from cpg_actor.machine import cpu_model, load_average
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "cpg_step.md"
 BATCH_SIZES = (1, 16, 256, 1024, 4096)
 DT = 0.01
 
 
-def cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as cpuinfo:
-            for line in cpuinfo:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine() or "unknown"
-
-
 def machine_description(threads: int) -> list[str]:
-    load = ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
+    load = load_average()
     return [
         f"- CPU: {cpu_model()}",
         f"- logical cores: {os.cpu_count()}",

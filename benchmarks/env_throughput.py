@@ -34,28 +34,11 @@ from pathlib import Path
 import numpy as np
 
 from cpg_actor.envs import HopperConfig, HopperVectorEnv
+from cpg_actor.machine import cpu_model, load_average, usable_cores
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "env_throughput.md"
 SIZES = (1, 16, 64, 256, 1024)
 ENV_STEPS_BUDGET = {"mujoco": 20_000, "pybullet": 4_000}  # robot-steps per timed block
-
-
-def cpu_model() -> str:
-    try:
-        with open("/proc/cpuinfo", encoding="utf-8") as cpuinfo:
-            for line in cpuinfo:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or platform.machine() or "unknown"
-
-
-def usable_cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:
-        return os.cpu_count() or 1
 
 
 def machine_description() -> list[str]:
@@ -64,7 +47,7 @@ def machine_description() -> list[str]:
 
     from cpg_actor.envs.backends.pybullet_backend import pybullet
 
-    load = ", ".join(f"{x:.2f}" for x in os.getloadavg()) if hasattr(os, "getloadavg") else "n/a"
+    load = load_average()
     return [
         f"- CPU: {cpu_model()}, {usable_cores()} usable logical core(s) "
         f"(os.cpu_count() = {os.cpu_count()})",

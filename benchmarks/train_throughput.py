@@ -9,8 +9,6 @@ from __future__ import annotations
 
 import argparse
 import datetime
-import os
-import platform
 import time
 from pathlib import Path
 
@@ -18,6 +16,7 @@ import numpy as np
 import torch
 
 from cpg_actor.config import TrainConfig
+from cpg_actor.machine import cpu_model, load_average, usable_cores
 from cpg_actor.runner import Runner
 
 AGENTS = ("mlp", "cpg-actor", "cpg-actor-open-loop")
@@ -97,7 +96,7 @@ def main() -> None:
         f"`python benchmarks/train_throughput.py --num-envs {args.num_envs} "
         f"--iterations {args.iterations} --sim {args.sim}`.",
         "",
-        f"Machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"Machine: {cpu_model()}, {usable_cores()} usable cores (load {load_average()}), "
         f"torch {torch.__version__} CPU, torch threads {config.torch_threads}, "
         f"env threads {config.env_threads or 'env default'}.",
         f"Batch per iteration: {args.num_envs} envs x {config.ppo.num_steps} steps; "
