@@ -3,6 +3,8 @@
 PYTHON ?= python3
 VENV ?= .venv
 TORCH_SPEC ?= torch==2.13.0
+# optional extras installed with the package; CI adds ray to test the Ray path of `reproduce`
+EXTRAS ?= test
 BIN := $(VENV)/bin
 
 .PHONY: setup quickstart test lint bench clean
@@ -11,7 +13,7 @@ $(BIN)/cpg-actor: pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet "$(TORCH_SPEC)"
-	$(BIN)/pip install --quiet -e ".[test]"
+	$(BIN)/pip install --quiet -e ".[$(EXTRAS)]"
 	touch $@
 
 setup: $(BIN)/cpg-actor
