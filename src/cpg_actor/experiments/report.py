@@ -17,6 +17,7 @@ from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.figures import make_figures, steps_per_iteration
 from cpg_actor.experiments.plan import STAGE_LABELS, load_settings_file
 from cpg_actor.experiments.results import Results, label
+from cpg_actor.machine import cpu_model
 
 PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
 PAPER_STAGE_STEPS = (1_000_000, 20_000_000, 60_000_000)
@@ -228,14 +229,7 @@ def environment() -> dict[str, Any]:
             versions[package] = metadata.version(package)
         except metadata.PackageNotFoundError:
             versions[package] = "not installed"
-    cpu = platform.processor() or platform.machine()
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
+    cpu = cpu_model()
     commit = "unknown"
     try:
         root = Path(__file__).resolve().parents[3]
