@@ -30,6 +30,7 @@ from mujoco import rollout as mj_rollout  # noqa: E402
 
 from cpg_actor.envs.backends.base import Backend  # noqa: E402
 from cpg_actor.envs.robot import MJCF_PATH  # noqa: E402
+from cpg_actor.machine import usable_cores  # noqa: E402
 
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS.value  # [time, qpos, qvel, (act, ...)]
 CONTROL_SPEC = mujoco.mjtState.mjSTATE_QFRC_APPLIED.value  # joint torques
@@ -47,11 +48,7 @@ def load_model(physics_dt: float, foot_friction: float) -> mujoco.MjModel:
 
 def default_threads(num_robots: int) -> int:
     """Threads for K robots: the cores this process may use, at least 16 robots per thread."""
-    try:
-        cores = len(os.sched_getaffinity(0))
-    except AttributeError:  # not Linux
-        cores = os.cpu_count() or 1
-    return max(1, min(cores, num_robots // 16))
+    return max(1, min(usable_cores(), num_robots // 16))
 
 
 class MujocoBackend(Backend):
