@@ -1,5 +1,8 @@
 """`cpg-actor train` / `cpg-actor eval`: config handling, run directory safety, resume, traces."""
 
+import argparse
+import json
+
 import numpy as np
 import pytest
 import torch
@@ -94,9 +97,12 @@ def test_existing_run_dir_is_never_overwritten_without_overwrite(tmp_path, capsy
 
 
 def test_train_resume_equals_straight_run_and_eval_writes_traces(tmp_path, capsys):
+    """Extending a run (--resume with a larger --total-steps) equals training that long in
+    one go under a fixed learning rate (a linear schedule is stretched by an extension)."""
     straight, split = tmp_path / "straight", tmp_path / "split"
-    assert main(["train", "--run-dir", str(straight), "--total-steps", "64", *TINY]) == 0
-    assert main(["train", "--run-dir", str(split), "--total-steps", "32", *TINY]) == 0
+    fixed = ["--set", "ppo.lr_schedule=fixed"]
+    assert main(["train", "--run-dir", str(straight), "--total-steps", "64", *TINY, *fixed]) == 0
+    assert main(["train", "--run-dir", str(split), "--total-steps", "32", *TINY, *fixed]) == 0
     assert main(["train", "--run-dir", str(split), "--resume", "--seed", "3"]) == 2
     assert "only --total-steps may change" in capsys.readouterr().err
     assert (
@@ -110,7 +116,9 @@ def test_train_resume_equals_straight_run_and_eval_writes_traces(tmp_path, capsy
         assert torch.equal(value, b["agent_state"][key]), key
     for key in ("config.yaml", "metrics.jsonl", "tensorboard", "checkpoints/iter_000002.pt"):
         assert (split / key).exists(), key
-    assert len((split / "metrics.jsonl").read_text().splitlines()) == 4
+    rows = [json.loads(line) for line in (split / "metrics.jsonl").read_text().splitlines()]
+    assert [row["iteration"] for row in rows] == [0, 1, 2, 3, 4]  # 0: the untrained agent's eval
+    assert "eval/return" in rows[0] and "eval/return" in rows[-1]
 
     assert main(["eval", str(split), "--episodes", "2"]) == 0
     traces = np.load(split / "eval" / "traces.npz")
@@ -178,8 +186,8 @@ def test_nan_loss_exits_with_status_1_and_keeps_the_last_good_checkpoint(tmp_pat
         AgentSpec(
             "test-nan",
             "MLP on an env whose rewards turn NaN",
-            lambda cfg, obs_dim, action_dim, env_cfg: MLPAgent(
-                obs_dim, action_dim, cfg, (0.4, -0.8)
+            lambda cfg, obs_dim, action_scale, env_cfg: MLPAgent(
+                obs_dim, action_scale, cfg, (0.4, -0.8)
             ),
             make_env,
         )
@@ -205,3 +213,56 @@ def test_resume_from_a_corrupt_checkpoint_is_a_clear_error_and_changes_nothing(t
     assert "corrupt" in capsys.readouterr().err
     after = {p.name: p.read_bytes() for p in run_dir.rglob("*") if p.is_file()}
     assert before == after
+
+
+def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path, capsys):
+    from cpg_actor.commands.train import add_arguments, build_config
+
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    paper = build_config(parser.parse_args([]))
+    assert paper.preset == "paper" and paper.num_envs * paper.ppo.num_steps == 2048
+    assert (paper.ppo.num_epochs, paper.ppo.num_minibatches, paper.ppo.max_grad_norm) == (
+        10,
+        32,
+        0.5,
+    )
+    assert paper.ppo.lr_schedule == "linear" and paper.ppo.normalize_rewards
+    assert paper.agent_config.init_std == 1.0
+    fast = build_config(parser.parse_args(["--preset", "throughput"]))
+    assert fast.preset == "throughput" and fast.num_envs == 32 and fast.ppo.num_minibatches == 16
+    fast.save(tmp_path / "fast.yaml")
+    # the flags and --set win over the preset; a config file brings its preset along
+    mixed = build_config(
+        parser.parse_args(
+            [
+                "--config",
+                str(tmp_path / "fast.yaml"),
+                "--num-envs",
+                "8",
+                "--set",
+                "ppo.num_epochs=3",
+            ]
+        )
+    )
+    assert (mixed.preset, mixed.num_envs, mixed.ppo.num_epochs) == ("throughput", 8, 3)
+    assert mixed.ppo.num_minibatches == 16
+    run_dir = tmp_path / "run"
+    argv = ["train", "--run-dir", str(run_dir), "--preset", "throughput", "--total-steps", "32"]
+    assert main([*argv, *TINY]) == 0
+    assert "throughput preset" in capsys.readouterr().out
+    assert TrainConfig.load(run_dir / "config.yaml").preset == "throughput"
+    assert main(["train", "--run-dir", str(run_dir), "--resume", "--preset", "paper"]) == 2
+    with pytest.raises(SystemExit):
+        parser.parse_args(["--preset", "fastest"])
+    with pytest.raises(ValueError, match="unknown preset 'fastest'; available: paper, throughput"):
+        TrainConfig(preset="fastest").validate()
+
+
+def test_init_std_is_in_units_of_the_action_half_range():
+    from cpg_actor.agents import AgentConfig, MLPAgent
+
+    agent = MLPAgent(8, [0.9, 0.45], AgentConfig(init_std=1.0), nominal_pose=(0.4, -0.8))
+    assert torch.allclose(agent.std(1)[0], torch.tensor([0.9, 0.45]))
+    with pytest.raises(ValueError, match="action_scale must be positive"):
+        MLPAgent(8, [0.9, 0.0], AgentConfig(), nominal_pose=(0.4, -0.8))

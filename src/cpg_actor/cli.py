@@ -17,6 +17,7 @@ COMMANDS: dict[str, str] = {
     "eval": "eval",
     "cho2019-reference": "cho2019_reference",
     "reproduce": "reproduce",
+    "sweep": "sweep",
     "figures": "figures",
 }
 

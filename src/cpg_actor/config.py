@@ -33,10 +33,15 @@ class TrainConfig:
     """One training run. ``total_steps`` counts control steps summed over all environments."""
 
     agent: str = "cpg-actor"  # a name in cpg_actor.agents.AGENTS
+    preset: str = "paper"  # the preset the run started from (cpg_actor.presets.PRESETS)
     seed: int = 0
-    num_envs: int = 64
-    total_steps: int = 1_000_000  # about 2 minutes on 2 cores (the quick start)
+    num_envs: int = 16  # x ppo.num_steps = 2,048 samples per update, as Baselines' ppo2
+    total_steps: int = 500_000  # the quick start
     checkpoint_interval: int = 50  # iterations between checkpoints (and one at the end)
+    # deterministic evaluation during training: every eval_interval iterations (0: never),
+    # one episode on each of eval_episodes envs of its own (cpg_actor.evaluation)
+    eval_interval: int = 10
+    eval_episodes: int = 5
     log_interval: int = 1  # iterations between TensorBoard / metrics.csv rows
     histogram_interval: int = 10  # iterations between parameter histograms
     torch_threads: int = 1  # torch intra-op threads (the simulator uses the other cores)
@@ -58,6 +63,21 @@ class TrainConfig:
         from cpg_actor.agents import get_agent_spec
 
         get_agent_spec(self.agent)
+        from cpg_actor.presets import PRESETS
+
+        if self.preset not in PRESETS:
+            raise ValueError(
+                f"unknown preset {self.preset!r}; available: {', '.join(sorted(PRESETS))}"
+            )
+        if (
+            isinstance(self.eval_interval, bool)
+            or not isinstance(self.eval_interval, int)
+            or (self.eval_interval < 0)
+        ):
+            raise ValueError(
+                f"eval_interval must be an integer >= 0 (0: no evaluation during training), "
+                f"got {self.eval_interval!r}"
+            )
         for name in (
             "num_envs",
             "total_steps",
@@ -65,6 +85,7 @@ class TrainConfig:
             "log_interval",
             "histogram_interval",
             "torch_threads",
+            "eval_episodes",
         ):
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
@@ -92,13 +113,18 @@ class TrainConfig:
 
     @classmethod
     def load(cls, path: Path) -> TrainConfig:
-        try:
-            data = yaml.safe_load(Path(path).read_text()) or {}
-        except yaml.YAMLError as error:
-            raise ValueError(f"{path} is not valid YAML: {error}") from None
-        if not isinstance(data, dict):
-            raise ValueError(f"{path} must hold a mapping of config keys")
-        return cls.from_dict(data)
+        return cls.from_dict(read_config_file(path))
+
+
+def read_config_file(path: Path) -> dict[str, Any]:
+    """The mapping of config keys in a YAML file; a clear ValueError if it is not one."""
+    try:
+        data = yaml.safe_load(Path(path).read_text()) or {}
+    except yaml.YAMLError as error:
+        raise ValueError(f"{path} is not valid YAML: {error}") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{path} must hold a mapping of config keys")
+    return data
 
 
 def _to_plain(value: Any) -> Any:

@@ -1,6 +1,14 @@
 """The training loop: rollouts with the CPG state carried per environment, PPO updates,
 logging (console, TensorBoard, metrics.jsonl) and atomic, resumable checkpoints.
 
+Evaluation during training. Every ``eval_interval`` iterations (and before the first and
+after the last) the policy's mean action runs one episode on each of ``eval_episodes``
+environments of its own, always reset with the same seed (:mod:`cpg_actor.evaluation`); the
+mean return and hop height are logged as ``eval/return`` and ``eval/hop_height``. It draws no
+random numbers and touches neither the training envs nor the normaliser, so a run trains the
+same with or without it. ``time/train_wall`` is the run's wall time without evaluation and
+checkpoints (what ``benchmarks/time_to_hop.py`` reports).
+
 Reproducibility. Everything random is seeded from ``TrainConfig.seed``: torch (action noise,
 minibatch order, initialisation), numpy and python RNGs, and the environments'
 ``reset(seed=...)``. After every checkpoint all environments restart their episodes with a
@@ -17,6 +25,7 @@ import os
 import random
 import time
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -26,12 +35,19 @@ import torch
 
 from cpg_actor.agents import get_agent_spec
 from cpg_actor.config import TrainConfig
-from cpg_actor.ppo import PPO, NonFiniteLossError, RolloutStorage, RunningNormalizer
+from cpg_actor.evaluation import HIP_HEIGHT, evaluate
+from cpg_actor.ppo import (
+    PPO,
+    NonFiniteLossError,
+    RewardNormalizer,
+    RolloutStorage,
+    RunningNormalizer,
+)
 
 CHECKPOINT_FORMAT = "cpg-actor-checkpoint"
 CHECKPOINT_VERSION = 1
-HIP_HEIGHT = 6  # index of the hip height in the hopper observation
 WARM_START_SEED_KEY = 2**31  # derived_seed(seed, this) seeds the warm start's environments
+EVAL_SEED_KEY = 2**31 + 1  # derived_seed(seed, this) resets the evaluation envs, every time
 
 
 class TrainingDiverged(RuntimeError):
@@ -132,7 +148,7 @@ class Runner:
     """Builds env, agent, normaliser and PPO from a :class:`TrainConfig` and trains.
 
     ``run_dir`` (optional) receives checkpoints, ``metrics.jsonl`` and TensorBoard events;
-    ``env`` replaces the agent spec's environment factory (tests).
+    ``env`` and ``eval_env`` replace the agent spec's environment factory (tests).
     """
 
     def __init__(
@@ -142,8 +158,14 @@ class Runner:
         env: Any = None,
         progress: bool = False,
         tensorboard: bool = True,
+        eval_env: Any = None,
     ) -> None:
         config.validate()
+        if env is not None and eval_env is None and config.eval_interval > 0:
+            raise ValueError(
+                "a Runner given its own env needs an eval_env too (the evaluation envs), "
+                "or a config with eval_interval=0"
+            )
         self.config = config
         self.run_dir = Path(run_dir) if run_dir is not None else None
         self.show_progress = progress
@@ -165,8 +187,11 @@ class Runner:
         self.action_high = np.asarray(action_space.high, dtype=np.float32)
         obs_dim = int(self.env.single_observation_space.shape[0])
         action_dim = int(action_space.shape[0])
-        self.agent = self.spec.build(config.agent_config, obs_dim, action_dim, config.env)
+        action_scale = (self.action_high - self.action_low) / 2.0
+        self.agent = self.spec.build(config.agent_config, obs_dim, action_scale, config.env)
         self.normalizer = RunningNormalizer(obs_dim)
+        self.reward_normalizer = RewardNormalizer(config.num_envs, config.ppo.gamma)
+        self.eval_env = eval_env  # None: built at the first evaluation
         self.ppo = PPO(self.agent, config.ppo)
         self.storage = RolloutStorage(
             config.ppo.num_steps,
@@ -177,6 +202,7 @@ class Runner:
         )
         self.iteration = 0
         self.global_step = 0
+        self.train_wall = 0.0  # seconds of collection + update, over the whole run
         self.env_seed: int | None = None
         self.recent: dict[str, deque] = {}
         self._writer = None
@@ -189,6 +215,7 @@ class Runner:
         obs, _ = self.env.reset(seed=self.env_seed)
         self.obs = torch.as_tensor(np.asarray(obs, dtype=np.float32))
         self.agent_state = self.agent.initial_state(self.config.num_envs)
+        self.reward_normalizer.reset()
         self.episode = EpisodeStats.zeros(self.config.num_envs)
         # hop height is measured from the hip height the hopper starts its episodes at
         self.standing_height = float(self.obs[:, HIP_HEIGHT].mean())
@@ -227,6 +254,9 @@ class Runner:
                 final_values[rows] = self.agent.value(
                     self.normalize(final_obs, update=False), step.next_state[rows]
                 )
+            rewards = torch.as_tensor(np.asarray(reward, dtype=np.float32))
+            if cfg.ppo.normalize_rewards:
+                rewards = self.reward_normalizer(rewards, torch.as_tensor(done))
             self.storage.add(
                 observations=obs,
                 states=state,
@@ -235,7 +265,7 @@ class Runner:
                 values=step.value,
                 action_mean=step.mean,
                 action_std=step.std,
-                rewards=torch.as_tensor(np.asarray(reward, dtype=np.float32)),
+                rewards=rewards,
                 terminated=terminated_t,
                 truncated=truncated_t,
                 final_values=final_values,
@@ -287,8 +317,12 @@ class Runner:
         return float(np.mean(values)) if values else math.nan
 
     # -- training ----------------------------------------------------------------------------
-    def learn(self) -> None:
-        """Train to ``config.total_steps``; checkpoint every ``checkpoint_interval`` iterations."""
+    def learn(self, stop_when: Callable[[dict[str, float]], bool] | None = None) -> None:
+        """Train to ``config.total_steps``; checkpoint every ``checkpoint_interval`` iterations.
+
+        ``stop_when(evaluation)``, if given, is called with each evaluation's scalars
+        (``eval/return``, ``eval/hop_height``, ...); training stops after the first one for
+        which it returns True (with a checkpoint, if the run has a directory)."""
         cfg = self.config
         num_iterations = cfg.num_iterations
         if self.run_dir is not None:
@@ -297,6 +331,8 @@ class Runner:
             self.run_warm_start()
         if not self._episodes_started:
             self.start_episodes()
+        if self.iteration == 0 and cfg.eval_interval > 0:
+            self.log_evaluation()  # the untrained (or warm-started) agent
         if self.run_dir is not None and self.iteration == 0:
             self.save_checkpoint()  # the untrained (or warm-started) agent: a "before"
         progress = self._make_progress(num_iterations)
@@ -317,6 +353,7 @@ class Runner:
                 learn_time = time.perf_counter() - start_learn
                 self.iteration += 1
                 self.global_step += cfg.steps_per_iteration
+                self.train_wall += collect_time + learn_time
                 sps = cfg.steps_per_iteration / (collect_time + learn_time)
                 timing = {
                     "SPS": sps,
@@ -325,8 +362,13 @@ class Runner:
                     "inference": collect_time - collect_info["simulation_time"],
                     "learning": learn_time,
                 }
-                if self.iteration % cfg.log_interval == 0 or self.iteration == num_iterations:
-                    self.log(stats, timing)
+                last = self.iteration == num_iterations
+                evaluation = None
+                if cfg.eval_interval > 0 and (self.iteration % cfg.eval_interval == 0 or last):
+                    evaluation = self.run_evaluation()
+                if self.iteration % cfg.log_interval == 0 or last or evaluation is not None:
+                    self.log(stats, timing, evaluation)
+                stop = evaluation is not None and stop_when is not None and stop_when(evaluation)
                 if progress is not None:
                     progress.update(
                         self._task,
@@ -335,9 +377,17 @@ class Runner:
                         ret=f"{self.mean_recent('return'):.2f}",
                         hop=f"{self.mean_recent('hop_height'):.3f}",
                     )
+                    if evaluation is not None:
+                        self._evaluation_text = (
+                            f"eval return {evaluation['eval/return']:.1f} "
+                            f"hop {evaluation['eval/hop_height']:.3f} m"
+                        )
+                        progress.update(self._task, evaluation=self._evaluation_text)
                 at_interval = self.iteration % cfg.checkpoint_interval == 0
-                if self.run_dir is not None and (at_interval or self.iteration == num_iterations):
+                if self.run_dir is not None and (at_interval or last or stop):
                     self.save_checkpoint()
+                if stop:
+                    break
                 if at_interval and self.iteration < num_iterations:
                     self.start_episodes()
         finally:
@@ -371,6 +421,41 @@ class Runner:
                     self.writer.add_scalar("warm_start/loss", loss, epoch)
         return losses
 
+    def run_evaluation(self) -> dict[str, float]:
+        """Deterministic episodes on the evaluation envs (see the module docstring)."""
+        cfg = self.config
+        start = time.perf_counter()
+        if self.eval_env is None:
+            self.eval_env = self.spec.make_env(cfg.eval_episodes, cfg.env, cfg.env_threads)
+        result = evaluate(
+            self.agent,
+            lambda obs: self.normalize(obs, update=False),
+            self.eval_env,
+            seed=derived_seed(cfg.seed, EVAL_SEED_KEY),
+            action_low=self.action_low,
+            action_high=self.action_high,
+            control_dt=float(cfg.env.control_dt),
+            max_steps=int(getattr(cfg.env, "episode_steps", 10_000)),
+            traces=False,
+        )
+        return {
+            "eval/return": float(result["episode_return"].mean()),
+            "eval/return_min": float(result["episode_return"].min()),
+            "eval/hop_height": float(result["hop_height"].mean()),
+            "eval/length": float(result["length"].mean()),
+            "time/eval": time.perf_counter() - start,
+        }
+
+    def log_evaluation(self) -> dict[str, float]:
+        """Evaluate now and log it alone (a metrics row of the current iteration)."""
+        evaluation = self.run_evaluation()
+        self._evaluation_text = (
+            f"eval return {evaluation['eval/return']:.1f} hop {evaluation['eval/hop_height']:.3f} m"
+        )
+        self.last_evaluation = evaluation
+        self._write_row(dict(evaluation, **{"time/train_wall": self.train_wall}))
+        return evaluation
+
     def _make_progress(self, num_iterations: int):
         if not self.show_progress:
             return None
@@ -392,10 +477,17 @@ class Runner:
             TextColumn("ETA"),
             TimeRemainingColumn(),
             TextColumn("return {task.fields[ret]} hop {task.fields[hop]} m"),
+            TextColumn("{task.fields[evaluation]}"),
         )
         total = num_iterations * self.config.steps_per_iteration
         self._task = progress.add_task(
-            self.config.agent, total=total, completed=self.global_step, sps="-", ret="-", hop="-"
+            self.config.agent,
+            total=total,
+            completed=self.global_step,
+            sps="-",
+            ret="-",
+            hop="-",
+            evaluation=getattr(self, "_evaluation_text", ""),
         )
         progress.start()
         return progress
@@ -434,6 +526,7 @@ class Runner:
             row[f"policy/log_std_{i}"] = log_std
         for key in ("collection", "simulation", "inference", "learning"):
             row[f"time/{key}"] = timing[key]
+        row["time/train_wall"] = self.train_wall
         row.update(self.cpg_scalars())
         return row
 
@@ -452,23 +545,37 @@ class Runner:
             row[f"cpg/phi_{names[i]}_{names[j]}"] = float(values["phase_bias"][i, j])
         return row
 
-    def log(self, stats: dict[str, float], timing: dict[str, float]) -> None:
+    def log(
+        self,
+        stats: dict[str, float],
+        timing: dict[str, float],
+        evaluation: dict[str, float] | None = None,
+    ) -> None:
         row = self.scalars(stats, timing)
+        if evaluation is not None:
+            row.update(evaluation)
+            self.last_evaluation = evaluation
         self.last_row = row
+        writer = self._write_row(row)
+        if writer is not None and self.iteration % self.config.histogram_interval == 0:
+            self.log_histograms(writer)
+
+    def _write_row(self, row: dict[str, float]):
+        """Append ``row`` to ``metrics.jsonl`` and TensorBoard; returns the writer (or None)."""
         if self.run_dir is None:
-            return
+            return None
+        self.run_dir.mkdir(parents=True, exist_ok=True)
         record = {"iteration": self.iteration, "global_step": self.global_step}
         record.update({k: (None if not math.isfinite(v) else v) for k, v in row.items()})
         with open(self.run_dir / "metrics.jsonl", "a") as f:
             f.write(json.dumps(record) + "\n")
         writer = self.writer
         if writer is None:
-            return
+            return None
         for key, value in row.items():
             if math.isfinite(value):
                 writer.add_scalar(key, value, self.global_step)
-        if self.iteration % self.config.histogram_interval == 0:
-            self.log_histograms(writer)
+        return writer
 
     def log_histograms(self, writer) -> None:
         """Paper Fig. 5: CPG parameters and the feedback network's output layer over time."""
@@ -509,6 +616,8 @@ class Runner:
             "global_step": self.global_step,
             "agent_state": self.agent.state_dict(),
             "normalizer": self.normalizer.state_dict(),
+            "reward_normalizer": self.reward_normalizer.state_dict(),
+            "train_wall": self.train_wall,
             "optimizer": self.ppo.optimizer.state_dict(),
             "learning_rate": self.ppo.learning_rate,
             "rng": rng_state(),
@@ -541,6 +650,9 @@ class Runner:
             return
         self.ppo.optimizer.load_state_dict(data["optimizer"])
         self.ppo.set_learning_rate(data["learning_rate"])
+        if "reward_normalizer" in data:  # absent from checkpoints of earlier versions
+            self.reward_normalizer.load_state_dict(data["reward_normalizer"])
+        self.train_wall = float(data.get("train_wall", 0.0))
         self.iteration = data["iteration"]
         self.global_step = data["global_step"]
         self.recent = {k: deque(v, maxlen=100) for k, v in data["recent"].items()}
@@ -552,3 +664,6 @@ class Runner:
             self._writer.close()
             self._writer = None
         self.env.close()
+        if self.eval_env is not None:
+            self.eval_env.close()
+            self.eval_env = None

@@ -22,6 +22,7 @@ def make_runner(agent="cpg-actor", num_envs=6, num_steps=32, seed=0, **env_kwarg
         total_steps=num_envs * num_steps * 2,
         ppo=PPOConfig(num_steps=num_steps, num_epochs=2, num_minibatches=2),
         env=env_config,
+        eval_interval=0,
     )
     return Runner(config, env=FakeHopperVectorEnv(num_envs, env_config))
 
@@ -92,7 +93,7 @@ def test_update_changes_cpg_parameters_and_feedback_output_layer():
 
 
 def test_gradient_reaches_cpg_and_feedback_from_one_replayed_step():
-    agent = CPGActorAgent(8, 2, AgentConfig(), control_dt=0.01)
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), control_dt=0.01)
     state = agent.cpg.initial_state(4, amplitude=0.2).as_tensor()
     obs = torch.randn(4, 8)
     log_prob, *_ = agent.evaluate(obs, state, torch.zeros(4, 2))
@@ -103,7 +104,7 @@ def test_gradient_reaches_cpg_and_feedback_from_one_replayed_step():
 
 
 def test_open_loop_agent_has_no_feedback_and_trains_only_cpg_and_log_std():
-    agent = CPGActorAgent(8, 2, AgentConfig(), control_dt=0.01, feedback=False)
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), control_dt=0.01, feedback=False)
     actor_params = {n for n, _ in agent.named_parameters() if not n.startswith("critic")}
     assert actor_params == {"log_std", "cpg.parametrisation.vector"}
     out = agent.actor(torch.randn(3, 8), agent.initial_state(3))
@@ -111,7 +112,7 @@ def test_open_loop_agent_has_no_feedback_and_trains_only_cpg_and_log_std():
 
 
 def test_initial_feedback_is_small_and_mean_starts_at_nominal_pose():
-    agent = CPGActorAgent(8, 2, AgentConfig(), control_dt=0.01)
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), control_dt=0.01)
     out = agent.actor(torch.randn(16, 8), agent.initial_state(16))
     assert out.extras["xi"].abs().max() < 0.5  # rad/s, vs 2 pi nu = 12.6
     state = CPGState.from_tensor(out.next_state)
@@ -122,7 +123,7 @@ def test_initial_feedback_is_small_and_mean_starts_at_nominal_pose():
 
 
 def test_mlp_agent_is_stateless_and_starts_at_nominal_pose():
-    agent = MLPAgent(8, 2, AgentConfig(), nominal_pose=(0.4, -0.8))
+    agent = MLPAgent(8, [0.9, 0.9], AgentConfig(), nominal_pose=(0.4, -0.8))
     state = agent.initial_state(5)
     assert state.shape == (5, 0)
     out = agent.actor(torch.randn(5, 8), state)
@@ -151,8 +152,8 @@ def test_a_new_agent_with_its_own_env_factory_is_one_registry_entry():
         AgentSpec(
             "test-wrapped",
             "MLP on a stand-in env",
-            lambda cfg, obs_dim, action_dim, env_cfg: MLPAgent(
-                obs_dim, action_dim, cfg, (0.4, -0.8)
+            lambda cfg, obs_dim, action_scale, env_cfg: MLPAgent(
+                obs_dim, action_scale, cfg, (0.4, -0.8)
             ),
             make_env,
         )
@@ -169,6 +170,6 @@ def test_a_new_agent_with_its_own_env_factory_is_one_registry_entry():
         )
         runner = Runner(config)
         runner.learn()
-        assert made == [3] and runner.iteration == 1
+        assert made == [3, 5] and runner.iteration == 1  # training envs, eval envs
     finally:
         del AGENTS["test-wrapped"]

@@ -107,3 +107,13 @@ def test_check_env_with_rendering(sim):
         warnings.simplefilter("ignore")  # the action-space remark, see test_hopper_env.py
         check_env(env)
     env.close()
+
+
+def test_headless_gl_backend_falls_back_to_none_without_opengl_libraries():
+    """With no display, MUJOCO_GL is chosen from the OpenGL libraries installed: importing
+    mujoco must not fail on a machine with neither EGL nor OSMesa (training needs neither)."""
+    from cpg_actor.envs.backends.mujoco_backend import headless_gl
+
+    assert headless_gl(lambda name: f"lib{name}.so") == "egl"
+    assert headless_gl(lambda name: "libOSMesa.so" if name == "OSMesa" else None) == "osmesa"
+    assert headless_gl(lambda name: None) == "disable"

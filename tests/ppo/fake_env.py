@@ -30,6 +30,7 @@ class FakeHopperVectorEnv:
         self.single_observation_space = spaces.Box(-np.inf, np.inf, (8,), np.float32)
         self.rng = np.random.default_rng(0)
         self.nan_at_step: int | None = None  # inject a NaN reward at this global step
+        self.interrupt_at_step: int | None = None  # raise KeyboardInterrupt here (a kill)
         self.global_step = 0
 
     def _reset_rows(self, rows: np.ndarray) -> None:
@@ -59,6 +60,8 @@ class FakeHopperVectorEnv:
     def step(self, actions: np.ndarray):
         actions = np.asarray(actions, dtype=np.float64)
         assert actions.shape == (self.num_envs, 2)
+        if self.interrupt_at_step is not None and self.global_step >= self.interrupt_at_step:
+            raise KeyboardInterrupt
         old = self.q.copy()
         self.q = self.q + 0.3 * (actions - self.q)
         self.qd = (self.q - old) / self.config.control_dt

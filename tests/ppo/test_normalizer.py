@@ -1,3 +1,4 @@
+import numpy as np
 import torch
 
 from cpg_actor.ppo import RunningNormalizer
@@ -34,3 +35,38 @@ def test_forward_does_not_update_clips_and_round_trips_state_dict():
     other.load_state_dict(before)
     torch.testing.assert_close(other.mean, norm.mean)
     torch.testing.assert_close(other.var, norm.var)
+
+
+def test_reward_normalizer_divides_by_the_std_of_discounted_returns_by_hand():
+    from cpg_actor.ppo import RewardNormalizer
+
+    gamma = 0.5
+    norm = RewardNormalizer(num_envs=2, gamma=gamma)
+    rewards = [torch.tensor([1.0, 2.0]), torch.tensor([3.0, -1.0]), torch.tensor([0.5, 4.0])]
+    dones = [torch.tensor([a, False]) for a in (False, True, False)]
+    returns_seen: list[float] = []
+    discounted = [0.0, 0.0]
+    for reward, done in zip(rewards, dones, strict=True):
+        scaled = norm(reward, done)
+        for i in range(2):
+            discounted[i] = gamma * discounted[i] + float(reward[i])
+        returns_seen += discounted
+        std = float(np.sqrt(np.var(returns_seen) + 1e-8))
+        np.testing.assert_allclose(scaled.numpy(), reward.numpy() / std, rtol=1e-5)
+        for i in range(2):
+            if done[i]:
+                discounted[i] = 0.0  # the episode ended: its return starts again
+
+
+def test_reward_normalizer_clips_and_keeps_the_sign_and_resets():
+    from cpg_actor.ppo import RewardNormalizer
+
+    norm = RewardNormalizer(num_envs=1, gamma=0.99, clip=0.5)
+    for _ in range(50):
+        norm(torch.tensor([0.01]), torch.tensor([False]))
+    assert float(norm(torch.tensor([5.0]), torch.tensor([False]))) == 0.5
+    assert float(norm(torch.tensor([-0.01]), torch.tensor([False]))) < 0
+    norm.reset()
+    assert float(norm.discounted[0]) == 0.0
+    state = norm.state_dict()
+    assert set(state) == {"returns_rms.mean", "returns_rms.var", "returns_rms.count"}

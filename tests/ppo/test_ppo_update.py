@@ -17,6 +17,7 @@ def collected_runner(**ppo):
         total_steps=4 * 16 * 10,
         ppo=PPOConfig(num_steps=16, num_epochs=3, num_minibatches=2, **ppo),
         env=FakeConfig(),
+        eval_interval=0,
     )
     runner = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
     runner.start_episodes()

@@ -1,5 +1,7 @@
 """Runner: reproducibility, exact resume, checkpoint validation, NaN handling (fake env)."""
 
+import json
+
 import pytest
 import torch
 
@@ -12,13 +14,15 @@ from .fake_env import FakeConfig, FakeHopperVectorEnv
 NUM_ENVS, NUM_STEPS = 4, 16
 
 
-def config(iterations, agent="cpg-actor", seed=3, interval=2, **ppo):
+def config(iterations, agent="cpg-actor", seed=3, interval=2, eval_interval=0, **ppo):
     return TrainConfig(
         agent=agent,
         seed=seed,
         num_envs=NUM_ENVS,
         total_steps=iterations * NUM_ENVS * NUM_STEPS,
         checkpoint_interval=interval,
+        eval_interval=eval_interval,
+        eval_episodes=3,
         ppo=PPOConfig(num_steps=NUM_STEPS, num_epochs=2, num_minibatches=2, **ppo),
         env=FakeConfig(episode_steps=11, fall_probability=0.05),
     )
@@ -26,7 +30,11 @@ def config(iterations, agent="cpg-actor", seed=3, interval=2, **ppo):
 
 def runner(cfg, run_dir=None, env=None):
     return Runner(
-        cfg, run_dir, env=env or FakeHopperVectorEnv(cfg.num_envs, cfg.env), tensorboard=False
+        cfg,
+        run_dir,
+        env=env or FakeHopperVectorEnv(cfg.num_envs, cfg.env),
+        eval_env=FakeHopperVectorEnv(cfg.eval_episodes, cfg.env),
+        tensorboard=False,
     )
 
 
@@ -52,26 +60,70 @@ def test_same_seed_gives_identical_numbers_and_other_seed_differs():
 
 
 @pytest.mark.parametrize("agent", ["cpg-actor", "mlp"])
-def test_resume_equals_uninterrupted_run(tmp_path, agent):
-    straight = runner(config(4, agent=agent), tmp_path / "straight")
+def test_resume_after_a_kill_equals_uninterrupted_run(tmp_path, agent):
+    """Killed in iteration 4 (after the checkpoint at 2), resumed from that checkpoint: the
+    same parameters, optimiser, learning rate (linear decay), reward and observation
+    normalisers and evaluations as the run that was never interrupted."""
+    straight = runner(config(6, agent=agent, eval_interval=2), tmp_path / "straight")
     straight.learn()
 
-    first = runner(config(2, agent=agent), tmp_path / "split")
-    first.learn()
-    assert (tmp_path / "split" / "checkpoints" / "last.pt").is_file()
-    resumed = runner(config(4, agent=agent), tmp_path / "split")
+    env = FakeHopperVectorEnv(NUM_ENVS, config(6).env)
+    env.interrupt_at_step = 3 * NUM_STEPS + 5
+    killed = runner(config(6, agent=agent, eval_interval=2), tmp_path / "split", env=env)
+    with pytest.raises(KeyboardInterrupt):
+        killed.learn()
+    resumed = runner(config(6, agent=agent, eval_interval=2), tmp_path / "split")
     resumed.load_checkpoint(tmp_path / "split" / "checkpoints" / "last.pt")
     assert resumed.iteration == 2
     resumed.learn()
 
+    assert straight.config.ppo.lr_schedule == "linear"
+    assert straight.config.ppo.normalize_rewards
     assert_same(params(straight), params(resumed))
+    assert_same(straight.reward_normalizer.state_dict(), resumed.reward_normalizer.state_dict())
     assert straight.ppo.learning_rate == resumed.ppo.learning_rate
+    assert straight.last_evaluation["eval/return"] == resumed.last_evaluation["eval/return"]
     opt_a = straight.ppo.optimizer.state_dict()["state"]
     opt_b = resumed.ppo.optimizer.state_dict()["state"]
     for k in opt_a:
         assert torch.equal(opt_a[k]["exp_avg"], opt_b[k]["exp_avg"])
     ckpt = load_checkpoint(tmp_path / "split" / "checkpoints" / "last.pt")
-    assert ckpt["iteration"] == 4 and ckpt["global_step"] == 4 * NUM_ENVS * NUM_STEPS
+    assert ckpt["iteration"] == 6 and ckpt["global_step"] == 6 * NUM_ENVS * NUM_STEPS
+
+
+def test_evaluation_during_training_changes_nothing_that_is_trained(tmp_path):
+    """The same run with an evaluation after every iteration and with none: identical
+    parameters, normalisers, losses and training returns."""
+    with_eval = runner(config(4, eval_interval=1), tmp_path / "with")
+    with_eval.learn()
+    without = runner(config(4, eval_interval=0))
+    without.learn()
+    assert_same(params(with_eval), params(without))
+    for key in ("losses/policy_loss", "charts/episode_return"):
+        assert with_eval.last_row[key] == without.last_row[key]
+    rows = [
+        json.loads(line) for line in (tmp_path / "with" / "metrics.jsonl").read_text().splitlines()
+    ]
+    evaluated = [row["iteration"] for row in rows if "eval/return" in row]
+    assert evaluated == [0, 1, 2, 3, 4]
+    assert all(row["eval/hop_height"] >= 0 for row in rows if "eval/return" in row)
+    assert "eval/return" not in without.last_row
+
+
+def test_linear_schedule_decays_the_learning_rate_to_zero_over_the_run():
+    r = runner(config(4))
+    r.learn()
+    lr = r.config.ppo.learning_rate
+    assert r.last_row["charts/learning_rate"] == pytest.approx(lr / 4)  # the last iteration's
+    fixed = runner(config(4, lr_schedule="fixed"))
+    fixed.learn()
+    assert fixed.last_row["charts/learning_rate"] == lr
+
+
+def test_a_custom_env_without_eval_env_needs_evaluation_off():
+    cfg = config(1, eval_interval=1)
+    with pytest.raises(ValueError, match="eval_env"):
+        Runner(cfg, env=FakeHopperVectorEnv(cfg.num_envs, cfg.env), tensorboard=False)
 
 
 def test_checkpoint_from_another_agent_and_corrupt_files_are_rejected(tmp_path):
@@ -117,7 +169,6 @@ def test_metrics_are_written_per_iteration(tmp_path):
     r.learn()
     lines = (tmp_path / "run" / "metrics.jsonl").read_text().splitlines()
     assert len(lines) == 2
-    import json
 
     row = json.loads(lines[-1])
     for key in (
@@ -131,6 +182,7 @@ def test_metrics_are_written_per_iteration(tmp_path):
         "reward_terms/r1",
         "time/simulation",
         "time/learning",
+        "time/train_wall",
         "policy/log_std_0",
     ):
         assert key in row, key

@@ -9,7 +9,7 @@ the rollout storage treat every agent the same way.
 
 from __future__ import annotations
 
-import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -31,7 +31,9 @@ class AgentConfig:
     actor_hidden: tuple[int, ...] = (64, 64)
     critic_hidden: tuple[int, ...] = (64, 64)
     activation: str = "tanh"  # tanh | elu
-    init_std: float = 0.1  # initial action standard deviation (rad of desired position)
+    # initial action std in units of the action's half-range (high - low) / 2, as Baselines'
+    # log-std 0 on an env whose actions span [-1, 1]: 1.0 is 0.9 rad on the hopper's joints
+    init_std: float = 1.0
     output_gain: float = 0.01  # orthogonal gain of the actor's / feedback's last layer
     # The feedback is bounded: xi = xi_scale * tanh(out[:N]) (rad/s), kappa = kappa_scale *
     # tanh(out[N:]) (rad/s^2). Unbounded feedback (feedback_tanh=False: scale * out) learned a
@@ -100,12 +102,21 @@ class Agent(nn.Module):
     state_shape: tuple[int, ...] = (0,)
 
     def __init__(
-        self, obs_dim: int, action_dim: int, config: AgentConfig, critic_state_features: int = 0
+        self,
+        obs_dim: int,
+        action_scale: Sequence[float],
+        config: AgentConfig,
+        critic_state_features: int = 0,
     ) -> None:
         super().__init__()
+        scale = torch.as_tensor(action_scale, dtype=torch.float32).reshape(-1)
+        if not bool((scale > 0).all()) or not bool(torch.isfinite(scale).all()):
+            raise ValueError(f"action_scale must be positive and finite, got {scale.tolist()}")
         self.obs_dim = obs_dim
-        self.action_dim = action_dim
-        self.log_std = nn.Parameter(torch.full((action_dim,), math.log(config.init_std)))
+        self.action_dim = int(scale.shape[0])
+        # (high - low) / 2 of the action space: the unit of init_std (and of the MLP's mean)
+        self.register_buffer("action_scale", scale)
+        self.log_std = nn.Parameter(torch.log(config.init_std * scale))
         critic_in = obs_dim + critic_state_features
         self.critic = mlp([critic_in, *config.critic_hidden, 1], config.activation, 1.0)
 

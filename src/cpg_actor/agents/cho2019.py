@@ -24,9 +24,9 @@ def make_cpg_parameter_env(num_envs: int, env_config: Any, num_threads: int | No
     return CPGParameterVectorEnv(num_envs, config=env_config, num_threads=num_threads)
 
 
-def build_cho2019(config: AgentConfig, obs_dim: int, action_dim: int, env_config: Any) -> Agent:
+def build_cho2019(config: AgentConfig, obs_dim: int, action_scale, env_config: Any) -> Agent:
     """Actor MLP 64x64 -> Gaussian over the CPG parameter actions, centred at 0."""
-    return MLPAgent(obs_dim, action_dim, config, nominal_pose=[0.0] * action_dim)
+    return MLPAgent(obs_dim, action_scale, config, nominal_pose=[0.0] * len(action_scale))
 
 
 def reference_action() -> np.ndarray:

@@ -8,6 +8,8 @@ parameters V and the feedback MLP together with no backpropagation through time.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import torch
 from torch import Tensor
 
@@ -31,16 +33,18 @@ class CPGActorAgent(Agent):
     def __init__(
         self,
         obs_dim: int,
-        action_dim: int,
+        action_scale: Sequence[float],
         config: AgentConfig,
         control_dt: float,
         feedback: bool = True,
     ) -> None:
         cpg = hopper_cpg(control_dt, initial=config.cpg_initial or None, check_inputs=False)
         n = cpg.num_oscillators
-        if n != action_dim:
-            raise ValueError(f"the CPG has {n} oscillators but the action has {action_dim} entries")
-        super().__init__(obs_dim, action_dim, config, critic_state_features=3 * n)
+        if n != len(action_scale):
+            raise ValueError(
+                f"the CPG has {n} oscillators but the action has {len(action_scale)} entries"
+            )
+        super().__init__(obs_dim, action_scale, config, critic_state_features=3 * n)
         self.cpg: CPGNetwork = cpg
         self.joint_map = JointMap()
         self.state_shape = (5, n)

@@ -27,7 +27,9 @@ def make_hopper_env(num_envs: int, env_config: Any, num_threads: int | None = No
 
 @dataclass(frozen=True)
 class AgentSpec:
-    """``build(agent_config, obs_dim, action_dim, env_config) -> Agent``,
+    """``build(agent_config, obs_dim, action_scale, env_config) -> Agent`` (``action_scale``:
+    the action space's half-range ``(high - low) / 2`` per entry, the unit of
+    ``agent_config.init_std``),
     ``make_env(num_envs, env_config, num_threads) -> vector env`` (the hopper env contract)
     and an optional supervised warm start."""
 
@@ -60,8 +62,8 @@ register_agent(
     AgentSpec(
         "mlp",
         "classic actor-critic: MLP actor on desired joint positions",
-        lambda cfg, obs_dim, action_dim, env_cfg: MLPAgent(
-            obs_dim, action_dim, cfg, HOPPER_NOMINAL_POSE
+        lambda cfg, obs_dim, action_scale, env_cfg: MLPAgent(
+            obs_dim, action_scale, cfg, HOPPER_NOMINAL_POSE
         ),
     )
 )
@@ -69,8 +71,8 @@ register_agent(
     AgentSpec(
         "cpg-actor",
         "CPG-Actor: feedback MLP -> (xi, kappa) -> Hopf CPG -> desired joint positions",
-        lambda cfg, obs_dim, action_dim, env_cfg: CPGActorAgent(
-            obs_dim, action_dim, cfg, env_cfg.control_dt, feedback=True
+        lambda cfg, obs_dim, action_scale, env_cfg: CPGActorAgent(
+            obs_dim, action_scale, cfg, env_cfg.control_dt, feedback=True
         ),
     )
 )
@@ -78,8 +80,8 @@ register_agent(
     AgentSpec(
         "cpg-actor-open-loop",
         "CPG-Actor without feedback (xi = kappa = 0): only the CPG parameters are trained",
-        lambda cfg, obs_dim, action_dim, env_cfg: CPGActorAgent(
-            obs_dim, action_dim, cfg, env_cfg.control_dt, feedback=False
+        lambda cfg, obs_dim, action_scale, env_cfg: CPGActorAgent(
+            obs_dim, action_scale, cfg, env_cfg.control_dt, feedback=False
         ),
     )
 )

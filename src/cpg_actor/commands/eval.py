@@ -83,74 +83,21 @@ def run(args: argparse.Namespace) -> int:
 
 
 def evaluate(runner, seed: int) -> dict[str, np.ndarray]:
-    """Run every env to the end of its first episode with the mean action; return traces
-    ``(T, E, ...)`` (rows after an env's episode ended are NaN)."""
-    import torch
+    """Run every env of ``runner`` to the end of its first episode with the mean action;
+    return traces ``(T, E, ...)`` (rows after an env's episode ended are NaN)."""
+    from cpg_actor.evaluation import evaluate as run_episodes
 
-    from cpg_actor.runner import HIP_HEIGHT
-
-    agent, env, config = runner.agent, runner.env, runner.config
-    num_envs = config.num_envs
-    dt = float(config.env.control_dt)
-    obs, _ = env.reset(seed=seed)
-    obs = np.asarray(obs, dtype=np.float32)
-    standing = float(obs[:, HIP_HEIGHT].mean())
-    state = agent.initial_state(num_envs)
-    previous_desired = obs[:, 4:6].copy()
-    active = np.ones(num_envs, dtype=bool)
-    length = np.zeros(num_envs, dtype=np.int64)
-    records: dict[str, list[np.ndarray]] = {}
-    max_steps = int(getattr(config.env, "episode_steps", 10_000)) + 1
-    for _ in range(max_steps):
-        with torch.no_grad():
-            obs_n = runner.normalize(torch.as_tensor(obs), update=False)
-            step = agent.act(obs_n, state, deterministic=True)
-        desired = np.clip(step.action.numpy(), runner.action_low, runner.action_high)
-        next_obs, reward, terminated, truncated, info = env.step(desired)
-        done = np.logical_or(terminated, truncated)
-        measured = np.asarray(next_obs, dtype=np.float32).copy()
-        if done.any():
-            measured[done] = np.asarray(info["final_obs"], dtype=np.float32)[done]
-        # the desired positions the hopper tracked: the clipped action for agents acting on
-        # joint positions, the CPG's output for agents whose env holds the CPG (cho2019)
-        applied = np.asarray(info.get("desired_position", desired), dtype=np.float64)
-        row = {
-            "desired_position": applied,
-            "measured_position": measured[:, 0:2],
-            "measured_velocity": measured[:, 2:4],
-            "hip_height": measured[:, HIP_HEIGHT],
-            "foot_height": np.asarray(info.get("foot_height", np.full(num_envs, np.nan))),
-            "reward": np.asarray(reward, dtype=np.float64),
-        }
-        if "desired_velocity" in step.extras:
-            row["desired_velocity"] = step.extras["desired_velocity"].numpy()
-        elif "desired_velocity" in info:  # CPG inside the environment
-            row["desired_velocity"] = np.asarray(info["desired_velocity"])
-        else:  # the MLP has no analytic velocity: finite difference of its desired positions
-            row["desired_velocity"] = (applied - previous_desired) / dt
-        for key in ("theta_dot", "r_ddot", "xi", "kappa", "cpg_parameters"):
-            if key in step.extras:
-                row[key] = step.extras[key].numpy()
-            elif key in info:
-                row[key] = np.asarray(info[key])
-        for key, value in row.items():
-            value = np.asarray(value, dtype=np.float64).copy()
-            value[~active] = np.nan
-            records.setdefault(key, []).append(value)
-        length += active
-        active &= ~done
-        previous_desired = applied
-        state = step.next_state
-        obs = np.asarray(next_obs, dtype=np.float32)
-        if not active.any():
-            break
-    traces = {key: np.stack(values) for key, values in records.items()}
-    traces["time"] = dt * np.arange(1, len(records["reward"]) + 1)
-    traces["length"] = length
-    traces["episode_return"] = np.nansum(traces["reward"], axis=0)
-    traces["hop_height"] = np.maximum(0.0, np.nanmax(traces["hip_height"], axis=0) - standing)
-    traces["standing_hip_height"] = np.array(standing)
-    traces["control_dt"] = np.array(dt)
+    config = runner.config
+    traces = run_episodes(
+        runner.agent,
+        lambda obs: runner.normalize(obs, update=False),
+        runner.env,
+        seed=seed,
+        action_low=runner.action_low,
+        action_high=runner.action_high,
+        control_dt=float(config.env.control_dt),
+        max_steps=int(getattr(config.env, "episode_steps", 10_000)),
+    )
     traces["agent"] = np.array(config.agent)
     return traces
 

@@ -8,6 +8,8 @@ import shlex
 import sys
 from pathlib import Path
 
+from cpg_actor.commands import add_set_option
+
 HELP = "reproduce the paper: train variants x seeds in parallel (or on Ray), figures and a report"
 
 DEFAULT_VARIANTS = "cpg-actor,cpg-actor-open-loop,cho2019-warm,cho2019,mlp"
@@ -32,13 +34,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--num-envs", type=int, default=None, help="parallel envs per run")
     parser.add_argument("--sim", default=None, choices=("mujoco", "pybullet"))
-    parser.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="training config override for every run (repeatable), as in `cpg-actor train`",
+    add_set_option(
+        parser, "training config override for every run (repeatable), as in `cpg-actor train`"
     )
     parser.add_argument(
         "--eval-episodes", type=int, default=5, help="episodes per stage evaluation (default 5)"

@@ -7,7 +7,15 @@ import shutil
 import sys
 from pathlib import Path
 
-from cpg_actor.config import TrainConfig, apply_dict, parse_override, parse_steps
+from cpg_actor.commands import add_set_option
+from cpg_actor.config import (
+    TrainConfig,
+    apply_dict,
+    parse_override,
+    parse_steps,
+    read_config_file,
+)
+from cpg_actor.presets import PRESETS, preset_values
 
 HELP = "train an agent (cpg-actor, cpg-actor-open-loop, mlp, cho2019, cho2019-warm) with PPO"
 
@@ -26,6 +34,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=("mujoco", "pybullet"),
         help="physics backend (default mujoco)",
     )
+    parser.add_argument(
+        "--preset",
+        default=None,
+        choices=sorted(PRESETS),
+        help="starting config values: paper (OpenAI Baselines' ppo2 MuJoCo settings, the "
+        "default) or throughput (fewer, larger gradient steps; see docs/training.md)",
+    )
     parser.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
     parser.add_argument(
         "--total-steps",
@@ -41,13 +56,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--config", default=None, help="YAML file with config values (nested like config.yaml)"
     )
-    parser.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a config value on its dotted path, e.g. ppo.learning_rate=1e-4 (repeatable)",
+    add_set_option(
+        parser,
+        "override a config value on its dotted path, e.g. ppo.learning_rate=1e-4 (repeatable)",
     )
     parser.add_argument(
         "--resume",
@@ -61,13 +72,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def build_config(args: argparse.Namespace) -> TrainConfig:
-    """Defaults, then --config, then the flags, then each --set, in that order."""
-    config = TrainConfig()
+    """Defaults, then the preset (--preset, else the --config file's, else paper), then
+    --config, then the flags, then each --set, in that order."""
+    file_data: dict = {}
     if args.config:
         path = Path(args.config)
         if not path.is_file():
             raise FileNotFoundError(f"config file {path} does not exist")
-        config = TrainConfig.load(path)
+        file_data = read_config_file(path)
+    preset = getattr(args, "preset", None) or file_data.get("preset") or "paper"
+    config = TrainConfig()
+    apply_dict(config, preset_values(preset), prefix="")
+    apply_dict(config, file_data, prefix="")
+    config.preset = preset
     flags: dict = {}
     if args.agent is not None:
         flags["agent"] = args.agent
@@ -114,6 +131,7 @@ def run(args: argparse.Namespace) -> int:
             flag
             for flag, value in (
                 ("--agent", args.agent),
+                ("--preset", args.preset),
                 ("--sim", args.sim),
                 ("--seed", args.seed),
                 ("--num-envs", args.num_envs),
@@ -167,7 +185,8 @@ def run(args: argparse.Namespace) -> int:
         prepare_run_dir(run_dir, args.overwrite)
         config.save(run_dir / "config.yaml")
         print(
-            f"training {config.agent} on {config.env.sim} for {config.total_steps:,} steps "
+            f"training {config.agent} ({config.preset} preset) on {config.env.sim} for "
+            f"{config.total_steps:,} steps "
             f"({config.num_iterations} iterations of {config.steps_per_iteration} steps), "
             f"run directory {run_dir}"
         )
@@ -187,10 +206,18 @@ def run(args: argparse.Namespace) -> int:
         runner.close()
     row = getattr(runner, "last_row", {})
     nan = float("nan")
+    evaluation = getattr(runner, "last_evaluation", None)
+    evaluated = (
+        f"; deterministic eval return {evaluation['eval/return']:.3f}, hop height "
+        f"{evaluation['eval/hop_height']:.3f} m"
+        if evaluation
+        else ""
+    )
     print(
-        f"done: {runner.global_step:,} steps, mean episode return "
-        f"{row.get('charts/episode_return', nan):.3f}, hop height "
-        f"{row.get('charts/hop_height', nan):.3f} m; checkpoint {runner.last_checkpoint_path()}"
+        f"done: {runner.global_step:,} steps in {runner.train_wall:.0f} s of training, mean "
+        f"episode return {row.get('charts/episode_return', nan):.3f}, hop height "
+        f"{row.get('charts/hop_height', nan):.3f} m{evaluated}; checkpoint "
+        f"{runner.last_checkpoint_path()}"
     )
     return 0
 

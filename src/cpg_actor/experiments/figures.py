@@ -56,7 +56,7 @@ def ep_reward(results: Results, directory: Path) -> Output:
         if not runs:
             notes.append(f"ep_reward: {variant} was not run")
             continue
-        curves = [run.curve("charts/episode_return") for run in runs]
+        curves = [run.return_curve() for run in runs]
         curves = [(s, v) for s, v in curves if np.isfinite(v).any()]
         if not curves:
             notes.append(f"ep_reward: {variant} has no finished episodes logged")

@@ -3,7 +3,8 @@
 Definitions (also in ``docs/reproduction.md`` and in each report):
 
 * **final return** of a run: the mean of the last ``FINAL_ROWS`` logged values of
-  ``charts/episode_return`` (each the mean return of the last 100 finished episodes) at or
+  ``eval/return`` (the deterministic evaluation during training; ``charts/episode_return``,
+  the mean return of the last 100 training episodes, for runs logged without it) at or
   before a step budget;
 * **smoothness** of desired positions: mean over steps, joints and episodes of the squared
   second difference ``(p[t+1] - 2 p[t] + p[t-1])^2``, rad^2 per control step^2 (0 for a straight

@@ -67,10 +67,12 @@ class RunTask:
     train_args: tuple[str, ...]  # the arguments after `cpg-actor train` for a fresh run
     stage_fractions: tuple[float, ...]
     eval_episodes: int
+    group: str = ""  # a sweep's setting label: names stay unique across settings
 
     @property
     def name(self) -> str:
-        return f"{self.variant}/seed{self.seed}"
+        prefix = f"{self.group}/" if self.group else ""
+        return f"{prefix}{self.variant}/seed{self.seed}"
 
 
 def parse_variants(text: str) -> list[str]:
@@ -100,6 +102,7 @@ def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
 
     args = argparse.Namespace(
         config=None,
+        preset=None,
         agent=variant,
         seed=seed,
         total_steps=str(settings.total_steps),

@@ -39,7 +39,7 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
         )
     }
     for run in results.runs.get(variant, []):
-        steps, returns = run.curve("charts/episode_return")
+        steps, returns = run.return_curve()
         out["final_return"].append(m.final_return(steps, returns, at_step=at_step))
         traces = run.traces()
         first = run.traces(0) if run.stages else None
@@ -281,7 +281,7 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
     if not total_steps:
         total_steps = max(
             (
-                int(run.curve("charts/episode_return")[0].max(initial=0))
+                int(run.return_curve()[0].max(initial=0))
                 for runs in results.runs.values()
                 for run in runs
             ),
@@ -338,8 +338,10 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
         "## Results per variant",
         "",
         "Mean +- standard deviation over seeds. *Final return*: mean of the last "
-        f"{m.FINAL_ROWS} logged values of `charts/episode_return` (each the mean return of the "
-        "last 100 training episodes). *Eval return*, *hop height*, *smoothness*, *|v| <= 15* "
+        f"{m.FINAL_ROWS} deterministic evaluations logged during training (`eval/return`, "
+        "the mean return of the policy's mean action over a few episodes on evaluation envs; "
+        "runs logged without it: `charts/episode_return`, the mean return of the last 100 "
+        "training episodes). *Eval return*, *hop height*, *smoothness*, *|v| <= 15* "
         "and *p99 |v|* come from the deterministic evaluation of the final checkpoint.",
         "",
         "| variant | seeds (finished) | final return | eval return | hop height (m) | "

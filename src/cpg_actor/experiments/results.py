@@ -62,6 +62,14 @@ class Run:
         values = np.array([np.nan if r.get(key) is None else r[key] for r in rows], dtype=float)
         return steps, values
 
+    def return_curve(self) -> tuple[np.ndarray, np.ndarray]:
+        """The deterministic evaluation's return during training (``eval/return``); the
+        exploration return (``charts/episode_return``) for runs logged without evaluation."""
+        steps, values = self.curve("eval/return")
+        if np.isfinite(values).any():
+            return steps, values
+        return self.curve("charts/episode_return")
+
     @property
     def finished(self) -> bool:
         marker = self.path / MARKER

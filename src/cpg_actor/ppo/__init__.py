@@ -2,13 +2,14 @@
 
 from cpg_actor.ppo.algorithm import PPO, NonFiniteLossError, gaussian_kl
 from cpg_actor.ppo.config import PPOConfig
-from cpg_actor.ppo.normalizer import RunningNormalizer
+from cpg_actor.ppo.normalizer import RewardNormalizer, RunningNormalizer
 from cpg_actor.ppo.storage import RolloutStorage, compute_gae
 
 __all__ = [
     "PPO",
     "NonFiniteLossError",
     "PPOConfig",
+    "RewardNormalizer",
     "RolloutStorage",
     "RunningNormalizer",
     "compute_gae",

@@ -9,31 +9,45 @@ SCHEDULES = ("fixed", "linear", "adaptive")
 
 @dataclass
 class PPOConfig:
-    """PPO hyper-parameters (defaults: CleanRL's continuous-control PPO; rsl_rl's KL rule optional).
+    """PPO hyper-parameters. The defaults are the ``paper`` preset: OpenAI Baselines' ppo2
+    settings for MuJoCo tasks (the paper's CPG-Actor was trained in a Baselines-based
+    framework), which are also Stable-Baselines3's PPO defaults. Sources, per number:
+    ``baselines/ppo2/defaults.py`` (``mujoco()``: nsteps 2048, nminibatches 32, lam 0.95,
+    gamma 0.99, noptepochs 10, log_interval 1, ent_coef 0.0, lr 3e-4 linearly decayed to 0,
+    cliprange 0.2), ``baselines/ppo2/ppo2.py`` (vf_coef 0.5, max_grad_norm 0.5),
+    ``baselines/ppo2/model.py`` (Adam eps 1e-5, value loss clipped with the same cliprange,
+    advantages normalised per minibatch) and ``baselines/common/vec_env/vec_normalize.py``
+    (observations and rewards normalised, both clipped to +-10, discount 0.99, eps 1e-8), which
+    ``baselines/run.py`` wraps around every MuJoCo env. See ``docs/training.md``, "Presets".
 
     One iteration collects ``num_steps`` control steps in each of the runner's environments,
     then runs ``num_epochs`` passes over that batch in ``num_minibatches`` minibatches.
+    Baselines steps 1 env for 2048 steps; the preset steps 16 envs for 128 steps: the same
+    2,048 samples per update, the same 64-sample minibatches and 320 gradient steps per update.
     """
 
-    num_steps: int = 32  # control steps per environment per iteration (rollout length)
-    num_epochs: int = 5
-    num_minibatches: int = 4
+    num_steps: int = 128  # control steps per environment per iteration (rollout length)
+    num_epochs: int = 10
+    num_minibatches: int = 32
     gamma: float = 0.99
     gae_lambda: float = 0.95
-    clip_ratio: float = 0.2  # epsilon of the clipped surrogate
-    clip_value_loss: bool = True
+    clip_ratio: float = 0.2  # epsilon of the clipped surrogate (and of the value clip)
+    clip_value_loss: bool = True  # Baselines ppo2 clips; SB3 does not (clip_range_vf=None)
     value_loss_coef: float = 0.5
     entropy_coef: float = 0.0
     normalize_advantages: bool = True  # per minibatch
-    max_grad_norm: float = 1.0
+    max_grad_norm: float = 0.5
     learning_rate: float = 3e-4
-    lr_schedule: str = "fixed"  # fixed | linear (to 0 at the last iteration) | adaptive (KL)
+    lr_schedule: str = "linear"  # fixed | linear (to 0 at the last iteration) | adaptive (KL)
     desired_kl: float = 0.01  # adaptive schedule: lr /1.5 above 2x, *1.5 below 0.5x
     min_learning_rate: float = 1e-5
     max_learning_rate: float = 1e-2
     target_kl: float | None = None  # stop the epochs of an iteration once approx_kl exceeds it
     adam_eps: float = 1e-5
     normalize_observations: bool = True
+    # VecNormalize's reward scaling: rewards divided by the running std of each env's
+    # discounted return (discount ``gamma``), clipped to +-10; training only, logs stay raw
+    normalize_rewards: bool = True
 
     def validate(self) -> None:
         positive_int = ("num_steps", "num_epochs", "num_minibatches")

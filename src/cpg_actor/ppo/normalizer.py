@@ -49,3 +49,38 @@ class RunningNormalizer(nn.Module):
         std = torch.sqrt(self.var + self.epsilon)
         y = (x.to(torch.float64) - self.mean) / std
         return y.clamp(-self.clip, self.clip).to(x.dtype)
+
+
+class RewardNormalizer(nn.Module):
+    """VecNormalize-style reward scaling (OpenAI Baselines, ``vec_normalize.py``).
+
+    Each environment keeps its discounted return ``G <- gamma G + r`` (reset to 0 when its
+    episode ends); the running variance of every ``G`` seen so far scales the reward:
+    ``r / sqrt(var(G) + eps)``, clipped to ``+-clip``. The mean is not subtracted, so the sign
+    of a reward is kept. Used on the training rewards only (logged returns stay raw). The
+    statistics are buffers and travel with checkpoints; the per-env returns are reset with
+    the episodes (:meth:`reset`).
+    """
+
+    def __init__(
+        self, num_envs: int, gamma: float, epsilon: float = 1e-8, clip: float = 10.0
+    ) -> None:
+        super().__init__()
+        self.gamma = gamma
+        self.epsilon = epsilon
+        self.clip = clip
+        self.returns_rms = RunningNormalizer(1)
+        self.discounted = torch.zeros(num_envs, dtype=torch.float64)
+
+    def reset(self) -> None:
+        self.discounted.zero_()
+
+    @torch.no_grad()
+    def forward(self, reward: Tensor, done: Tensor) -> Tensor:
+        """Scale a step's rewards ``(N,)``; ``done`` ``(N,)`` marks episodes that just ended."""
+        self.discounted.mul_(self.gamma).add_(reward.to(torch.float64))
+        self.returns_rms.update(self.discounted.unsqueeze(-1))
+        std = torch.sqrt(self.returns_rms.var[0] + self.epsilon)
+        scaled = (reward.to(torch.float64) / std).clamp(-self.clip, self.clip)
+        self.discounted[done.to(torch.bool)] = 0.0
+        return scaled.to(reward.dtype)

@@ -12,17 +12,29 @@ The solver warm start (``qacc_warmstart``) is zero at every substep: ``rollout``
 return it. The constraint solver converges to its tolerance either way.
 
 Headless rendering: ``MUJOCO_GL`` must be chosen before ``mujoco`` is first imported. On Linux
-without a ``DISPLAY`` this module defaults it to ``egl`` (GPU or Mesa EGL); set
-``MUJOCO_GL=osmesa`` yourself for pure software rendering where EGL is missing.
+without a ``DISPLAY`` this module defaults it (:func:`headless_gl`) to ``egl`` where libEGL is
+installed, else ``osmesa`` where libOSMesa is, else ``disable``: with no OpenGL library at all
+``import mujoco`` would fail (PyOpenGL cannot load EGL), and training needs no rendering.
 """
 
 from __future__ import annotations
 
+import ctypes.util
 import os
 import sys
 
+
+def headless_gl(find_library=ctypes.util.find_library) -> str:
+    """The ``MUJOCO_GL`` backend for a machine without a display: egl, osmesa or disable."""
+    if find_library("EGL"):
+        return "egl"
+    if find_library("OSMesa"):
+        return "osmesa"
+    return "disable"
+
+
 if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
-    os.environ.setdefault("MUJOCO_GL", "egl")
+    os.environ.setdefault("MUJOCO_GL", headless_gl())
 
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402

@@ -1,0 +1,229 @@
+"""Wall-clock time and env steps until a deterministic evaluation reaches a threshold, per
+agent and preset, side by side with Stable-Baselines3's PPO (defaults) in the same run.
+
+    python benchmarks/time_to_hop.py [--seeds 3] [--output benchmarks/results/time_to_hop.md]
+
+What a user waits for is a good policy, not steps per second. Every method is evaluated the
+same way (:func:`cpg_actor.evaluation.evaluate`: the mean action, 5 episodes on envs of their
+own, the same reset seed) every ``EVAL_EVERY`` env steps; a method reaches a threshold when one
+evaluation has a mean return >= R and a mean hop height >= H. Time is training wall time,
+evaluations excluded. Runs stop at the threshold or at their step budget, one at a time (no
+two measurements share the CPU). SB3 (``pip install stable-baselines3``) runs stock: PPO
+``MlpPolicy`` with its defaults (Baselines' ppo2 numbers) on the registered env
+``cpg_actor/AnymalHopper-v0`` with actions rescaled to [-1, 1] and no VecNormalize. The
+physics ceiling (``mujoco.rollout`` on the project's MJCF, the same N envs) is measured in the
+same run (``benchmarks/env_throughput.py``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import math
+import sys
+import time
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import torch
+
+from cpg_actor.config import TrainConfig, apply_dict
+from cpg_actor.evaluation import evaluate
+from cpg_actor.machine import cpu_model, load_average, usable_cores
+from cpg_actor.presets import preset_values
+from cpg_actor.runner import EVAL_SEED_KEY, Runner, derived_seed
+
+EVAL_EVERY = 10_240  # env steps between evaluations (5 iterations of 2,048 steps)
+EVAL_EPISODES = 5
+# (return, hop height) thresholds and step budgets: the targets of the learning issue
+THRESHOLDS = {"mlp": (800.0, 0.28), "cpg-actor": (600.0, 0.30)}
+BUDGETS = {"mlp": 300_000, "cpg-actor": 500_000}
+
+
+def reached(evaluation: dict[str, float], threshold: tuple[float, float]) -> bool:
+    return (
+        evaluation["eval/return"] >= threshold[0] and evaluation["eval/hop_height"] >= threshold[1]
+    )
+
+
+def project_run(agent: str, preset: str, seed: int) -> dict:
+    config = TrainConfig()
+    apply_dict(config, preset_values(preset), prefix="")
+    config.agent, config.seed, config.total_steps = agent, seed, BUDGETS[agent]
+    config.eval_interval = max(1, round(EVAL_EVERY / config.steps_per_iteration))
+    config.eval_episodes = EVAL_EPISODES
+    runner = Runner(config, run_dir=None, tensorboard=False)
+    history: list[tuple[int, float, float, float]] = []
+
+    def stop(evaluation: dict[str, float]) -> bool:
+        history.append(
+            (
+                runner.global_step,
+                runner.train_wall,
+                evaluation["eval/return"],
+                evaluation["eval/hop_height"],
+            )
+        )
+        return reached(evaluation, THRESHOLDS[agent])
+
+    try:
+        runner.learn(stop_when=stop)
+    finally:
+        runner.close()
+    return summarize(history, THRESHOLDS[agent])
+
+
+class SB3Policy:
+    """An SB3 model behind the agent interface :func:`evaluate` uses (stateless)."""
+
+    def __init__(self, model, low: np.ndarray, high: np.ndarray) -> None:
+        self.model, self.low, self.high = model, low, high
+
+    def initial_state(self, batch_size: int) -> torch.Tensor:
+        return torch.zeros(batch_size, 0)
+
+    def act(self, obs: torch.Tensor, state: torch.Tensor, deterministic: bool = True):
+        action, _ = self.model.predict(obs.numpy(), deterministic=True)  # in [-1, 1]
+        desired = self.low + (np.asarray(action) + 1.0) * (self.high - self.low) / 2.0
+        return SimpleNamespace(action=torch.as_tensor(desired), next_state=state, extras={})
+
+
+def sb3_run(seed: int) -> dict:
+    import gymnasium as gym
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    from cpg_actor.envs import ENV_ID, HopperVectorEnv
+
+    env = gym.wrappers.RescaleAction(gym.make(ENV_ID), -1.0, 1.0)
+    eval_env = HopperVectorEnv(EVAL_EPISODES)
+    low, high = env.unwrapped.action_space.low, env.unwrapped.action_space.high
+    history: list[tuple[int, float, float, float]] = []
+    threshold = THRESHOLDS["mlp"]
+    clock = {"start": 0.0, "eval": 0.0}
+
+    class Evaluate(BaseCallback):
+        def _on_training_start(self) -> None:
+            clock["start"] = time.perf_counter()
+
+        def _on_step(self) -> bool:
+            if self.num_timesteps % EVAL_EVERY:
+                return True
+            start = time.perf_counter()
+            result = evaluate(
+                SB3Policy(self.model, low, high),
+                lambda obs: obs,
+                eval_env,
+                seed=derived_seed(seed, EVAL_SEED_KEY),
+                action_low=low,
+                action_high=high,
+                control_dt=0.01,
+                max_steps=500,
+                traces=False,
+            )
+            clock["eval"] += time.perf_counter() - start
+            wall = time.perf_counter() - clock["start"] - clock["eval"]
+            ret, hop = float(result["episode_return"].mean()), float(result["hop_height"].mean())
+            history.append((self.num_timesteps, wall, ret, hop))
+            return not reached({"eval/return": ret, "eval/hop_height": hop}, threshold)
+
+    model = PPO("MlpPolicy", env, seed=seed, device="cpu", verbose=0)
+    try:
+        model.learn(total_timesteps=BUDGETS["mlp"], callback=Evaluate())
+    finally:
+        env.close()
+        eval_env.close()
+    return summarize(history, threshold)
+
+
+def summarize(history, threshold) -> dict:
+    for step, wall, ret, hop in history:
+        if ret >= threshold[0] and hop >= threshold[1]:
+            return {"reached": True, "steps": step, "wall": wall, "return": ret, "hop": hop}
+    best = max(history, key=lambda h: h[2]) if history else (0, math.nan, math.nan, math.nan)
+    last = history[-1] if history else best
+    return {"reached": False, "steps": last[0], "wall": last[1], "return": best[2], "hop": best[3]}
+
+
+def ceiling(num_envs: int) -> float:
+    sys.path.insert(0, str(Path(__file__).parent))
+    from env_throughput import bench_size
+
+    return bench_size("mujoco", num_envs, repeats=2, budget=50_000)["rollout"]
+
+
+def fmt_runs(runs: list[dict]) -> tuple[str, str, str]:
+    hits = [r for r in runs if r["reached"]]
+    if not hits:
+        return f"0/{len(runs)}", "not reached", "-"
+    steps = np.median([r["steps"] for r in hits])
+    wall = np.median([r["wall"] for r in hits])
+    return f"{len(hits)}/{len(runs)}", f"{steps / 1000:.0f}k", f"{wall:.0f} s"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seeds", type=int, default=3)
+    parser.add_argument("--agents", default="mlp,cpg-actor")
+    parser.add_argument("--presets", default="paper,throughput")
+    parser.add_argument("--no-sb3", action="store_true", help="skip Stable-Baselines3")
+    parser.add_argument("--output", default="benchmarks/results/time_to_hop.md")
+    args = parser.parse_args(argv)
+    torch.set_num_threads(1)
+    methods: list[tuple[str, str, object]] = []
+    for agent in args.agents.split(","):
+        for preset in args.presets.split(","):
+            methods.append((agent, f"cpg-actor `{agent}`, `{preset}` preset", (agent, preset)))
+        if agent == "mlp" and not args.no_sb3:
+            methods.append(("mlp", "Stable-Baselines3 PPO, defaults (MLP)", None))
+    results: dict[str, list[dict]] = {label: [] for _, label, _ in methods}
+    for seed in range(args.seeds):
+        for _agent, label, spec in methods:
+            run = sb3_run(seed) if spec is None else project_run(*spec, seed)
+            results[label].append(run)
+            print(f"seed {seed} {label}: {run}", flush=True)
+    ceilings = {n: ceiling(n) for n in (1, 16, 32)}
+    lines = [
+        "# Time to hop: wall-clock time until a deterministic evaluation reaches a threshold",
+        "",
+        f"Measured {datetime.date.today().isoformat()} by `python benchmarks/time_to_hop.py "
+        f"--seeds {args.seeds}` on {cpu_model()}, {usable_cores()} usable cores (load "
+        f"{load_average()} at the end), torch {torch.__version__}, 1 torch thread.",
+        "",
+        f"Threshold: mean return and hop height over {EVAL_EPISODES} deterministic episodes, "
+        f"evaluated every {EVAL_EVERY:,} env steps (mlp and SB3: return >= "
+        f"{THRESHOLDS['mlp'][0]:.0f} and hop >= {THRESHOLDS['mlp'][1]} m within "
+        f"{BUDGETS['mlp']:,} steps; cpg-actor: return >= {THRESHOLDS['cpg-actor'][0]:.0f} and "
+        f"hop >= {THRESHOLDS['cpg-actor'][1]} m within {BUDGETS['cpg-actor']:,} steps). "
+        "Steps and time are medians over the seeds that reached it; time is training wall "
+        "time without the evaluations.",
+        "",
+        "| method | seeds that reached it | env steps | wall time | per seed |",
+        "| --- | ---: | ---: | ---: | --- |",
+    ]
+    for _, label, _ in methods:
+        runs = results[label]
+        hit, steps, wall = fmt_runs(runs)
+        per_seed = "; ".join(
+            f"{r['steps'] / 1000:.0f}k, {r['wall']:.0f} s"
+            if r["reached"]
+            else f"best {r['return']:.0f}"
+            for r in runs
+        )
+        lines.append(f"| {label} | {hit} | {steps} | {wall} | {per_seed} |")
+    lines += [
+        "",
+        "Physics ceiling in the same run (`mujoco.rollout`, 10 substeps per control step, "
+        "constant torques): "
+        + ", ".join(f"{v:,.0f} control steps/s at N={n}" for n, v in ceilings.items())
+        + ". The paper preset steps 16 envs, the throughput preset 32, SB3 1.",
+    ]
+    text = "\n".join(lines) + "\n"
+    Path(args.output).write_text(text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,114 @@
+"""`cpg-actor sweep`: a one-at-a-time sensitivity study of config values, variants x seeds."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import shlex
+import sys
+from pathlib import Path
+
+from cpg_actor.commands import add_set_option
+
+HELP = "sensitivity study: train variants x seeds for the defaults and each --vary setting"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--out", required=True, help="results directory")
+    parser.add_argument(
+        "--variants", default="mlp,cpg-actor", help="agents (default mlp,cpg-actor)"
+    )
+    parser.add_argument("--seeds", type=int, default=3, help="seeds 0..N-1 (default 3)")
+    parser.add_argument("--total-steps", default="300k", help="steps per run (default 300k)")
+    parser.add_argument(
+        "--vary",
+        action="append",
+        default=[],
+        metavar="KEY=V1,V2",
+        help="one setting per value, the rest at the defaults (repeatable); several keys "
+        "changed together: KEY1,KEY2=A1:A2,B1:B2",
+    )
+    add_set_option(parser, "a config value for every run (repeatable)")
+    parser.add_argument(
+        "--workers", type=int, default=None, help=f"parallel runs (default {os.cpu_count()})"
+    )
+    parser.add_argument(
+        "--summary-only",
+        action="store_true",
+        help="train nothing: write the summary from the runs in OUT as they are (unfinished "
+        "runs are scored at the step they reached, which the table shows)",
+    )
+    parser.add_argument("--no-progress", action="store_true", help="no live table")
+    parser.add_argument(
+        "--progress-interval", type=float, default=30.0, help="seconds between progress blocks"
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    from cpg_actor.config import parse_steps
+    from cpg_actor.experiments import plan, sweep
+
+    variants = plan.parse_variants(args.variants)
+    settings = sweep.build_settings(args.vary)
+    total_steps = parse_steps(args.total_steps)
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    if workers < 1:
+        raise ValueError(f"--workers must be >= 1, got {workers}")
+    out = Path(args.out)
+    plans = []
+    for setting in settings:  # validate every setting before anything is written
+        reproduction = sweep.reproduce_settings(
+            setting, variants, args.seeds, total_steps, args.overrides
+        )
+        plans.append(
+            (setting, reproduction, plan.build_tasks(reproduction, out / setting.label, workers))
+        )
+    command = (
+        shlex.join(["cpg-actor", *sys.argv[1:]])
+        if sys.argv[1:2] == ["sweep"]
+        else "cpg-actor sweep"
+    )
+    tasks = []
+    if args.summary_only:
+        plans = []
+        if not out.is_dir():
+            raise FileNotFoundError(f"{out} does not exist; nothing to summarise")
+    for setting, reproduction, setting_tasks in plans:
+        plan.prepare_out_dir(out / setting.label, reproduction, overwrite=False)
+        plan.write_settings_file(
+            out / setting.label, reproduction, command, {"workers": workers, "sweep": str(out)}
+        )
+        tasks += [dataclasses.replace(task, group=setting.label) for task in setting_tasks]
+    print(
+        f"sweep: {len(settings)} settings x {len(variants)} variant(s) x {args.seeds} seed(s) = "
+        f"{len(tasks)} runs of {total_steps:,} steps in {out}, {workers} worker(s)",
+        flush=True,
+    )
+    results = []
+    if tasks:
+        results = _train(tasks, workers, args)
+        if results is None:
+            return 130
+    failed = [r for r in results if r["status"] == "failed"]
+    summary = sweep.summarize(out, settings, variants, args.seeds)
+    for path in sweep.write_summary(out, summary, command, args.seeds):
+        print(f"wrote {path}")
+    if failed:
+        for result in failed:
+            print(f"  {result['name']}: failed: {result.get('error')}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def _train(tasks, workers: int, args: argparse.Namespace):
+    from cpg_actor.experiments import execute
+
+    progress = execute.Progress(
+        tasks, args.progress_interval, live=not args.no_progress and sys.stdout.isatty()
+    )
+    try:
+        return execute.run_local(tasks, workers, progress)
+    except KeyboardInterrupt:
+        print("cpg-actor sweep: interrupted; re-run the same command to resume", file=sys.stderr)
+        return None

@@ -1,0 +1,107 @@
+"""Deterministic evaluation: every env runs one episode with the policy's mean action.
+
+Used by ``cpg-actor eval`` (traces, figures) and by the runner's evaluation during training
+(``eval_interval``), which runs it on environments of its own: it never steps the training
+envs, never updates the observation normaliser and draws no random numbers (the mean action
+is taken and the envs are reset with their own seed), so training is the same with or
+without it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import torch
+
+HIP_HEIGHT = 6  # index of the hip height in the hopper observation
+
+
+@torch.no_grad()
+def evaluate(
+    agent,
+    normalize,
+    env,
+    seed: int,
+    action_low: np.ndarray,
+    action_high: np.ndarray,
+    control_dt: float,
+    max_steps: int,
+    traces: bool = True,
+) -> dict[str, np.ndarray]:
+    """Run every env of ``env`` to the end of its first episode with the mean action.
+
+    ``normalize(obs_tensor) -> obs_tensor`` is the frozen observation normaliser. Returns
+    ``episode_return``, ``hop_height`` and ``length`` per env and, with ``traces``, per-step
+    traces ``(T, E, ...)`` (rows after an env's episode ended are NaN).
+    """
+    num_envs = env.num_envs
+    obs, _ = env.reset(seed=seed)
+    obs = np.asarray(obs, dtype=np.float32)
+    standing = float(obs[:, HIP_HEIGHT].mean())
+    state = agent.initial_state(num_envs)
+    previous_desired = obs[:, 4:6].copy()
+    active = np.ones(num_envs, dtype=bool)
+    length = np.zeros(num_envs, dtype=np.int64)
+    returns = np.zeros(num_envs)
+    max_hip = np.full(num_envs, -np.inf)
+    records: dict[str, list[np.ndarray]] = {}
+    for _ in range(max_steps + 1):
+        step = agent.act(normalize(torch.as_tensor(obs)), state, deterministic=True)
+        desired = np.clip(step.action.numpy(), action_low, action_high)
+        next_obs, reward, terminated, truncated, info = env.step(desired)
+        done = np.logical_or(terminated, truncated)
+        measured = np.asarray(next_obs, dtype=np.float32).copy()
+        if done.any():
+            measured[done] = np.asarray(info["final_obs"], dtype=np.float32)[done]
+        returns += np.where(active, np.asarray(reward, dtype=np.float64), 0.0)
+        max_hip = np.where(active, np.maximum(max_hip, measured[:, HIP_HEIGHT]), max_hip)
+        if traces:
+            row = _trace_row(step, info, desired, previous_desired, measured, reward, control_dt)
+            for key, value in row.items():
+                value = np.asarray(value, dtype=np.float64).copy()
+                value[~active] = np.nan
+                records.setdefault(key, []).append(value)
+            previous_desired = row["desired_position"]
+        length += active
+        active &= ~done
+        state = step.next_state
+        obs = np.asarray(next_obs, dtype=np.float32)
+        if not active.any():
+            break
+    result = {key: np.stack(values) for key, values in records.items()}
+    if traces:
+        result["time"] = control_dt * np.arange(1, len(records["reward"]) + 1)
+    result["length"] = length
+    result["episode_return"] = returns
+    result["hop_height"] = np.maximum(0.0, max_hip - standing)
+    result["standing_hip_height"] = np.array(standing)
+    result["control_dt"] = np.array(control_dt)
+    return result
+
+
+def _trace_row(step, info, desired, previous_desired, measured, reward, dt) -> dict[str, Any]:
+    # the desired positions the hopper tracked: the clipped action for agents acting on joint
+    # positions, the CPG's output for agents whose env holds the CPG (cho2019)
+    applied = np.asarray(info.get("desired_position", desired), dtype=np.float64)
+    num_envs = applied.shape[0]
+    row = {
+        "desired_position": applied,
+        "measured_position": measured[:, 0:2],
+        "measured_velocity": measured[:, 2:4],
+        "hip_height": measured[:, HIP_HEIGHT],
+        "foot_height": np.asarray(info.get("foot_height", np.full(num_envs, np.nan))),
+        "reward": np.asarray(reward, dtype=np.float64),
+    }
+    if "desired_velocity" in step.extras:
+        row["desired_velocity"] = step.extras["desired_velocity"].numpy()
+    elif "desired_velocity" in info:  # CPG inside the environment
+        row["desired_velocity"] = np.asarray(info["desired_velocity"])
+    else:  # the MLP has no analytic velocity: finite difference of its desired positions
+        row["desired_velocity"] = (applied - previous_desired) / dt
+    for key in ("theta_dot", "r_ddot", "xi", "kappa", "cpg_parameters"):
+        if key in step.extras:
+            row[key] = step.extras[key].numpy()
+        elif key in info:
+            row[key] = np.asarray(info[key])
+    return row

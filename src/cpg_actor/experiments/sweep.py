@@ -1,0 +1,194 @@
+"""A one-at-a-time sensitivity study on reproduce's plan machinery.
+
+Each *setting* is the defaults (``default``) or the defaults with one group of config values
+changed (``--vary KEY=V1,V2`` or ``--vary KEY1,KEY2=A1:A2,B1:B2``). A setting is a reproduction
+(:class:`~cpg_actor.experiments.plan.ReproduceSettings`, variants x seeds) in ``OUT/LABEL``,
+evaluated once at the end; all runs of all settings share one pool of workers. The summary
+(``OUT/sensitivity.md``, ``OUT/sensitivity.json``, ``OUT/sensitivity.png``) is made from the
+deterministic evaluations logged during training (``eval/return``, ``eval/hop_height``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cpg_actor.experiments import plan
+
+FINAL_EVALS = 3  # the score of a run: the mean of its last FINAL_EVALS evaluations
+
+
+@dataclass(frozen=True)
+class Setting:
+    label: str  # directory name and table row, e.g. "default", "init_std=0.3"
+    overrides: tuple[str, ...]  # --set texts
+
+
+def parse_vary(text: str) -> list[Setting]:
+    """``"agent_config.init_std=0.3,3"`` -> two settings; ``"a,b=1:2,3:4"`` changes a and b
+    together (a=1 b=2, then a=3 b=4)."""
+    if "=" not in text:
+        raise ValueError(f"--vary expects KEY=V1,V2 or KEY1,KEY2=A1:A2,B1:B2, got {text!r}")
+    keys_text, values_text = text.split("=", 1)
+    keys = [k.strip() for k in keys_text.split(",") if k.strip()]
+    groups = [g.strip() for g in values_text.split(",") if g.strip()]
+    if not keys or not groups:
+        raise ValueError(f"--vary {text!r} names no key or no value")
+    settings = []
+    for group in groups:
+        values = group.split(":") if len(keys) > 1 else [group]
+        if len(values) != len(keys):
+            raise ValueError(
+                f"--vary {text!r}: value group {group!r} has {len(values)} values for "
+                f"{len(keys)} keys (separate them with ':')"
+            )
+        short = [k.rsplit(".", 1)[-1] for k in keys]
+        label = ",".join(f"{k}={v}" for k, v in zip(short, values, strict=True))
+        overrides = tuple(f"{k}={v}" for k, v in zip(keys, values, strict=True))
+        settings.append(Setting(label, overrides))
+    return settings
+
+
+def build_settings(varies: list[str]) -> list[Setting]:
+    settings = [Setting("default", ())]
+    for text in varies:
+        settings += parse_vary(text)
+    labels = [s.label for s in settings]
+    if len(set(labels)) != len(labels):
+        raise ValueError(f"two settings have the same label: {labels}")
+    return settings
+
+
+def reproduce_settings(
+    setting: Setting, variants: list[str], seeds: int, total_steps: int, overrides: list[str]
+) -> plan.ReproduceSettings:
+    return plan.ReproduceSettings(
+        variants=variants,
+        seeds=seeds,
+        total_steps=total_steps,
+        overrides=[*overrides, *setting.overrides],
+        stage_fractions=[1.0],
+    )
+
+
+def read_evaluations(run_dir: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(steps, eval return, eval hop height, train wall seconds)`` from ``metrics.jsonl``."""
+    rows = []
+    path = run_dir / "metrics.jsonl"
+    if path.is_file():
+        for line in path.read_text().splitlines():
+            if line.strip():
+                row = json.loads(line)
+                if row.get("eval/return") is not None:
+                    rows.append(row)
+    return (
+        np.array([r["global_step"] for r in rows], dtype=float),
+        np.array([r["eval/return"] for r in rows], dtype=float),
+        np.array([r["eval/hop_height"] for r in rows], dtype=float),
+        np.array([r.get("time/train_wall") or math.nan for r in rows], dtype=float),
+    )
+
+
+def summarize(
+    out: Path, settings: list[Setting], variants: list[str], seeds: int
+) -> dict[str, Any]:
+    """Per setting and variant: each seed's score (mean of the last evaluations) and curve."""
+    summary: dict[str, Any] = {"final_evals": FINAL_EVALS, "settings": {}}
+    for setting in settings:
+        entry: dict[str, Any] = {"overrides": list(setting.overrides), "variants": {}}
+        for variant in variants:
+            returns, hops, curves = [], [], []
+            for seed in range(seeds):
+                steps, ret, hop, wall = read_evaluations(
+                    out / setting.label / "runs" / variant / f"seed{seed}"
+                )
+                returns.append(float(ret[-FINAL_EVALS:].mean()) if ret.size else math.nan)
+                hops.append(float(hop[-FINAL_EVALS:].mean()) if hop.size else math.nan)
+                curves.append({"steps": steps.tolist(), "return": ret.tolist()})
+            entry["variants"][variant] = {
+                "return": returns,
+                "hop_height": hops,
+                "curves": curves,
+            }
+        summary["settings"][setting.label] = entry
+    return summary
+
+
+def _mean_std(values: list[float], digits: int) -> str:
+    a = np.array(values, dtype=float)
+    a = a[np.isfinite(a)]
+    return f"{a.mean():.{digits}f} ± {a.std():.{digits}f}" if a.size else "-"
+
+
+def write_summary(out: Path, summary: dict[str, Any], command: str, seeds: int) -> list[Path]:
+    """``sensitivity.json``, ``sensitivity.md`` (table) and ``sensitivity.png`` (curves)."""
+    (out / "sensitivity.json").write_text(json.dumps(summary, indent=1) + "\n")
+    labels = list(summary["settings"])
+    variants = list(next(iter(summary["settings"].values()))["variants"])
+    lines = [
+        "# Sensitivity of PPO settings (one at a time around the defaults)",
+        "",
+        f"Produced by `{command}`.",
+        "",
+        f"Score of a run: the mean of its last {summary['final_evals']} deterministic "
+        f"evaluations (`eval/return`, `eval/hop_height`, 5 episodes each); mean ± std over "
+        f"{seeds} seeds; *steps*: the fewest env steps any seed's run reached (less than the "
+        "budget for runs that did not finish). The first row is the defaults; every other row "
+        "changes only the values it names.",
+        "",
+        "| setting | "
+        + " | ".join(f"{v} return | {v} hop (m) | {v} steps" for v in variants)
+        + " |",
+        "| --- | " + " | ".join("---: | ---: | ---:" for _ in variants) + " |",
+    ]
+    for label in labels:
+        cells = []
+        for variant in variants:
+            data = summary["settings"][label]["variants"][variant]
+            reached = [c["steps"][-1] if c["steps"] else 0 for c in data["curves"]]
+            cells += [
+                _mean_std(data["return"], 0),
+                _mean_std(data["hop_height"], 3),
+                f"{min(reached) / 1000:.0f}k",
+            ]
+        lines.append(f"| `{label}` | " + " | ".join(cells) + " |")
+    (out / "sensitivity.md").write_text("\n".join(lines) + "\n")
+    figure = out / "sensitivity.png"
+    _plot(summary, figure)
+    return [out / "sensitivity.md", out / "sensitivity.json", figure]
+
+
+def _plot(summary: dict[str, Any], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    labels = list(summary["settings"])
+    variants = list(next(iter(summary["settings"].values()))["variants"])
+    fig, axes = plt.subplots(1, len(variants), figsize=(6 * len(variants), 4), squeeze=False)
+    for ax, variant in zip(axes[0], variants, strict=True):
+        for i, label in enumerate(labels):
+            curves = summary["settings"][label]["variants"][variant]["curves"]
+            curves = [c for c in curves if c["steps"]]
+            if not curves:
+                continue
+            length = min(len(c["steps"]) for c in curves)
+            steps = np.array(curves[0]["steps"][:length])
+            values = np.array([c["return"][:length] for c in curves])
+            style = "-" if i < 10 else "--"
+            width = 2.5 if label == "default" else 1.2
+            ax.plot(steps, values.mean(0), style, lw=width, label=label)
+        ax.set_title(variant)
+        ax.set_xlabel("control steps")
+        ax.set_ylabel("deterministic eval return (mean over seeds)")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
