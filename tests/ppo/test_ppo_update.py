@@ -70,3 +70,27 @@ def test_invalid_ppo_values_are_rejected():
     for bad in ({"gamma": 1.5}, {"num_epochs": 0}, {"lr_schedule": "cosine"}, {"clip_ratio": 0}):
         with pytest.raises(ValueError, match="ppo"):
             PPOConfig(**bad).validate()
+
+
+def test_an_update_that_breaks_the_policy_is_undone_and_raises():
+    """A finite loss with a huge learning rate (1e6) makes the policy non-finite: the update
+    raises and every parameter is back to its value before the update, all finite."""
+    from cpg_actor.ppo import NonFiniteLossError
+
+    runner = collected_runner(learning_rate=1e6)
+    before = {k: v.clone() for k, v in runner.agent.state_dict().items()}
+    with pytest.raises(NonFiniteLossError, match="non-finite.*undone"):
+        runner.ppo.update(runner.storage)
+    for key, value in runner.agent.state_dict().items():
+        assert torch.equal(value, before[key]), key
+        assert torch.isfinite(value).all(), key
+
+
+@pytest.mark.parametrize("key", ["learning_rate", "max_grad_norm", "gamma", "entropy_coef"])
+def test_non_finite_numbers_are_refused(key):
+    from cpg_actor.ppo import PPOConfig
+
+    with pytest.raises(ValueError, match=f"ppo.{key} must be finite"):
+        PPOConfig(**{key: float("inf")}).validate()
+    with pytest.raises(ValueError, match=f"ppo.{key} must be"):
+        PPOConfig(**{key: float("nan")}).validate()

@@ -139,7 +139,7 @@ class Agent(nn.Module):
     def act(self, obs: Tensor, state: Tensor, deterministic: bool = False) -> ActStep:
         """Sample (or take the mean) action for a batch; no gradients needed by callers."""
         out = self.actor(obs, state)
-        dist = torch.distributions.Normal(out.mean, out.std)
+        dist = torch.distributions.Normal(out.mean, out.std, validate_args=False)
         action = out.mean if deterministic else dist.sample()
         log_prob = dist.log_prob(action).sum(-1)
         return ActStep(
@@ -149,7 +149,7 @@ class Agent(nn.Module):
     def evaluate(self, obs: Tensor, state: Tensor, actions: Tensor) -> tuple[Tensor, ...]:
         """Replay one step from stored (obs, state): ``(log_prob, entropy, value, mean, std)``."""
         out = self.actor(obs, state)
-        dist = torch.distributions.Normal(out.mean, out.std)
+        dist = torch.distributions.Normal(out.mean, out.std, validate_args=False)
         return (
             dist.log_prob(actions).sum(-1),
             dist.entropy().sum(-1),

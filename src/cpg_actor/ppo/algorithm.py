@@ -17,7 +17,7 @@ from cpg_actor.ppo.storage import RolloutStorage
 
 
 class NonFiniteLossError(FloatingPointError):
-    """A loss or gradient became NaN/inf; the update was not applied."""
+    """A loss, gradient, parameter or policy output became NaN/inf; the update was undone."""
 
 
 def gaussian_kl(mu_old: Tensor, std_old: Tensor, mu: Tensor, std: Tensor) -> Tensor:
@@ -46,12 +46,37 @@ class PPO:
         if self.config.lr_schedule == "linear":
             self.set_learning_rate(self.config.learning_rate * (1.0 - iteration / num_iterations))
 
+    def _parameters(self) -> list[torch.Tensor]:
+        return [p for group in self.optimizer.param_groups for p in group["params"]]
+
+    def _undo(self, snapshot: list[torch.Tensor], reason: str) -> NonFiniteLossError:
+        """Put the parameters back to ``snapshot``; the error to raise."""
+        with torch.no_grad():
+            for p, old in zip(self._parameters(), snapshot, strict=True):
+                p.copy_(old)
+        return NonFiniteLossError(
+            f"{reason} (learning rate {self.learning_rate:g}); the update was undone"
+        )
+
+    @torch.no_grad()
+    def _outputs_are_finite(self, storage: RolloutStorage) -> bool:
+        """The updated policy's mean, std and value on every stored (observation, state)."""
+        # flattened in order: no random permutation, so training's RNG stream is untouched
+        obs, states = (getattr(storage, name).flatten(0, 1) for name in ("observations", "states"))
+        out = self.agent.actor(obs, states)
+        value, mean, std = self.agent.value(obs, states), out.mean, out.std
+        return all(bool(torch.isfinite(t).all()) for t in (value, mean, std))
+
     def update(self, storage: RolloutStorage) -> dict[str, float]:
         cfg = self.config
         stats: dict[str, list[float]] = {
             k: [] for k in ("policy_loss", "value_loss", "entropy", "approx_kl", "clipfrac", "kl")
         }
         early_stop = False
+        # a finite loss with a huge step can still break the policy: every update is checked
+        # (parameters after each step, outputs at the end) and undone if it did, so nothing
+        # non-finite is ever used, logged or saved
+        snapshot = [p.detach().clone() for p in self._parameters()]
         for _ in range(cfg.num_epochs):
             for batch in storage.minibatches(cfg.num_minibatches):
                 log_prob, entropy, value, mean, std = self.agent.evaluate(
@@ -95,10 +120,10 @@ class PPO:
                     policy_loss + cfg.value_loss_coef * value_loss - cfg.entropy_coef * entropy_mean
                 )
                 if not torch.isfinite(loss):
-                    raise NonFiniteLossError(
+                    raise self._undo(
+                        snapshot,
                         f"non-finite PPO loss (policy {policy_loss.item()}, value "
-                        f"{value_loss.item()}, entropy {entropy_mean.item()}); "
-                        "the update was not applied"
+                        f"{value_loss.item()}, entropy {entropy_mean.item()})",
                     )
 
                 self.optimizer.zero_grad(set_to_none=True)
@@ -107,8 +132,10 @@ class PPO:
                     self.agent.parameters(), cfg.max_grad_norm
                 )
                 if not torch.isfinite(grad_norm):
-                    raise NonFiniteLossError("non-finite gradient norm; the update was not applied")
+                    raise self._undo(snapshot, "non-finite gradient norm")
                 self.optimizer.step()
+                if not all(bool(torch.isfinite(p).all()) for p in self._parameters()):
+                    raise self._undo(snapshot, "an optimiser step made the parameters non-finite")
 
                 stats["policy_loss"].append(policy_loss.item())
                 stats["value_loss"].append(value_loss.item())
@@ -122,6 +149,8 @@ class PPO:
             if early_stop:
                 break
 
+        if not self._outputs_are_finite(storage):
+            raise self._undo(snapshot, "the updated policy gives non-finite actions or values")
         values = storage.values.flatten()
         returns = storage.returns.flatten()
         var_returns = returns.var().item()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 SCHEDULES = ("fixed", "linear", "adaptive")
@@ -55,6 +56,17 @@ class PPOConfig:
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise ValueError(f"ppo.{name} must be a positive integer, got {value!r}")
+        numbers = (
+            "gamma", "gae_lambda", "clip_ratio", "value_loss_coef", "entropy_coef",
+            "max_grad_norm", "learning_rate", "desired_kl", "min_learning_rate",
+            "max_learning_rate", "adam_eps",
+        )  # fmt: skip
+        for name in numbers:
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise ValueError(f"ppo.{name} must be a number, got {value!r}")
+            if not math.isfinite(value):
+                raise ValueError(f"ppo.{name} must be finite, got {value!r}")
         for name in ("gamma", "gae_lambda"):
             if not 0.0 <= getattr(self, name) <= 1.0:
                 raise ValueError(f"ppo.{name} must be in [0, 1], got {getattr(self, name)!r}")
