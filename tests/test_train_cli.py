@@ -2,6 +2,7 @@
 
 import argparse
 import json
+import os
 
 import numpy as np
 import pytest
@@ -72,6 +73,8 @@ def test_config_round_trips_through_yaml(tmp_path):
         (["--total-steps", "-100"], "positive integer"),
         (["--set", "ppo.gamma=2"], "ppo.gamma"),
         (["--set", "bogus=1"], "unknown config key 'bogus'"),
+        (["--total-steps", "1e30"], "above the largest accepted"),
+        (["--config", "."], "is a directory; give a YAML file"),
     ],
 )
 def test_bad_input_is_a_clear_error_and_creates_nothing(tmp_path, capsys, argv, message):
@@ -208,10 +211,13 @@ def test_resume_from_a_corrupt_checkpoint_is_a_clear_error_and_changes_nothing(t
     assert main(["train", "--run-dir", str(run_dir), "--total-steps", "32", *TINY]) == 0
     last = run_dir / "checkpoints" / "last.pt"
     last.write_bytes(last.read_bytes()[:200])
-    before = {p.name: p.read_bytes() for p in run_dir.rglob("*") if p.is_file()}
+    files = [p for p in run_dir.rglob("*") if p.is_file() and p.name != ".lock"]  # lock: who
+    before = {p.name: p.read_bytes() for p in files}
     assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64"]) == 2
     assert "corrupt" in capsys.readouterr().err
-    after = {p.name: p.read_bytes() for p in run_dir.rglob("*") if p.is_file()}
+    after = {
+        p.name: p.read_bytes() for p in run_dir.rglob("*") if p.is_file() and p.name != ".lock"
+    }
     assert before == after
 
 
@@ -266,3 +272,33 @@ def test_init_std_is_in_units_of_the_action_half_range():
     assert torch.allclose(agent.std(1)[0], torch.tensor([0.9, 0.45]))
     with pytest.raises(ValueError, match="action_scale must be positive"):
         MLPAgent(8, [0.9, 0.0], AgentConfig(), nominal_pose=(0.4, -0.8))
+
+
+def test_a_second_writer_is_refused_naming_the_holder_and_a_dead_holder_leaves_no_lock(
+    tmp_path, capsys
+):
+    import subprocess
+    import sys
+
+    from cpg_actor.run_lock import RunLock
+
+    run_dir = tmp_path / "run"
+    assert main(["train", "--run-dir", str(run_dir), "--total-steps", "32", *TINY]) == 0
+    with RunLock(run_dir):  # as if another `cpg-actor train` were writing this run
+        assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64"]) == 2
+        err = capsys.readouterr().err
+        assert "is in use by process" in err and str(os.getpid()) in err
+        assert main(["train", "--run-dir", str(run_dir), "--overwrite", *TINY]) == 2
+        assert "is in use" in capsys.readouterr().err
+        assert (run_dir / "checkpoints" / "last.pt").is_file()  # --overwrite deleted nothing
+    # a holder killed without any clean-up: the operating system drops its lock
+    holder = subprocess.Popen(
+        [sys.executable, "-c", "import sys, time; from cpg_actor.run_lock import RunLock; "
+         f"lock = RunLock({str(run_dir)!r}).acquire(); print('held', flush=True); time.sleep(60)"],
+        stdout=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    assert holder.stdout.readline().strip() == "held"
+    assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64"]) == 2
+    holder.kill()
+    holder.wait()
+    assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64"]) == 0

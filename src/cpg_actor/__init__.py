@@ -5,3 +5,7 @@ Implements *CPG-Actor: Reinforcement Learning for Central Pattern Generators*
 """
 
 __version__ = "0.1.0"
+
+from cpg_actor.registration import register as _register_envs
+
+_register_envs()  # the Gymnasium ids cpg_actor/AnymalHopper-v0 (and -pybullet-v0)

@@ -244,6 +244,9 @@ def parse_override(text: str) -> dict[str, Any]:
 _SUFFIXES = {"k": 1_000, "m": 1_000_000, "g": 1_000_000_000, "b": 1_000_000_000}
 
 
+MAX_STEPS = 10**12  # 1e30 would be accepted as a float and print rounding noise
+
+
 def parse_steps(text: str | int) -> int:
     """``"20M"`` -> 20_000_000, ``"500k"`` -> 500_000, ``"1e6"`` -> 1_000_000; must be > 0."""
     raw = str(text).strip().lower().replace("_", "")
@@ -256,4 +259,9 @@ def parse_steps(text: str | int) -> int:
         raise ValueError(f"invalid step count {text!r}; use e.g. 300000, 500k or 20M") from None
     if not math.isfinite(value) or value != int(value) or value <= 0:
         raise ValueError(f"the step count must be a positive integer, got {text!r}")
+    if value > MAX_STEPS:
+        raise ValueError(
+            f"the step count {text!r} is above the largest accepted, {MAX_STEPS:.0e} "
+            "(years of training on any machine)"
+        )
     return int(value)

@@ -199,3 +199,20 @@ def test_render_without_mode_returns_none(env):
         assert env.render() is None
     with pytest.raises(ValueError, match="render_mode"):
         HopperEnv(render_mode="human")
+
+
+def test_import_cpg_actor_registers_the_gymnasium_ids_without_loading_a_simulator():
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, gymnasium, cpg_actor\n"
+        "assert 'cpg_actor/AnymalHopper-v0' in gymnasium.registry\n"
+        "assert 'cpg_actor/AnymalHopper-pybullet-v0' in gymnasium.registry\n"
+        "assert 'mujoco' not in sys.modules and 'cpg_actor.envs' not in sys.modules\n"
+        "env = gymnasium.make('cpg_actor/AnymalHopper-v0')\n"
+        "print(env.reset(seed=0)[0].shape)\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "(8,)"

@@ -16,6 +16,7 @@ from cpg_actor.config import (
     read_config_file,
 )
 from cpg_actor.presets import PRESETS, preset_values
+from cpg_actor.run_lock import LOCK_NAME, RunLock
 
 HELP = "train an agent (cpg-actor, cpg-actor-open-loop, mlp, cho2019, cho2019-warm) with PPO"
 
@@ -77,6 +78,10 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
     file_data: dict = {}
     if args.config:
         path = Path(args.config)
+        if path.is_dir():
+            raise ValueError(
+                f"--config {path} is a directory; give a YAML file (e.g. a run's config.yaml)"
+            )
         if not path.is_file():
             raise FileNotFoundError(f"config file {path} does not exist")
         file_data = read_config_file(path)
@@ -103,10 +108,16 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
     return config
 
 
+def _has_content(run_dir: Path) -> bool:
+    """``run_dir`` holds something besides its lock file."""
+    return run_dir.is_dir() and any(p.name != LOCK_NAME for p in run_dir.iterdir())
+
+
 def prepare_run_dir(run_dir: Path, overwrite: bool) -> None:
     """Create ``run_dir``; an existing non-empty one is replaced only with ``overwrite`` and only
-    if it looks like a run directory (holds a config.yaml)."""
-    if run_dir.exists() and any(run_dir.iterdir()):
+    if it looks like a run directory (holds a config.yaml). Its lock file is kept (the caller
+    holds the lock)."""
+    if _has_content(run_dir):
         if not overwrite:
             raise FileExistsError(
                 f"run directory {run_dir} already exists; pass --resume to continue it or "
@@ -117,11 +128,31 @@ def prepare_run_dir(run_dir: Path, overwrite: bool) -> None:
                 f"{run_dir} is not empty and is not a run directory (no config.yaml); "
                 "refusing to delete it"
             )
-        shutil.rmtree(run_dir)
+        for path in run_dir.iterdir():
+            if path.name == LOCK_NAME:
+                continue
+            if path.is_dir() and not path.is_symlink():
+                shutil.rmtree(path)
+            else:
+                path.unlink()
     run_dir.mkdir(parents=True, exist_ok=True)
 
 
 def run(args: argparse.Namespace) -> int:
+    locks: list[RunLock] = []
+    try:
+        return _run(args, locks)
+    finally:
+        for lock in locks:
+            lock.release()
+
+
+def _lock(run_dir: Path, locks: list[RunLock]) -> None:
+    """Hold ``run_dir``'s lock until the command ends (RunInUseError if another run has it)."""
+    locks.append(RunLock(run_dir).acquire())
+
+
+def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
     from cpg_actor.runner import Runner, TrainingDiverged
 
     if args.resume:
@@ -154,6 +185,7 @@ def run(args: argparse.Namespace) -> int:
         checkpoint = run_dir / "checkpoints" / "last.pt"
         if not checkpoint.is_file():
             raise FileNotFoundError(f"{checkpoint} does not exist; nothing to resume")
+        _lock(run_dir, locks)
         config = TrainConfig.load(config_path)
         if args.total_steps is not None:
             config.total_steps = parse_steps(args.total_steps)
@@ -179,10 +211,15 @@ def run(args: argparse.Namespace) -> int:
             args.run_dir
             or DEFAULT_RUN_DIR.format(agent=config.agent, sim=config.env.sim, seed=config.seed)
         )
-        if run_dir.exists() and any(run_dir.iterdir()) and not args.overwrite:
+        if _has_content(run_dir) and not args.overwrite:
             prepare_run_dir(run_dir, overwrite=False)  # raises before anything is built
         runner = Runner(config, run_dir, progress=not args.no_progress)
-        prepare_run_dir(run_dir, args.overwrite)
+        try:
+            _lock(run_dir, locks)  # before --overwrite deletes anything
+            prepare_run_dir(run_dir, args.overwrite)
+        except BaseException:
+            runner.close()
+            raise
         config.save(run_dir / "config.yaml")
         print(
             f"training {config.agent} ({config.preset} preset) on {config.env.sim} for "

@@ -7,32 +7,15 @@ Gymnasium ids (registered on import): ``cpg_actor/AnymalHopper-v0`` (MuJoCo, the
 
 from __future__ import annotations
 
-import gymnasium
-
 from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.hopper import HopperEnv
 from cpg_actor.envs.reward import REWARD_TERMS, reward_terms
 from cpg_actor.envs.simulation import OBS_NAMES
 from cpg_actor.envs.vector import HopperVectorEnv, make_vector_env
 from cpg_actor.envs.video import write_video
+from cpg_actor.registration import ENV_ID, PYBULLET_ENV_ID, register
 
-ENV_ID = "cpg_actor/AnymalHopper-v0"
-PYBULLET_ENV_ID = "cpg_actor/AnymalHopper-pybullet-v0"
-
-
-def _register() -> None:
-    for env_id, sim in ((ENV_ID, "mujoco"), (PYBULLET_ENV_ID, "pybullet")):
-        if env_id in gymnasium.registry:
-            continue
-        gymnasium.register(
-            id=env_id,
-            entry_point="cpg_actor.envs.hopper:HopperEnv",
-            vector_entry_point="cpg_actor.envs.vector:HopperVectorEnv",
-            kwargs={"sim": sim},
-        )
-
-
-_register()
+register()
 
 __all__ = [
     "ENV_ID",

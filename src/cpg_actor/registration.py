@@ -1,0 +1,21 @@
+"""Gymnasium ids of the hopper, registered on ``import cpg_actor`` (entry points as strings:
+nothing heavy is imported until ``gymnasium.make``)."""
+
+from __future__ import annotations
+
+import gymnasium
+
+ENV_ID = "cpg_actor/AnymalHopper-v0"
+PYBULLET_ENV_ID = "cpg_actor/AnymalHopper-pybullet-v0"
+
+
+def register() -> None:
+    for env_id, sim in ((ENV_ID, "mujoco"), (PYBULLET_ENV_ID, "pybullet")):
+        if env_id in gymnasium.registry:
+            continue
+        gymnasium.register(
+            id=env_id,
+            entry_point="cpg_actor.envs.hopper:HopperEnv",
+            vector_entry_point="cpg_actor.envs.vector:HopperVectorEnv",
+            kwargs={"sim": sim},
+        )
