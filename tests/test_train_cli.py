@@ -302,3 +302,33 @@ def test_a_second_writer_is_refused_naming_the_holder_and_a_dead_holder_leaves_n
     holder.kill()
     holder.wait()
     assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64"]) == 0
+
+
+def test_a_config_file_accepts_exponents_without_a_dot(tmp_path):
+    """YAML 1.1 reads `1e-4` as a string; `--config` takes it as the number it means."""
+    path = tmp_path / "c.yaml"
+    path.write_text("ppo:\n  learning_rate: 1e-4\n  max_grad_norm: 5E-1\n")
+    config = TrainConfig.load(path)
+    assert config.ppo.learning_rate == 1e-4 and config.ppo.max_grad_norm == 0.5
+    path.write_text("ppo:\n  learning_rate: fast\n")
+    with pytest.raises(ValueError, match="ppo.learning_rate must be a number"):
+        TrainConfig.load(path)
+
+
+def test_progress_goes_to_a_log_file_as_plain_lines(tmp_path):
+    """With stdout not a terminal (nohup, cluster jobs) train prints a plain progress line
+    every --progress-interval seconds and one at the end, not a progress bar at exit."""
+    import subprocess
+    import sys
+
+    run_dir = tmp_path / "run"
+    argv = ["train", "--run-dir", str(run_dir), "--total-steps", "48", "--progress-interval", "0"]
+    argv += [a for a in TINY if a != "--no-progress"]
+    result = subprocess.run(
+        [sys.executable, "-m", "cpg_actor.cli", *argv], capture_output=True, text=True
+    )
+    assert result.returncode == 0, result.stderr
+    lines = [line for line in result.stdout.splitlines() if line.startswith("[train cpg-actor]")]
+    assert len(lines) == 3  # one per iteration with interval 0, the last with the evaluation
+    assert lines[0].startswith("[train cpg-actor] 16/48 steps (33.3%)")
+    assert "eval return" in lines[-1] and "48/48 steps (100.0%)" in lines[-1]

@@ -144,6 +144,9 @@ def _field_types(obj: Any) -> dict[str, Any]:
         return {f.name: type(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
 
 
+_YAML11_FLOAT = re.compile(r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+")
+
+
 def _coerce(value: Any, annotation: Any, key: str) -> Any:
     """Convert a YAML value to the field's annotated type, or raise a clear ValueError."""
     origin = typing.get_origin(annotation)
@@ -171,6 +174,8 @@ def _coerce(value: Any, annotation: Any, key: str) -> Any:
             raise ValueError(f"{key} must be an integer, got {value!r}")
         return int(value)
     if annotation is float:
+        if isinstance(value, str) and _YAML11_FLOAT.fullmatch(value.strip()):
+            return float(value)  # YAML 1.1 reads 1e-4 (no dot) as a string
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ValueError(f"{key} must be a number, got {value!r}")
         return float(value)

@@ -23,6 +23,7 @@ import json
 import math
 import os
 import random
+import sys
 import time
 from collections import deque
 from collections.abc import Callable
@@ -144,6 +145,40 @@ class EpisodeStats:
         )
 
 
+class PlainProgress:
+    """Progress as a plain line every ``interval`` seconds (and at the end) when stdout is not a
+    terminal; the same ``update``/``stop`` calls as the rich progress bar."""
+
+    def __init__(self, name: str, total: int, completed: int, interval: float) -> None:
+        self.name, self.total, self.interval = name, total, interval
+        self.start = self.last = time.perf_counter()
+        self.first_step = completed
+        self.fields: dict[str, Any] = {"completed": completed, "evaluation": ""}
+
+    def update(self, task: Any, **fields: Any) -> None:
+        self.fields.update(fields)
+        now = time.perf_counter()
+        if now - self.last >= self.interval or self.fields["completed"] >= self.total:
+            self.last = now
+            self.print(now)
+
+    def print(self, now: float) -> None:
+        done = self.fields["completed"]
+        elapsed = now - self.start
+        rate = (done - self.first_step) / elapsed if elapsed > 0 else 0.0
+        eta = (self.total - done) / rate if rate > 0 else math.nan
+        print(
+            f"[train {self.name}] {done:,}/{self.total:,} steps ({100 * done / self.total:.1f}%), "
+            f"{self.fields.get('sps', '-')} SPS, elapsed {elapsed:.0f} s, ETA {eta:.0f} s, "
+            f"return {self.fields.get('ret', '-')} hop {self.fields.get('hop', '-')} m "
+            f"{self.fields['evaluation']}".rstrip(),
+            flush=True,
+        )
+
+    def stop(self) -> None:
+        pass
+
+
 class Runner:
     """Builds env, agent, normaliser and PPO from a :class:`TrainConfig` and trains.
 
@@ -159,6 +194,7 @@ class Runner:
         progress: bool = False,
         tensorboard: bool = True,
         eval_env: Any = None,
+        progress_interval: float = 30.0,
     ) -> None:
         config.validate()
         if env is not None and eval_env is None and config.eval_interval > 0:
@@ -169,6 +205,7 @@ class Runner:
         self.config = config
         self.run_dir = Path(run_dir) if run_dir is not None else None
         self.show_progress = progress
+        self.progress_interval = progress_interval  # seconds between plain-text progress lines
         self.use_tensorboard = tensorboard and self.run_dir is not None
         torch.set_num_threads(config.torch_threads)
         seed_everything(config.seed)
@@ -369,6 +406,11 @@ class Runner:
                 if self.iteration % cfg.log_interval == 0 or last or evaluation is not None:
                     self.log(stats, timing, evaluation)
                 stop = evaluation is not None and stop_when is not None and stop_when(evaluation)
+                if evaluation is not None:
+                    self._evaluation_text = (
+                        f"eval return {evaluation['eval/return']:.1f} "
+                        f"hop {evaluation['eval/hop_height']:.3f} m"
+                    )
                 if progress is not None:
                     progress.update(
                         self._task,
@@ -376,13 +418,8 @@ class Runner:
                         sps=f"{sps:,.0f}",
                         ret=f"{self.mean_recent('return'):.2f}",
                         hop=f"{self.mean_recent('hop_height'):.3f}",
+                        evaluation=getattr(self, "_evaluation_text", ""),
                     )
-                    if evaluation is not None:
-                        self._evaluation_text = (
-                            f"eval return {evaluation['eval/return']:.1f} "
-                            f"hop {evaluation['eval/hop_height']:.3f} m"
-                        )
-                        progress.update(self._task, evaluation=self._evaluation_text)
                 at_interval = self.iteration % cfg.checkpoint_interval == 0
                 if self.run_dir is not None and (at_interval or last or stop):
                     self.save_checkpoint()
@@ -459,6 +496,10 @@ class Runner:
     def _make_progress(self, num_iterations: int):
         if not self.show_progress:
             return None
+        total = num_iterations * self.config.steps_per_iteration
+        if not sys.stdout.isatty():  # a log file (nohup, a cluster job): plain lines
+            self._task = None
+            return PlainProgress(self.config.agent, total, self.global_step, self.progress_interval)
         from rich.progress import (
             BarColumn,
             MofNCompleteColumn,
@@ -479,7 +520,6 @@ class Runner:
             TextColumn("return {task.fields[ret]} hop {task.fields[hop]} m"),
             TextColumn("{task.fields[evaluation]}"),
         )
-        total = num_iterations * self.config.steps_per_iteration
         self._task = progress.add_task(
             self.config.agent,
             total=total,

@@ -216,3 +216,20 @@ def test_import_cpg_actor_registers_the_gymnasium_ids_without_loading_a_simulato
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "(8,)"
+
+
+def test_step_or_reset_after_close_is_a_clear_error():
+    import gymnasium
+
+    from cpg_actor.envs import HopperEnv, HopperVectorEnv
+    from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
+
+    for env in (HopperEnv(), HopperVectorEnv(2), CPGParameterVectorEnv(2)):
+        env.reset(seed=0)
+        env.close()
+        env.close()  # twice is fine
+        action = np.zeros(env.action_space.shape, dtype=np.float32)
+        with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="closed environment"):
+            env.step(action)
+        with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="closed environment"):
+            env.reset(seed=0)

@@ -70,6 +70,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--overwrite", action="store_true", help="replace an existing run directory"
     )
     parser.add_argument("--no-progress", action="store_true", help="no progress bar")
+    parser.add_argument(
+        "--progress-interval",
+        type=float,
+        default=30.0,
+        help="seconds between plain progress lines when stdout is not a terminal (default 30)",
+    )
 
 
 def build_config(args: argparse.Namespace) -> TrainConfig:
@@ -190,7 +196,12 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         if args.total_steps is not None:
             config.total_steps = parse_steps(args.total_steps)
         config.validate()
-        runner = Runner(config, run_dir, progress=not args.no_progress)
+        runner = Runner(
+            config,
+            run_dir,
+            progress=not args.no_progress,
+            progress_interval=args.progress_interval,
+        )
         try:
             runner.load_checkpoint(checkpoint)
         except (ValueError, FileNotFoundError):
@@ -213,7 +224,12 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         )
         if _has_content(run_dir) and not args.overwrite:
             prepare_run_dir(run_dir, overwrite=False)  # raises before anything is built
-        runner = Runner(config, run_dir, progress=not args.no_progress)
+        runner = Runner(
+            config,
+            run_dir,
+            progress=not args.no_progress,
+            progress_interval=args.progress_interval,
+        )
         try:
             _lock(run_dir, locks)  # before --overwrite deletes anything
             prepare_run_dir(run_dir, args.overwrite)

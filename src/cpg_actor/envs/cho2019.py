@@ -34,6 +34,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 import torch
 from gymnasium import spaces
@@ -150,6 +151,10 @@ class CPGParameterVectorEnv(VectorEnv):
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        if getattr(self, "env", None) is None:
+            raise gym.error.ClosedEnvironmentError(
+                "reset() on a closed environment; make a new one"
+            )
         env_obs, info = self.env.reset(seed=seed, options=options)
         self.state = self._initial_state(self.num_envs)
         return self._observation(env_obs, self.state), info
@@ -157,6 +162,8 @@ class CPGParameterVectorEnv(VectorEnv):
     def step(
         self, actions: Any
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        if getattr(self, "env", None) is None:
+            raise gym.error.ClosedEnvironmentError("step() on a closed environment; make a new one")
         try:
             array = np.asarray(actions, dtype=np.float64)
         except (TypeError, ValueError):

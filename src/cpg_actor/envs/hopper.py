@@ -117,6 +117,10 @@ class HopperEnv(gym.Env):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
+        if getattr(self, "sim", None) is None:
+            raise gym.error.ClosedEnvironmentError(
+                "reset() on a closed environment; make a new one"
+            )
         super().reset(seed=seed)
         self.sim.reset_robots(np.array([0]), self.sim.sample_noise(self.np_random)[None])
         self._needs_reset = False
@@ -130,6 +134,8 @@ class HopperEnv(gym.Env):
         return self.sim.observation()[0], info
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        if getattr(self, "sim", None) is None:
+            raise gym.error.ClosedEnvironmentError("step() on a closed environment; make a new one")
         desired = check_actions(action, (2,))
         if self._needs_reset:
             raise gym.error.ResetNeeded(

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
@@ -85,6 +86,10 @@ class HopperVectorEnv(VectorEnv):
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
         """Reset every env. ``seed``: an int s (env i gets s + i), a list of N ints, or None."""
+        if getattr(self, "sim", None) is None:
+            raise gym.error.ClosedEnvironmentError(
+                "reset() on a closed environment; make a new one"
+            )
         if seed is None:
             if self._rngs is None:
                 self._rngs = [seeding.np_random(None)[0] for _ in range(self.num_envs)]
@@ -114,6 +119,8 @@ class HopperVectorEnv(VectorEnv):
     def step(
         self, actions: Any
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        if getattr(self, "sim", None) is None:
+            raise gym.error.ClosedEnvironmentError("step() on a closed environment; make a new one")
         desired = check_actions(actions, (self.num_envs, 2))
         if self._needs_reset:
             raise RuntimeError("call reset() before step()")

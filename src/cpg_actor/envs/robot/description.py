@@ -1,7 +1,9 @@
 """The single-leg ANYmal hopper as plain Python data: the one source of both robot files.
 
-Numbers are ANYmal B's right-front leg from ANYbotics' public description (see DESIGN.md,
-"Facts for the hopper"). ``mjcf.py`` and ``urdf.py`` turn this data into the MJCF (MuJoCo)
+Numbers are ANYmal B's right-front leg from ANYbotics' public description (the ANYmal B URDF,
+BSD licence), collected in the project's design notes (not part of this repository) under
+"Facts for the hopper"; ``docs/hopper.md`` lists each number with its reason. ``mjcf.py``
+and ``urdf.py`` turn this data into the MJCF (MuJoCo)
 and URDF (PyBullet) files shipped in ``cpg_actor/envs/assets``; a test checks that both
 simulators load the same masses, inertias and joint frames from them.
 
