@@ -207,18 +207,52 @@ def test_nan_loss_exits_with_status_1_and_keeps_the_last_good_checkpoint(tmp_pat
 
 
 def test_resume_from_a_corrupt_checkpoint_is_a_clear_error_and_changes_nothing(tmp_path, capsys):
+    """Every checkpoint unreadable: exit 2 naming each one, nothing written."""
     run_dir = tmp_path / "run"
     assert main(["train", "--run-dir", str(run_dir), "--total-steps", "32", *TINY]) == 0
-    last = run_dir / "checkpoints" / "last.pt"
-    last.write_bytes(last.read_bytes()[:200])
+    for path in (run_dir / "checkpoints").glob("*.pt"):
+        path.write_bytes(path.read_bytes()[:200])
     files = [p for p in run_dir.rglob("*") if p.is_file() and p.name != ".lock"]  # lock: who
     before = {p.name: p.read_bytes() for p in files}
     assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64"]) == 2
-    assert "corrupt" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "no usable checkpoint" in err and "last.pt" in err and "iter_000002.pt" in err
     after = {
         p.name: p.read_bytes() for p in run_dir.rglob("*") if p.is_file() and p.name != ".lock"
     }
     assert before == after
+
+
+def test_resume_recovers_from_a_corrupt_last_checkpoint_and_a_missing_config(tmp_path, capsys):
+    """A corrupt last.pt falls back to the newest readable iter_*.pt (saying so), a missing
+    config.yaml is rebuilt from the checkpoint, and the result equals the straight run."""
+    fixed = ["--set", "ppo.lr_schedule=fixed"]
+    straight, run_dir = tmp_path / "straight", tmp_path / "run"
+    assert main(["train", "--run-dir", str(straight), "--total-steps", "64", *TINY, *fixed]) == 0
+    assert main(["train", "--run-dir", str(run_dir), "--total-steps", "32", *TINY, *fixed]) == 0
+    last = run_dir / "checkpoints" / "last.pt"
+    last.write_bytes(last.read_bytes()[:200])
+    (run_dir / "config.yaml").unlink()
+    capsys.readouterr()
+    argv = ["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64", "--no-progress"]
+    assert main(argv) == 0
+    captured = capsys.readouterr()
+    assert "skipped last.pt" in captured.err and "resuming from iter_000002.pt" in captured.err
+    assert "was missing; rebuilt from iter_000002.pt" in captured.out
+    a = load_checkpoint(straight / "checkpoints" / "last.pt")
+    b = load_checkpoint(run_dir / "checkpoints" / "last.pt")
+    for key, value in a["agent_state"].items():
+        assert torch.equal(value, b["agent_state"][key]), key
+
+
+def test_resume_refuses_a_config_edited_since_the_checkpoint(tmp_path, capsys):
+    run_dir = tmp_path / "run"
+    assert main(["train", "--run-dir", str(run_dir), "--total-steps", "32", *TINY]) == 0
+    path = run_dir / "config.yaml"
+    path.write_text(path.read_text().replace("num_epochs: 1", "num_epochs: 4"))
+    assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64"]) == 2
+    err = capsys.readouterr().err
+    assert "differs from the config the run was trained with" in err and "ppo.num_epochs" in err
 
 
 def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path, capsys):

@@ -129,6 +129,42 @@ def load_checkpoint(path: Path) -> dict[str, Any]:
     return data
 
 
+def resume_checkpoint(run_dir: Path) -> tuple[Path, dict[str, Any], list[str]]:
+    """The checkpoint a run resumes from: ``last.pt`` or, if it is missing or unreadable, the
+    newest readable ``iter_*.pt`` (``last.pt`` is a copy of the newest one, so nothing is lost
+    when that one is readable). Returns ``(path, data, notes)``, the notes saying what was
+    skipped; FileNotFoundError / ValueError naming every file tried if none is usable."""
+    folder = Path(run_dir) / "checkpoints"
+    candidates = [folder / "last.pt", *sorted(folder.glob("iter_*.pt"), reverse=True)]
+    candidates = [path for path in candidates if path.is_file()]
+    if not candidates:
+        raise FileNotFoundError(
+            f"{folder} holds no checkpoint (last.pt, iter_*.pt); nothing to resume"
+        )
+    notes: list[str] = []
+    for path in candidates:
+        try:
+            return path, load_checkpoint(path), notes
+        except ValueError as error:
+            notes.append(f"skipped {path.name}: {error}")
+    raise ValueError(
+        f"no usable checkpoint in {folder}: " + "; ".join(notes) + ". Start a new run."
+    )
+
+
+def config_differences(a: dict[str, Any], b: dict[str, Any], prefix: str = "") -> list[str]:
+    """Dotted keys whose values differ between two nested config mappings."""
+    keys = sorted(set(a) | set(b))
+    out: list[str] = []
+    for key in keys:
+        x, y = a.get(key), b.get(key)
+        if isinstance(x, dict) and isinstance(y, dict):
+            out += config_differences(x, y, f"{prefix}{key}.")
+        elif x != y:
+            out.append(f"{prefix}{key}")
+    return out
+
+
 @dataclass
 class EpisodeStats:
     """Per-environment accumulators of the episode in progress."""

@@ -185,14 +185,11 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         if args.overwrite:
             raise ValueError("--resume and --overwrite exclude each other")
         run_dir = Path(args.run_dir)
-        config_path = run_dir / "config.yaml"
-        if not config_path.is_file():
-            raise FileNotFoundError(f"{config_path} does not exist; nothing to resume")
-        checkpoint = run_dir / "checkpoints" / "last.pt"
-        if not checkpoint.is_file():
-            raise FileNotFoundError(f"{checkpoint} does not exist; nothing to resume")
+        if not run_dir.is_dir():
+            raise FileNotFoundError(f"run directory {run_dir} does not exist; nothing to resume")
         _lock(run_dir, locks)
-        config = TrainConfig.load(config_path)
+        checkpoint, config = _resume_config(run_dir)
+        config_path = run_dir / "config.yaml"
         if args.total_steps is not None:
             config.total_steps = parse_steps(args.total_steps)
         config.validate()
@@ -273,6 +270,33 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         f"{runner.last_checkpoint_path()}"
     )
     return 0
+
+
+def _resume_config(run_dir: Path) -> tuple[Path, TrainConfig]:
+    """The checkpoint to resume from and the run's config, checked against each other: a
+    missing ``config.yaml`` is rebuilt from the checkpoint; one edited since (any key but
+    ``total_steps``) is refused, since the resumed run would not continue the same run."""
+    from cpg_actor.runner import config_differences, resume_checkpoint
+
+    checkpoint, data, notes = resume_checkpoint(run_dir)
+    for note in notes:
+        print(f"cpg-actor train: {note}; resuming from {checkpoint.name}", file=sys.stderr)
+    saved = TrainConfig.from_dict(data["config"])
+    config_path = run_dir / "config.yaml"
+    if not config_path.is_file():
+        saved.save(config_path)
+        print(f"cpg-actor train: {config_path} was missing; rebuilt from {checkpoint.name}")
+    config = TrainConfig.load(config_path)
+    changed = [
+        key for key in config_differences(config.to_dict(), saved.to_dict()) if key != "total_steps"
+    ]
+    if changed:
+        raise ValueError(
+            f"{config_path} differs from the config the run was trained with (in "
+            f"{checkpoint.name}) at {', '.join(changed)}; resuming would not continue the same "
+            "run. Undo the edit, or start a new run with the new values"
+        )
+    return checkpoint, config
 
 
 def _truncate_metrics(path: Path, iteration: int) -> None:
