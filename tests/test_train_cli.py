@@ -366,3 +366,21 @@ def test_progress_goes_to_a_log_file_as_plain_lines(tmp_path):
     assert len(lines) == 3  # one per iteration with interval 0, the last with the evaluation
     assert lines[0].startswith("[train cpg-actor] 16/48 steps (33.3%)")
     assert "eval return" in lines[-1] and "48/48 steps (100.0%)" in lines[-1]
+
+
+def test_file_system_errors_are_one_line_and_nothing_is_lost(tmp_path, capsys):
+    afile = tmp_path / "notes.txt"
+    afile.write_text("keep")
+    for run_dir in (afile, afile / "run"):
+        code = main(["train", "--run-dir", str(run_dir), "--total-steps", "32", *TINY])
+        err = capsys.readouterr().err
+        assert code in (1, 2) and err.count("\n") == 1 and "Traceback" not in err, err
+    assert afile.read_text() == "keep"
+
+
+def test_step_counts_not_a_whole_iteration_are_announced(tmp_path, capsys):
+    run_dir = tmp_path / "run"
+    assert main(["train", "--run-dir", str(run_dir), "--total-steps", "40", *TINY]) == 0
+    out = capsys.readouterr().out
+    assert "40 steps is not a whole number of iterations of 16; training 48" in out
+    assert "no training episode finished" in out

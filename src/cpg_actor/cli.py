@@ -43,9 +43,12 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args._run(args) or 0)
-    except (ValueError, FileNotFoundError, FileExistsError) as error:
+    except (ValueError, FileNotFoundError, FileExistsError, NotADirectoryError) as error:
         print(f"cpg-actor {args.command}: error: {error}", file=sys.stderr)
         return 2
+    except OSError as error:  # unwritable or full disk, read-only file system, ...: one line
+        print(f"cpg-actor {args.command}: error: {error}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -234,6 +234,12 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
             runner.close()
             raise
         config.save(run_dir / "config.yaml")
+        planned = config.num_iterations * config.steps_per_iteration
+        if planned != config.total_steps:
+            print(
+                f"note: {config.total_steps:,} steps is not a whole number of iterations of "
+                f"{config.steps_per_iteration:,}; training {planned:,}"
+            )
         print(
             f"training {config.agent} ({config.preset} preset) on {config.env.sim} for "
             f"{config.total_steps:,} steps "
@@ -263,11 +269,16 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         if evaluation
         else ""
     )
+    episode_return = row.get("charts/episode_return", nan)
+    training = (
+        f"mean episode return {episode_return:.3f}, hop height "
+        f"{row.get('charts/hop_height', nan):.3f} m"
+        if episode_return == episode_return
+        else "no training episode finished (runs shorter than an episode)"
+    )
     print(
-        f"done: {runner.global_step:,} steps in {runner.train_wall:.0f} s of training, mean "
-        f"episode return {row.get('charts/episode_return', nan):.3f}, hop height "
-        f"{row.get('charts/hop_height', nan):.3f} m{evaluated}; checkpoint "
-        f"{runner.last_checkpoint_path()}"
+        f"done: {runner.global_step:,} steps in {runner.train_wall:.0f} s of training, "
+        f"{training}{evaluated}; checkpoint {runner.last_checkpoint_path()}"
     )
     return 0
 
