@@ -117,3 +117,26 @@ def test_headless_gl_backend_falls_back_to_none_without_opengl_libraries():
     assert headless_gl(lambda name: f"lib{name}.so") == "egl"
     assert headless_gl(lambda name: "libOSMesa.so" if name == "OSMesa" else None) == "osmesa"
     assert headless_gl(lambda name: None) == "disable"
+
+
+def test_eval_video_only_adds_a_video_to_an_evaluated_run(tmp_path, capsys):
+    """`cpg-actor eval --video PATH --video-only` records the video without touching (or
+    needing --overwrite for) the traces of an earlier evaluation."""
+    reason = mujoco_gl_error()
+    if reason is not None:
+        pytest.skip(f"no MuJoCo GL context here: {reason}")
+    from cpg_actor.cli import main
+
+    run_dir = tmp_path / "run"
+    tiny = ["--num-envs", "2", "--set", "ppo.num_steps=8", "--set", "ppo.num_minibatches=2"]
+    tiny += ["--set", "ppo.num_epochs=1", "--set", "env.episode_steps=20", "--no-progress"]
+    assert main(["train", "--run-dir", str(run_dir), "--total-steps", "16", *tiny]) == 0
+    assert main(["eval", str(run_dir), "--episodes", "1"]) == 0
+    traces = run_dir / "eval" / "traces.npz"
+    before = traces.read_bytes()
+    video = tmp_path / "hop.mp4"
+    assert main(["eval", str(run_dir), "--video", str(video), "--video-only"]) == 0
+    assert video.stat().st_size > 0 and traces.read_bytes() == before
+    assert main(["eval", str(run_dir), "--video", str(video), "--video-only"]) == 2  # exists
+    assert main(["eval", str(run_dir), "--video-only"]) == 2
+    assert "--video-only needs --video" in capsys.readouterr().err

@@ -30,6 +30,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--output", default=None, help="traces file (default RUN_DIR/eval/traces.npz)"
     )
     parser.add_argument("--overwrite", action="store_true", help="replace existing traces / video")
+    parser.add_argument(
+        "--video-only",
+        action="store_true",
+        help="with --video: record the video only (a run already evaluated keeps its traces)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -46,7 +51,11 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     checkpoint = Path(args.checkpoint) if args.checkpoint else run_dir / "checkpoints" / "last.pt"
     output = Path(args.output) if args.output else run_dir / "eval" / "traces.npz"
-    for path in (output, Path(args.video) if args.video else None):
+    if args.video_only and not args.video:
+        raise ValueError("--video-only needs --video PATH")
+    if not checkpoint.is_file():
+        raise FileNotFoundError(f"checkpoint {checkpoint} does not exist")
+    for path in (None if args.video_only else output, Path(args.video) if args.video else None):
         if path is not None and path.exists() and not args.overwrite:
             raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
 
@@ -54,6 +63,10 @@ def run(args: argparse.Namespace) -> int:
     config.num_envs = args.episodes
     if args.sim is not None:
         config.env.sim = args.sim
+    if args.video_only:
+        record_video(config, checkpoint, Path(args.video), args.seed, args.overwrite)
+        print(f"video in {args.video}")
+        return 0
     runner = Runner(config, run_dir=None, tensorboard=False)
     try:
         runner.load_checkpoint(checkpoint, restore_training=False)
