@@ -29,6 +29,8 @@ def test_reproduce_runs_variants_and_seeds_then_skips_and_resumes(tmp_path, caps
     assert main(argv) == 0
     text = capsys.readouterr().out
     assert "4 runs of 96 steps" in text
+    # 3 iterations: the 1/60 stage (iteration 0.05) can only be the untrained agent
+    assert "warning: cpg-actor: 3 iterations are too few for the stage(s) at 0.0167" in text
     for variant in ("cpg-actor", "mlp"):
         for seed in (0, 1):
             run = out / "runs" / variant / f"seed{seed}"

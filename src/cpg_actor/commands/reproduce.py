@@ -102,6 +102,8 @@ def run(args: argparse.Namespace) -> int:
         + (f"Ray at {args.ray}" if args.ray else f"{workers} local worker(s)"),
         flush=True,
     )
+    for line in plan.stage_warnings(tasks):
+        print(f"reproduce: warning: {line}", flush=True)
     live = not args.no_progress and sys.stdout.isatty()
     progress = execute.Progress(tasks, args.progress_interval, live=live)
     try:

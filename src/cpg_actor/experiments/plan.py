@@ -183,6 +183,25 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
     return tasks
 
 
+def stage_warnings(tasks: list[RunTask]) -> list[str]:
+    """Stages that fall before the first checkpoint after the untrained one: on a budget this
+    short they are evaluated on the untrained agent (iteration 0)."""
+    lines = []
+    for variant in dict.fromkeys(task.variant for task in tasks):
+        task = next(t for t in tasks if t.variant == variant)
+        early = [
+            f"{fraction:.3g}"
+            for fraction in task.stage_fractions
+            if 0 < fraction and round(fraction * task.num_iterations) == 0
+        ]
+        if early:
+            lines.append(
+                f"{variant}: {task.num_iterations} iterations are too few for the stage(s) at "
+                f"{', '.join(early)} of training; they are evaluated on the untrained agent"
+            )
+    return lines
+
+
 def load_settings_file(out: Path) -> dict[str, Any] | None:
     path = out / SETTINGS_FILE
     if not path.is_file():
