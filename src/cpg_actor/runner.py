@@ -181,6 +181,11 @@ class EpisodeStats:
         )
 
 
+def evaluation_text(evaluation: dict[str, float]) -> str:
+    """One evaluation for the progress display."""
+    return f"eval return {evaluation['eval/return']:.1f} hop {evaluation['eval/hop_height']:.3f} m"
+
+
 class PlainProgress:
     """Progress as a plain line every ``interval`` seconds (and at the end) when stdout is not a
     terminal; the same ``update``/``stop`` calls as the rich progress bar."""
@@ -443,10 +448,7 @@ class Runner:
                     self.log(stats, timing, evaluation)
                 stop = evaluation is not None and stop_when is not None and stop_when(evaluation)
                 if evaluation is not None:
-                    self._evaluation_text = (
-                        f"eval return {evaluation['eval/return']:.1f} "
-                        f"hop {evaluation['eval/hop_height']:.3f} m"
-                    )
+                    self._evaluation_text = evaluation_text(evaluation)
                 if progress is not None:
                     progress.update(
                         self._task,
@@ -522,9 +524,7 @@ class Runner:
     def log_evaluation(self) -> dict[str, float]:
         """Evaluate now and log it alone (a metrics row of the current iteration)."""
         evaluation = self.run_evaluation()
-        self._evaluation_text = (
-            f"eval return {evaluation['eval/return']:.1f} hop {evaluation['eval/hop_height']:.3f} m"
-        )
+        self._evaluation_text = evaluation_text(evaluation)
         self.last_evaluation = evaluation
         self._write_row(dict(evaluation, **{"time/train_wall": self.train_wall}))
         return evaluation

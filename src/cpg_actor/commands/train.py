@@ -158,8 +158,16 @@ def _lock(run_dir: Path, locks: list[RunLock]) -> None:
     locks.append(RunLock(run_dir).acquire())
 
 
+def _runner(config: TrainConfig, run_dir: Path, args: argparse.Namespace):
+    from cpg_actor.runner import Runner
+
+    return Runner(
+        config, run_dir, progress=not args.no_progress, progress_interval=args.progress_interval
+    )
+
+
 def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
-    from cpg_actor.runner import Runner, TrainingDiverged
+    from cpg_actor.runner import TrainingDiverged
 
     if args.resume:
         if args.run_dir is None:
@@ -193,12 +201,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         if args.total_steps is not None:
             config.total_steps = parse_steps(args.total_steps)
         config.validate()
-        runner = Runner(
-            config,
-            run_dir,
-            progress=not args.no_progress,
-            progress_interval=args.progress_interval,
-        )
+        runner = _runner(config, run_dir, args)
         try:
             runner.load_checkpoint(checkpoint)
         except (ValueError, FileNotFoundError):
@@ -221,12 +224,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         )
         if _has_content(run_dir) and not args.overwrite:
             prepare_run_dir(run_dir, overwrite=False)  # raises before anything is built
-        runner = Runner(
-            config,
-            run_dir,
-            progress=not args.no_progress,
-            progress_interval=args.progress_interval,
-        )
+        runner = _runner(config, run_dir, args)
         try:
             _lock(run_dir, locks)  # before --overwrite deletes anything
             prepare_run_dir(run_dir, args.overwrite)
