@@ -1,49 +1,51 @@
-"""End-to-end PPO training throughput per agent, split into simulation / policy inference /
-learning, next to the raw simulator ceiling (same env, same number of envs, same process).
+"""End-to-end PPO training throughput per agent and preset: control steps per second, the
+collection cost per control step, the PPO update cost per sample, next to the raw physics
+ceiling (``mujoco.rollout`` on the project's MJCF, same number of robots, same run).
 
-    python benchmarks/train_throughput.py [--num-envs 64] [--iterations 5] [--sim mujoco]
-        [--output benchmarks/results/train_throughput.md]
+    python benchmarks/train_throughput.py [--presets paper throughput] [--agents mlp cpg-actor]
+        [--iterations 4] [--reference-src OLD/src] [--output benchmarks/results/train_throughput.md]
+
+``--reference-src DIR`` measures the same settings, in the same run, with the ``cpg_actor``
+package found in DIR (e.g. a ``git worktree`` of an older commit), in a subprocess, and reports
+the ratio: how much faster (or slower) the code under test is than that reference.
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import json
+import os
+import subprocess
+import sys
 import time
 from pathlib import Path
 
-import numpy as np
 import torch
 
-from cpg_actor.config import TrainConfig
+from cpg_actor.config import TrainConfig, apply_dict
 from cpg_actor.machine import cpu_model, load_average, usable_cores
+from cpg_actor.presets import preset_values
 from cpg_actor.runner import Runner
 
 AGENTS = ("mlp", "cpg-actor", "cpg-actor-open-loop")
 
 
-def simulator_ceiling(config: TrainConfig, steps: int) -> float:
-    """Control steps per second of ``env.step`` alone, with the nominal pose as action."""
-    from cpg_actor.agents import get_agent_spec
-
-    env = get_agent_spec(config.agent).make_env(config.num_envs, config.env, config.env_threads)
-    try:
-        env.reset(seed=0)
-        action = np.tile(np.array([0.4, -0.8], dtype=np.float32), (config.num_envs, 1))
-        env.step(action)
-        start = time.perf_counter()
-        for _ in range(steps):
-            env.step(action)
-        return steps * config.num_envs / (time.perf_counter() - start)
-    finally:
-        env.close()
+def make_config(agent: str, preset: str, compile: bool) -> TrainConfig:
+    config = TrainConfig(agent=agent)
+    apply_dict(config, preset_values(preset), "")
+    config.eval_interval = 0
+    if compile:
+        config.ppo.compile = True
+    return config
 
 
-def training_throughput(config: TrainConfig, iterations: int) -> dict[str, float]:
-    """Run 1 warm-up iteration, then ``iterations`` timed ones."""
+def measure(agent: str, preset: str, iterations: int, compile: bool = False) -> dict[str, float]:
+    """One warm-up iteration (and the compile), then ``iterations`` timed ones."""
+    config = make_config(agent, preset, compile)
     config.total_steps = (iterations + 1) * config.steps_per_iteration
     runner = Runner(config, run_dir=None, tensorboard=False)
-    totals = {"simulation": 0.0, "inference": 0.0, "learning": 0.0, "wall": 0.0}
+    collect = update = simulation = 0.0
     try:
         runner.start_episodes()
         for i in range(iterations + 1):
@@ -52,71 +54,126 @@ def training_throughput(config: TrainConfig, iterations: int) -> dict[str, float
             collected = time.perf_counter()
             runner.ppo.update(runner.storage)
             end = time.perf_counter()
-            if i == 0:
-                continue
-            totals["simulation"] += info["simulation_time"]
-            totals["inference"] += collected - start - info["simulation_time"]
-            totals["learning"] += end - collected
-            totals["wall"] += end - start
+            if i > 0:
+                collect += collected - start
+                update += end - collected
+                simulation += info["simulation_time"]
     finally:
         runner.close()
-    steps = iterations * config.steps_per_iteration
-    return {"SPS": steps / totals["wall"], **{k: v / totals["wall"] for k, v in totals.items()}}
+    samples = iterations * config.steps_per_iteration
+    return {
+        "num_envs": config.num_envs,
+        "SPS": samples / (collect + update),
+        "collect_us": 1e6 * collect / samples,
+        "simulation_us": 1e6 * simulation / samples,
+        "update_us": 1e6 * update / samples,
+    }
+
+
+def ceiling(num_envs: int) -> float:
+    """``mujoco.rollout`` control steps per second for ``num_envs`` robots (env_throughput)."""
+    sys.path.insert(0, str(Path(__file__).parent))
+    from env_throughput import bench_size
+
+    return bench_size("mujoco", num_envs, repeats=2, budget=50_000)["rollout"]
+
+
+def reference(src: str, presets: list[str], agents: list[str], iterations: int) -> dict:
+    """The same measurements with the package in ``src``, in a subprocess."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([src, os.environ.get("PYTHONPATH", "")]))
+    command = [sys.executable, __file__, "--json", "--iterations", str(iterations)]
+    command += ["--presets", *presets, "--agents", *agents]
+    out = subprocess.run(command, env=env, capture_output=True, text=True, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--num-envs", type=int, default=64)
-    parser.add_argument("--iterations", type=int, default=5)
-    parser.add_argument("--sim", default="mujoco", choices=("mujoco", "pybullet"))
+    parser.add_argument("--presets", nargs="+", default=["paper", "throughput"])
     parser.add_argument("--agents", nargs="+", default=list(AGENTS))
+    parser.add_argument("--iterations", type=int, default=4)
+    parser.add_argument("--compile", action="store_true", help="also measure with ppo.compile=true")
+    parser.add_argument("--reference-src", help="a src/ folder holding the reference cpg_actor")
+    parser.add_argument("--json", action="store_true", help="print one JSON line, write nothing")
     parser.add_argument("--output", default="benchmarks/results/train_throughput.md")
     args = parser.parse_args()
+    torch.set_num_threads(1)
 
-    rows = []
-    base = TrainConfig(num_envs=args.num_envs)
-    base.env.sim = args.sim
-    ceiling = simulator_ceiling(base, steps=200)
-    print(f"simulator ceiling ({args.sim}, {args.num_envs} envs): {ceiling:,.0f} steps/s")
-    for agent in args.agents:
-        config = TrainConfig(agent=agent, num_envs=args.num_envs)
-        config.env.sim = args.sim
-        result = training_throughput(config, args.iterations)
-        rows.append((agent, result))
-        print(
-            f"{agent:22s} {result['SPS']:8,.0f} SPS  simulation {result['simulation']:.0%}  "
-            f"inference {result['inference']:.0%}  learning {result['learning']:.0%}"
-        )
-
-    config = TrainConfig()
+    results = {
+        f"{preset}/{agent}": measure(agent, preset, args.iterations)
+        for preset in args.presets
+        for agent in args.agents
+    }
+    if args.compile:
+        for preset in args.presets:
+            for agent in args.agents:
+                results[f"{preset} + compile/{agent}"] = measure(
+                    agent, preset, args.iterations, compile=True
+                )
+    if args.json:
+        print(json.dumps(results))
+        return
+    ref = (
+        reference(args.reference_src, args.presets, args.agents, args.iterations)
+        if args.reference_src
+        else {}
+    )
+    ceilings = {n: ceiling(n) for n in sorted({r["num_envs"] for r in results.values()})}
+    commit = subprocess.run(
+        ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=False
+    ).stdout.strip()
     lines = [
         "# Training throughput",
         "",
-        f"Measured {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC with "
-        f"`python benchmarks/train_throughput.py --num-envs {args.num_envs} "
-        f"--iterations {args.iterations} --sim {args.sim}`.",
+        f"Measured {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC at commit "
+        f"{commit or 'unknown'} with `python benchmarks/train_throughput.py --presets "
+        f"{' '.join(args.presets)} --agents {' '.join(args.agents)} --iterations "
+        f"{args.iterations}"
+        + (" --compile" if args.compile else "")
+        + (" --reference-src REF/src`" if args.reference_src else "`")
+        + ".",
         "",
         f"Machine: {cpu_model()}, {usable_cores()} usable cores (load {load_average()}), "
-        f"torch {torch.__version__} CPU, torch threads {config.torch_threads}, "
-        f"env threads {config.env_threads or 'env default'}.",
-        f"Batch per iteration: {args.num_envs} envs x {config.ppo.num_steps} steps; "
-        f"{config.ppo.num_epochs} epochs x {config.ppo.num_minibatches} minibatches.",
+        f"torch {torch.__version__}, 1 torch thread.",
         "",
-        f"Raw simulator ceiling (`env.step` alone, constant action): **{ceiling:,.0f}** "
-        "control steps/s.",
+        "Physics ceiling in the same run (`mujoco.rollout`, 10 substeps per control step, "
+        "constant torques): "
+        + ", ".join(f"**{c:,.0f}** control steps/s at {n} robots" for n, c in ceilings.items())
+        + ".",
         "",
-        "| agent | training SPS | simulation | policy inference | learning | fraction of ceiling |",
-        "| --- | ---: | ---: | ---: | ---: | ---: |",
+        "| preset | agent | envs | training SPS | of ceiling | collection us/step | "
+        "of which simulation | update us/sample |"
+        + (" reference SPS | update speed-up |" if ref else ""),
+        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"
+        + (" ---: | ---: |" if ref else ""),
     ]
-    for agent, r in rows:
-        lines.append(
-            f"| {agent} | {r['SPS']:,.0f} | {r['simulation']:.0%} | {r['inference']:.0%} | "
-            f"{r['learning']:.0%} | {r['SPS'] / ceiling:.0%} |"
+    for key, r in results.items():
+        preset, agent = key.split("/")
+        row = (
+            f"| {preset} | {agent} | {r['num_envs']} | {r['SPS']:,.0f} | "
+            f"{r['SPS'] / ceilings[r['num_envs']]:.0%} | {r['collect_us']:.1f} | "
+            f"{r['simulation_us']:.1f} | {r['update_us']:.1f} |"
         )
+        if ref:
+            old = ref[key.replace(" + compile", "")]
+            row += f" {old['SPS']:,.0f} | {old['update_us'] / r['update_us']:.2f}x |"
+        lines.append(row)
+        print(row)
+    if args.reference_src:
+        ref_commit = subprocess.run(
+            ["git", "-C", args.reference_src, "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=False,
+        ).stdout.strip()
+        lines += ["", f"`REF`: a checkout of commit {ref_commit or 'unknown'}."]
     lines += [
         "",
-        "Shares are of the wall time of an iteration; inference includes the agent step, the",
-        "observation normaliser, rollout storage, episode bookkeeping and GAE.",
+        "Collection is everything in a rollout step (agent, normaliser, simulation, storage,",
+        "episode bookkeeping, GAE), per control step of one env; the update is the PPO epochs",
+        "over the rollout, per sample. `+ compile`: `ppo.compile=true` (the minibatch loss",
+        "compiled by `torch.compile`). Reference: the same script and settings (eager) with",
+        "the package of another source tree (`REF`, named below), measured in the same run.",
         "",
     ]
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)

@@ -101,7 +101,9 @@ def test_existing_run_dir_is_never_overwritten_without_overwrite(tmp_path, capsy
 
 def test_train_resume_equals_straight_run_and_eval_writes_traces(tmp_path, capsys):
     """Extending a run (--resume with a larger --total-steps) equals training that long in
-    one go under a fixed learning rate (a linear schedule is stretched by an extension)."""
+    one go under a fixed learning rate (a linear schedule is stretched by an extension).
+    The paper preset compiles the loss (ppo.compile), so this checks that compiled updates
+    are reproducible from one process to the next too."""
     straight, split = tmp_path / "straight", tmp_path / "split"
     fixed = ["--set", "ppo.lr_schedule=fixed"]
     assert main(["train", "--run-dir", str(straight), "--total-steps", "64", *TINY, *fixed]) == 0
@@ -297,6 +299,24 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
         parser.parse_args(["--preset", "fastest"])
     with pytest.raises(ValueError, match="unknown preset 'fastest'; available: paper, throughput"):
         TrainConfig(preset="fastest").validate()
+
+
+def test_presets_compile_the_loss_unless_no_cpp_compiler_is_found(monkeypatch, capsys):
+    from cpg_actor.commands import train as train_command
+    from cpg_actor.ppo import PPO, PPOConfig
+
+    parser = argparse.ArgumentParser()
+    train_command.add_arguments(parser)
+    assert train_command.build_config(parser.parse_args([])).ppo.compile
+    assert not train_command.build_config(
+        parser.parse_args(["--set", "ppo.compile=false"])
+    ).ppo.compile
+    monkeypatch.setattr(train_command, "cpp_compiler", lambda: None)
+    assert not train_command.build_config(parser.parse_args([])).ppo.compile
+    assert "no C++ compiler found" in capsys.readouterr().err
+    monkeypatch.setattr("cpg_actor.ppo.algorithm.cpp_compiler", lambda: None)
+    with pytest.raises(ValueError, match="needs a C.. compiler .* --set ppo.compile=false"):
+        PPO(torch.nn.Linear(2, 2), PPOConfig(compile=True))
 
 
 def test_init_std_is_in_units_of_the_action_half_range():

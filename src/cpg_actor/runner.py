@@ -11,10 +11,13 @@ checkpoints (what ``benchmarks/time_to_hop.py`` reports).
 
 Reproducibility. Everything random is seeded from ``TrainConfig.seed``: torch (action noise,
 minibatch order, initialisation), numpy and python RNGs, and the environments'
-``reset(seed=...)``. After every checkpoint all environments restart their episodes with a
-seed derived from ``(seed, iteration)`` (the same happens when a run resumes from that
-checkpoint), so a resumed run reproduces the uninterrupted run exactly, without saving the
-simulator's state.
+``reset(seed=...)`` at the start of the run. A checkpoint holds, besides the networks, the
+optimiser, the normalisers and the RNG streams, the episodes in progress: the env's state
+(``env.get_state()``: MuJoCo's full physics state of every robot, the episode clocks, each
+env's random generator), the last observation, the agent's recurrent state (the CPG state)
+and the episode statistics. Checkpointing therefore neither resets nor cuts an episode, and a
+resumed run continues exactly where the checkpoint was taken: it equals the uninterrupted run
+bit for bit (MuJoCo; PyBullet restores joint states but not its contact caches).
 """
 
 from __future__ import annotations
@@ -180,6 +183,22 @@ class EpisodeStats:
             np.zeros(num_envs), np.zeros(num_envs, dtype=np.int64), np.full(num_envs, -np.inf), {}
         )
 
+    def state_dict(self) -> dict[str, Any]:
+        arrays = {"returns": self.returns, "lengths": self.lengths, "max": self.max_hip_height}
+        return {
+            **{k: torch.from_numpy(v.copy()) for k, v in arrays.items()},
+            "terms": {k: torch.from_numpy(v.copy()) for k, v in self.terms.items()},
+        }
+
+    @classmethod
+    def from_state_dict(cls, state: dict[str, Any]) -> EpisodeStats:
+        return cls(
+            state["returns"].numpy().copy(),
+            state["lengths"].numpy().copy(),
+            state["max"].numpy().copy(),
+            {k: v.numpy().copy() for k, v in state["terms"].items()},
+        )
+
 
 def evaluation_text(evaluation: dict[str, float]) -> str:
     """One evaluation for the progress display."""
@@ -288,7 +307,7 @@ class Runner:
 
     # -- episodes ----------------------------------------------------------------------------
     def start_episodes(self) -> None:
-        """Reset every environment and every agent state (run start, after each checkpoint)."""
+        """Reset every environment and every agent state (at the start of a run)."""
         self.env_seed = derived_seed(self.config.seed, self.iteration)
         obs, _ = self.env.reset(seed=self.env_seed)
         self.obs = torch.as_tensor(np.asarray(obs, dtype=np.float32))
@@ -463,8 +482,6 @@ class Runner:
                     self.save_checkpoint()
                 if stop:
                     break
-                if at_interval and self.iteration < num_iterations:
-                    self.start_episodes()
         finally:
             if progress is not None:
                 progress.stop()
@@ -699,7 +716,41 @@ class Runner:
             "rng": rng_state(),
             "env_seed": self.env_seed,
             "recent": {k: list(v) for k, v in self.recent.items()},
+            "episodes": self.episodes_state(),
         }
+
+    def episodes_state(self) -> dict[str, Any] | None:
+        """The episodes in progress (see the module docstring); None if the env cannot save
+        its state (a resumed run then starts new episodes)."""
+        if not self._episodes_started or not hasattr(self.env, "get_state"):
+            return None
+        return {
+            "env": self.env.get_state(),
+            "obs": self.obs.clone(),
+            "agent_state": self.agent_state.clone(),
+            "statistics": self.episode.state_dict(),
+            "discounted_returns": self.reward_normalizer.discounted.clone(),
+            "standing_height": self.standing_height,
+        }
+
+    def restore_episodes(self, state: dict[str, Any]) -> None:
+        """Continue the episodes saved by :meth:`episodes_state`."""
+        try:
+            self.env.set_state(state["env"])
+            obs, agent_state = state["obs"], state["agent_state"]
+            if obs.shape != (self.config.num_envs, self.env.single_observation_space.shape[0]):
+                raise ValueError(f"observations of shape {tuple(obs.shape)}")
+            if agent_state.shape != (self.config.num_envs, *self.agent.state_shape):
+                raise ValueError(f"agent states of shape {tuple(agent_state.shape)}")
+            self.episode = EpisodeStats.from_state_dict(state["statistics"])
+            self.reward_normalizer.discounted.copy_(state["discounted_returns"])
+        except (KeyError, TypeError, AttributeError, RuntimeError, ValueError) as error:
+            raise ValueError(
+                f"the checkpoint's episodes do not fit this run's environments: {error}"
+            ) from None
+        self.obs, self.agent_state = obs.clone(), agent_state.clone()
+        self.standing_height = float(state["standing_height"])
+        self._episodes_started = True
 
     def save_checkpoint(self) -> Path:
         data = self.state_dict()
@@ -733,7 +784,12 @@ class Runner:
         self.global_step = data["global_step"]
         self.recent = {k: deque(v, maxlen=100) for k, v in data["recent"].items()}
         set_rng_state(data["rng"])
-        self.start_episodes()
+        self.env_seed = data.get("env_seed")
+        episodes = data.get("episodes")
+        if episodes is not None and hasattr(self.env, "set_state"):
+            self.restore_episodes(episodes)
+        else:  # a checkpoint without episodes (an env that cannot save them): new ones
+            self.start_episodes()
 
     def close(self) -> None:
         if self._writer is not None:

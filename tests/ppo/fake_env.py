@@ -91,5 +91,19 @@ class FakeHopperVectorEnv:
             obs = self._obs()
         return obs, reward, terminated, truncated, info
 
+    def get_state(self) -> dict:
+        import torch
+
+        arrays = {
+            k: torch.from_numpy(getattr(self, k).copy()) for k in ("q", "qd", "pd", "h", "hv", "t")
+        }
+        return {"arrays": arrays, "rng": self.rng.bit_generator.state}
+
+    def set_state(self, state: dict) -> None:
+        for key, value in state["arrays"].items():
+            setattr(self, key, value.numpy().copy())
+        self.rng = np.random.default_rng(0)
+        self.rng.bit_generator.state = state["rng"]
+
     def close(self) -> None:
         pass

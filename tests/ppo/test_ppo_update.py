@@ -94,3 +94,47 @@ def test_non_finite_numbers_are_refused(key):
         PPOConfig(**{key: float("inf")}).validate()
     with pytest.raises(ValueError, match=f"ppo.{key} must be"):
         PPOConfig(**{key: float("nan")}).validate()
+
+
+def test_gaussian_formulas_match_torch_distributions():
+    from cpg_actor.agents.base import gaussian_entropy, gaussian_log_prob
+
+    mean, std, value = torch.randn(6, 2), torch.rand(6, 2) + 0.1, torch.randn(6, 2)
+    normal = torch.distributions.Normal(mean, std)
+    assert torch.allclose(gaussian_log_prob(value, mean, std), normal.log_prob(value))
+    assert torch.allclose(gaussian_entropy(std), normal.entropy())
+
+
+@pytest.mark.skipif(
+    __import__("shutil").which("c++") is None and __import__("shutil").which("g++") is None,
+    reason="torch.compile's CPU backend needs a C++ compiler",
+)
+def test_compiled_loss_equals_the_eager_loss_and_its_gradients():
+    from cpg_actor.ppo.algorithm import ppo_loss
+
+    config = TrainConfig(
+        agent="cpg-actor",
+        num_envs=4,
+        total_steps=4 * 16 * 10,
+        ppo=PPOConfig(num_steps=16, num_epochs=1, num_minibatches=2),
+        env=FakeConfig(),
+        eval_interval=0,
+    )
+    runner = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
+    runner.start_episodes()
+    runner.collect()
+    batch = next(runner.storage.minibatches(2))
+    compiled = torch.compile(ppo_loss)
+    results = []
+    for loss_fn in (ppo_loss, compiled):
+        runner.agent.zero_grad()
+        loss, stats = loss_fn(runner.agent, batch, config.ppo)
+        loss.backward()
+        grads = [p.grad.clone() for p in runner.agent.parameters() if p.grad is not None]
+        results.append((loss.detach(), stats, grads))
+    (loss0, stats0, grads0), (loss1, stats1, grads1) = results
+    assert len(grads0) == len(grads1) > 0
+    assert torch.allclose(loss0, loss1, rtol=1e-5, atol=1e-6)
+    assert torch.allclose(stats0, stats1, rtol=1e-4, atol=1e-6)
+    for g0, g1 in zip(grads0, grads1, strict=True):
+        assert torch.allclose(g0, g1, rtol=1e-4, atol=1e-6)

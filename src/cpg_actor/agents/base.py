@@ -9,6 +9,7 @@ the rollout storage treat every agent the same way.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import NamedTuple
@@ -76,6 +77,19 @@ def mlp(sizes: list[int], activation: str, output_gain: float) -> nn.Sequential:
     return nn.Sequential(*layers)
 
 
+LOG_SQRT_2PI = 0.5 * math.log(2.0 * math.pi)
+
+
+def gaussian_log_prob(value: Tensor, mean: Tensor, std: Tensor) -> Tensor:
+    """Elementwise log N(value; mean, std^2) (the formula of ``torch.distributions.Normal``)."""
+    return -((value - mean) ** 2) / (2.0 * std**2) - torch.log(std) - LOG_SQRT_2PI
+
+
+def gaussian_entropy(std: Tensor) -> Tensor:
+    """Elementwise entropy of N(., std^2): 1/2 + log(sqrt(2 pi) std)."""
+    return 0.5 + LOG_SQRT_2PI + torch.log(std)
+
+
 class ActorOutput(NamedTuple):
     """Gaussian over actions for a batch, the next recurrent state and diagnostics."""
 
@@ -139,9 +153,12 @@ class Agent(nn.Module):
     def act(self, obs: Tensor, state: Tensor, deterministic: bool = False) -> ActStep:
         """Sample (or take the mean) action for a batch; no gradients needed by callers."""
         out = self.actor(obs, state)
-        dist = torch.distributions.Normal(out.mean, out.std, validate_args=False)
-        action = out.mean if deterministic else dist.sample()
-        log_prob = dist.log_prob(action).sum(-1)
+        if deterministic:
+            action = out.mean
+        else:  # as torch.distributions.Normal.sample: mean + std * N(0, 1), one RNG draw
+            with torch.no_grad():
+                action = torch.normal(out.mean.expand(out.std.shape), out.std)
+        log_prob = gaussian_log_prob(action, out.mean, out.std).sum(-1)
         return ActStep(
             action, log_prob, self.value(obs, state), out.mean, out.std, out.next_state, out.extras
         )
@@ -149,10 +166,9 @@ class Agent(nn.Module):
     def evaluate(self, obs: Tensor, state: Tensor, actions: Tensor) -> tuple[Tensor, ...]:
         """Replay one step from stored (obs, state): ``(log_prob, entropy, value, mean, std)``."""
         out = self.actor(obs, state)
-        dist = torch.distributions.Normal(out.mean, out.std, validate_args=False)
         return (
-            dist.log_prob(actions).sum(-1),
-            dist.entropy().sum(-1),
+            gaussian_log_prob(actions, out.mean, out.std).sum(-1),
+            gaussian_entropy(out.std).sum(-1),
             self.value(obs, state),
             out.mean,
             out.std,

@@ -15,6 +15,7 @@ from cpg_actor.config import (
     parse_steps,
     read_config_file,
 )
+from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.presets import PRESETS, preset_values
 from cpg_actor.run_lock import LOCK_NAME, RunLock
 
@@ -110,6 +111,13 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
     apply_dict(config, flags, prefix="")
     for text in args.overrides:
         apply_dict(config, parse_override(text), prefix="")
+    if config.ppo.compile and cpp_compiler() is None:
+        print(
+            "note: no C++ compiler found (g++, c++, clang++), so ppo.compile is off: the same "
+            "training with slower updates; install one (e.g. apt install g++) to compile",
+            file=sys.stderr,
+        )
+        config.ppo.compile = False
     config.validate()
     return config
 

@@ -152,11 +152,23 @@ class Parametrisation(nn.Module):
         # converts values already rounded to float32.
         dtype = dtype or torch.get_default_dtype()
         self.vector = nn.Parameter(torch.tensor(raw, dtype=dtype))
+        # All fields flattened into one row, so that the map V -> parameters is one gather,
+        # one exp and one select for every field at once (a few operators per CPG step).
+        self.shapes = {field: _field_shape(field, n) for field in FIELDS}
+        flat = {name: [] for name in ("index", "sign", "fixed", "trainable", "positive")}
         for field in FIELDS:
-            self.register_buffer(f"{field}_index", index[field].clamp(min=0), persistent=False)
-            self.register_buffer(f"{field}_trainable", index[field] >= 0, persistent=False)
-            self.register_buffer(f"{field}_sign", sign[field].to(dtype), persistent=False)
-            self.register_buffer(f"{field}_fixed", values[field].to(dtype), persistent=False)
+            flat["index"].append(index[field].flatten().clamp(min=0))
+            flat["trainable"].append(index[field].flatten() >= 0)
+            flat["sign"].append(sign[field].flatten())
+            flat["fixed"].append(values[field].flatten())
+            flat["positive"].append(
+                torch.full((index[field].numel(),), field in POSITIVE_FIELDS, dtype=torch.bool)
+            )
+        for name, parts in flat.items():
+            value = torch.cat(parts)
+            if value.is_floating_point():
+                value = value.to(dtype)
+            self.register_buffer(f"flat_{name}", value, persistent=False)
         self.register_buffer("coupling", adjacency.to(dtype), persistent=False)
 
     # -- construction helpers -------------------------------------------------------------
@@ -204,28 +216,51 @@ class Parametrisation(nn.Module):
         """The physical value of one field, differentiable in V."""
         if name not in FIELDS:
             raise ValueError(f"unknown field '{name}'; accepted: {FIELDS}")
-        fixed = getattr(self, f"{name}_fixed")
-        if self.vector.numel() == 0:
-            return fixed.to(self.vector.dtype)
-        raw = getattr(self, f"{name}_sign") * self.vector[getattr(self, f"{name}_index")]
-        value = torch.exp(raw) if name in POSITIVE_FIELDS else raw
-        return torch.where(getattr(self, f"{name}_trainable"), value, fixed.to(value.dtype))
+        return self.values()[name]
+
+    def indices(self, name: str) -> Tensor:
+        """The entry of V behind each entry of field ``name`` (its shape), -1 where frozen."""
+        if name not in FIELDS:
+            raise ValueError(f"unknown field '{name}'; accepted: {FIELDS}")
+        start = sum(math.prod(self.shapes[field]) for field in FIELDS[: FIELDS.index(name)])
+        rows = slice(start, start + math.prod(self.shapes[name]))
+        index = torch.where(self.flat_trainable[rows], self.flat_index[rows], -1)
+        return index.reshape(self.shapes[name])
 
     def values(self) -> dict[str, Tensor]:
-        """All fields, physical values (for logging and figures)."""
-        return {name: self.field(name) for name in FIELDS}
+        """All fields, physical values, differentiable in V (one gather for all of them)."""
+        if self.vector.numel() == 0:
+            flat = self.flat_fixed.to(self.vector.dtype)
+        else:
+            raw = self.flat_sign * self.vector[self.flat_index]
+            # exp only where the field is positive (exp of a large weight would be inf, and
+            # where() would turn its zero gradient into NaN)
+            positive = torch.exp(torch.where(self.flat_positive, raw, torch.zeros_like(raw)))
+            value = torch.where(self.flat_positive, positive, raw)
+            flat = torch.where(self.flat_trainable, value, self.flat_fixed.to(value.dtype))
+        sizes = [math.prod(self.shapes[field]) for field in FIELDS]
+        return {
+            field: part.reshape(self.shapes[field])
+            for field, part in zip(FIELDS, flat.split(sizes), strict=True)
+        }
 
     def oscillator_parameters(self, drive: Tensor | float = 0.0) -> OscillatorParameters:
         """nu(d) = c_nu1 d + c_nu0, rho(d) = c_R1 d + c_R0 (Ijspeert et al. 2007), a, W, Phi.
 
         ``drive`` is a scalar, ``(N,)`` or ``(B, N)`` and must be >= 0.
         """
+        values = self.values()
+        if isinstance(drive, (int, float)) and drive == 0:  # the hopper: no drive term to add
+            frequency, amplitude = values["frequency"], values["amplitude"]
+        else:
+            frequency = values["frequency_gain"] * drive + values["frequency"]
+            amplitude = values["amplitude_gain"] * drive + values["amplitude"]
         return OscillatorParameters(
-            frequency=self.field("frequency_gain") * drive + self.field("frequency"),
-            amplitude=self.field("amplitude_gain") * drive + self.field("amplitude"),
-            convergence=self.field("convergence"),
-            coupling_weight=self.field("coupling_weight"),
-            phase_bias=self.field("phase_bias"),
+            frequency=frequency,
+            amplitude=amplitude,
+            convergence=values["convergence"],
+            coupling_weight=values["coupling_weight"],
+            phase_bias=values["phase_bias"],
         )
 
 

@@ -199,6 +199,18 @@ class CPGParameterVectorEnv(VectorEnv):
         )
         return self._observation(env_obs, self.state), reward, terminated, truncated, info
 
+    def get_state(self) -> dict[str, Any]:
+        """The hopper's state (:meth:`HopperVectorEnv.get_state`) and the CPG state."""
+        if getattr(self, "env", None) is None:
+            raise gym.error.ClosedEnvironmentError("get_state() on a closed environment")
+        return {"hopper": self.env.get_state(), "cpg": self.state.as_tensor().clone()}
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        if getattr(self, "env", None) is None:
+            raise gym.error.ClosedEnvironmentError("set_state() on a closed environment")
+        self.env.set_state(state["hopper"])
+        self.state = CPGState.from_tensor(state["cpg"].to(torch.float64).clone())
+
     def render_frame(self, index: int = 0) -> np.ndarray:
         """An RGB frame of env ``index`` (see :meth:`HopperVectorEnv.render_frame`)."""
         return self.env.render_frame(index)

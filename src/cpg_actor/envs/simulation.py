@@ -76,6 +76,19 @@ class HopperSimulation:
         self.desired[index] = NOMINAL_POSE
         self.elapsed_steps[index] = 0
 
+    def get_state(self) -> dict[str, np.ndarray]:
+        """The simulator state, the desired positions being tracked and the episode clocks."""
+        return {
+            "backend": self.backend.get_state(),
+            "desired": self.desired.copy(),
+            "elapsed_steps": self.elapsed_steps.copy(),
+        }
+
+    def set_state(self, state: dict[str, np.ndarray]) -> None:
+        self.backend.set_state(np.asarray(state["backend"]))
+        np.copyto(self.desired, np.asarray(state["desired"], dtype=np.float64))
+        np.copyto(self.elapsed_steps, np.asarray(state["elapsed_steps"], dtype=np.int64))
+
     def sample_noise(self, rng: np.random.Generator) -> np.ndarray:
         """Uniform joint noise for one reset, drawn from ``rng``: (2,)."""
         scale = self.config.reset_noise

@@ -24,6 +24,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import torch
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
@@ -144,6 +145,36 @@ class HopperVectorEnv(VectorEnv):
             "_final_obs": done,
         }
         return obs, result.reward, result.terminated, result.truncated, info
+
+    def get_state(self) -> dict[str, Any]:
+        """Everything the next :meth:`step` depends on, as tensors and plain Python values
+        (``torch.save``-able with ``weights_only``): the simulation (MuJoCo: the full physics
+        state), the episode clocks and each env's random generator. :meth:`set_state` on an
+        env of the same size and config continues exactly (MuJoCo; PyBullet restores the
+        joint states, its contact caches start afresh)."""
+        if getattr(self, "sim", None) is None:
+            raise gym.error.ClosedEnvironmentError("get_state() on a closed environment")
+        if self._needs_reset:
+            raise RuntimeError("call reset() before get_state()")
+        sim = {k: torch.from_numpy(np.array(v)) for k, v in self.sim.get_state().items()}
+        return {"simulation": sim, "rngs": [rng.bit_generator.state for rng in self._rngs]}
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """Restore what :meth:`get_state` returned (ValueError if it does not fit)."""
+        if getattr(self, "sim", None) is None:
+            raise gym.error.ClosedEnvironmentError("set_state() on a closed environment")
+        try:
+            rngs = list(state["rngs"])
+            simulation = {k: v.numpy() for k, v in state["simulation"].items()}
+        except (KeyError, TypeError, AttributeError) as error:
+            raise ValueError(f"not a HopperVectorEnv state ({error!r})") from None
+        if len(rngs) != self.num_envs:
+            raise ValueError(f"the state has {len(rngs)} envs, this env {self.num_envs}")
+        self.sim.set_state(simulation)
+        self._rngs = [seeding.np_random(0)[0] for _ in rngs]
+        for rng, rng_state in zip(self._rngs, rngs, strict=True):
+            rng.bit_generator.state = rng_state
+        self._needs_reset = False
 
     def render_frame(self, index: int = 0) -> np.ndarray:
         """An RGB frame ``(H, W, 3)`` of env ``index`` (headless; see docs/hopper.md)."""

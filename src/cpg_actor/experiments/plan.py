@@ -115,8 +115,8 @@ def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
 
 def checkpoint_interval(config) -> int:
     """Iterations between checkpoints: about ``TARGET_CHECKPOINTS`` per run, but at least two
-    episodes per environment between checkpoints (every checkpoint restarts the episodes, and an
-    episode cut short is not counted in the statistics)."""
+    episodes per environment between checkpoints (so that the evaluation stages are policies
+    that differ by some training; the checkpoints themselves change nothing that is trained)."""
     episode_steps = int(getattr(config.env, "episode_steps", 500))
     at_least = math.ceil(2 * episode_steps / config.ppo.num_steps)
     return max(1, at_least, config.num_iterations // TARGET_CHECKPOINTS)

@@ -58,8 +58,9 @@ class RewardNormalizer(nn.Module):
     episode ends); the running variance of every ``G`` seen so far scales the reward:
     ``r / sqrt(var(G) + eps)``, clipped to ``+-clip``. The mean is not subtracted, so the sign
     of a reward is kept. Used on the training rewards only (logged returns stay raw). The
-    statistics are buffers and travel with checkpoints; the per-env returns are reset with
-    the episodes (:meth:`reset`).
+    statistics are buffers and travel with checkpoints; the per-env returns (``discounted``)
+    travel with the episodes in progress (``Runner.episodes_state``) and are reset with new
+    episodes (:meth:`reset`).
     """
 
     def __init__(

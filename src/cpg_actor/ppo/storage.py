@@ -141,5 +141,7 @@ class RolloutStorage:
             )
         }
         order = torch.randperm(batch_size)
+        # each field gathered on its own: contiguous tensors (torch.compile's CPU kernels for
+        # strided views of one shared table gave gradients that varied from run to run)
         for indices in order.chunk(num_minibatches):
             yield {name: value[indices] for name, value in flat.items()}

@@ -65,5 +65,22 @@ class Backend(ABC):
     def render(self, index: int, width: int, height: int) -> np.ndarray:
         """An RGB image (height, width, 3) uint8 of robot ``index``, side view."""
 
+    def get_state(self) -> np.ndarray:
+        """Everything needed to continue the simulation, ``(K, S)`` float64 (a copy).
+
+        This default is ``[qpos, qvel]``, which :meth:`set_state` restores with
+        :meth:`reset_robots`: exact for the state itself, but a simulator's internal caches
+        (e.g. contact warm starts) start afresh. Backends that can do better override both."""
+        return np.concatenate([self.qpos, self.qvel], axis=1)
+
+    def set_state(self, state: np.ndarray) -> None:
+        """Restore what :meth:`get_state` returned."""
+        state = np.asarray(state, dtype=np.float64)
+        expected = (self.num_robots, self.qpos.shape[1] + self.qvel.shape[1])
+        if state.shape != expected:
+            raise ValueError(f"a {self.name} state must have shape {expected}, got {state.shape}")
+        nq = self.qpos.shape[1]
+        self.reset_robots(np.arange(self.num_robots), state[:, :nq], state[:, nq:])
+
     def close(self) -> None:  # noqa: B027 - optional
         """Release simulator resources."""

@@ -118,6 +118,20 @@ class MujocoBackend(Backend):
         )  # fmt: skip
         np.copyto(self._state, self._next_state)
 
+    def get_state(self) -> np.ndarray:
+        """The full physics state of every robot (``mjSTATE_FULLPHYSICS``: time, qpos, qvel,
+        ...), ``(K, nstate)``. It is all a substep starts from (the solver's warm start is
+        zero at every substep, see the module docstring), so restoring it is exact."""
+        return self._state.copy()
+
+    def set_state(self, state: np.ndarray) -> None:
+        state = np.asarray(state, dtype=np.float64)
+        if state.shape != self._state.shape:
+            raise ValueError(
+                f"a MuJoCo state must have shape {self._state.shape}, got {state.shape}"
+            )
+        np.copyto(self._state, state)
+
     def unstable(self) -> np.ndarray:
         # a robot MuJoCo reset since its last reset_robots has a clock restarted from 0
         return self._time < CLOCK_START
