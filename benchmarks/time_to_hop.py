@@ -31,6 +31,7 @@ import torch
 from cpg_actor.config import TrainConfig, apply_dict
 from cpg_actor.evaluation import evaluate
 from cpg_actor.machine import cpu_model, load_average, usable_cores
+from cpg_actor.policy import PolicyStep
 from cpg_actor.presets import preset_values
 from cpg_actor.runner import EVAL_SEED_KEY, Runner, derived_seed
 
@@ -75,18 +76,19 @@ def project_run(agent: str, preset: str, seed: int) -> dict:
 
 
 class SB3Policy:
-    """An SB3 model behind the agent interface :func:`evaluate` uses (stateless)."""
+    """An SB3 model behind the :class:`cpg_actor.policy.Policy` calls :func:`evaluate` makes."""
 
     def __init__(self, model, low: np.ndarray, high: np.ndarray) -> None:
         self.model, self.low, self.high = model, low, high
 
-    def initial_state(self, batch_size: int) -> torch.Tensor:
-        return torch.zeros(batch_size, 0)
+    def reset(self, num_envs: int) -> None:
+        pass
 
-    def act(self, obs: torch.Tensor, state: torch.Tensor, deterministic: bool = True):
-        action, _ = self.model.predict(obs.numpy(), deterministic=True)  # in [-1, 1]
+    def act(self, obs: np.ndarray, deterministic: bool = True) -> PolicyStep:
+        action, _ = self.model.predict(np.asarray(obs), deterministic=True)  # in [-1, 1]
         desired = self.low + (np.asarray(action) + 1.0) * (self.high - self.low) / 2.0
-        return SimpleNamespace(action=torch.as_tensor(desired), next_state=state, extras={})
+        agent = SimpleNamespace(extras={})
+        return PolicyStep(desired.astype(np.float32), torch.as_tensor(obs), torch.zeros(0), agent)
 
 
 def sb3_run(seed: int) -> dict:
@@ -113,11 +115,8 @@ def sb3_run(seed: int) -> dict:
             start = time.perf_counter()
             result = evaluate(
                 SB3Policy(self.model, low, high),
-                lambda obs: obs,
                 eval_env,
                 seed=derived_seed(seed, EVAL_SEED_KEY),
-                action_low=low,
-                action_high=high,
                 control_dt=0.01,
                 max_steps=500,
                 traces=False,

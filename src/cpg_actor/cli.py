@@ -15,6 +15,7 @@ COMMANDS: dict[str, str] = {
     "cpg-demo": "cpg_demo",
     "train": "train",
     "eval": "eval",
+    "export": "export",
     "cho2019-reference": "cho2019_reference",
     "reproduce": "reproduce",
     "sweep": "sweep",

@@ -92,6 +92,11 @@ class TrainConfig:
                 raise ValueError(f"{name} must be a positive integer, got {value!r}")
         if not isinstance(self.seed, int) or self.seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
+        if getattr(self.env, "normalized_actions", False):
+            raise ValueError(
+                "env.normalized_actions is for off-the-shelf RL libraries (gymnasium.make); "
+                "the project's agents act on desired positions in rad: leave it false"
+            )
         self.agent_config.validate()
         self.ppo.validate()
         self.warm_start.validate()

@@ -19,19 +19,17 @@ HIP_HEIGHT = 6  # index of the hip height in the hopper observation
 
 @torch.no_grad()
 def evaluate(
-    agent,
-    normalize,
+    policy,
     env,
     seed: int,
-    action_low: np.ndarray,
-    action_high: np.ndarray,
     control_dt: float,
     max_steps: int,
     traces: bool = True,
 ) -> dict[str, np.ndarray]:
     """Run every env of ``env`` to the end of its first episode with the mean action.
 
-    ``normalize(obs_tensor) -> obs_tensor`` is the frozen observation normaliser. Returns
+    ``policy`` is a :class:`cpg_actor.policy.Policy` (or anything with its ``reset`` and
+    ``act``); its recurrent state is reset here, its normaliser is not updated. Returns
     ``episode_return``, ``hop_height`` and ``length`` per env and, with ``traces``, per-step
     traces ``(T, E, ...)`` (rows after an env's episode ended are NaN).
     """
@@ -39,7 +37,7 @@ def evaluate(
     obs, _ = env.reset(seed=seed)
     obs = np.asarray(obs, dtype=np.float32)
     standing = float(obs[:, HIP_HEIGHT].mean())
-    state = agent.initial_state(num_envs)
+    policy.reset(num_envs)
     previous_desired = obs[:, 4:6].copy()
     active = np.ones(num_envs, dtype=bool)
     length = np.zeros(num_envs, dtype=np.int64)
@@ -47,8 +45,8 @@ def evaluate(
     max_hip = np.full(num_envs, -np.inf)
     records: dict[str, list[np.ndarray]] = {}
     for _ in range(max_steps + 1):
-        step = agent.act(normalize(torch.as_tensor(obs)), state, deterministic=True)
-        desired = np.clip(step.action.numpy(), action_low, action_high)
+        step = policy.act(obs, deterministic=True)
+        desired = step.action
         next_obs, reward, terminated, truncated, info = env.step(desired)
         done = np.logical_or(terminated, truncated)
         measured = np.asarray(next_obs, dtype=np.float32).copy()
@@ -57,7 +55,9 @@ def evaluate(
         returns += np.where(active, np.asarray(reward, dtype=np.float64), 0.0)
         max_hip = np.where(active, np.maximum(max_hip, measured[:, HIP_HEIGHT]), max_hip)
         if traces:
-            row = _trace_row(step, info, desired, previous_desired, measured, reward, control_dt)
+            row = _trace_row(
+                step.agent.extras, info, desired, previous_desired, measured, reward, control_dt
+            )
             for key, value in row.items():
                 value = np.asarray(value, dtype=np.float64).copy()
                 value[~active] = np.nan
@@ -65,7 +65,6 @@ def evaluate(
             previous_desired = row["desired_position"]
         length += active
         active &= ~done
-        state = step.next_state
         obs = np.asarray(next_obs, dtype=np.float32)
         if not active.any():
             break
@@ -80,7 +79,7 @@ def evaluate(
     return result
 
 
-def _trace_row(step, info, desired, previous_desired, measured, reward, dt) -> dict[str, Any]:
+def _trace_row(extras, info, desired, previous_desired, measured, reward, dt) -> dict[str, Any]:
     # the desired positions the hopper tracked: the clipped action for agents acting on joint
     # positions, the CPG's output for agents whose env holds the CPG (cho2019)
     applied = np.asarray(info.get("desired_position", desired), dtype=np.float64)
@@ -93,15 +92,15 @@ def _trace_row(step, info, desired, previous_desired, measured, reward, dt) -> d
         "foot_height": np.asarray(info.get("foot_height", np.full(num_envs, np.nan))),
         "reward": np.asarray(reward, dtype=np.float64),
     }
-    if "desired_velocity" in step.extras:
-        row["desired_velocity"] = step.extras["desired_velocity"].numpy()
+    if "desired_velocity" in extras:
+        row["desired_velocity"] = extras["desired_velocity"].numpy()
     elif "desired_velocity" in info:  # CPG inside the environment
         row["desired_velocity"] = np.asarray(info["desired_velocity"])
     else:  # the MLP has no analytic velocity: finite difference of its desired positions
         row["desired_velocity"] = (applied - previous_desired) / dt
     for key in ("theta_dot", "r_ddot", "xi", "kappa", "cpg_parameters"):
-        if key in step.extras:
-            row[key] = step.extras[key].numpy()
+        if key in extras:
+            row[key] = extras[key].numpy()
         elif key in info:
             row[key] = np.asarray(info[key])
     return row

@@ -7,6 +7,7 @@ import gymnasium
 
 ENV_ID = "cpg_actor/AnymalHopper-v0"
 PYBULLET_ENV_ID = "cpg_actor/AnymalHopper-pybullet-v0"
+EPISODE_STEPS = 500  # HopperConfig.episode_steps (a test checks they agree)
 
 
 def register() -> None:
@@ -18,4 +19,8 @@ def register() -> None:
             entry_point="cpg_actor.envs.hopper:HopperEnv",
             vector_entry_point="cpg_actor.envs.vector:HopperVectorEnv",
             kwargs={"sim": sim},
+            # the env truncates its episodes itself (HopperConfig.episode_steps, 500); this
+            # makes spec.max_episode_steps say so. A longer episode needs both:
+            # gym.make(ENV_ID, episode_steps=1000, max_episode_steps=1000)
+            max_episode_steps=EPISODE_STEPS,
         )

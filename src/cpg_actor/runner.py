@@ -40,6 +40,7 @@ import torch
 from cpg_actor.agents import get_agent_spec
 from cpg_actor.config import TrainConfig
 from cpg_actor.evaluation import HIP_HEIGHT, evaluate
+from cpg_actor.policy import Policy
 from cpg_actor.ppo import (
     PPO,
     NonFiniteLossError,
@@ -287,6 +288,13 @@ class Runner:
         action_scale = (self.action_high - self.action_low) / 2.0
         self.agent = self.spec.build(config.agent_config, obs_dim, action_scale, config.env)
         self.normalizer = RunningNormalizer(obs_dim)
+        self.policy = Policy(
+            self.agent,
+            self.normalizer,
+            self.action_low,
+            self.action_high,
+            config.ppo.normalize_observations,
+        )
         self.reward_normalizer = RewardNormalizer(config.num_envs, config.ppo.gamma)
         self.eval_env = eval_env  # None: built at the first evaluation
         self.ppo = PPO(self.agent, config.ppo)
@@ -311,7 +319,7 @@ class Runner:
         self.env_seed = derived_seed(self.config.seed, self.iteration)
         obs, _ = self.env.reset(seed=self.env_seed)
         self.obs = torch.as_tensor(np.asarray(obs, dtype=np.float32))
-        self.agent_state = self.agent.initial_state(self.config.num_envs)
+        self.policy.reset(self.config.num_envs)
         self.reward_normalizer.reset()
         self.episode = EpisodeStats.zeros(self.config.num_envs)
         # hop height is measured from the hip height the hopper starts its episodes at
@@ -319,11 +327,12 @@ class Runner:
         self._episodes_started = True
 
     def normalize(self, obs: torch.Tensor, update: bool) -> torch.Tensor:
-        if not self.config.ppo.normalize_observations:
-            return obs
-        if update:
-            self.normalizer.update(obs)
-        return self.normalizer(obs)
+        return self.policy.normalize(obs, update)
+
+    @property
+    def agent_state(self) -> torch.Tensor:
+        """Every training env's recurrent (CPG) state, ``(N, *state_shape)``."""
+        return self.policy.state
 
     @torch.no_grad()
     def collect(self) -> dict[str, float]:
@@ -332,12 +341,10 @@ class Runner:
         self.storage.clear()
         sim_time = 0.0
         for _ in range(cfg.ppo.num_steps):
-            obs = self.normalize(self.obs, update=True)
-            state = self.agent_state
-            step = self.agent.act(obs, state)
-            action = np.clip(step.action.numpy(), self.action_low, self.action_high)
+            acted = self.policy.act(self.obs, deterministic=False, update_normalizer=True)
+            step = acted.agent
             start = time.perf_counter()
-            next_obs, reward, terminated, truncated, info = self.env.step(action)
+            next_obs, reward, terminated, truncated, info = self.env.step(acted.action)
             sim_time += time.perf_counter() - start
 
             terminated_t = torch.as_tensor(np.asarray(terminated, dtype=np.float32))
@@ -355,8 +362,8 @@ class Runner:
             if cfg.ppo.normalize_rewards:
                 rewards = self.reward_normalizer(rewards, torch.as_tensor(done))
             self.storage.add(
-                observations=obs,
-                states=state,
+                observations=acted.observation,
+                states=acted.state,
                 actions=step.action,
                 log_probs=step.log_prob,
                 values=step.value,
@@ -367,11 +374,7 @@ class Runner:
                 truncated=truncated_t,
                 final_values=final_values,
             )
-            next_state = step.next_state.clone()
-            if done.any():
-                rows = torch.as_tensor(np.flatnonzero(done))
-                next_state[rows] = self.agent.initial_state(len(rows))
-            self.agent_state = next_state
+            self.policy.end_episodes(done)
             self.obs = torch.as_tensor(np.asarray(next_obs, dtype=np.float32))
             # the hip height reached by this step; for envs that ended it is in final_obs
             hip = np.array(next_obs[:, HIP_HEIGHT], dtype=np.float64)
@@ -519,13 +522,19 @@ class Runner:
         start = time.perf_counter()
         if self.eval_env is None:
             self.eval_env = self.spec.make_env(cfg.eval_episodes, cfg.env, cfg.env_threads)
-        result = evaluate(
+        # a policy of its own (the same agent and normaliser): the training envs' CPG states
+        # stay untouched
+        policy = Policy(
             self.agent,
-            lambda obs: self.normalize(obs, update=False),
+            self.normalizer,
+            self.action_low,
+            self.action_high,
+            cfg.ppo.normalize_observations,
+        )
+        result = evaluate(
+            policy,
             self.eval_env,
             seed=derived_seed(cfg.seed, EVAL_SEED_KEY),
-            action_low=self.action_low,
-            action_high=self.action_high,
             control_dt=float(cfg.env.control_dt),
             max_steps=int(getattr(cfg.env, "episode_steps", 10_000)),
             traces=False,
@@ -727,7 +736,7 @@ class Runner:
         return {
             "env": self.env.get_state(),
             "obs": self.obs.clone(),
-            "agent_state": self.agent_state.clone(),
+            "agent_state": self.policy.state.clone(),
             "statistics": self.episode.state_dict(),
             "discounted_returns": self.reward_normalizer.discounted.clone(),
             "standing_height": self.standing_height,
@@ -748,7 +757,7 @@ class Runner:
             raise ValueError(
                 f"the checkpoint's episodes do not fit this run's environments: {error}"
             ) from None
-        self.obs, self.agent_state = obs.clone(), agent_state.clone()
+        self.obs, self.policy.state = obs.clone(), agent_state.clone()
         self.standing_height = float(state["standing_height"])
         self._episodes_started = True
 
@@ -759,7 +768,10 @@ class Runner:
         atomic_save(data, self.checkpoint_dir() / "last.pt")
         return path
 
-    def load_checkpoint(self, path: Path, restore_training: bool = True) -> None:
+    def load_checkpoint(self, path: Path) -> None:
+        """Continue training from ``path`` (networks, optimiser, normalisers, RNG streams,
+        counters and the episodes in progress). To act with a trained agent, see
+        :func:`cpg_actor.policy.load_policy`."""
         data = load_checkpoint(path)
         if data["agent"] != self.config.agent:
             raise ValueError(
@@ -773,8 +785,6 @@ class Runner:
             raise ValueError(
                 f"checkpoint {path} does not match this agent's networks: {error}"
             ) from None
-        if not restore_training:
-            return
         self.ppo.optimizer.load_state_dict(data["optimizer"])
         self.ppo.set_learning_rate(data["learning_rate"])
         if "reward_normalizer" in data:  # absent from checkpoints of earlier versions

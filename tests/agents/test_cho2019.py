@@ -92,7 +92,7 @@ def test_eval_traces_of_cho2019_hold_the_cpg_signals():
     from cpg_actor.commands.eval import evaluate
 
     runner = Runner(config("cho2019"), None, tensorboard=False)
-    traces = evaluate(runner, seed=5)
+    traces = evaluate(runner.policy, runner.config, 4, seed=5)
     runner.close()
     steps = traces["time"].shape[0]
     assert steps == 100

@@ -7,6 +7,7 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pytest
+from gymnasium import spaces
 from gymnasium.utils.env_checker import check_env
 
 from cpg_actor.envs import ENV_ID, OBS_NAMES, PYBULLET_ENV_ID, HopperConfig, HopperEnv
@@ -233,3 +234,35 @@ def test_step_or_reset_after_close_is_a_clear_error():
             env.step(action)
         with pytest.raises(gymnasium.error.ClosedEnvironmentError, match="closed environment"):
             env.reset(seed=0)
+
+
+def test_normalized_actions_map_minus_one_to_one_onto_the_joint_ranges():
+    from cpg_actor.config import TrainConfig
+    from cpg_actor.envs.hopper import ACTION_HIGH, ACTION_LOW
+    from cpg_actor.registration import EPISODE_STEPS
+
+    assert gym.spec(ENV_ID).max_episode_steps == EPISODE_STEPS == HopperConfig().episode_steps
+    env = gym.make(ENV_ID, normalized_actions=True)
+    plain = HopperEnv()
+    try:
+        assert env.action_space == spaces.Box(-1.0, 1.0, (2,), np.float32)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            check_env(env.unwrapped, skip_render_check=True)
+        assert not [str(w.message) for w in caught]
+        env.reset(seed=1)
+        plain.reset(seed=1)
+        for action in ([-1.0, -1.0], [1.0, 1.0], [0.2, -0.4], [3.0, -7.0]):
+            info = env.step(np.array(action, dtype=np.float32))[4]
+            clipped = np.clip(action, -1.0, 1.0)
+            desired = ACTION_LOW + (clipped + 1.0) / 2.0 * (ACTION_HIGH - ACTION_LOW)
+            assert np.allclose(info["desired_position"], desired)
+            expected = plain.step(desired.astype(np.float32))
+            assert np.allclose(info["hip_height"], expected[4]["hip_height"], atol=1e-6)
+    finally:
+        env.close()
+        plain.close()
+    config = TrainConfig()
+    config.env.normalized_actions = True
+    with pytest.raises(ValueError, match="the project's agents act on desired positions in rad"):
+        config.validate()

@@ -39,7 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import TrainConfig
-    from cpg_actor.runner import Runner
+    from cpg_actor.policy import load_policy
 
     run_dir = Path(args.run_dir)
     config_path = run_dir / "config.yaml"
@@ -60,19 +60,19 @@ def run(args: argparse.Namespace) -> int:
             raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
 
     config = TrainConfig.load(config_path)
-    config.num_envs = args.episodes
     if args.sim is not None:
         config.env.sim = args.sim
+    policy = load_policy(checkpoint, env_config=config.env)
+    if policy.config.agent != config.agent:
+        raise ValueError(
+            f"checkpoint {checkpoint} was trained with agent '{policy.config.agent}', "
+            f"this run uses '{config.agent}'"
+        )
     if args.video_only:
-        record_video(config, checkpoint, Path(args.video), args.seed, args.overwrite)
+        record_video(policy, config, Path(args.video), args.seed, args.overwrite)
         print(f"video in {args.video}")
         return 0
-    runner = Runner(config, run_dir=None, tensorboard=False)
-    try:
-        runner.load_checkpoint(checkpoint, restore_training=False)
-        traces = evaluate(runner, seed=args.seed)
-    finally:
-        runner.close()
+    traces = evaluate(policy, config, args.episodes, seed=args.seed)
 
     output.parent.mkdir(parents=True, exist_ok=True)
     np.savez(output, **traces)
@@ -90,59 +90,50 @@ def run(args: argparse.Namespace) -> int:
     for figure in figures:
         print(f"figure {figure}")
     if args.video:
-        record_video(config, checkpoint, Path(args.video), args.seed, args.overwrite)
+        record_video(policy, config, Path(args.video), args.seed, args.overwrite)
         print(f"video in {args.video}")
     return 0
 
 
-def evaluate(runner, seed: int) -> dict[str, np.ndarray]:
-    """Run every env of ``runner`` to the end of its first episode with the mean action;
-    return traces ``(T, E, ...)`` (rows after an env's episode ended are NaN)."""
+def evaluate(policy, config, episodes: int, seed: int) -> dict[str, np.ndarray]:
+    """Run ``episodes`` envs of the agent's own environment to the end of their first episode
+    with the mean action; return traces ``(T, E, ...)`` (rows after an env's episode ended are
+    NaN)."""
+    from cpg_actor.agents import get_agent_spec
     from cpg_actor.evaluation import evaluate as run_episodes
 
-    config = runner.config
-    traces = run_episodes(
-        runner.agent,
-        lambda obs: runner.normalize(obs, update=False),
-        runner.env,
-        seed=seed,
-        action_low=runner.action_low,
-        action_high=runner.action_high,
-        control_dt=float(config.env.control_dt),
-        max_steps=int(getattr(config.env, "episode_steps", 10_000)),
-    )
+    env = get_agent_spec(config.agent).make_env(episodes, config.env, config.env_threads)
+    try:
+        traces = run_episodes(
+            policy,
+            env,
+            seed=seed,
+            control_dt=float(config.env.control_dt),
+            max_steps=int(getattr(config.env, "episode_steps", 10_000)),
+        )
+    finally:
+        env.close()
     traces["agent"] = np.array(config.agent)
     return traces
 
 
-def record_video(config, checkpoint: Path, path: Path, seed: int, overwrite: bool) -> None:
+def record_video(policy, config, path: Path, seed: int, overwrite: bool) -> None:
     """One deterministic episode in the agent's own environment (one env), rendered offscreen."""
-    import torch
-
+    from cpg_actor.agents import get_agent_spec
     from cpg_actor.envs import write_video
-    from cpg_actor.runner import Runner
 
-    config.num_envs = 1
-    runner = Runner(config, run_dir=None, tensorboard=False)
-    env = runner.env
+    env = get_agent_spec(config.agent).make_env(1, config.env, 1)
     try:
-        runner.load_checkpoint(checkpoint, restore_training=False)
-        agent = runner.agent
         obs, _ = env.reset(seed=seed)
-        state = agent.initial_state(1)
+        policy.reset(1)
         frames = [env.render_frame(0)]
         for _ in range(int(config.env.episode_steps)):
-            with torch.no_grad():
-                obs_n = runner.normalize(torch.as_tensor(obs), update=False)
-                step = agent.act(obs_n, state, deterministic=True)
-            action = np.clip(step.action.numpy(), runner.action_low, runner.action_high)
-            obs, _, terminated, truncated, _ = env.step(action)
+            obs, _, terminated, truncated, _ = env.step(policy.act(obs).action)
             if terminated[0] or truncated[0]:
                 break  # the env has already reset: the frame would show the next episode
             frames.append(env.render_frame(0))
-            state = step.next_state
     finally:
-        runner.close()
+        env.close()
     write_video(frames, path, fps=round(1.0 / config.env.control_dt), overwrite=overwrite)
 
 

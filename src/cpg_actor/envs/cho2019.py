@@ -93,6 +93,12 @@ class CPGParameterVectorEnv(VectorEnv):
         num_threads: int | None = None,
     ) -> None:
         self.env = HopperVectorEnv(num_envs, config=config, num_threads=num_threads)
+        if self.env.config.normalized_actions:
+            self.env.close()
+            raise ValueError(
+                "the Cho et al. env drives the hopper with desired positions in rad: "
+                "normalized_actions must be false"
+            )
         self.config = self.env.config
         self.num_envs = self.env.num_envs
         # The hopper preset supplies a, w, the topology and the initial phases; its trainable

@@ -41,6 +41,10 @@ class HopperConfig:
     # -- termination: a simulation blow-up ends the episode (terminated) ------------------------
     blowup_joint_velocity: float = 200.0  # rad/s
     blowup_hip_velocity: float = 50.0  # m/s
+    # -- interface ----------------------------------------------------------------------------
+    # actions in [-1, 1] per joint, mapped linearly to the joint's range (the desired
+    # position, rad), for off-the-shelf RL libraries; the project's agents act in radians
+    normalized_actions: bool = False
     # -- rendering ----------------------------------------------------------------------------
     render_width: int = 640
     render_height: int = 480
@@ -65,6 +69,9 @@ class HopperConfig:
             if kind is str:
                 if not isinstance(value, str):
                     raise ValueError(f"{field.name} must be a string, got {value!r}")
+            elif kind is bool:
+                if not isinstance(value, bool):
+                    raise ValueError(f"{field.name} must be true or false, got {value!r}")
             elif kind is int:
                 if isinstance(value, bool) or not isinstance(value, int):
                     raise ValueError(f"{field.name} must be an integer, got {value!r}")
@@ -138,6 +145,6 @@ class HopperConfig:
 
 
 _FIELD_KINDS = {
-    f.name: {"str": str, "int": int, "float": float}[f.type]
+    f.name: {"str": str, "int": int, "float": float, "bool": bool}[f.type]
     for f in dataclasses.fields(HopperConfig)
 }

@@ -43,7 +43,10 @@ def resolve_config(
     return config.replace(**changes) if changes else config.replace()
 
 
-def action_space() -> spaces.Box:
+def action_space(normalized: bool = False) -> spaces.Box:
+    """Desired [HFE, KFE] positions in rad within the joint limits, or [-1, 1] per joint."""
+    if normalized:
+        return spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
     return spaces.Box(
         low=ACTION_LOW.astype(np.float32), high=ACTION_HIGH.astype(np.float32), dtype=np.float32
     )
@@ -55,8 +58,10 @@ def observation_space() -> spaces.Box:
     return spaces.Box(low=-OBS_BOUND, high=OBS_BOUND, shape=(len(OBS_NAMES),), dtype=np.float32)
 
 
-def check_actions(actions: Any, shape: tuple[int, ...]) -> np.ndarray:
-    """Actions as float64 clipped to the joint limits; ValueError on a bad shape or NaN/inf."""
+def check_actions(actions: Any, shape: tuple[int, ...], normalized: bool = False) -> np.ndarray:
+    """Desired positions (rad, float64) clipped to the joint limits; ValueError on a bad shape
+    or NaN/inf. ``normalized``: the actions are in [-1, 1], -1 the lower and +1 the upper joint
+    limit (clipped to [-1, 1] first)."""
     try:
         array = np.asarray(actions, dtype=np.float64)
     except (TypeError, ValueError):
@@ -68,6 +73,8 @@ def check_actions(actions: Any, shape: tuple[int, ...]) -> np.ndarray:
         )
     if not np.isfinite(array).all():
         raise ValueError(f"actions must be finite, got {array.tolist()}")
+    if normalized:
+        array = ACTION_LOW + (np.clip(array, -1.0, 1.0) + 1.0) * (ACTION_HIGH - ACTION_LOW) / 2.0
     return np.clip(array, ACTION_LOW.astype(np.float32), ACTION_HIGH.astype(np.float32))
 
 
@@ -109,7 +116,7 @@ class HopperEnv(gym.Env):
             )
         self.render_mode = render_mode
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.config.control_dt)}
-        self.action_space = action_space()
+        self.action_space = action_space(self.config.normalized_actions)
         self.observation_space = observation_space()
         self.sim = HopperSimulation(self.config, num_robots=1, num_threads=1)
         self._needs_reset = True
@@ -136,7 +143,7 @@ class HopperEnv(gym.Env):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if getattr(self, "sim", None) is None:
             raise gym.error.ClosedEnvironmentError("step() on a closed environment; make a new one")
-        desired = check_actions(action, (2,))
+        desired = check_actions(action, (2,), self.config.normalized_actions)
         if self._needs_reset:
             raise gym.error.ResetNeeded(
                 "call reset() before step() (and after an episode terminated)"

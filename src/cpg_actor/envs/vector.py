@@ -42,6 +42,8 @@ class HopperVectorEnv(VectorEnv):
         config: a :class:`HopperConfig` (or a dict of its keys); defaults if None.
         num_threads: MuJoCo stepping threads; None: the usable cores (>= 16 robots each).
         sim: ``"mujoco"`` or ``"pybullet"``, overrides ``config.sim``.
+        max_episode_steps: what ``gymnasium.make_vec`` passes from the registered spec; must
+            equal ``episode_steps`` (the env truncates its episodes itself).
         **overrides: any :class:`HopperConfig` field.
     """
 
@@ -53,6 +55,7 @@ class HopperVectorEnv(VectorEnv):
         config: HopperConfig | dict | None = None,
         num_threads: int | None = None,
         sim: str | None = None,
+        max_episode_steps: int | None = None,
         **overrides: Any,
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
@@ -64,9 +67,15 @@ class HopperVectorEnv(VectorEnv):
         ):
             raise ValueError(f"num_threads must be a positive integer or None, got {num_threads!r}")
         self.config = resolve_config(config, sim, overrides)
+        # gymnasium.make_vec passes the registered max_episode_steps: the episode length
+        if max_episode_steps is not None and max_episode_steps != self.config.episode_steps:
+            raise ValueError(
+                f"max_episode_steps={max_episode_steps} differs from episode_steps="
+                f"{self.config.episode_steps}; give both the same value"
+            )
         self.num_envs = int(num_envs)
         self.single_observation_space = observation_space()
-        self.single_action_space = action_space()
+        self.single_action_space = action_space(self.config.normalized_actions)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.config.control_dt)}
@@ -122,7 +131,7 @@ class HopperVectorEnv(VectorEnv):
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         if getattr(self, "sim", None) is None:
             raise gym.error.ClosedEnvironmentError("step() on a closed environment; make a new one")
-        desired = check_actions(actions, (self.num_envs, 2))
+        desired = check_actions(actions, (self.num_envs, 2), self.config.normalized_actions)
         if self._needs_reset:
             raise RuntimeError("call reset() before step()")
         result = self.sim.step(desired)

@@ -1,0 +1,52 @@
+"""`cpg-actor export`: a trained policy as one TorchScript or ONNX file (see cpg_actor.export)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = "export a trained policy (normaliser, networks, CPG step) as TorchScript or ONNX"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("run_dir", help="a run directory written by `cpg-actor train`")
+    parser.add_argument(
+        "--format", default="onnx", choices=("onnx", "torchscript"), help="default onnx"
+    )
+    parser.add_argument(
+        "--checkpoint", default=None, help="checkpoint file (default RUN_DIR/checkpoints/last.pt)"
+    )
+    parser.add_argument(
+        "--out", default=None, help="output file (default RUN_DIR/export/policy.onnx or .pt)"
+    )
+    parser.add_argument("--batch", type=int, default=1, help="robots per call (default 1)")
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing export")
+
+
+def run(args: argparse.Namespace) -> int:
+    from cpg_actor.export import SUFFIXES, export_policy
+    from cpg_actor.policy import load_policy
+
+    run_dir = Path(args.run_dir)
+    if not run_dir.is_dir():
+        raise FileNotFoundError(f"run directory {run_dir} does not exist")
+    checkpoint = Path(args.checkpoint) if args.checkpoint else run_dir / "checkpoints" / "last.pt"
+    out = Path(args.out) if args.out else run_dir / "export" / f"policy{SUFFIXES[args.format]}"
+    if args.format == "onnx":
+        try:
+            import onnxscript  # noqa: F401  (torch.onnx.export needs it)
+        except ImportError:
+            raise ValueError(
+                "ONNX export needs the onnx and onnxscript packages: "
+                "pip install 'cpg-actor[export]' (or use --format torchscript)"
+            ) from None
+    policy = load_policy(checkpoint)
+    path = export_policy(policy, out, args.format, batch=args.batch, overwrite=args.overwrite)
+    state = policy.agent.state_shape
+    print(
+        f"exported {policy.config.agent} ({args.format}) to {path}: inputs observation "
+        f"({args.batch}, {policy.normalizer.mean.shape[0]}) and state ({args.batch}, "
+        f"{', '.join(map(str, state))}), outputs action and next_state; initial state in "
+        f"{path.name}.initial_state.npy"
+    )
+    return 0

@@ -1,0 +1,157 @@
+"""`Policy`: what acts in an environment, in one object: the observation normaliser, the agent,
+the action bounds and the recurrent (CPG) state of every environment it drives.
+
+One control step is :meth:`Policy.act`: normalise the observation, run the agent from each
+env's state, clip the action to the action space, keep the next state. Training (with
+sampling and the normaliser updating), the evaluation during training, ``cpg-actor eval``, the
+video and anything that deploys a trained agent use this same step, so they cannot drift apart.
+When episodes end, :meth:`end_episodes` restarts those envs' states.
+
+:func:`load_policy` builds one from a run directory or a checkpoint, with no trainer, env or
+optimiser::
+
+    policy = load_policy("runs/cpg-actor")      # checkpoints/last.pt and config.yaml
+    policy.reset(num_envs=1)
+    action = policy.act(obs).action             # obs (1, obs_dim) float32, numpy or torch
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, NamedTuple
+
+import numpy as np
+import torch
+from torch import Tensor
+
+from cpg_actor.agents.base import ActStep, Agent
+from cpg_actor.ppo.normalizer import RunningNormalizer
+
+
+class PolicyStep(NamedTuple):
+    """One control step: the clipped action for the env and what training stores."""
+
+    action: np.ndarray  # (N, A) float32, clipped to the action space
+    observation: Tensor  # (N, obs_dim) the normalised observation the agent acted on
+    state: Tensor  # (N, *state_shape) the recurrent state before the step
+    agent: ActStep  # the agent's output: sampled action, log-prob, value, mean, std, extras
+
+
+class Policy:
+    """``normalizer -> agent -> clip`` with the per-env recurrent state (see the module doc).
+
+    Args:
+        agent: the actor-critic.
+        normalizer: the observation normaliser (frozen unless ``act(update_normalizer=True)``).
+        action_low, action_high: the env's action bounds; actions are clipped to them.
+        normalize_observations: False: observations go to the agent as they are.
+    """
+
+    def __init__(
+        self,
+        agent: Agent,
+        normalizer: RunningNormalizer,
+        action_low: np.ndarray,
+        action_high: np.ndarray,
+        normalize_observations: bool = True,
+    ) -> None:
+        self.agent = agent
+        self.normalizer = normalizer
+        self.action_low = np.asarray(action_low, dtype=np.float32)
+        self.action_high = np.asarray(action_high, dtype=np.float32)
+        self.normalize_observations = normalize_observations
+        self.state: Tensor | None = None
+        self.config: Any = None  # the run's TrainConfig when built by load_policy
+
+    @property
+    def num_envs(self) -> int:
+        if self.state is None:
+            raise RuntimeError("call Policy.reset(num_envs) first")
+        return self.state.shape[0]
+
+    def reset(self, num_envs: int) -> None:
+        """Start every env's recurrent state afresh (the CPG at rest, at its initial phases)."""
+        self.state = self.agent.initial_state(num_envs)
+
+    def end_episodes(self, done: np.ndarray | Tensor) -> None:
+        """Restart the state of the envs whose episode ended (``done``: (N,) bool)."""
+        rows = np.flatnonzero(np.asarray(done))
+        if len(rows):
+            state = self.state.clone()
+            state[torch.as_tensor(rows)] = self.agent.initial_state(len(rows))
+            self.state = state
+
+    def normalize(self, obs: Tensor, update: bool = False) -> Tensor:
+        """The agent's input; ``update`` first merges ``obs`` into the running statistics."""
+        if not self.normalize_observations:
+            return obs
+        if update:
+            self.normalizer.update(obs)
+        return self.normalizer(obs)
+
+    @torch.no_grad()
+    def act(
+        self,
+        obs: np.ndarray | Tensor,
+        deterministic: bool = True,
+        update_normalizer: bool = False,
+    ) -> PolicyStep:
+        """One control step for every env: ``obs`` (N, obs_dim) -> clipped action (N, A).
+
+        ``deterministic``: the Gaussian's mean (evaluation, deployment); False samples from
+        it (training). The recurrent state advances; call :meth:`end_episodes` for the envs
+        whose episode the step ended."""
+        if self.state is None:
+            raise RuntimeError("call Policy.reset(num_envs) before act()")
+        obs_t = torch.as_tensor(np.asarray(obs, dtype=np.float32))
+        if obs_t.dim() != 2 or obs_t.shape[0] != self.num_envs:
+            raise ValueError(
+                f"obs must have shape ({self.num_envs}, obs_dim), got {tuple(obs_t.shape)}"
+            )
+        normalized = self.normalize(obs_t, update=update_normalizer)
+        state = self.state
+        step = self.agent.act(normalized, state, deterministic=deterministic)
+        action = np.clip(step.action.numpy(), self.action_low, self.action_high)
+        self.state = step.next_state
+        return PolicyStep(action, normalized, state, step)
+
+
+def load_policy(path: str | Path, env_config: Any = None) -> Policy:
+    """The policy of a run directory (``checkpoints/last.pt``) or of a checkpoint file.
+
+    The agent is rebuilt from the config saved in the checkpoint; the action bounds and
+    observation size come from that agent's environment (built once, then closed).
+    ``env_config`` replaces the run's env config (e.g. another simulator). Call
+    :meth:`Policy.reset` with the number of envs before acting.
+    """
+    from cpg_actor.agents import get_agent_spec
+    from cpg_actor.config import TrainConfig
+    from cpg_actor.runner import load_checkpoint
+
+    path = Path(path)
+    checkpoint = path / "checkpoints" / "last.pt" if path.is_dir() else path
+    data = load_checkpoint(checkpoint)
+    config = TrainConfig.from_dict(data["config"])
+    if env_config is not None:
+        config.env = env_config
+    spec = get_agent_spec(config.agent)
+    env = spec.make_env(1, config.env, 1)
+    try:
+        low = np.asarray(env.single_action_space.low, dtype=np.float32)
+        high = np.asarray(env.single_action_space.high, dtype=np.float32)
+        obs_dim = int(env.single_observation_space.shape[0])
+    finally:
+        env.close()
+    agent = spec.build(config.agent_config, obs_dim, (high - low) / 2.0, config.env)
+    normalizer = RunningNormalizer(obs_dim)
+    try:
+        agent.load_state_dict(data["agent_state"])
+        normalizer.load_state_dict(data["normalizer"])
+    except RuntimeError as error:
+        raise ValueError(
+            f"checkpoint {checkpoint} does not match its agent's networks: {error}"
+        ) from None
+    agent.eval()
+    policy = Policy(agent, normalizer, low, high, config.ppo.normalize_observations)
+    policy.config = config  # the run's resolved config, as saved in the checkpoint
+    return policy

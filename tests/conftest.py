@@ -1,0 +1,19 @@
+"""Test-session set-up."""
+
+from pathlib import Path
+
+import pytest
+
+MUJOCO_LOG = Path("MUJOCO_LOG.TXT")
+
+
+@pytest.fixture(autouse=True, scope="session")
+def no_mujoco_log_left_behind():
+    """Some tests blow the simulation up on purpose (the env must terminate those episodes),
+    and MuJoCo's warning handler then appends to MUJOCO_LOG.TXT in the working directory, the
+    repository root. Remove it at the end unless it was there before. (A custom handler via
+    ``mujoco.set_mju_user_warning`` made ``mujoco.Renderer`` abort on this machine.)"""
+    existed = MUJOCO_LOG.exists()
+    yield
+    if not existed:
+        MUJOCO_LOG.unlink(missing_ok=True)

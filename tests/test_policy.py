@@ -1,0 +1,75 @@
+"""`Policy` (normaliser -> agent -> clip, with per-env CPG state) and `load_policy`."""
+
+import numpy as np
+import pytest
+import torch
+
+from cpg_actor.config import TrainConfig
+from cpg_actor.envs import HopperVectorEnv
+from cpg_actor.policy import load_policy
+from cpg_actor.ppo import PPOConfig
+from cpg_actor.runner import Runner
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    run_dir = tmp_path_factory.mktemp("policy") / "run"
+    config = TrainConfig(
+        agent="cpg-actor",
+        num_envs=2,
+        total_steps=2 * 2 * 8,
+        ppo=PPOConfig(num_steps=8, num_epochs=1, num_minibatches=2),
+        eval_interval=0,
+    )
+    runner = Runner(config, run_dir=run_dir, tensorboard=False)
+    runner.learn()
+    yield runner, run_dir
+    runner.close()
+
+
+def test_load_policy_acts_as_the_trained_agent(trained):
+    runner, run_dir = trained
+    policy = load_policy(run_dir)
+    assert policy.config.agent == "cpg-actor"
+    env = HopperVectorEnv(3)
+    obs, _ = env.reset(seed=2)
+    policy.reset(3)
+    runner.policy.reset(3)
+    try:
+        for _ in range(20):
+            a = policy.act(obs)
+            b = runner.policy.act(obs, deterministic=True)
+            assert np.array_equal(a.action, b.action)
+            assert torch.equal(policy.state, runner.policy.state)
+            assert (a.action >= policy.action_low).all() and (a.action <= policy.action_high).all()
+            obs, _, terminated, truncated, _ = env.step(a.action)
+            policy.end_episodes(terminated | truncated)
+            runner.policy.end_episodes(terminated | truncated)
+    finally:
+        env.close()
+
+
+def test_end_episodes_restarts_only_the_finished_rows(trained):
+    policy = load_policy(trained[1])
+    policy.reset(3)
+    obs = np.zeros((3, 8), dtype=np.float32)
+    obs[:, :2] = [0.4, -0.8]
+    policy.act(obs)
+    before = policy.state.clone()
+    policy.end_episodes(np.array([False, True, False]))
+    assert torch.equal(policy.state[[0, 2]], before[[0, 2]])
+    assert torch.equal(policy.state[1], policy.agent.initial_state(1)[0])
+
+
+def test_policy_errors_say_what_is_wrong(trained, tmp_path):
+    policy = load_policy(trained[1] / "checkpoints" / "last.pt")
+    with pytest.raises(RuntimeError, match="reset"):
+        policy.act(np.zeros((1, 8), dtype=np.float32))
+    policy.reset(2)
+    with pytest.raises(ValueError, match=r"shape \(2, obs_dim\)"):
+        policy.act(np.zeros((3, 8), dtype=np.float32))
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        load_policy(tmp_path / "nothing.pt")
+    (tmp_path / "bad.pt").write_bytes(b"garbage")
+    with pytest.raises(ValueError, match="corrupt or not a cpg-actor checkpoint"):
+        load_policy(tmp_path / "bad.pt")
