@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import torch
 
+from cpg_actor.checkpoint import load_checkpoint
 from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig, apply_dict, parse_override, parse_steps
-from cpg_actor.runner import load_checkpoint
 
 # tiny runs: 2 envs x 8 steps per iteration
 TINY = [

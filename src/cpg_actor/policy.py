@@ -125,8 +125,8 @@ def load_policy(path: str | Path, env_config: Any = None) -> Policy:
     :meth:`Policy.reset` with the number of envs before acting.
     """
     from cpg_actor.agents import get_agent_spec
+    from cpg_actor.checkpoint import load_checkpoint
     from cpg_actor.config import TrainConfig
-    from cpg_actor.runner import load_checkpoint
 
     path = Path(path)
     checkpoint = path / "checkpoints" / "last.pt" if path.is_dir() else path

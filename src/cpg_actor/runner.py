@@ -24,9 +24,7 @@ from __future__ import annotations
 
 import json
 import math
-import os
 import random
-import sys
 import time
 from collections import deque
 from collections.abc import Callable
@@ -38,6 +36,15 @@ import numpy as np
 import torch
 
 from cpg_actor.agents import get_agent_spec
+from cpg_actor.checkpoint import (
+    CHECKPOINT_FORMAT,
+    CHECKPOINT_VERSION,
+    atomic_save,
+    atomic_write_text,
+    load_checkpoint,
+    rng_state,
+    set_rng_state,
+)
 from cpg_actor.config import TrainConfig
 from cpg_actor.evaluation import HIP_HEIGHT, evaluate
 from cpg_actor.policy import Policy
@@ -48,9 +55,8 @@ from cpg_actor.ppo import (
     RolloutStorage,
     RunningNormalizer,
 )
+from cpg_actor.progress import evaluation_text, make_progress
 
-CHECKPOINT_FORMAT = "cpg-actor-checkpoint"
-CHECKPOINT_VERSION = 1
 WARM_START_SEED_KEY = 2**31  # derived_seed(seed, this) seeds the warm start's environments
 EVAL_SEED_KEY = 2**31 + 1  # derived_seed(seed, this) resets the evaluation envs, every time
 
@@ -68,105 +74,6 @@ def seed_everything(seed: int) -> None:
     random.seed(seed)
     np.random.seed(seed % 2**32)  # noqa: NPY002 (third-party code may use the global RNG)
     torch.manual_seed(seed)
-
-
-def rng_state() -> dict[str, Any]:
-    kind, keys, pos, has_gauss, cached = np.random.get_state()  # noqa: NPY002
-    return {
-        "torch": torch.get_rng_state(),
-        "numpy": [kind, torch.from_numpy(keys.astype(np.int64)), pos, has_gauss, cached],
-        "python": random.getstate(),
-    }
-
-
-def set_rng_state(state: dict[str, Any]) -> None:
-    torch.set_rng_state(state["torch"])
-    kind, keys, pos, has_gauss, cached = state["numpy"]
-    np.random.set_state((kind, keys.numpy().astype(np.uint32), pos, has_gauss, cached))  # noqa: NPY002
-    random.setstate(state["python"])
-
-
-def atomic_save(obj: Any, path: Path) -> None:
-    """``torch.save`` to a temporary file in the same directory, fsync, then ``os.replace``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    try:
-        with open(tmp, "wb") as f:
-            torch.save(obj, f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
-def atomic_write_text(text: str, path: Path) -> None:
-    """Write ``text`` to a temporary file in the same directory, then ``os.replace``."""
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    try:
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
-def load_checkpoint(path: Path) -> dict[str, Any]:
-    """Load and sanity-check a checkpoint; a clear ValueError if it is not one of ours."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"checkpoint {path} does not exist")
-    try:
-        data = torch.load(path, map_location="cpu", weights_only=True)
-    except Exception as error:  # truncated, corrupt, or not a torch file at all
-        raise ValueError(
-            f"checkpoint {path} is corrupt or not a cpg-actor checkpoint "
-            f"({error.__class__.__name__})"
-        ) from None
-    if not isinstance(data, dict) or data.get("format") != CHECKPOINT_FORMAT:
-        raise ValueError(f"{path} is not a cpg-actor checkpoint")
-    if data.get("version") != CHECKPOINT_VERSION:
-        raise ValueError(
-            f"checkpoint {path} has version {data.get('version')}, expected {CHECKPOINT_VERSION}"
-        )
-    return data
-
-
-def resume_checkpoint(run_dir: Path) -> tuple[Path, dict[str, Any], list[str]]:
-    """The checkpoint a run resumes from: ``last.pt`` or, if it is missing or unreadable, the
-    newest readable ``iter_*.pt`` (``last.pt`` is a copy of the newest one, so nothing is lost
-    when that one is readable). Returns ``(path, data, notes)``, the notes saying what was
-    skipped; FileNotFoundError / ValueError naming every file tried if none is usable."""
-    folder = Path(run_dir) / "checkpoints"
-    candidates = [folder / "last.pt", *sorted(folder.glob("iter_*.pt"), reverse=True)]
-    candidates = [path for path in candidates if path.is_file()]
-    if not candidates:
-        raise FileNotFoundError(
-            f"{folder} holds no checkpoint (last.pt, iter_*.pt); nothing to resume"
-        )
-    notes: list[str] = []
-    for path in candidates:
-        try:
-            return path, load_checkpoint(path), notes
-        except ValueError as error:
-            notes.append(f"skipped {path.name}: {error}")
-    raise ValueError(
-        f"no usable checkpoint in {folder}: " + "; ".join(notes) + ". Start a new run."
-    )
-
-
-def config_differences(a: dict[str, Any], b: dict[str, Any], prefix: str = "") -> list[str]:
-    """Dotted keys whose values differ between two nested config mappings."""
-    keys = sorted(set(a) | set(b))
-    out: list[str] = []
-    for key in keys:
-        x, y = a.get(key), b.get(key)
-        if isinstance(x, dict) and isinstance(y, dict):
-            out += config_differences(x, y, f"{prefix}{key}.")
-        elif x != y:
-            out.append(f"{prefix}{key}")
-    return out
 
 
 @dataclass
@@ -199,45 +106,6 @@ class EpisodeStats:
             state["max"].numpy().copy(),
             {k: v.numpy().copy() for k, v in state["terms"].items()},
         )
-
-
-def evaluation_text(evaluation: dict[str, float]) -> str:
-    """One evaluation for the progress display."""
-    return f"eval return {evaluation['eval/return']:.1f} hop {evaluation['eval/hop_height']:.3f} m"
-
-
-class PlainProgress:
-    """Progress as a plain line every ``interval`` seconds (and at the end) when stdout is not a
-    terminal; the same ``update``/``stop`` calls as the rich progress bar."""
-
-    def __init__(self, name: str, total: int, completed: int, interval: float) -> None:
-        self.name, self.total, self.interval = name, total, interval
-        self.start = self.last = time.perf_counter()
-        self.first_step = completed
-        self.fields: dict[str, Any] = {"completed": completed, "evaluation": ""}
-
-    def update(self, task: Any, **fields: Any) -> None:
-        self.fields.update(fields)
-        now = time.perf_counter()
-        if now - self.last >= self.interval or self.fields["completed"] >= self.total:
-            self.last = now
-            self.print(now)
-
-    def print(self, now: float) -> None:
-        done = self.fields["completed"]
-        elapsed = now - self.start
-        rate = (done - self.first_step) / elapsed if elapsed > 0 else 0.0
-        eta = (self.total - done) / rate if rate > 0 else math.nan
-        print(
-            f"[train {self.name}] {done:,}/{self.total:,} steps ({100 * done / self.total:.1f}%), "
-            f"{self.fields.get('sps', '-')} SPS, elapsed {elapsed:.0f} s, ETA {eta:.0f} s, "
-            f"return {self.fields.get('ret', '-')} hop {self.fields.get('hop', '-')} m "
-            f"{self.fields['evaluation']}".rstrip(),
-            flush=True,
-        )
-
-    def stop(self) -> None:
-        pass
 
 
 class Runner:
@@ -559,39 +427,13 @@ class Runner:
         if not self.show_progress:
             return None
         total = num_iterations * self.config.steps_per_iteration
-        if not sys.stdout.isatty():  # a log file (nohup, a cluster job): plain lines
-            self._task = None
-            return PlainProgress(self.config.agent, total, self.global_step, self.progress_interval)
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
-
-        progress = Progress(
-            TextColumn("[bold]{task.description}"),
-            BarColumn(bar_width=16),
-            MofNCompleteColumn(),
-            TextColumn("steps {task.fields[sps]} SPS"),
-            TimeElapsedColumn(),
-            TextColumn("ETA"),
-            TimeRemainingColumn(),
-            TextColumn("return {task.fields[ret]} hop {task.fields[hop]} m"),
-            TextColumn("{task.fields[evaluation]}"),
-        )
-        self._task = progress.add_task(
+        progress, self._task = make_progress(
             self.config.agent,
-            total=total,
-            completed=self.global_step,
-            sps="-",
-            ret="-",
-            hop="-",
-            evaluation=getattr(self, "_evaluation_text", ""),
+            total,
+            self.global_step,
+            self.progress_interval,
+            getattr(self, "_evaluation_text", ""),
         )
-        progress.start()
         return progress
 
     # -- logging -----------------------------------------------------------------------------
@@ -624,27 +466,10 @@ class Runner:
         ):
             if key in stats:
                 row[f"losses/{key}"] = stats[key]
-        for i, log_std in enumerate(self.agent.log_std.detach().tolist()):
-            row[f"policy/log_std_{i}"] = log_std
         for key in ("collection", "simulation", "inference", "learning"):
             row[f"time/{key}"] = timing[key]
         row["time/train_wall"] = self.train_wall
-        row.update(self.cpg_scalars())
-        return row
-
-    def cpg_scalars(self) -> dict[str, float]:
-        cpg = getattr(self.agent, "cpg", None)
-        if cpg is None:
-            return {}
-        names = cpg.topology.names
-        values = {k: v.detach() for k, v in cpg.parametrisation.values().items()}
-        row = {}
-        for field, short in (("frequency", "nu"), ("amplitude", "rho"), ("convergence", "a")):
-            for i, name in enumerate(names):
-                row[f"cpg/{short}_{name}"] = float(values[field][i])
-        for i, j in cpg.topology.edges:
-            row[f"cpg/w_{names[i]}_{names[j]}"] = float(values["coupling_weight"][i, j])
-            row[f"cpg/phi_{names[i]}_{names[j]}"] = float(values["phase_bias"][i, j])
+        row.update(self.agent.log_scalars())  # the agent's own: log-std, CPG parameters, ...
         return row
 
     def log(
@@ -680,22 +505,9 @@ class Runner:
         return writer
 
     def log_histograms(self, writer) -> None:
-        """Paper Fig. 5: CPG parameters and the feedback network's output layer over time."""
-        cpg = getattr(self.agent, "cpg", None)
-        if cpg is not None:
-            values = torch.cat(
-                [v.detach().flatten() for v in cpg.parametrisation.values().values()]
-            )
-            writer.add_histogram("cpg/parameters", values, self.global_step)
-            writer.add_histogram(
-                "cpg/vector_V", cpg.parametrisation.vector.detach(), self.global_step
-            )
-        for group, name in (("feedback", "feedback"), ("actor", "actor_mlp")):
-            network = getattr(self.agent, name, None)
-            if network is not None:
-                last, step = network[-1], self.global_step
-                writer.add_histogram(f"{group}/output_weight", last.weight.detach(), step)
-                writer.add_histogram(f"{group}/output_bias", last.bias.detach(), step)
+        """The agent's histograms (paper Fig. 5: CPG parameters, the feedback's output layer)."""
+        for tag, values in self.agent.log_histograms().items():
+            writer.add_histogram(tag, values, self.global_step)
 
     # -- checkpoints -------------------------------------------------------------------------
     def checkpoint_dir(self) -> Path:

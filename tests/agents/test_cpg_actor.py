@@ -173,3 +173,23 @@ def test_a_new_agent_with_its_own_env_factory_is_one_registry_entry():
         assert made == [3, 5] and runner.iteration == 1  # training envs, eval envs
     finally:
         del AGENTS["test-wrapped"]
+
+
+def test_agents_supply_their_own_scalars_and_histograms():
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), control_dt=0.01)
+    scalars = agent.log_scalars()
+    assert {"policy/log_std_0", "cpg/nu_HFE", "cpg/rho_KFE", "cpg/a_HFE"} <= set(scalars)
+    assert scalars["cpg/phi_HFE_KFE"] == pytest.approx(-scalars["cpg/phi_KFE_HFE"])
+    histograms = agent.log_histograms()
+    assert histograms["cpg/vector_V"].shape == (8,)
+    assert set(histograms) == {
+        "cpg/parameters",
+        "cpg/vector_V",
+        "feedback/output_weight",
+        "feedback/output_bias",
+    }
+    open_loop = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), control_dt=0.01, feedback=False)
+    assert "feedback/output_weight" not in open_loop.log_histograms()
+    mlp = MLPAgent(8, [0.9, 0.9], AgentConfig(), nominal_pose=(0.4, -0.8))
+    assert set(mlp.log_scalars()) == {"policy/log_std_0", "policy/log_std_1"}
+    assert mlp.log_histograms()["actor/output_weight"].shape == (2, 64)

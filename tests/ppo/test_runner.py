@@ -5,9 +5,10 @@ import json
 import pytest
 import torch
 
+from cpg_actor.checkpoint import load_checkpoint
 from cpg_actor.config import TrainConfig
 from cpg_actor.ppo import PPOConfig
-from cpg_actor.runner import Runner, TrainingDiverged, load_checkpoint
+from cpg_actor.runner import Runner, TrainingDiverged
 
 from .fake_env import FakeConfig, FakeHopperVectorEnv
 

@@ -176,3 +176,12 @@ class Agent(nn.Module):
 
     def std(self, batch_size: int) -> Tensor:
         return self.log_std.exp().expand(batch_size, self.action_dim)
+
+    # -- logging (the runner writes what the agent gives) -----------------------------------
+    def log_scalars(self) -> dict[str, float]:
+        """Scalars for TensorBoard and ``metrics.jsonl`` at every logged iteration."""
+        return {f"policy/log_std_{i}": v for i, v in enumerate(self.log_std.detach().tolist())}
+
+    def log_histograms(self) -> dict[str, Tensor]:
+        """Histograms for TensorBoard every ``histogram_interval`` iterations."""
+        return {}

@@ -65,6 +65,34 @@ class CPGActorAgent(Agent):
         phase = cpg_state.phase
         return torch.cat([torch.cos(phase), torch.sin(phase), cpg_state.amplitude], dim=-1)
 
+    def log_scalars(self) -> dict[str, float]:
+        """The log-std and the CPG's physical parameters: nu, rho, a per oscillator, w and phi
+        per edge of the topology."""
+        row = super().log_scalars()
+        names = self.cpg.topology.names
+        values = {k: v.detach() for k, v in self.cpg.parametrisation.values().items()}
+        for field, short in (("frequency", "nu"), ("amplitude", "rho"), ("convergence", "a")):
+            for i, name in enumerate(names):
+                row[f"cpg/{short}_{name}"] = float(values[field][i])
+        for i, j in self.cpg.topology.edges:
+            row[f"cpg/w_{names[i]}_{names[j]}"] = float(values["coupling_weight"][i, j])
+            row[f"cpg/phi_{names[i]}_{names[j]}"] = float(values["phase_bias"][i, j])
+        return row
+
+    def log_histograms(self) -> dict[str, Tensor]:
+        """Paper Fig. 5: the CPG parameters, V, and the feedback network's output layer."""
+        parametrisation = self.cpg.parametrisation
+        values = parametrisation.values().values()
+        out = {
+            "cpg/parameters": torch.cat([v.detach().flatten() for v in values]),
+            "cpg/vector_V": parametrisation.vector.detach(),
+        }
+        if self.feedback is not None:
+            last = self.feedback[-1]
+            out["feedback/output_weight"] = last.weight.detach()
+            out["feedback/output_bias"] = last.bias.detach()
+        return out
+
     def actor(self, obs: Tensor, state: Tensor) -> ActorOutput:
         n = self.cpg.num_oscillators
         if self.feedback is not None:

@@ -34,6 +34,13 @@ class MLPAgent(Agent):
         )
         self.register_buffer("nominal_pose", torch.as_tensor(nominal_pose, dtype=torch.float32))
 
+    def log_histograms(self) -> dict[str, Tensor]:
+        last = self.actor_mlp[-1]
+        return {
+            "actor/output_weight": last.weight.detach(),
+            "actor/output_bias": last.bias.detach(),
+        }
+
     def actor(self, obs: Tensor, state: Tensor) -> ActorOutput:
         mean = self.nominal_pose + self.action_scale * self.actor_mlp(obs)
         return ActorOutput(mean, self.std(obs.shape[0]), state, {})

@@ -293,7 +293,7 @@ def _resume_config(run_dir: Path) -> tuple[Path, TrainConfig]:
     """The checkpoint to resume from and the run's config, checked against each other: a
     missing ``config.yaml`` is rebuilt from the checkpoint; one edited since (any key but
     ``total_steps``) is refused, since the resumed run would not continue the same run."""
-    from cpg_actor.runner import config_differences, resume_checkpoint
+    from cpg_actor.checkpoint import config_differences, resume_checkpoint
 
     checkpoint, data, notes = resume_checkpoint(run_dir)
     for note in notes:

@@ -89,7 +89,7 @@ def trained_iteration(run_dir: Path) -> int | None:
     path = Path(run_dir) / "checkpoints" / "last.pt"
     if not path.is_file():
         return None
-    from cpg_actor.runner import load_checkpoint
+    from cpg_actor.checkpoint import load_checkpoint
 
     try:
         return int(load_checkpoint(path)["iteration"])

@@ -1,0 +1,81 @@
+"""Progress display of a training run: a rich progress bar on a terminal, a plain line every
+``interval`` seconds otherwise (a log file, a cluster job)."""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from typing import Any
+
+
+def evaluation_text(evaluation: dict[str, float]) -> str:
+    """One evaluation for the progress display."""
+    return f"eval return {evaluation['eval/return']:.1f} hop {evaluation['eval/hop_height']:.3f} m"
+
+
+class PlainProgress:
+    """Progress as a plain line every ``interval`` seconds (and at the end) when stdout is not a
+    terminal; the same ``update``/``stop`` calls as the rich progress bar."""
+
+    def __init__(self, name: str, total: int, completed: int, interval: float) -> None:
+        self.name, self.total, self.interval = name, total, interval
+        self.start = self.last = time.perf_counter()
+        self.first_step = completed
+        self.fields: dict[str, Any] = {"completed": completed, "evaluation": ""}
+
+    def update(self, task: Any, **fields: Any) -> None:
+        self.fields.update(fields)
+        now = time.perf_counter()
+        if now - self.last >= self.interval or self.fields["completed"] >= self.total:
+            self.last = now
+            self.print(now)
+
+    def print(self, now: float) -> None:
+        done = self.fields["completed"]
+        elapsed = now - self.start
+        rate = (done - self.first_step) / elapsed if elapsed > 0 else 0.0
+        eta = (self.total - done) / rate if rate > 0 else math.nan
+        print(
+            f"[train {self.name}] {done:,}/{self.total:,} steps ({100 * done / self.total:.1f}%), "
+            f"{self.fields.get('sps', '-')} SPS, elapsed {elapsed:.0f} s, ETA {eta:.0f} s, "
+            f"return {self.fields.get('ret', '-')} hop {self.fields.get('hop', '-')} m "
+            f"{self.fields['evaluation']}".rstrip(),
+            flush=True,
+        )
+
+    def stop(self) -> None:
+        pass
+
+
+def make_progress(name: str, total: int, completed: int, interval: float, evaluation: str):
+    """``(progress, task)``: a started rich progress bar (stdout a terminal) or a
+    :class:`PlainProgress`; both take ``update(task, completed=, sps=, ret=, hop=,
+    evaluation=)`` and ``stop()``."""
+    if not sys.stdout.isatty():
+        return PlainProgress(name, total, completed, interval), None
+    from rich.progress import (
+        BarColumn,
+        MofNCompleteColumn,
+        Progress,
+        TextColumn,
+        TimeElapsedColumn,
+        TimeRemainingColumn,
+    )
+
+    progress = Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(bar_width=16),
+        MofNCompleteColumn(),
+        TextColumn("steps {task.fields[sps]} SPS"),
+        TimeElapsedColumn(),
+        TextColumn("ETA"),
+        TimeRemainingColumn(),
+        TextColumn("return {task.fields[ret]} hop {task.fields[hop]} m"),
+        TextColumn("{task.fields[evaluation]}"),
+    )
+    task = progress.add_task(
+        name, total=total, completed=completed, sps="-", ret="-", hop="-", evaluation=evaluation
+    )
+    progress.start()
+    return progress, task
