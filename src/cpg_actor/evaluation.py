@@ -30,8 +30,10 @@ def evaluate(
 
     ``policy`` is a :class:`cpg_actor.policy.Policy` (or anything with its ``reset`` and
     ``act``); its recurrent state is reset here, its normaliser is not updated. Returns
-    ``episode_return``, ``hop_height`` and ``length`` per env and, with ``traces``, per-step
-    traces ``(T, E, ...)`` (rows after an env's episode ended are NaN).
+    ``episode_return`` and ``length`` per env, the env's episode metrics (its
+    ``info["episode_metrics"]``: ``hop_height`` for the hopper) per env, their names in
+    ``metric_names`` and, with ``traces``, per-step traces ``(T, E, ...)`` (rows after an env's
+    episode ended are NaN).
     """
     num_envs = env.num_envs
     obs, _ = env.reset(seed=seed)
@@ -42,7 +44,7 @@ def evaluate(
     active = np.ones(num_envs, dtype=bool)
     length = np.zeros(num_envs, dtype=np.int64)
     returns = np.zeros(num_envs)
-    max_hip = np.full(num_envs, -np.inf)
+    metrics: dict[str, np.ndarray] = {}  # the env's per-episode metrics (hop_height)
     records: dict[str, list[np.ndarray]] = {}
     for _ in range(max_steps + 1):
         step = policy.act(obs, deterministic=True)
@@ -53,7 +55,10 @@ def evaluate(
         if done.any():
             measured[done] = np.asarray(info["final_obs"], dtype=np.float32)[done]
         returns += np.where(active, np.asarray(reward, dtype=np.float64), 0.0)
-        max_hip = np.where(active, np.maximum(max_hip, measured[:, HIP_HEIGHT]), max_hip)
+        for name, values in info.get("episode_metrics", {}).items():
+            metric = metrics.setdefault(name, np.full(num_envs, np.nan))
+            ended = active & done
+            metric[ended] = np.asarray(values)[ended]
         if traces:
             row = _trace_row(
                 step.agent.extras, info, desired, previous_desired, measured, reward, control_dt
@@ -73,7 +78,8 @@ def evaluate(
         result["time"] = control_dt * np.arange(1, len(records["reward"]) + 1)
     result["length"] = length
     result["episode_return"] = returns
-    result["hop_height"] = np.maximum(0.0, max_hip - standing)
+    result.update(metrics)
+    result["metric_names"] = np.array(sorted(metrics), dtype=str)
     result["standing_hip_height"] = np.array(standing)
     result["control_dt"] = np.array(control_dt)
     return result

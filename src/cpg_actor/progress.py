@@ -11,7 +11,8 @@ from typing import Any
 
 def evaluation_text(evaluation: dict[str, float]) -> str:
     """One evaluation for the progress display."""
-    return f"eval return {evaluation['eval/return']:.1f} hop {evaluation['eval/hop_height']:.3f} m"
+    hop = evaluation.get("eval/hop_height", math.nan)
+    return f"eval return {evaluation['eval/return']:.1f} hop {hop:.3f} m"
 
 
 class PlainProgress:

@@ -46,7 +46,7 @@ from cpg_actor.checkpoint import (
     set_rng_state,
 )
 from cpg_actor.config import TrainConfig
-from cpg_actor.evaluation import HIP_HEIGHT, evaluate
+from cpg_actor.evaluation import evaluate
 from cpg_actor.policy import Policy
 from cpg_actor.ppo import (
     PPO,
@@ -82,17 +82,14 @@ class EpisodeStats:
 
     returns: np.ndarray
     lengths: np.ndarray
-    max_hip_height: np.ndarray
     terms: dict[str, np.ndarray]
 
     @classmethod
     def zeros(cls, num_envs: int) -> EpisodeStats:
-        return cls(
-            np.zeros(num_envs), np.zeros(num_envs, dtype=np.int64), np.full(num_envs, -np.inf), {}
-        )
+        return cls(np.zeros(num_envs), np.zeros(num_envs, dtype=np.int64), {})
 
     def state_dict(self) -> dict[str, Any]:
-        arrays = {"returns": self.returns, "lengths": self.lengths, "max": self.max_hip_height}
+        arrays = {"returns": self.returns, "lengths": self.lengths}
         return {
             **{k: torch.from_numpy(v.copy()) for k, v in arrays.items()},
             "terms": {k: torch.from_numpy(v.copy()) for k, v in self.terms.items()},
@@ -103,7 +100,6 @@ class EpisodeStats:
         return cls(
             state["returns"].numpy().copy(),
             state["lengths"].numpy().copy(),
-            state["max"].numpy().copy(),
             {k: v.numpy().copy() for k, v in state["terms"].items()},
         )
 
@@ -190,8 +186,6 @@ class Runner:
         self.policy.reset(self.config.num_envs)
         self.reward_normalizer.reset()
         self.episode = EpisodeStats.zeros(self.config.num_envs)
-        # hop height is measured from the hip height the hopper starts its episodes at
-        self.standing_height = float(self.obs[:, HIP_HEIGHT].mean())
         self._episodes_started = True
 
     def normalize(self, obs: torch.Tensor, update: bool) -> torch.Tensor:
@@ -244,21 +238,18 @@ class Runner:
             )
             self.policy.end_episodes(done)
             self.obs = torch.as_tensor(np.asarray(next_obs, dtype=np.float32))
-            # the hip height reached by this step; for envs that ended it is in final_obs
-            hip = np.array(next_obs[:, HIP_HEIGHT], dtype=np.float64)
-            if done.any():
-                hip[done] = np.asarray(info["final_obs"])[done, HIP_HEIGHT]
-            self._track_episodes(reward, hip, done, info)
+            self._track_episodes(reward, done, info)
 
         last_values = self.agent.value(self.normalize(self.obs, update=False), self.agent_state)
         self.storage.compute_returns(last_values, cfg.ppo.gamma, cfg.ppo.gae_lambda)
         return {"simulation_time": sim_time}
 
-    def _track_episodes(self, reward, hip, done, info) -> None:
+    def _track_episodes(self, reward, done, info) -> None:
+        """Returns, lengths and reward terms summed per episode; the env's own episode metrics
+        (``info["episode_metrics"]``, e.g. the hopper's hop height) as it reports them."""
         ep = self.episode
         ep.returns += np.asarray(reward, dtype=np.float64)
         ep.lengths += 1
-        ep.max_hip_height = np.maximum(ep.max_hip_height, hip)
         for name, value in info.get("reward_terms", {}).items():
             ep.terms.setdefault(name, np.zeros_like(ep.returns))
             ep.terms[name] += np.asarray(value, dtype=np.float64)
@@ -267,13 +258,13 @@ class Runner:
         for i in np.flatnonzero(done):
             self._remember("return", ep.returns[i])
             self._remember("length", ep.lengths[i])
-            if np.isfinite(ep.max_hip_height[i]):
-                self._remember("hop_height", max(0.0, ep.max_hip_height[i] - self.standing_height))
+            for name, values in info.get("episode_metrics", {}).items():
+                if np.isfinite(values[i]):
+                    self._remember(name, values[i])
             for name, value in ep.terms.items():
                 self._remember(f"reward_terms/{name}", value[i])
         ep.returns[done] = 0.0
         ep.lengths[done] = 0
-        ep.max_hip_height[done] = -np.inf
         for value in ep.terms.values():
             value[done] = 0.0
 
@@ -407,13 +398,15 @@ class Runner:
             max_steps=int(getattr(cfg.env, "episode_steps", 10_000)),
             traces=False,
         )
-        return {
+        row = {
             "eval/return": float(result["episode_return"].mean()),
             "eval/return_min": float(result["episode_return"].min()),
-            "eval/hop_height": float(result["hop_height"].mean()),
             "eval/length": float(result["length"].mean()),
-            "time/eval": time.perf_counter() - start,
         }
+        for name in result["metric_names"]:  # the env's own (the hopper's hop height)
+            row[f"eval/{name}"] = float(np.nanmean(result[str(name)]))
+        row["time/eval"] = time.perf_counter() - start
+        return row
 
     def log_evaluation(self) -> dict[str, float]:
         """Evaluate now and log it alone (a metrics row of the current iteration)."""
@@ -551,7 +544,6 @@ class Runner:
             "agent_state": self.policy.state.clone(),
             "statistics": self.episode.state_dict(),
             "discounted_returns": self.reward_normalizer.discounted.clone(),
-            "standing_height": self.standing_height,
         }
 
     def restore_episodes(self, state: dict[str, Any]) -> None:
@@ -570,7 +562,6 @@ class Runner:
                 f"the checkpoint's episodes do not fit this run's environments: {error}"
             ) from None
         self.obs, self.policy.state = obs.clone(), agent_state.clone()
-        self.standing_height = float(state["standing_height"])
         self._episodes_started = True
 
     def save_checkpoint(self) -> Path:

@@ -189,3 +189,28 @@ def test_make_vec_uses_the_vector_env():
     env = gym.make_vec(ENV_ID, num_envs=2, vectorization_mode="vector_entry_point", sim="pybullet")
     assert isinstance(env, HopperVectorEnv) and env.config.sim == "pybullet"
     env.close()
+
+
+def test_the_env_reports_each_finished_episode_hop_height():
+    """hop_height = the episode's highest hip above the hip height it started at, reported at
+    the step the episode ends (NaN for the other envs)."""
+    env = HopperVectorEnv(3, episode_steps=15)
+    obs, _ = env.reset(seed=4)
+    standing, highest = obs[:, 6].astype(np.float64), np.full(3, -np.inf)
+    rng = np.random.default_rng(1)
+    reported = 0
+    try:
+        for _ in range(40):
+            action = np.array([0.4, -0.8]) + 0.4 * rng.standard_normal((3, 2))
+            obs, _, terminated, truncated, info = env.step(action)
+            done = terminated | truncated
+            highest = np.maximum(highest, info["hip_height"])
+            hop = info["episode_metrics"]["hop_height"]
+            assert np.isnan(hop[~done]).all()
+            expected = np.maximum(0.0, highest - standing)
+            np.testing.assert_allclose(hop[done], expected[done], rtol=0, atol=1e-6)
+            reported += int(done.sum())
+            standing[done], highest[done] = obs[done, 6], -np.inf
+    finally:
+        env.close()
+    assert reported == 6  # two episodes of 15 steps per env in 40 steps

@@ -84,6 +84,7 @@ class FakeHopperVectorEnv:
             "joint_torque": 10 * (actions - self.q),
         }
         done = terminated | truncated
+        info["episode_metrics"] = {"hop_height": np.where(done, self.h - 0.5, np.nan)}
         obs = self._obs()
         if done.any():
             info["final_obs"] = obs.copy()

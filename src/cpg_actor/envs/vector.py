@@ -12,6 +12,10 @@ the returned ``obs`` is already the first observation of its next episode; the l
 of the finished episode is in ``info["final_obs"][i]`` (rows of envs that did not end hold
 their current observation) and ``info["_final_obs"]`` marks the rows that ended.
 
+Episode metrics: ``info["episode_metrics"]["hop_height"][i]`` is, for an env whose episode
+ended at this step, the episode's highest hip height above the hip height it started at (m,
+>= 0); NaN for the others. The trainer logs every entry of ``episode_metrics`` as it is.
+
 Seeding: ``reset(seed=s)`` seeds env i with ``s + i`` (Gymnasium's convention), exactly as
 ``HopperEnv.reset(seed=s + i)`` would, so env i of the vector env and a single ``HopperEnv``
 given the same seed and actions follow the same trajectory. Later autoresets continue each
@@ -117,6 +121,8 @@ class HopperVectorEnv(VectorEnv):
         index = np.arange(self.num_envs)
         noise = np.stack([self.sim.sample_noise(rng) for rng in self._rngs])
         self.sim.reset_robots(index, noise)
+        self._standing = self.sim.backend.hip_height.copy()
+        self._max_hip = np.full(self.num_envs, -np.inf)
         self._needs_reset = False
         info = {
             "hip_height": self.sim.backend.hip_height.copy(),
@@ -138,11 +144,16 @@ class HopperVectorEnv(VectorEnv):
         obs = result.obs
         done = result.terminated | result.truncated
         final_obs = obs.copy()
+        self._max_hip = np.maximum(self._max_hip, result.hip_height)
+        hop_height = np.full(self.num_envs, np.nan)
         if done.any():
             ended = np.flatnonzero(done)
+            hop_height[ended] = np.maximum(0.0, self._max_hip[ended] - self._standing[ended])
             noise = np.stack([self.sim.sample_noise(self._rngs[i]) for i in ended])
             self.sim.reset_robots(ended, noise)
             obs[ended] = self.sim.observation()[ended]
+            self._standing[ended] = self.sim.backend.hip_height[ended]
+            self._max_hip[ended] = -np.inf
         info = {
             "reward_terms": result.reward_terms,
             "hip_height": result.hip_height,
@@ -152,6 +163,8 @@ class HopperVectorEnv(VectorEnv):
             "measured_position": result.measured_position,
             "final_obs": final_obs,
             "_final_obs": done,
+            # per-episode metrics of the envs whose episode ended at this step (NaN elsewhere)
+            "episode_metrics": {"hop_height": hop_height},
         }
         return obs, result.reward, result.terminated, result.truncated, info
 
@@ -166,7 +179,12 @@ class HopperVectorEnv(VectorEnv):
         if self._needs_reset:
             raise RuntimeError("call reset() before get_state()")
         sim = {k: torch.from_numpy(np.array(v)) for k, v in self.sim.get_state().items()}
-        return {"simulation": sim, "rngs": [rng.bit_generator.state for rng in self._rngs]}
+        episodes = {"standing": self._standing.copy(), "max_hip": self._max_hip.copy()}
+        return {
+            "simulation": sim,
+            "episodes": {k: torch.from_numpy(v) for k, v in episodes.items()},
+            "rngs": [rng.bit_generator.state for rng in self._rngs],
+        }
 
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`get_state` returned (ValueError if it does not fit)."""
@@ -180,6 +198,8 @@ class HopperVectorEnv(VectorEnv):
         if len(rngs) != self.num_envs:
             raise ValueError(f"the state has {len(rngs)} envs, this env {self.num_envs}")
         self.sim.set_state(simulation)
+        self._standing = state["episodes"]["standing"].numpy().copy()
+        self._max_hip = state["episodes"]["max_hip"].numpy().copy()
         self._rngs = [seeding.np_random(0)[0] for _ in rngs]
         for rng, rng_state in zip(self._rngs, rngs, strict=True):
             rng.bit_generator.state = rng_state
