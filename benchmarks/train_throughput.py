@@ -31,18 +31,30 @@ from cpg_actor.runner import Runner
 AGENTS = ("mlp", "cpg-actor", "cpg-actor-open-loop")
 
 
-def make_config(agent: str, preset: str, compile: bool) -> TrainConfig:
+def make_config(
+    agent: str, preset: str, compile: bool, device: str = "cpu", num_envs: int | None = None
+) -> TrainConfig:
     config = TrainConfig(agent=agent)
     apply_dict(config, preset_values(preset), "")
     config.eval_interval = 0
-    if compile:
-        config.ppo.compile = True
+    config.ppo.compile = compile  # the presets compile; rows say which
+    if device != "cpu":
+        config.device = device
+    if num_envs is not None:
+        config.num_envs = num_envs
     return config
 
 
-def measure(agent: str, preset: str, iterations: int, compile: bool = False) -> dict[str, float]:
+def measure(
+    agent: str,
+    preset: str,
+    iterations: int,
+    compile: bool = False,
+    device: str = "cpu",
+    num_envs: int | None = None,
+) -> dict[str, float]:
     """One warm-up iteration (and the compile), then ``iterations`` timed ones."""
-    config = make_config(agent, preset, compile)
+    config = make_config(agent, preset, compile, device, num_envs)
     config.total_steps = (iterations + 1) * config.steps_per_iteration
     runner = Runner(config, run_dir=None, tensorboard=False)
     collect = update = simulation = 0.0
@@ -93,14 +105,17 @@ def main() -> None:
     parser.add_argument("--agents", nargs="+", default=list(AGENTS))
     parser.add_argument("--iterations", type=int, default=4)
     parser.add_argument("--compile", action="store_true", help="also measure with ppo.compile=true")
+    parser.add_argument("--device", default="cpu", help="cpu (default) or cuda")
+    parser.add_argument("--num-envs", type=int, default=None, help="override the preset's")
     parser.add_argument("--reference-src", help="a src/ folder holding the reference cpg_actor")
     parser.add_argument("--json", action="store_true", help="print one JSON line, write nothing")
     parser.add_argument("--output", default="benchmarks/results/train_throughput.md")
     args = parser.parse_args()
     torch.set_num_threads(1)
 
+    extra = {"device": args.device, "num_envs": args.num_envs}
     results = {
-        f"{preset}/{agent}": measure(agent, preset, args.iterations)
+        f"{preset}/{agent}": measure(agent, preset, args.iterations, **extra)
         for preset in args.presets
         for agent in args.agents
     }
@@ -108,7 +123,7 @@ def main() -> None:
         for preset in args.presets:
             for agent in args.agents:
                 results[f"{preset} + compile/{agent}"] = measure(
-                    agent, preset, args.iterations, compile=True
+                    agent, preset, args.iterations, compile=True, **extra
                 )
     if args.json:
         print(json.dumps(results))
@@ -130,11 +145,15 @@ def main() -> None:
         f"{' '.join(args.presets)} --agents {' '.join(args.agents)} --iterations "
         f"{args.iterations}"
         + (" --compile" if args.compile else "")
+        + (f" --device {args.device}" if args.device != "cpu" else "")
+        + (f" --num-envs {args.num_envs}" if args.num_envs else "")
         + (" --reference-src REF/src`" if args.reference_src else "`")
         + ".",
         "",
         f"Machine: {cpu_model()}, {usable_cores()} usable cores (load {load_average()}), "
-        f"torch {torch.__version__}, 1 torch thread.",
+        f"torch {torch.__version__}, 1 torch thread"
+        + (f", networks and PPO on {torch.cuda.get_device_name()}" if args.device != "cpu" else "")
+        + ".",
         "",
         "Physics ceiling in the same run (`mujoco.rollout`, 10 substeps per control step, "
         "constant torques): "

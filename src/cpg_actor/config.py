@@ -19,6 +19,7 @@ import yaml
 
 from cpg_actor.agents.base import AgentConfig
 from cpg_actor.agents.warm_start import WarmStartConfig
+from cpg_actor.device import check_device_name
 from cpg_actor.ppo.config import PPOConfig
 
 
@@ -45,6 +46,7 @@ class TrainConfig:
     log_interval: int = 1  # iterations between TensorBoard / metrics.csv rows
     histogram_interval: int = 10  # iterations between parameter histograms
     torch_threads: int = 1  # torch intra-op threads (the simulator uses the other cores)
+    device: str = "cpu"  # networks, storage and PPO: cpu | cuda | cuda:N | auto (cpg_actor.device)
     env_threads: int | None = None  # simulator threads, None: the env's default
     agent_config: AgentConfig = field(default_factory=AgentConfig)
     ppo: PPOConfig = field(default_factory=PPOConfig)
@@ -97,6 +99,7 @@ class TrainConfig:
                 "env.normalized_actions is for off-the-shelf RL libraries (gymnasium.make); "
                 "the project's agents act on desired positions in rad: leave it false"
             )
+        check_device_name(self.device)
         self.agent_config.validate()
         self.ppo.validate()
         self.warm_start.validate()

@@ -64,6 +64,11 @@ class Policy:
         self.config: Any = None  # the run's TrainConfig when built by load_policy
 
     @property
+    def device(self) -> torch.device:
+        """Where the agent runs; observations go there, actions come back to numpy."""
+        return self.agent.log_std.device
+
+    @property
     def num_envs(self) -> int:
         if self.state is None:
             raise RuntimeError("call Policy.reset(num_envs) first")
@@ -78,7 +83,7 @@ class Policy:
         rows = np.flatnonzero(np.asarray(done))
         if len(rows):
             state = self.state.clone()
-            state[torch.as_tensor(rows)] = self.agent.initial_state(len(rows))
+            state[torch.as_tensor(rows, device=state.device)] = self.agent.initial_state(len(rows))
             self.state = state
 
     def normalize(self, obs: Tensor, update: bool = False) -> Tensor:
@@ -103,7 +108,10 @@ class Policy:
         whose episode the step ended."""
         if self.state is None:
             raise RuntimeError("call Policy.reset(num_envs) before act()")
-        obs_t = torch.as_tensor(np.asarray(obs, dtype=np.float32))
+        if isinstance(obs, Tensor):
+            obs_t = obs.to(self.device, torch.float32)
+        else:
+            obs_t = torch.as_tensor(np.asarray(obs, dtype=np.float32), device=self.device)
         if obs_t.dim() != 2 or obs_t.shape[0] != self.num_envs:
             raise ValueError(
                 f"obs must have shape ({self.num_envs}, obs_dim), got {tuple(obs_t.shape)}"
@@ -111,17 +119,20 @@ class Policy:
         normalized = self.normalize(obs_t, update=update_normalizer)
         state = self.state
         step = self.agent.act(normalized, state, deterministic=deterministic)
-        action = np.clip(step.action.numpy(), self.action_low, self.action_high)
+        action = np.clip(step.action.cpu().numpy(), self.action_low, self.action_high)
         self.state = step.next_state
         return PolicyStep(action, normalized, state, step)
 
 
-def load_policy(path: str | Path, env_config: Any = None) -> Policy:
+def load_policy(
+    path: str | Path, env_config: Any = None, device: torch.device | str = "cpu"
+) -> Policy:
     """The policy of a run directory (``checkpoints/last.pt``) or of a checkpoint file.
 
     The agent is rebuilt from the config saved in the checkpoint; the action bounds and
     observation size come from that agent's environment (built once, then closed).
-    ``env_config`` replaces the run's env config (e.g. another simulator). Call
+    ``env_config`` replaces the run's env config (e.g. another simulator); ``device`` is where
+    the agent runs (default the CPU, wherever it was trained). Call
     :meth:`Policy.reset` with the number of envs before acting.
     """
     from cpg_actor.agents import get_agent_spec
@@ -152,6 +163,8 @@ def load_policy(path: str | Path, env_config: Any = None) -> Policy:
             f"checkpoint {checkpoint} does not match its agent's networks: {error}"
         ) from None
     agent.eval()
+    agent.to(device)
+    normalizer.to(device)
     policy = Policy(agent, normalizer, low, high, config.ppo.normalize_observations)
     policy.config = config  # the run's resolved config, as saved in the checkpoint
     return policy

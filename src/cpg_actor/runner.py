@@ -46,6 +46,7 @@ from cpg_actor.checkpoint import (
     set_rng_state,
 )
 from cpg_actor.config import TrainConfig
+from cpg_actor.device import resolve_device
 from cpg_actor.evaluation import evaluate
 from cpg_actor.policy import Policy
 from cpg_actor.ppo import (
@@ -133,6 +134,7 @@ class Runner:
         self.progress_interval = progress_interval  # seconds between plain-text progress lines
         self.use_tensorboard = tensorboard and self.run_dir is not None
         torch.set_num_threads(config.torch_threads)
+        self.device = resolve_device(config.device)
         seed_everything(config.seed)
         self.spec = get_agent_spec(config.agent)
         self.env = (
@@ -151,7 +153,8 @@ class Runner:
         action_dim = int(action_space.shape[0])
         action_scale = (self.action_high - self.action_low) / 2.0
         self.agent = self.spec.build(config.agent_config, obs_dim, action_scale, config.env)
-        self.normalizer = RunningNormalizer(obs_dim)
+        self.agent.to(self.device)
+        self.normalizer = RunningNormalizer(obs_dim).to(self.device)
         self.policy = Policy(
             self.agent,
             self.normalizer,
@@ -160,6 +163,7 @@ class Runner:
             config.ppo.normalize_observations,
         )
         self.reward_normalizer = RewardNormalizer(config.num_envs, config.ppo.gamma)
+        self.reward_normalizer.to(self.device)
         self.eval_env = eval_env  # None: built at the first evaluation
         self.ppo = PPO(self.agent, config.ppo)
         self.storage = RolloutStorage(
@@ -168,6 +172,7 @@ class Runner:
             obs_dim,
             action_dim,
             tuple(self.agent.state_shape),
+            self.device,
         )
         self.iteration = 0
         self.global_step = 0
@@ -209,20 +214,22 @@ class Runner:
             next_obs, reward, terminated, truncated, info = self.env.step(acted.action)
             sim_time += time.perf_counter() - start
 
-            terminated_t = torch.as_tensor(np.asarray(terminated, dtype=np.float32))
-            truncated_t = torch.as_tensor(np.asarray(truncated, dtype=np.float32))
+            device = self.device
+            terminated_t = torch.as_tensor(np.asarray(terminated, np.float32), device=device)
+            truncated_t = torch.as_tensor(np.asarray(truncated, np.float32), device=device)
             done = np.logical_or(terminated, truncated)
-            final_values = torch.zeros(cfg.num_envs)
+            final_values = torch.zeros(cfg.num_envs, device=device)
             bootstrap = np.logical_and(truncated, np.logical_not(terminated))
             if bootstrap.any():
-                rows = torch.as_tensor(np.flatnonzero(bootstrap))
-                final_obs = torch.as_tensor(np.asarray(info["final_obs"], dtype=np.float32))[rows]
+                rows = torch.as_tensor(np.flatnonzero(bootstrap), device=device)
+                final_obs = np.asarray(info["final_obs"], dtype=np.float32)
+                final_obs = torch.as_tensor(final_obs, device=device)[rows]
                 final_values[rows] = self.agent.value(
                     self.normalize(final_obs, update=False), step.next_state[rows]
                 )
-            rewards = torch.as_tensor(np.asarray(reward, dtype=np.float32))
+            rewards = torch.as_tensor(np.asarray(reward, dtype=np.float32), device=device)
             if cfg.ppo.normalize_rewards:
-                rewards = self.reward_normalizer(rewards, torch.as_tensor(done))
+                rewards = self.reward_normalizer(rewards, torch.as_tensor(done, device=device))
             self.storage.add(
                 observations=acted.observation,
                 states=acted.state,
@@ -240,7 +247,8 @@ class Runner:
             self.obs = torch.as_tensor(np.asarray(next_obs, dtype=np.float32))
             self._track_episodes(reward, done, info)
 
-        last_values = self.agent.value(self.normalize(self.obs, update=False), self.agent_state)
+        obs = self.obs.to(self.device)
+        last_values = self.agent.value(self.normalize(obs, update=False), self.agent_state)
         self.storage.compute_returns(last_values, cfg.ppo.gamma, cfg.ppo.gae_lambda)
         return {"simulation_time": sim_time}
 
@@ -540,10 +548,10 @@ class Runner:
             return None
         return {
             "env": self.env.get_state(),
-            "obs": self.obs.clone(),
-            "agent_state": self.policy.state.clone(),
+            "obs": self.obs.cpu().clone(),
+            "agent_state": self.policy.state.cpu().clone(),
             "statistics": self.episode.state_dict(),
-            "discounted_returns": self.reward_normalizer.discounted.clone(),
+            "discounted_returns": self.reward_normalizer.discounted.cpu().clone(),
         }
 
     def restore_episodes(self, state: dict[str, Any]) -> None:
@@ -561,7 +569,7 @@ class Runner:
             raise ValueError(
                 f"the checkpoint's episodes do not fit this run's environments: {error}"
             ) from None
-        self.obs, self.policy.state = obs.clone(), agent_state.clone()
+        self.obs, self.policy.state = obs.clone().cpu(), agent_state.to(self.device).clone()
         self._episodes_started = True
 
     def save_checkpoint(self) -> Path:

@@ -136,7 +136,7 @@ class Agent(nn.Module):
 
     # -- to implement ---------------------------------------------------------------------
     def initial_state(self, batch_size: int) -> Tensor:
-        return torch.zeros(batch_size, *self.state_shape)
+        return torch.zeros(batch_size, *self.state_shape, device=self.log_std.device)
 
     def actor(self, obs: Tensor, state: Tensor) -> ActorOutput:
         raise NotImplementedError

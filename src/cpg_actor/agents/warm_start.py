@@ -62,13 +62,16 @@ def warm_start(
     updated with the reference observations first (None: no normalisation).
     """
     config.validate()
+    device = agent.log_std.device
     observations = collect_reference_observations(env, target_action, config.rollout_steps, seed)
+    observations = observations.to(device)
     if normalizer is not None:
         normalizer.update(observations)
         inputs = normalizer(observations)
     else:
         inputs = observations
-    target = torch.as_tensor(target_action, dtype=torch.float32).expand(inputs.shape[0], -1)
+    target = torch.as_tensor(target_action, dtype=torch.float32, device=device)
+    target = target.expand(inputs.shape[0], -1)
     empty_state = agent.initial_state(inputs.shape[0])
     actor_parameters = [
         p
@@ -78,7 +81,7 @@ def warm_start(
     optimiser = torch.optim.Adam(actor_parameters, lr=config.learning_rate)
     losses = []
     for _ in range(config.epochs):
-        order = torch.randperm(inputs.shape[0], generator=generator)
+        order = torch.randperm(inputs.shape[0], generator=generator).to(device)
         total = 0.0
         for start in range(0, inputs.shape[0], config.minibatch_size):
             batch = order[start : start + config.minibatch_size]

@@ -53,6 +53,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--num-envs", type=int, default=None, help=f"parallel envs (default {TrainConfig.num_envs})"
     )
     parser.add_argument(
+        "--device",
+        default=None,
+        help="networks, storage and PPO: cpu (default), cuda, cuda:N or auto; the simulator "
+        "stays on the CPU",
+    )
+    parser.add_argument(
         "--run-dir", default=None, help=f"output directory (default {DEFAULT_RUN_DIR})"
     )
     parser.add_argument(
@@ -108,6 +114,8 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
         flags["num_envs"] = args.num_envs
     if args.sim is not None:
         flags["env"] = {"sim": args.sim}
+    if getattr(args, "device", None) is not None:
+        flags["device"] = args.device
     apply_dict(config, flags, prefix="")
     for text in args.overrides:
         apply_dict(config, parse_override(text), prefix="")
@@ -186,6 +194,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
                 ("--agent", args.agent),
                 ("--preset", args.preset),
                 ("--sim", args.sim),
+                ("--device", args.device),
                 ("--seed", args.seed),
                 ("--num-envs", args.num_envs),
                 ("--config", args.config),

@@ -71,7 +71,9 @@ class RewardNormalizer(nn.Module):
         self.epsilon = epsilon
         self.clip = clip
         self.returns_rms = RunningNormalizer(1)
-        self.discounted = torch.zeros(num_envs, dtype=torch.float64)
+        # a buffer (moves with .to(device)) but not in state_dict: it belongs to the episodes
+        # in progress, which the runner saves on their own
+        self.register_buffer("discounted", torch.zeros(num_envs, dtype=torch.float64), False)
 
     def reset(self) -> None:
         self.discounted.zero_()

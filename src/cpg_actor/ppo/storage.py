@@ -77,22 +77,25 @@ class RolloutStorage:
         obs_dim: int,
         action_dim: int,
         state_shape: tuple[int, ...],
+        device: torch.device | str = "cpu",
     ) -> None:
         t, n = num_steps, num_envs
+        self.device = torch.device(device)
+        zeros = lambda *shape: torch.zeros(*shape, device=self.device)  # noqa: E731
         self.num_steps, self.num_envs = num_steps, num_envs
-        self.observations = torch.zeros(t, n, obs_dim)
-        self.states = torch.zeros(t, n, *state_shape)
-        self.actions = torch.zeros(t, n, action_dim)
-        self.log_probs = torch.zeros(t, n)
-        self.values = torch.zeros(t, n)
-        self.action_mean = torch.zeros(t, n, action_dim)
-        self.action_std = torch.zeros(t, n, action_dim)
-        self.rewards = torch.zeros(t, n)
-        self.terminated = torch.zeros(t, n)
-        self.truncated = torch.zeros(t, n)
-        self.final_values = torch.zeros(t, n)
-        self.advantages = torch.zeros(t, n)
-        self.returns = torch.zeros(t, n)
+        self.observations = zeros(t, n, obs_dim)
+        self.states = zeros(t, n, *state_shape)
+        self.actions = zeros(t, n, action_dim)
+        self.log_probs = zeros(t, n)
+        self.values = zeros(t, n)
+        self.action_mean = zeros(t, n, action_dim)
+        self.action_std = zeros(t, n, action_dim)
+        self.rewards = zeros(t, n)
+        self.terminated = zeros(t, n)
+        self.truncated = zeros(t, n)
+        self.final_values = zeros(t, n)
+        self.advantages = zeros(t, n)
+        self.returns = zeros(t, n)
         self.step = 0
 
     def add(self, **fields: Tensor) -> None:
@@ -140,7 +143,7 @@ class RolloutStorage:
                 "returns",
             )
         }
-        order = torch.randperm(batch_size)
+        order = torch.randperm(batch_size).to(self.device)  # the CPU generator on any device
         # each field gathered on its own: contiguous tensors (torch.compile's CPU kernels for
         # strided views of one shared table gave gradients that varied from run to run)
         for indices in order.chunk(num_minibatches):
