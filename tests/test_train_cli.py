@@ -179,7 +179,8 @@ def test_train_resume_equals_straight_run_and_eval_writes_traces(tmp_path, capsy
 
 
 def test_nan_loss_exits_with_status_1_and_keeps_the_last_good_checkpoint(tmp_path, capsys):
-    from cpg_actor.agents import AGENTS, AgentSpec, MLPAgent, register_agent
+    from cpg_actor.agents import AGENTS, AgentSpec, register_agent
+    from cpg_actor.agents.registry import build_mlp
     from ppo.fake_env import FakeHopperVectorEnv  # tests/ppo; pytest puts tests/ on sys.path
 
     def make_env(num_envs, env_config, num_threads=None):
@@ -191,9 +192,7 @@ def test_nan_loss_exits_with_status_1_and_keeps_the_last_good_checkpoint(tmp_pat
         AgentSpec(
             "test-nan",
             "MLP on an env whose rewards turn NaN",
-            lambda cfg, obs_dim, action_scale, env_cfg: MLPAgent(
-                obs_dim, action_scale, cfg, (0.4, -0.8)
-            ),
+            build_mlp,
             make_env,
         )
     )

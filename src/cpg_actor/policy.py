@@ -151,9 +151,9 @@ def load_policy(
         low = np.asarray(env.single_action_space.low, dtype=np.float32)
         high = np.asarray(env.single_action_space.high, dtype=np.float32)
         obs_dim = int(env.single_observation_space.shape[0])
+        agent = spec.build(config.agent_config, env)
     finally:
         env.close()
-    agent = spec.build(config.agent_config, obs_dim, (high - low) / 2.0, config.env)
     normalizer = RunningNormalizer(obs_dim)
     try:
         agent.load_state_dict(data["agent_state"])

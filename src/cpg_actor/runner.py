@@ -151,8 +151,7 @@ class Runner:
         self.action_high = np.asarray(action_space.high, dtype=np.float32)
         obs_dim = int(self.env.single_observation_space.shape[0])
         action_dim = int(action_space.shape[0])
-        action_scale = (self.action_high - self.action_low) / 2.0
-        self.agent = self.spec.build(config.agent_config, obs_dim, action_scale, config.env)
+        self.agent = self.spec.build(config.agent_config, self.env)
         self.agent.to(self.device)
         self.normalizer = RunningNormalizer(obs_dim).to(self.device)
         self.policy = Policy(

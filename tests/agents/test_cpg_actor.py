@@ -6,11 +6,15 @@ import torch
 from cpg_actor.agents import AgentConfig, CPGActorAgent, MLPAgent, get_agent_spec
 from cpg_actor.config import TrainConfig
 from cpg_actor.cpg import CPGState
+from cpg_actor.envs import HopperConfig
+from cpg_actor.envs.hopper import robot_spec
 from cpg_actor.ppo import PPOConfig
 from cpg_actor.runner import Runner
 
 # tests/ppo/fake_env.py: pytest puts tests/ on sys.path (tests/ is not a package)
 from ppo.fake_env import FakeConfig, FakeHopperVectorEnv  # noqa: I001
+
+HOPPER = robot_spec(HopperConfig())  # the robot the CPG-Actor is built for
 
 
 def make_runner(agent="cpg-actor", num_envs=6, num_steps=32, seed=0, **env_kwargs):
@@ -93,7 +97,7 @@ def test_update_changes_cpg_parameters_and_feedback_output_layer():
 
 
 def test_gradient_reaches_cpg_and_feedback_from_one_replayed_step():
-    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), control_dt=0.01)
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER)
     state = agent.cpg.initial_state(4, amplitude=0.2).as_tensor()
     obs = torch.randn(4, 8)
     log_prob, *_ = agent.evaluate(obs, state, torch.zeros(4, 2))
@@ -104,7 +108,7 @@ def test_gradient_reaches_cpg_and_feedback_from_one_replayed_step():
 
 
 def test_open_loop_agent_has_no_feedback_and_trains_only_cpg_and_log_std():
-    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), control_dt=0.01, feedback=False)
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER, feedback=False)
     actor_params = {n for n, _ in agent.named_parameters() if not n.startswith("critic")}
     assert actor_params == {"log_std", "cpg.parametrisation.vector"}
     out = agent.actor(torch.randn(3, 8), agent.initial_state(3))
@@ -112,7 +116,7 @@ def test_open_loop_agent_has_no_feedback_and_trains_only_cpg_and_log_std():
 
 
 def test_initial_feedback_is_small_and_mean_starts_at_nominal_pose():
-    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), control_dt=0.01)
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER)
     out = agent.actor(torch.randn(16, 8), agent.initial_state(16))
     assert out.extras["xi"].abs().max() < 0.5  # rad/s, vs 2 pi nu = 12.6
     state = CPGState.from_tensor(out.next_state)
@@ -141,6 +145,7 @@ def test_unknown_agent_name_lists_the_registered_ones():
 def test_a_new_agent_with_its_own_env_factory_is_one_registry_entry():
     """How a later baseline (e.g. cho2019 on a wrapped env) plugs in: no runner change."""
     from cpg_actor.agents import AGENTS, AgentSpec, register_agent
+    from cpg_actor.agents.registry import env_shapes
 
     made = []
 
@@ -152,9 +157,7 @@ def test_a_new_agent_with_its_own_env_factory_is_one_registry_entry():
         AgentSpec(
             "test-wrapped",
             "MLP on a stand-in env",
-            lambda cfg, obs_dim, action_scale, env_cfg: MLPAgent(
-                obs_dim, action_scale, cfg, (0.4, -0.8)
-            ),
+            lambda cfg, env: MLPAgent(*env_shapes(env), cfg, (0.4, -0.8)),
             make_env,
         )
     )
@@ -176,7 +179,7 @@ def test_a_new_agent_with_its_own_env_factory_is_one_registry_entry():
 
 
 def test_agents_supply_their_own_scalars_and_histograms():
-    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), control_dt=0.01)
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER)
     scalars = agent.log_scalars()
     assert {"policy/log_std_0", "cpg/nu_HFE", "cpg/rho_KFE", "cpg/a_HFE"} <= set(scalars)
     assert scalars["cpg/phi_HFE_KFE"] == pytest.approx(-scalars["cpg/phi_KFE_HFE"])
@@ -188,8 +191,27 @@ def test_agents_supply_their_own_scalars_and_histograms():
         "feedback/output_weight",
         "feedback/output_bias",
     }
-    open_loop = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), control_dt=0.01, feedback=False)
+    open_loop = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER, feedback=False)
     assert "feedback/output_weight" not in open_loop.log_histograms()
     mlp = MLPAgent(8, [0.9, 0.9], AgentConfig(), nominal_pose=(0.4, -0.8))
     assert set(mlp.log_scalars()) == {"policy/log_std_0", "policy/log_std_1"}
     assert mlp.log_histograms()["actor/output_weight"].shape == (2, 64)
+
+
+def test_agents_are_built_from_the_env_robot():
+    """The nominal pose and the CPG's time step come from the env's RobotSpec, defined once."""
+    from cpg_actor.agents.registry import build_cpg_actor, build_mlp
+    from cpg_actor.envs.robot import description
+    from cpg_actor.robot import RobotSpec
+
+    env = FakeHopperVectorEnv(2, FakeConfig(control_dt=0.02))
+    assert env.robot.nominal_pose == tuple(description.NOMINAL_POSE) == HOPPER.nominal_pose
+    agent = build_cpg_actor(AgentConfig(), env)
+    assert agent.cpg.dt == 0.02
+    assert torch.equal(agent.joint_map.offset, torch.tensor([0.4, -0.8]))
+    assert torch.equal(build_mlp(AgentConfig(), env).nominal_pose, torch.tensor([0.4, -0.8]))
+    env.robot = RobotSpec("a-biped", ("HFE", "KFE"), (0.4, -0.8), (-1, -2), (1, 0), 0.01, ())
+    with pytest.raises(ValueError, match="no CPG preset for robot 'a-biped'"):
+        build_cpg_actor(AgentConfig(), env)
+    with pytest.raises(ValueError, match="nominal_pose needs 2 entries"):
+        RobotSpec("x", ("HFE", "KFE"), (0.4,), (-1, -2), (1, 0), 0.01, ())

@@ -11,6 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from cpg_actor.robot import RobotSpec
+
 
 @dataclass
 class FakeConfig:
@@ -28,6 +30,16 @@ class FakeHopperVectorEnv:
             np.array([-1.0, -2.5], dtype=np.float32), np.array([1.5, 0.0], dtype=np.float32)
         )
         self.single_observation_space = spaces.Box(-np.inf, np.inf, (8,), np.float32)
+        # the hopper's joints, so that the hopper's agents (and its CPG preset) build on it
+        self.robot = RobotSpec(
+            name="anymal-hopper",
+            joint_names=("HFE", "KFE"),
+            nominal_pose=(0.4, -0.8),
+            action_low=(-1.0, -2.5),
+            action_high=(1.5, 0.0),
+            control_dt=self.config.control_dt,
+            observation_names=tuple(f"o{i}" for i in range(8)),
+        )
         self.rng = np.random.default_rng(0)
         self.nan_at_step: int | None = None  # inject a NaN reward at this global step
         self.interrupt_at_step: int | None = None  # raise KeyboardInterrupt here (a kill)

@@ -24,8 +24,11 @@ def make_cpg_parameter_env(num_envs: int, env_config: Any, num_threads: int | No
     return CPGParameterVectorEnv(num_envs, config=env_config, num_threads=num_threads)
 
 
-def build_cho2019(config: AgentConfig, obs_dim: int, action_scale, env_config: Any) -> Agent:
-    """Actor MLP 64x64 -> Gaussian over the CPG parameter actions, centred at 0."""
+def build_cho2019(config: AgentConfig, env: Any) -> Agent:
+    """Actor MLP 64x64 -> Gaussian over the CPG parameter actions (in [-1, 1]), centred at 0."""
+    obs_dim = int(env.single_observation_space.shape[0])
+    space = env.single_action_space
+    action_scale = (np.asarray(space.high) - np.asarray(space.low)) / 2.0
     return MLPAgent(obs_dim, action_scale, config, nominal_pose=[0.0] * len(action_scale))
 
 

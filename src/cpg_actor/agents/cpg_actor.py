@@ -15,6 +15,11 @@ from torch import Tensor
 
 from cpg_actor.agents.base import ActorOutput, Agent, AgentConfig, mlp
 from cpg_actor.cpg import CPGNetwork, CPGState, JointMap, hopper_cpg
+from cpg_actor.robot import RobotSpec
+
+# robot name -> the CPG of that robot, ``preset(dt, initial=..., check_inputs=...)``; one
+# oscillator per joint, in the robot's joint order
+CPG_PRESETS = {"anymal-hopper": hopper_cpg}
 
 
 class CPGActorAgent(Agent):
@@ -35,18 +40,25 @@ class CPGActorAgent(Agent):
         obs_dim: int,
         action_scale: Sequence[float],
         config: AgentConfig,
-        control_dt: float,
+        robot: RobotSpec,
         feedback: bool = True,
     ) -> None:
-        cpg = hopper_cpg(control_dt, initial=config.cpg_initial or None, check_inputs=False)
-        n = cpg.num_oscillators
-        if n != len(action_scale):
+        if robot.name not in CPG_PRESETS:
             raise ValueError(
-                f"the CPG has {n} oscillators but the action has {len(action_scale)} entries"
+                f"no CPG preset for robot '{robot.name}'; add one to "
+                f"cpg_actor.agents.cpg_actor.CPG_PRESETS (known: {', '.join(CPG_PRESETS)})"
+            )
+        preset = CPG_PRESETS[robot.name]
+        cpg = preset(robot.control_dt, initial=config.cpg_initial or None, check_inputs=False)
+        n = cpg.num_oscillators
+        if n != len(action_scale) or n != robot.num_joints:
+            raise ValueError(
+                f"the CPG has {n} oscillators but the robot has {robot.num_joints} joints and "
+                f"the action {len(action_scale)} entries"
             )
         super().__init__(obs_dim, action_scale, config, critic_state_features=3 * n)
         self.cpg: CPGNetwork = cpg
-        self.joint_map = JointMap()
+        self.joint_map = JointMap(robot.nominal_pose)  # the robot's standing pose
         self.state_shape = (5, n)
         self.xi_scale = config.xi_scale
         self.kappa_scale = config.kappa_scale

@@ -11,11 +11,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from cpg_actor.agents.base import Agent, AgentConfig
 from cpg_actor.agents.cho2019 import build_cho2019, make_cpg_parameter_env, warm_start_cho2019
 from cpg_actor.agents.cpg_actor import CPGActorAgent
 from cpg_actor.agents.mlp import MLPAgent
-from cpg_actor.cpg import HOPPER_NOMINAL_POSE
 
 
 def make_hopper_env(num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
@@ -25,17 +26,25 @@ def make_hopper_env(num_envs: int, env_config: Any, num_threads: int | None = No
     return HopperVectorEnv(num_envs, config=env_config, num_threads=num_threads)
 
 
+def env_shapes(env: Any) -> tuple[int, np.ndarray]:
+    """``(obs_dim, action_scale)`` of a vector env: the action scale is the half-range
+    ``(high - low) / 2`` of its action space, the unit of ``agent_config.init_std``."""
+    space = env.single_action_space
+    low = np.asarray(space.low, dtype=np.float32)
+    high = np.asarray(space.high, dtype=np.float32)
+    return int(env.single_observation_space.shape[0]), (high - low) / 2.0
+
+
 @dataclass(frozen=True)
 class AgentSpec:
-    """``build(agent_config, obs_dim, action_scale, env_config) -> Agent`` (``action_scale``:
-    the action space's half-range ``(high - low) / 2`` per entry, the unit of
-    ``agent_config.init_std``),
-    ``make_env(num_envs, env_config, num_threads) -> vector env`` (the hopper env contract)
-    and an optional supervised warm start."""
+    """``build(agent_config, env) -> Agent``: the agent for an env, from its spaces and its
+    ``robot`` (:class:`cpg_actor.robot.RobotSpec`: joints, nominal pose, control period);
+    ``make_env(num_envs, env_config, num_threads) -> vector env`` (the hopper env contract);
+    an optional supervised warm start."""
 
     name: str
     description: str
-    build: Callable[[AgentConfig, int, int, Any], Agent]
+    build: Callable[[AgentConfig, Any], Agent]
     make_env: Callable[..., Any] = make_hopper_env
     # ``warm_start(agent, normalizer, env, WarmStartConfig, seed) -> losses``, run once before
     # the first PPO iteration of a new run (not on resume)
@@ -58,31 +67,31 @@ def get_agent_spec(name: str) -> AgentSpec:
     return AGENTS[name]
 
 
+def build_mlp(config: AgentConfig, env: Any) -> Agent:
+    """Actor MLP on desired joint positions, centred on the robot's nominal pose."""
+    return MLPAgent(*env_shapes(env), config, env.robot.nominal_pose)
+
+
+def build_cpg_actor(config: AgentConfig, env: Any, feedback: bool = True) -> Agent:
+    """The CPG-Actor with the CPG preset of the env's robot."""
+    return CPGActorAgent(*env_shapes(env), config, env.robot, feedback=feedback)
+
+
 register_agent(
-    AgentSpec(
-        "mlp",
-        "classic actor-critic: MLP actor on desired joint positions",
-        lambda cfg, obs_dim, action_scale, env_cfg: MLPAgent(
-            obs_dim, action_scale, cfg, HOPPER_NOMINAL_POSE
-        ),
-    )
+    AgentSpec("mlp", "classic actor-critic: MLP actor on desired joint positions", build_mlp)
 )
 register_agent(
     AgentSpec(
         "cpg-actor",
         "CPG-Actor: feedback MLP -> (xi, kappa) -> Hopf CPG -> desired joint positions",
-        lambda cfg, obs_dim, action_scale, env_cfg: CPGActorAgent(
-            obs_dim, action_scale, cfg, env_cfg.control_dt, feedback=True
-        ),
+        build_cpg_actor,
     )
 )
 register_agent(
     AgentSpec(
         "cpg-actor-open-loop",
         "CPG-Actor without feedback (xi = kappa = 0): only the CPG parameters are trained",
-        lambda cfg, obs_dim, action_scale, env_cfg: CPGActorAgent(
-            obs_dim, action_scale, cfg, env_cfg.control_dt, feedback=False
-        ),
+        lambda config, env: build_cpg_actor(config, env, feedback=False),
     )
 )
 register_agent(

@@ -41,7 +41,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from cpg_actor.cpg import HOPPER_NOMINAL_POSE, CPGState, OscillatorParameters, hopf_step, hopper_cpg
+from cpg_actor.cpg import CPGState, OscillatorParameters, hopf_step, hopper_cpg
 from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.simulation import OBS_BOUND, OBS_NAMES
 from cpg_actor.envs.vector import HopperVectorEnv
@@ -108,7 +108,8 @@ class CPGParameterVectorEnv(VectorEnv):
         self._convergence = values["convergence"].detach()
         self._coupling_weight = values["coupling_weight"].detach()
         self._coupling = self.cpg.parametrisation.coupling
-        self._offset = torch.as_tensor(HOPPER_NOMINAL_POSE, dtype=torch.float64)
+        self.robot = self.env.robot  # the hopper it drives (the actions are CPG parameters)
+        self._offset = torch.as_tensor(self.robot.nominal_pose, dtype=torch.float64)
         bound = np.full(len(OBS_NAMES) + len(CPG_OBS_NAMES), OBS_BOUND, dtype=np.float32)
         self.single_observation_space = spaces.Box(-bound, bound, dtype=np.float32)
         self.single_action_space = spaces.Box(-1.0, 1.0, shape=(5,), dtype=np.float32)

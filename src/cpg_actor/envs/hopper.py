@@ -16,6 +16,7 @@ import numpy as np
 from gymnasium import spaces
 
 from cpg_actor.envs.config import HopperConfig
+from cpg_actor.envs.robot import description as robot
 from cpg_actor.envs.simulation import (
     ACTION_HIGH,
     ACTION_LOW,
@@ -25,6 +26,7 @@ from cpg_actor.envs.simulation import (
     HopperSimulation,
     StepResult,
 )
+from cpg_actor.robot import RobotSpec
 
 
 def resolve_config(
@@ -41,6 +43,19 @@ def resolve_config(
     if sim is not None:
         changes["sim"] = sim
     return config.replace(**changes) if changes else config.replace()
+
+
+def robot_spec(config: HopperConfig) -> RobotSpec:
+    """The hopper as the agents see it (joints, nominal pose, limits from the description)."""
+    return RobotSpec(
+        name="anymal-hopper",
+        joint_names=tuple(robot.JOINT_NAMES),
+        nominal_pose=tuple(float(v) for v in NOMINAL_POSE),
+        action_low=tuple(float(v) for v in ACTION_LOW),
+        action_high=tuple(float(v) for v in ACTION_HIGH),
+        control_dt=float(config.control_dt),
+        observation_names=tuple(OBS_NAMES),
+    )
 
 
 def action_space(normalized: bool = False) -> spaces.Box:
@@ -118,6 +133,7 @@ class HopperEnv(gym.Env):
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.config.control_dt)}
         self.action_space = action_space(self.config.normalized_actions)
         self.observation_space = observation_space()
+        self.robot = robot_spec(self.config)
         self.sim = HopperSimulation(self.config, num_robots=1, num_threads=1)
         self._needs_reset = True
 

@@ -34,7 +34,13 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from cpg_actor.envs.config import HopperConfig
-from cpg_actor.envs.hopper import action_space, check_actions, observation_space, resolve_config
+from cpg_actor.envs.hopper import (
+    action_space,
+    check_actions,
+    observation_space,
+    resolve_config,
+    robot_spec,
+)
 from cpg_actor.envs.simulation import NOMINAL_POSE, HopperSimulation
 
 
@@ -80,6 +86,7 @@ class HopperVectorEnv(VectorEnv):
         self.num_envs = int(num_envs)
         self.single_observation_space = observation_space()
         self.single_action_space = action_space(self.config.normalized_actions)
+        self.robot = robot_spec(self.config)  # what the agents are built from
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.metadata = {**self.metadata, "render_fps": round(1.0 / self.config.control_dt)}
