@@ -403,3 +403,34 @@ def test_step_counts_not_a_whole_iteration_are_announced(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "40 steps is not a whole number of iterations of 16; training 48" in out
     assert "no training episode finished" in out
+
+
+def test_a_full_disk_or_a_read_only_run_is_one_line_and_keeps_what_was_saved(
+    tmp_path, capsys, monkeypatch
+):
+    """(As root, chmod cannot make a directory read-only: the file-system errors are raised
+    where the writes happen.)"""
+    import errno
+
+    run_dir = tmp_path / "run"
+    assert main(["train", "--run-dir", str(run_dir), "--total-steps", "32", *TINY]) == 0
+    saved = load_checkpoint(run_dir / "checkpoints" / "last.pt")
+    capsys.readouterr()
+
+    def full_disk(*args, **kwargs):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr("cpg_actor.runner.atomic_save", full_disk)
+    code = main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64"])
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1 and "No space left on device" in err, err
+    kept = load_checkpoint(run_dir / "checkpoints" / "last.pt")
+    assert kept["iteration"] == saved["iteration"] == 2
+
+    def read_only(*args, **kwargs):
+        raise PermissionError(errno.EROFS, "Read-only file system")
+
+    monkeypatch.setattr(np, "savez", read_only)
+    code = main(["eval", str(run_dir), "--episodes", "1"])
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1 and "Read-only file system" in err, err
