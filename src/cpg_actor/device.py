@@ -30,7 +30,8 @@ def resolve_device(name: str) -> torch.device:
         if not torch.cuda.is_available():
             raise ValueError(
                 f"device {name!r}: torch sees no CUDA device here (torch {torch.__version__}, "
-                f"CUDA build {torch.version.cuda or 'none'}); use --device cpu or auto"
+                f"CUDA build {torch.version.cuda or 'none'}); use --device cpu or auto (a "
+                f"resumed run keeps the device of its config.yaml: start a new run to change it)"
             )
         if device.index is not None and device.index >= torch.cuda.device_count():
             raise ValueError(

@@ -99,14 +99,14 @@ def _trace_row(extras, info, desired, previous_desired, measured, reward, dt) ->
         "reward": np.asarray(reward, dtype=np.float64),
     }
     if "desired_velocity" in extras:
-        row["desired_velocity"] = extras["desired_velocity"].numpy()
+        row["desired_velocity"] = extras["desired_velocity"].cpu().numpy()
     elif "desired_velocity" in info:  # CPG inside the environment
         row["desired_velocity"] = np.asarray(info["desired_velocity"])
     else:  # the MLP has no analytic velocity: finite difference of its desired positions
         row["desired_velocity"] = (applied - previous_desired) / dt
     for key in ("theta_dot", "r_ddot", "xi", "kappa", "cpg_parameters"):
         if key in extras:
-            row[key] = extras[key].numpy()
+            row[key] = extras[key].cpu().numpy()
         elif key in info:
             row[key] = np.asarray(info[key])
     return row

@@ -65,7 +65,7 @@ class ControlStep(nn.Module):
 
 def initial_state(policy: Policy, batch: int = 1) -> np.ndarray:
     """The recurrent state an episode starts from, ``(batch, *state_shape)`` float32."""
-    return policy.agent.initial_state(batch).numpy().astype(np.float32)
+    return policy.agent.initial_state(batch).cpu().numpy().astype(np.float32)
 
 
 def export_policy(
@@ -89,7 +89,7 @@ def export_policy(
     for target in (path, state_path):
         if target.exists() and not overwrite:
             raise FileExistsError(f"{target} exists; pass --overwrite to replace it")
-    module = ControlStep(policy).eval()
+    module = ControlStep(policy).cpu().eval()  # exported for the CPU, wherever it trained
     obs_dim = int(policy.normalizer.mean.shape[0])
     example = (torch.zeros(batch, obs_dim), torch.as_tensor(initial_state(policy, batch)))
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -110,8 +110,12 @@ def export_policy(
                     verbose=False,
                 )
                 program.save(str(tmp))
-        np.save(state_path, initial_state(policy, batch))
+        state_tmp = state_path.with_name(f".{state_path.name}.tmp{os.getpid()}")
+        with open(state_tmp, "wb") as f:
+            np.save(f, initial_state(policy, batch))
+        os.replace(state_tmp, state_path)
         os.replace(tmp, path)
     finally:
         tmp.unlink(missing_ok=True)
+        state_path.with_name(f".{state_path.name}.tmp{os.getpid()}").unlink(missing_ok=True)
     return path

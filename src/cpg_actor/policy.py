@@ -10,7 +10,7 @@ When episodes end, :meth:`end_episodes` restarts those envs' states.
 :func:`load_policy` builds one from a run directory or a checkpoint, with no trainer, env or
 optimiser::
 
-    policy = load_policy("runs/cpg-actor")      # checkpoints/last.pt and config.yaml
+    policy = load_policy("runs/cpg-actor")      # checkpoints/last.pt (its saved config)
     policy.reset(num_envs=1)
     action = policy.act(obs).action             # obs (1, obs_dim) float32, numpy or torch
 """
@@ -80,6 +80,10 @@ class Policy:
 
     def end_episodes(self, done: np.ndarray | Tensor) -> None:
         """Restart the state of the envs whose episode ended (``done``: (N,) bool)."""
+        if self.state is None:
+            raise RuntimeError("call Policy.reset(num_envs) before end_episodes()")
+        if isinstance(done, Tensor):
+            done = done.cpu().numpy()
         rows = np.flatnonzero(np.asarray(done))
         if len(rows):
             state = self.state.clone()

@@ -180,6 +180,7 @@ class Runner:
         self.recent: dict[str, deque] = {}
         self._writer = None
         self._episodes_started = False
+        self._resumed = False  # loaded from a checkpoint: no warm start, no "before" again
 
     # -- episodes ----------------------------------------------------------------------------
     def start_episodes(self) -> None:
@@ -293,13 +294,14 @@ class Runner:
         num_iterations = cfg.num_iterations
         if self.run_dir is not None:
             self.run_dir.mkdir(parents=True, exist_ok=True)
-        if self.iteration == 0 and self.spec.warm_start is not None:
+        fresh = self.iteration == 0 and not self._resumed  # a new run, not one resumed at 0
+        if fresh and self.spec.warm_start is not None:
             self.run_warm_start()
         if not self._episodes_started:
             self.start_episodes()
-        if self.iteration == 0 and cfg.eval_interval > 0:
+        if fresh and cfg.eval_interval > 0:
             self.log_evaluation()  # the untrained (or warm-started) agent
-        if self.run_dir is not None and self.iteration == 0:
+        if fresh and self.run_dir is not None:
             self.save_checkpoint()  # the untrained (or warm-started) agent: a "before"
         progress = self._make_progress(num_iterations)
         try:
@@ -563,7 +565,10 @@ class Runner:
             if agent_state.shape != (self.config.num_envs, *self.agent.state_shape):
                 raise ValueError(f"agent states of shape {tuple(agent_state.shape)}")
             self.episode = EpisodeStats.from_state_dict(state["statistics"])
-            self.reward_normalizer.discounted.copy_(state["discounted_returns"])
+            discounted = state["discounted_returns"]
+            if discounted.shape != self.reward_normalizer.discounted.shape:
+                raise ValueError(f"discounted returns of shape {tuple(discounted.shape)}")
+            self.reward_normalizer.discounted.copy_(discounted)
         except (KeyError, TypeError, AttributeError, RuntimeError, ValueError) as error:
             raise ValueError(
                 f"the checkpoint's episodes do not fit this run's environments: {error}"
@@ -600,6 +605,7 @@ class Runner:
         if "reward_normalizer" in data:  # absent from checkpoints of earlier versions
             self.reward_normalizer.load_state_dict(data["reward_normalizer"])
         self.train_wall = float(data.get("train_wall", 0.0))
+        self._resumed = True
         self.iteration = data["iteration"]
         self.global_step = data["global_step"]
         self.recent = {k: deque(v, maxlen=100) for k, v in data["recent"].items()}

@@ -103,3 +103,22 @@ def test_eval_traces_of_cho2019_hold_the_cpg_signals():
     assert np.all(np.abs(traces["cpg_parameters"][:, :, 0] - nu_mid) < 0.2)
     # desired positions are the CPG output around the nominal pose, not the raw action
     assert np.all(traces["desired_position"][:, :, 1] < 0.1)
+
+
+def test_a_run_resumed_at_iteration_0_is_not_warm_started_again(tmp_path):
+    """Killed before its first PPO checkpoint, a cho2019-warm run resumes from iter_000000.pt
+    (the warm-started agent) and equals the uninterrupted run."""
+    straight = Runner(config("cho2019-warm", epochs=3), tmp_path / "a", tensorboard=False)
+    straight.learn()
+    resumed = Runner(config("cho2019-warm", epochs=3), tmp_path / "b", tensorboard=False)
+    resumed.load_checkpoint(tmp_path / "a" / "checkpoints" / "iter_000000.pt")
+    assert resumed.iteration == 0
+    resumed.learn()
+    try:
+        assert not (tmp_path / "b" / "warm_start.json").exists()
+        for key, value in straight.agent.state_dict().items():
+            assert torch.equal(value, resumed.agent.state_dict()[key]), key
+        assert straight.last_evaluation["eval/return"] == resumed.last_evaluation["eval/return"]
+    finally:
+        straight.close()
+        resumed.close()

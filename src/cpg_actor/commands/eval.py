@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 import numpy as np
@@ -51,6 +52,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
     checkpoint = Path(args.checkpoint) if args.checkpoint else run_dir / "checkpoints" / "last.pt"
     output = Path(args.output) if args.output else run_dir / "eval" / "traces.npz"
+    if output.suffix != ".npz":
+        raise ValueError(f"--output must end in .npz, got {output}")
     if args.video_only and not args.video:
         raise ValueError("--video-only needs --video PATH")
     if not checkpoint.is_file():
@@ -75,7 +78,12 @@ def run(args: argparse.Namespace) -> int:
     traces = evaluate(policy, config, args.episodes, seed=args.seed)
 
     output.parent.mkdir(parents=True, exist_ok=True)
-    np.savez(output, **traces)
+    tmp = output.with_name(f".{output.stem}.tmp{os.getpid()}.npz")
+    try:  # written next to it, then renamed: an existing file is replaced whole or not at all
+        np.savez(tmp, **traces)
+        os.replace(tmp, output)
+    finally:
+        tmp.unlink(missing_ok=True)
     for i in range(args.episodes):
         print(
             f"episode {i}: return {traces['episode_return'][i]:.3f}, hop height "
