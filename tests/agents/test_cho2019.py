@@ -122,3 +122,20 @@ def test_a_run_resumed_at_iteration_0_is_not_warm_started_again(tmp_path):
     finally:
         straight.close()
         resumed.close()
+
+
+def test_cho2019_agents_declare_the_cpg_wrapper_around_the_robot_env():
+    from cpg_actor.agents import get_agent_spec
+    from cpg_actor.envs import HopperVectorEnv
+    from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
+
+    spec = get_agent_spec("cho2019")
+    env = spec.make_env(2, HopperConfig(), 1)
+    try:
+        assert isinstance(env, CPGParameterVectorEnv) and isinstance(env.env, HopperVectorEnv)
+        assert env.robot == env.env.robot and env.single_action_space.shape == (5,)
+    finally:
+        env.close()
+    assert get_agent_spec("mlp").wrapper is None
+    with pytest.raises(ValueError, match="belong to the wrapped env"):
+        CPGParameterVectorEnv(HopperVectorEnv(1), config=HopperConfig())

@@ -17,11 +17,11 @@ from cpg_actor.agents.mlp import MLPAgent
 from cpg_actor.agents.warm_start import WarmStartConfig, warm_start
 
 
-def make_cpg_parameter_env(num_envs: int, env_config: Any, num_threads: int | None = None):
-    """The hopper with the CPG inside: actions are CPG parameters in [-1, 1]."""
+def cpg_parameter_wrapper(env: Any):
+    """The CPG put inside the hopper env: actions become CPG parameters in [-1, 1]."""
     from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
 
-    return CPGParameterVectorEnv(num_envs, config=env_config, num_threads=num_threads)
+    return CPGParameterVectorEnv(env)
 
 
 def build_cho2019(config: AgentConfig, env: Any) -> Agent:

@@ -1,8 +1,9 @@
-"""Agents selectable by name. An entry names both the network and the environment it acts on.
+"""Agents selectable by name. An entry names the network and, if it needs one, a wrapper
+around the robot's environment.
 
-A later baseline (e.g. ``cho2019``: an MLP actor acting on a wrapped env whose actions are CPG
-parameters) registers an :class:`AgentSpec` with its own ``make_env``; the runner needs
-nothing else.
+A baseline such as ``cho2019`` (an MLP actor acting on a wrapped env whose actions are CPG
+parameters) registers an :class:`AgentSpec` with its ``wrapper``; the runner needs nothing
+else.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from cpg_actor.agents.base import Agent, AgentConfig
-from cpg_actor.agents.cho2019 import build_cho2019, make_cpg_parameter_env, warm_start_cho2019
+from cpg_actor.agents.cho2019 import build_cho2019, cpg_parameter_wrapper, warm_start_cho2019
 from cpg_actor.agents.cpg_actor import CPGActorAgent
 from cpg_actor.agents.mlp import MLPAgent
 
@@ -39,16 +40,23 @@ def env_shapes(env: Any) -> tuple[int, np.ndarray]:
 class AgentSpec:
     """``build(agent_config, env) -> Agent``: the agent for an env, from its spaces and its
     ``robot`` (:class:`cpg_actor.robot.RobotSpec`: joints, nominal pose, control period);
-    ``make_env(num_envs, env_config, num_threads) -> vector env`` (the hopper env contract);
-    an optional supervised warm start."""
+    ``env_factory(num_envs, env_config, num_threads) -> vector env`` (the robot's env, the
+    hopper by default); ``wrapper(env) -> env``, an environment around the robot's that the
+    agent needs (``cho2019``: the CPG inside the env); an optional supervised warm start."""
 
     name: str
     description: str
     build: Callable[[AgentConfig, Any], Agent]
-    make_env: Callable[..., Any] = make_hopper_env
+    env_factory: Callable[..., Any] = make_hopper_env
+    wrapper: Callable[[Any], Any] | None = None
     # ``warm_start(agent, normalizer, env, WarmStartConfig, seed) -> losses``, run once before
     # the first PPO iteration of a new run (not on resume)
     warm_start: Callable[..., list[float]] | None = None
+
+    def make_env(self, num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
+        """The env this agent acts on: the robot's env, wrapped if the agent declares it."""
+        env = self.env_factory(num_envs, env_config, num_threads)
+        return env if self.wrapper is None else self.wrapper(env)
 
 
 AGENTS: dict[str, AgentSpec] = {}
@@ -99,7 +107,7 @@ register_agent(
         "cho2019",
         "Cho et al. 2019: MLP actor outputs CPG parameters; the CPG is inside the environment",
         build_cho2019,
-        make_env=make_cpg_parameter_env,
+        wrapper=cpg_parameter_wrapper,
     )
 )
 register_agent(
@@ -107,7 +115,7 @@ register_agent(
         "cho2019-warm",
         "Cho et al. 2019 with the actor warm-started toward the reference hopping parameters",
         build_cho2019,
-        make_env=make_cpg_parameter_env,
+        wrapper=cpg_parameter_wrapper,
         warm_start=warm_start_cho2019,
     )
 )

@@ -78,21 +78,31 @@ def parameters_to_action(parameters: np.ndarray) -> np.ndarray:
 class CPGParameterVectorEnv(VectorEnv):
     """N hoppers driven by N CPGs whose parameters are the actions (SAME_STEP autoreset).
 
+    A wrapper: ``CPGParameterVectorEnv(env)`` puts the CPGs in front of an existing
+    :class:`HopperVectorEnv` (what the ``cho2019`` agents declare they need);
+    ``CPGParameterVectorEnv(N, config)`` builds that hopper env first.
+
     Args:
-        num_envs: N.
-        config: the hopper's :class:`HopperConfig` (or dict); the CPG runs at its control rate.
-        num_threads: passed to :class:`HopperVectorEnv`.
+        env_or_num_envs: a :class:`HopperVectorEnv` to wrap, or N.
+        config: with N, the hopper's :class:`HopperConfig` (or dict); the CPG runs at its
+            control rate.
+        num_threads: with N, passed to :class:`HopperVectorEnv`.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
 
     def __init__(
         self,
-        num_envs: int,
+        env_or_num_envs: HopperVectorEnv | int,
         config: HopperConfig | dict | None = None,
         num_threads: int | None = None,
     ) -> None:
-        self.env = HopperVectorEnv(num_envs, config=config, num_threads=num_threads)
+        if isinstance(env_or_num_envs, HopperVectorEnv):
+            if config is not None or num_threads is not None:
+                raise ValueError("config and num_threads belong to the wrapped env, not here")
+            self.env = env_or_num_envs
+        else:
+            self.env = HopperVectorEnv(env_or_num_envs, config=config, num_threads=num_threads)
         if self.env.config.normalized_actions:
             self.env.close()
             raise ValueError(
@@ -227,9 +237,3 @@ class CPGParameterVectorEnv(VectorEnv):
             self.env.close()
             self.env = None
 
-
-def make_cpg_parameter_env(
-    num_envs: int, config: HopperConfig | dict | None = None, num_threads: int | None = None
-) -> CPGParameterVectorEnv:
-    """Factory with the hopper env's signature (for the agent registry)."""
-    return CPGParameterVectorEnv(num_envs, config=config, num_threads=num_threads)
