@@ -6,23 +6,15 @@ import pytest
 import torch
 
 from cpg_actor.cli import main
-from cpg_actor.config import TrainConfig
 from cpg_actor.envs import HopperVectorEnv
 from cpg_actor.export import export_policy
 from cpg_actor.policy import load_policy
-from cpg_actor.ppo import PPOConfig
 from cpg_actor.runner import Runner
+from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
 
 
 def trained_run(path, agent):
-    config = TrainConfig(
-        agent=agent,
-        num_envs=2,
-        total_steps=2 * 2 * 8,
-        ppo=PPOConfig(num_steps=8, num_epochs=1, num_minibatches=2),
-        eval_interval=0,
-    )
-    runner = Runner(config, run_dir=path, tensorboard=False)
+    runner = Runner(tiny_config(agent), run_dir=path, tensorboard=False)
     runner.learn()
     runner.close()
     return path

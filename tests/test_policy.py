@@ -4,24 +4,16 @@ import numpy as np
 import pytest
 import torch
 
-from cpg_actor.config import TrainConfig
 from cpg_actor.envs import HopperVectorEnv
 from cpg_actor.policy import load_policy
-from cpg_actor.ppo import PPOConfig
 from cpg_actor.runner import Runner
+from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
 
 
 @pytest.fixture(scope="module")
 def trained(tmp_path_factory):
     run_dir = tmp_path_factory.mktemp("policy") / "run"
-    config = TrainConfig(
-        agent="cpg-actor",
-        num_envs=2,
-        total_steps=2 * 2 * 8,
-        ppo=PPOConfig(num_steps=8, num_epochs=1, num_minibatches=2),
-        eval_interval=0,
-    )
-    runner = Runner(config, run_dir=run_dir, tensorboard=False)
+    runner = Runner(tiny_config("cpg-actor"), run_dir=run_dir, tensorboard=False)
     runner.learn()
     yield runner, run_dir
     runner.close()

@@ -268,7 +268,7 @@ class Runner:
             self._remember("length", ep.lengths[i])
             for name, values in info.get("episode_metrics", {}).items():
                 if np.isfinite(values[i]):
-                    self._remember(name, values[i])
+                    self._remember(f"charts/{name}", values[i])  # logged under this name
             for name, value in ep.terms.items():
                 self._remember(f"reward_terms/{name}", value[i])
         ep.returns[done] = 0.0
@@ -345,7 +345,7 @@ class Runner:
                         completed=self.global_step,
                         sps=f"{sps:,.0f}",
                         ret=f"{self.mean_recent('return'):.2f}",
-                        hop=f"{self.mean_recent('hop_height'):.3f}",
+                        hop=f"{self.mean_recent('charts/hop_height'):.3f}",
                         evaluation=getattr(self, "_evaluation_text", ""),
                     )
                 at_interval = self.iteration % cfg.checkpoint_interval == 0
@@ -451,9 +451,8 @@ class Runner:
         row: dict[str, float] = {}
         row["charts/episode_return"] = self.mean_recent("return")
         row["charts/episode_length"] = self.mean_recent("length")
-        row["charts/hop_height"] = self.mean_recent("hop_height")
-        for key in sorted(self.recent):
-            if key.startswith("reward_terms/"):
+        for key in sorted(self.recent):  # the env's episode metrics and reward terms
+            if key.startswith(("charts/", "reward_terms/")):
                 row[key] = self.mean_recent(key)
         row["charts/SPS"] = timing["SPS"]
         row["charts/learning_rate"] = stats["learning_rate"]

@@ -8,21 +8,14 @@ import torch
 
 from cpg_actor.config import TrainConfig
 from cpg_actor.envs import HopperVectorEnv
-from cpg_actor.ppo import PPOConfig
 from cpg_actor.runner import Runner
+from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
 
 EPISODE = 12  # control steps: several episodes end inside the 6 iterations of 8 steps
 
 
 def config(agent: str) -> TrainConfig:
-    cfg = TrainConfig(
-        agent=agent,
-        num_envs=2,
-        total_steps=6 * 2 * 8,
-        ppo=PPOConfig(num_steps=8, num_epochs=1, num_minibatches=2),
-        eval_interval=0,
-        checkpoint_interval=1,
-    )
+    cfg = tiny_config(agent, iterations=6, checkpoint_interval=1)
     cfg.env.episode_steps = EPISODE
     return cfg
 

@@ -280,7 +280,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
     evaluation = getattr(runner, "last_evaluation", None)
     evaluated = (
         f"; deterministic eval return {evaluation['eval/return']:.3f}, hop height "
-        f"{evaluation['eval/hop_height']:.3f} m"
+        f"{evaluation.get('eval/hop_height', nan):.3f} m"
         if evaluation
         else ""
     )

@@ -236,4 +236,3 @@ class CPGParameterVectorEnv(VectorEnv):
         if getattr(self, "env", None) is not None:
             self.env.close()
             self.env = None
-
