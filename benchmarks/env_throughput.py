@@ -3,9 +3,10 @@
 For each backend and number of environments N the script measures, in the same run:
 
 * ``env``: ``HopperVectorEnv(N).step`` with hopping actions (each env follows a 2 Hz
-  squat-and-extend sinusoid with its own phase), everything included: PD law every physics
-  substep, observation, reward, autoreset. One env step = ``decimation`` physics substeps.
-* MuJoCo ceilings, the same model and the same robot states, no environment:
+  squat-and-extend sinusoid with its own phase), everything included: actuator law every
+  physics substep, observation, reward, autoreset. One env step = ``decimation`` substeps.
+* MuJoCo ceilings, the same model with its actuators disabled and the same robot states, no
+  environment:
   ``mj_step loop``: a bare Python loop of ``mujoco.mj_step`` over N ``MjData`` split across
   the same number of threads (``concurrent.futures``; mj_step releases the GIL), and
   ``rollout``: ``mujoco.rollout`` doing ``decimation`` steps per robot in C++ on its pool.
@@ -96,11 +97,15 @@ def bench_size(sim: str, num_envs: int, repeats: int, budget: int) -> dict:
         import mujoco
         from mujoco import rollout
 
-        from cpg_actor.envs.backends.mujoco_backend import CONTROL_SPEC, STATE_SPEC
+        from cpg_actor.envs.actuator import Actuator
+        from cpg_actor.envs.backends.mujoco_backend import STATE_SPEC, load_model
 
-        model = backend.model
+        # the project's MJCF with its actuators switched off: constant joint torques instead
+        model = load_model(config.physics_dt, config.foot_friction)
+        model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ACTUATION.value
+        torque_spec = mujoco.mjtState.mjSTATE_QFRC_APPLIED.value
         states = backend._state.copy()
-        torque = env.sim.actuator(env.sim.desired, backend.joint_pos, backend.joint_vel)
+        torque = Actuator.from_config(config)(env.sim.desired, backend.joint_pos, backend.joint_vel)
         datas = []
         for i in range(num_envs):
             data = mujoco.MjData(model)
@@ -133,7 +138,7 @@ def bench_size(sim: str, num_envs: int, repeats: int, budget: int) -> dict:
         def run_rollout() -> None:
             for _ in range(steps):
                 roller.rollout(
-                    [model] * num_envs, roll_datas, states, control, control_spec=CONTROL_SPEC,
+                    [model] * num_envs, roll_datas, states, control, control_spec=torque_spec,
                     skip_checks=True, nstep=decimation, initial_warmstart=None, state=out,
                     sensordata=None, chunk_size=max(1, num_envs // (4 * threads)),
                 )  # fmt: skip
@@ -228,13 +233,13 @@ def main(argv: list[str] | None = None) -> int:
         "",
         *lines,
         "",
-        "*env*: `HopperVectorEnv(N).step` with hopping actions, all included (PD law every "
+        "*env*: `HopperVectorEnv(N).step` with hopping actions, all included (actuator law every "
         "substep, observation, reward, autoreset). *bare step loop*: MuJoCo: a Python loop of "
         "`mujoco.mj_step` over N `MjData` on the same number of threads (`concurrent.futures`); "
         "PyBullet: `stepSimulation` on the same worlds of N robots (16 per world). "
         "*mujoco.rollout*: the same substeps looped in C++ by `mujoco.rollout` on its thread "
-        "pool. Ceilings start from the "
-        "env's robot states and hold the torques constant (no PD law, no observation).",
+        "pool. Ceilings start from the env's robot states, switch the model's actuators off and "
+        "hold the joint torques constant (no actuator law, no observation).",
         "",
         "*threads*: the env's MuJoCo stepping threads (`HopperVectorEnv` default: the usable "
         "cores, at least 16 robots per thread); the bare loop and rollout use as many. When "

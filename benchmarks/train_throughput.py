@@ -7,7 +7,8 @@ ceiling (``mujoco.rollout`` on the project's MJCF, same number of robots, same r
 
 ``--reference-src DIR`` measures the same settings, in the same run, with the ``cpg_actor``
 package found in DIR (e.g. a ``git worktree`` of an older commit), in a subprocess, and reports
-the ratio: how much faster (or slower) the code under test is than that reference.
+the ratio: how much faster (or slower) the code under test is than that reference. Only the
+``paper`` preset is compared: the other presets' values may differ between the two trees.
 """
 
 from __future__ import annotations
@@ -128,9 +129,10 @@ def main() -> None:
     if args.json:
         print(json.dumps(results))
         return
+    compared = [p for p in args.presets if p == "paper"]
     ref = (
-        reference(args.reference_src, args.presets, args.agents, args.iterations)
-        if args.reference_src
+        reference(args.reference_src, compared, args.agents, args.iterations)
+        if args.reference_src and compared
         else {}
     )
     ceilings = {n: ceiling(n) for n in sorted({r["num_envs"] for r in results.values()})}
@@ -174,8 +176,12 @@ def main() -> None:
             f"{r['simulation_us']:.1f} | {r['update_us']:.1f} |"
         )
         if ref:
-            old = ref[key.replace(" + compile", "")]
-            row += f" {old['SPS']:,.0f} | {old['update_us'] / r['update_us']:.2f}x |"
+            old = ref.get(key.replace(" + compile", ""))
+            row += (
+                f" {old['SPS']:,.0f} | {old['update_us'] / r['update_us']:.2f}x |"
+                if old
+                else " - | - |"
+            )
         lines.append(row)
         print(row)
     if args.reference_src:

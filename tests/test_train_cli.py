@@ -271,7 +271,8 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
     assert paper.ppo.lr_schedule == "linear" and paper.ppo.normalize_rewards
     assert paper.agent_config.init_std == 1.0
     fast = build_config(parser.parse_args(["--preset", "throughput"]))
-    assert fast.preset == "throughput" and fast.num_envs == 32 and fast.ppo.num_minibatches == 16
+    assert fast.preset == "throughput" and fast.num_envs == 256 and fast.ppo.num_minibatches == 4
+    assert (fast.ppo.lr_schedule, fast.ppo.learning_rate) == ("adaptive", 1e-3)
     fast.save(tmp_path / "fast.yaml")
     # the flags and --set win over the preset; a config file brings its preset along
     mixed = build_config(
@@ -287,7 +288,7 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
         )
     )
     assert (mixed.preset, mixed.num_envs, mixed.ppo.num_epochs) == ("throughput", 8, 3)
-    assert mixed.ppo.num_minibatches == 16
+    assert mixed.ppo.num_minibatches == 4
     run_dir = tmp_path / "run"
     argv = ["train", "--run-dir", str(run_dir), "--preset", "throughput", "--total-steps", "32"]
     assert main([*argv, *TINY]) == 0

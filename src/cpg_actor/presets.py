@@ -8,9 +8,12 @@ saved in the run's ``config.yaml`` (``preset``).
   (every number and its source: :class:`cpg_actor.ppo.PPOConfig`). These are the dataclass
   defaults; the preset only adds ``ppo.compile`` (the same algorithm, its minibatch loss
   compiled by ``torch.compile``: 2 to 2.8x faster updates, ``benchmarks/train_throughput.py``).
-* ``throughput``: fewer, larger gradient steps per sample and more envs per Python step,
-  chosen to reach the same evaluation thresholds in less wall time on a CPU
-  (``benchmarks/time_to_hop.py``; the numbers in ``docs/training.md``, "Presets").
+* ``throughput``: the massively parallel recipe of legged_gym / rsl_rl (Rudin et al. 2021):
+  many envs, short rollouts, few large minibatches, a learning rate adapted to a target KL.
+  256 envs x 32 steps = 8,192 samples per iteration, 5 epochs of 4 minibatches (20 gradient
+  steps per 8,192 samples; paper: 320 per 2,048), learning rate 1e-3 adapted to KL 0.01. It
+  keeps a 2-core CPU near the physics ceiling (``benchmarks/train_throughput.py``) and learns
+  less per sample; what it reaches and when: ``docs/training.md``, "Presets".
 """
 
 from __future__ import annotations
@@ -19,11 +22,17 @@ from typing import Any
 
 PRESETS: dict[str, dict[str, Any]] = {
     "paper": {"ppo": {"compile": True}},
-    # 32 envs x 64 steps, minibatches of 128: 160 gradient steps per 2,048 samples (paper: 320)
     "throughput": {
-        "num_envs": 32,
+        "num_envs": 256,
         "eval_interval": 10,
-        "ppo": {"num_steps": 64, "num_epochs": 10, "num_minibatches": 16, "compile": True},
+        "ppo": {
+            "num_steps": 32,
+            "num_epochs": 5,
+            "num_minibatches": 4,
+            "lr_schedule": "adaptive",
+            "learning_rate": 1e-3,
+            "compile": True,
+        },
     },
 }
 

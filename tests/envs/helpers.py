@@ -1,4 +1,4 @@
-"""Shared helpers for the hopper tests: drive a backend directly with the shared actuator."""
+"""Shared helpers for the hopper tests: drive a backend directly, one substep at a time."""
 
 from __future__ import annotations
 
@@ -27,13 +27,12 @@ def place(backend, joint_pos=NOMINAL, hip_height=None) -> None:
     backend.reset_robots(np.array([0]), np.array([[hip_height, *joint_pos]]), np.zeros((1, 3)))
 
 
-def simulate(backend, actuator, desired_fn, substeps: int, dt: float):
+def simulate(backend, desired_fn, substeps: int, dt: float):
     """Run ``substeps`` physics steps tracking ``desired_fn(t)``; return (qpos, torque) logs."""
     qpos, torque = [], []
     for i in range(substeps):
         desired = np.asarray(desired_fn(i * dt), dtype=np.float64)[None]
-        tau = actuator(desired, backend.joint_pos, backend.joint_vel)
-        backend.step(tau)
+        tau = backend.track(desired, 1)
         qpos.append(backend.qpos[0].copy())
         torque.append(tau[0].copy())
     return np.array(qpos), np.array(torque)

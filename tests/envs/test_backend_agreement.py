@@ -33,9 +33,9 @@ def test_free_fall_of_the_rail():
     """From 1 m, joints held by the PD law: the hip falls as h - g t^2 / 2."""
     height, substeps = 1.0, 300
     logs = {}
-    for sim, (backend, actuator, _) in both().items():
+    for sim, (backend, _, _) in both().items():
         place(backend, NOMINAL, hip_height=height)
-        logs[sim], _ = simulate(backend, actuator, lambda t: NOMINAL, substeps, DT)
+        logs[sim], _ = simulate(backend, lambda t: NOMINAL, substeps, DT)
         backend.close()
     n = np.arange(1, substeps + 1)
     t = n * DT
@@ -52,9 +52,9 @@ def test_free_fall_of_the_rail():
 def test_static_torques_standing_match_the_hand_calculation():
     """Frictionless floor (the ground force is vertical) and stiff gains (pose ~ nominal)."""
     torques, poses = {}, {}
-    for sim, (backend, actuator, _) in both(foot_friction=0.0, kp=1000.0, kd=20.0).items():
+    for sim, (backend, _, _) in both(foot_friction=0.0, kp=1000.0, kd=20.0).items():
         place(backend, NOMINAL)
-        qpos, torque = simulate(backend, actuator, lambda t: NOMINAL, 2000, DT)
+        qpos, torque = simulate(backend, lambda t: NOMINAL, 2000, DT)
         assert np.abs(backend.qvel).max() < 1e-4, sim  # settled
         torques[sim], poses[sim] = torque[-100:].mean(axis=0), qpos[-1, 1:]
         backend.close()
@@ -77,9 +77,9 @@ def test_static_torques_standing_match_the_hand_calculation():
 def test_standing_with_friction_agrees():
     """Default config: the stuck foot takes a horizontal force too; both simulators agree."""
     logs = {}
-    for sim, (backend, actuator, _) in both().items():
+    for sim, (backend, _, _) in both().items():
         place(backend, NOMINAL)
-        logs[sim] = simulate(backend, actuator, lambda t: NOMINAL, 1500, DT)
+        logs[sim] = simulate(backend, lambda t: NOMINAL, 1500, DT)
         backend.close()
     (q_mj, tau_mj), (q_pb, tau_pb) = logs["mujoco"], logs["pybullet"]
     assert abs(q_mj[-1, 0] - q_pb[-1, 0]) < 2e-3  # hip height, m
@@ -94,9 +94,9 @@ def test_open_loop_sinusoid_agrees():
         return NOMINAL + np.array([0.3, -0.6]) * np.sin(2 * np.pi * 2.0 * t)
 
     logs = {}
-    for sim, (backend, actuator, _) in both().items():
+    for sim, (backend, _, _) in both().items():
         place(backend, NOMINAL)
-        logs[sim], _ = simulate(backend, actuator, desired, 1000, DT)
+        logs[sim], _ = simulate(backend, desired, 1000, DT)
         backend.close()
     diff = logs["mujoco"] - logs["pybullet"]
     joint_rms = np.sqrt(np.mean(diff[:, 1:] ** 2, axis=0))
@@ -109,12 +109,12 @@ def test_open_loop_sinusoid_agrees():
 
 
 def test_foot_state_and_contact_match_kinematics():
-    for sim, (backend, actuator, _) in both().items():
+    for sim, (backend, _, _) in both().items():
         place(backend, NOMINAL)
-        simulate(backend, actuator, lambda t: NOMINAL, 50, DT)
+        simulate(backend, lambda t: NOMINAL, 50, DT)
         assert backend.contact().tolist() == [True], sim
         place(backend, NOMINAL, hip_height=0.8)
-        simulate(backend, actuator, lambda t: NOMINAL + [0.5 * t * 20, -t * 20], 30, DT)
+        simulate(backend, lambda t: NOMINAL + [0.5 * t * 20, -t * 20], 30, DT)
         assert backend.contact().tolist() == [False], sim
         pos, vel = backend.foot_state()
         q, v = backend.qpos[0], backend.qvel[0]

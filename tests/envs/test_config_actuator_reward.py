@@ -83,18 +83,46 @@ def test_torque_is_clipped_to_40_nm():
 def test_torque_speed_curve_models_the_velocity_limit():
     actuator = Actuator.from_config(HopperConfig())  # tau_sat 80, v_max 15, tau_max 40
     push = np.array([10.0])  # a huge position error: the PD law asks for +800 N m
-    for velocity, expected in [(0.0, 40.0), (7.5, 40.0), (11.25, 20.0), (15.0, 0.0), (20.0, 0.0)]:
+    # 80 (1 - v / 15), at most 40: full torque up to 7.5 rad/s, none at 15, braking beyond
+    for velocity, expected in [
+        (0.0, 40.0), (7.5, 40.0), (11.25, 20.0), (15.0, 0.0), (20.0, -80 / 3), (30.0, -40.0)
+    ]:  # fmt: skip
         tau = actuator(push, np.zeros(1), np.array([velocity]))
         assert tau[0] == pytest.approx(expected), velocity
     # moving the other way, the same push is braking: never limited below 40 N m
     for velocity in (-5.0, -15.0, -30.0):
         assert actuator(push, np.zeros(1), np.array([velocity]))[0] == pytest.approx(40.0)
-    # beyond the limit the drive still brakes: negative torque at +20 rad/s
+    # beyond the limit the back-EMF brakes the joint whatever the command
     lower, upper = actuator.torque_bounds(np.array([20.0]))
-    assert upper[0] == 0.0 and lower[0] == -40.0
+    assert upper[0] == pytest.approx(-80 / 3) and lower[0] == -40.0
     # symmetric for the negative direction
     lower, upper = actuator.torque_bounds(np.array([-11.25]))
     assert (lower[0], upper[0]) == (-20.0, 40.0)
+
+
+@pytest.mark.parametrize("overrides", [{}, {"kp": 300.0, "kd": 5.0, "saturation_torque": 60.0}])
+def test_mujoco_dcmotor_actuator_is_the_same_law(overrides):
+    """The MuJoCo backend runs the law inside the simulator (a ``dcmotor`` actuator): at random
+    positions, velocities (past the velocity limit too) and commands, the force MuJoCo
+    computes equals :class:`Actuator`'s to rounding."""
+    import mujoco
+
+    from cpg_actor.envs.backends.mujoco_backend import load_model
+
+    config = HopperConfig(**overrides)
+    actuator = Actuator.from_config(config)
+    model = load_model(config.physics_dt, config.foot_friction, actuator)
+    data = mujoco.MjData(model)
+    rng = np.random.default_rng(0)
+    for _ in range(500):
+        data.qpos[1:3] = rng.uniform(-1.5, 1.5, 2)
+        data.qvel[1:3] = rng.uniform(-40.0, 40.0, 2)
+        data.ctrl[:] = rng.uniform(-2.0, 2.0, 2)
+        mujoco.mj_forward(model, data)
+        expected = actuator(data.ctrl, data.qpos[1:3], data.qvel[1:3])
+        np.testing.assert_allclose(data.actuator_force, expected, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(data.sensordata, expected, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(data.qfrc_actuator[1:3], expected, rtol=0, atol=1e-9)
 
 
 def test_actuator_is_elementwise_on_batches():

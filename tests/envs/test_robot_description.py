@@ -6,8 +6,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from cpg_actor.envs.backends.mujoco_backend import MujocoBackend
-from cpg_actor.envs.backends.pybullet_backend import FOOT_LINK, PybulletBackend
+from cpg_actor.envs.actuator import Actuator
+from cpg_actor.envs.backends import make_backend
+from cpg_actor.envs.backends.mujoco_backend import load_model
+from cpg_actor.envs.backends.pybullet_backend import FOOT_LINK
+from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.robot import description as robot
 from cpg_actor.envs.robot import kinematics, stale_assets
 
@@ -17,14 +20,14 @@ POSES = [(0.4, -0.8), (0.0, 0.0), (1.2, -1.6), (-0.4, 0.05)]
 
 @pytest.fixture(scope="module")
 def mj():
-    backend = MujocoBackend(physics_dt=0.001, foot_friction=0.8)
+    backend = make_backend(HopperConfig(sim="mujoco"))
     yield backend.model
     backend.close()
 
 
 @pytest.fixture(scope="module")
 def pb():
-    backend = PybulletBackend(physics_dt=0.001, foot_friction=0.8)
+    backend = make_backend(HopperConfig(sim="pybullet"))
     yield backend.handle(0)
     backend.close()
 
@@ -120,3 +123,16 @@ def test_nominal_pose_puts_the_foot_under_the_hip_with_the_knee_bent():
     assert knee[0] < hfe_x and knee[0] < foot[0]  # knee points backwards: bent
     # positive HFE swings the leg backwards (the sign convention in description.py)
     assert kinematics.foot_position(np.array([0.6, -0.8]))[0] < foot[0]
+
+
+def test_shipped_mjcf_has_the_default_actuators():
+    """The backend writes the configured actuator constants; with the default config its model
+    is the shipped file's, and other constants do reach the model."""
+    config = HopperConfig()
+    shipped = load_model(config.physics_dt, config.foot_friction)
+    built = load_model(config.physics_dt, config.foot_friction, Actuator.from_config(config))
+    for field in ("actuator_gainprm", "actuator_biasprm", "actuator_dynprm", "actuator_forcerange"):
+        np.testing.assert_array_equal(getattr(shipped, field), getattr(built, field), err_msg=field)
+    assert shipped.nu == 2 and shipped.na == 0 and shipped.nsensordata == 2
+    other = load_model(0.001, 0.8, Actuator.from_config(HopperConfig(torque_limit=30.0)))
+    np.testing.assert_array_equal(other.actuator_forcerange, [[-30.0, 30.0]] * 2)

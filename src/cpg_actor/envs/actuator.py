@@ -1,19 +1,26 @@
-"""The joint actuator, shared by both simulators: PD on the desired position, torque-limited and
-velocity-limited, evaluated in numpy once per physics substep and applied as a joint torque.
+"""The joint actuator, shared by both simulators: PD on the desired position through a DC
+motor whose driver saturates at its supply voltage, and a torque limit.
 
 The law, per joint (p_d: desired position, p: measured position, v: measured velocity)::
 
-    tau_pd = Kp (p_d - p) - Kd v
-    tau_hi(v) = clip(tau_sat (1 - v / v_max), 0, tau_max)
-    tau_lo(v) = clip(tau_sat (-1 - v / v_max), -tau_max, 0)
-    tau = min(max(tau_pd, tau_lo(v)), tau_hi(v))
+    tau_pd = Kp (p_d - p) - Kd v                       # the drive's PD controller
+    tau_dc = clip(tau_pd, tau_sat (-1 - v / v_max),    # what the motor can deliver at
+                          tau_sat ( 1 - v / v_max))    #   speed v (its torque-speed line)
+    tau = clip(tau_dc, -tau_max, tau_max)              # the command torque limit
 
 ``tau_max`` = 40 N m is the command torque limit of the ANYmal drive. The velocity limit
-``v_max`` = 15 rad/s is modelled by the torque-speed line of a DC motor with stall torque
-``tau_sat``: the torque that pushes *in the direction of motion* falls linearly from
-``tau_sat`` at rest to 0 at ``v_max`` (with ``tau_sat`` = 80 N m the full 40 N m is available
-up to 7.5 rad/s). Beyond ``v_max`` the drive can only brake; braking torque is never limited
-below ``tau_max``. Gravity or an impact can still push a joint past ``v_max``, as on a robot.
+``v_max`` = 15 rad/s is the no-load speed of a DC motor with stall torque ``tau_sat``: the
+torque that pushes *in the direction of motion* falls linearly from ``tau_sat`` at rest to 0
+at ``v_max`` (with ``tau_sat`` = 80 N m the full 40 N m is available up to 7.5 rad/s).
+Beyond ``v_max`` the back-EMF exceeds the supply voltage and the motor brakes the joint
+whatever it is asked; braking torque is never limited below ``tau_max``. Gravity or an
+impact can still push a joint past ``v_max``, as on a robot.
+
+This is exactly MuJoCo's ``dcmotor`` actuator with ``input="pos"``, controller gains
+``Kp, Kd``, drive voltage limit ``V`` and ``nominal="V tau_sat v_max"`` and ``saturation``
+``tau_max`` (no inductance, no friction): the MuJoCo backend runs the law inside the
+simulator (:func:`cpg_actor.envs.robot.mjcf.actuator_xml`), the PyBullet backend calls this
+class once per physics substep. ``tests/envs/test_config_actuator_reward.py`` checks they agree.
 """
 
 from __future__ import annotations
@@ -46,9 +53,9 @@ class Actuator:
     def torque_bounds(self, velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) torque the drive can produce at joint velocity ``velocity``."""
         # np.minimum / np.maximum rather than np.clip: same result, a third of the overhead
-        drop = velocity * (self.saturation_torque / self.velocity_limit)
-        upper = np.minimum(np.maximum(self.saturation_torque - drop, 0.0), self.torque_limit)
-        lower = np.maximum(np.minimum(-self.saturation_torque - drop, 0.0), -self.torque_limit)
+        limit, drop = self.torque_limit, velocity * (self.saturation_torque / self.velocity_limit)
+        upper = np.minimum(np.maximum(self.saturation_torque - drop, -limit), limit)
+        lower = np.minimum(np.maximum(-self.saturation_torque - drop, -limit), limit)
         return lower, upper
 
     def __call__(

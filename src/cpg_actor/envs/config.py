@@ -27,8 +27,8 @@ class HopperConfig:
     kp: float = 80.0  # N m / rad
     kd: float = 2.0  # N m s / rad
     torque_limit: float = 40.0  # N m, |tau| <= torque_limit
-    velocity_limit: float = 15.0  # rad/s, no torque in the direction of motion beyond it
-    saturation_torque: float = 80.0  # N m, torque-speed line tau_sat * (1 - |v| / v_max)
+    velocity_limit: float = 15.0  # rad/s, no-load speed: only braking torque beyond it
+    saturation_torque: float = 80.0  # N m, stall torque: line tau_sat (1 - v / v_max)
     # -- reward, paper eq. 4 (c1 >= 0, c2..c5 <= 0) --------------------------------------------
     c1: float = 1.0  # r1 = (c1 * max(v_hip, 0))^2: upward hip velocity, (m/s)^2
     c2: float = -1.0  # r2 = c2 * sum_j (p_d - p_m)^2: tracking error, rad^2

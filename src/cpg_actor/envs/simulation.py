@@ -1,5 +1,5 @@
-"""K hoppers stepped together: reset pose, decimation loop with the PD actuator, observation,
-reward, termination. :class:`HopperEnv` is K = 1 and :class:`HopperVectorEnv` is K = N of
+"""K hoppers stepped together: reset pose, a control step of ``decimation`` physics substeps
+(the backend runs the joint actuators at every substep), observation, reward, termination. :class:`HopperEnv` is K = 1 and :class:`HopperVectorEnv` is K = N of
 this same code, which is why they produce identical trajectories.
 """
 
@@ -9,7 +9,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cpg_actor.envs.actuator import Actuator
 from cpg_actor.envs.backends import make_backend
 from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.reward import reward_terms, total_reward
@@ -58,11 +57,9 @@ class HopperSimulation:
         self.config = config
         self.num_robots = int(num_robots)
         self.backend = make_backend(config, self.num_robots, num_threads)
-        self.actuator = Actuator.from_config(config)
         self.weights = config.reward_weights
         self.desired = np.tile(NOMINAL_POSE, (self.num_robots, 1))
         self.elapsed_steps = np.zeros(self.num_robots, dtype=np.int64)
-        self._torque_sum = np.zeros((self.num_robots, 2))
 
     # -- reset -------------------------------------------------------------------------------
     def reset_robots(self, index: np.ndarray, joint_noise: np.ndarray) -> None:
@@ -97,17 +94,9 @@ class HopperSimulation:
     # -- step --------------------------------------------------------------------------------
     def step(self, desired: np.ndarray) -> StepResult:
         """Track ``desired`` (K, 2) for one control step (``decimation`` physics substeps)."""
-        backend, actuator = self.backend, self.actuator
+        backend = self.backend
         np.copyto(self.desired, desired)
-        desired = self.desired
-        joint_pos, joint_vel = backend.joint_pos, backend.joint_vel  # views, updated in place
-        torque_sum = self._torque_sum
-        torque_sum[:] = 0.0
-        for _ in range(self.config.decimation):
-            torque = actuator(desired, joint_pos, joint_vel)
-            backend.step(torque)
-            torque_sum += torque
-        joint_torque = torque_sum / self.config.decimation
+        joint_torque = backend.track(self.desired, self.config.decimation)
         self.elapsed_steps += 1
 
         qpos, qvel = backend.qpos, backend.qvel

@@ -7,7 +7,10 @@ from cpg_actor.envs.backends.base import Backend
 
 def make_backend(config, num_robots: int = 1, num_threads: int | None = None) -> Backend:
     """The backend named by ``config.sim`` for ``num_robots`` hoppers (imported on demand)."""
+    from cpg_actor.envs.actuator import Actuator
+
     kwargs = dict(
+        actuator=Actuator.from_config(config),
         physics_dt=config.physics_dt,
         foot_friction=config.foot_friction,
         num_robots=num_robots,

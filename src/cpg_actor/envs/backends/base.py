@@ -42,8 +42,10 @@ class Backend(ABC):
         """Put robots ``index`` (k,) in state ``qpos``, ``qvel`` (k, 3), at rest otherwise."""
 
     @abstractmethod
-    def step(self, joint_torque: np.ndarray) -> None:
-        """One physics substep of all robots with ``joint_torque`` (K, 2) N m on HFE, KFE."""
+    def track(self, desired: np.ndarray, substeps: int) -> np.ndarray:
+        """``substeps`` physics substeps of all robots, the joint actuators
+        (:mod:`cpg_actor.envs.actuator`) tracking ``desired`` (K, 2) rad on HFE, KFE at every
+        substep; returns the joint torque applied, mean over the substeps, (K, 2) N m."""
 
     @abstractmethod
     def unstable(self) -> np.ndarray:

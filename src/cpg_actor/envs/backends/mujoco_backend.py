@@ -1,15 +1,19 @@
 """MuJoCo backend: K hoppers as K rows of one state array, stepped by ``mujoco.rollout``.
 
-One ``MjModel``; each physics substep is one call of ``mujoco.rollout`` with ``nstep=1``: the
+One ``MjModel`` whose joints carry ``dcmotor`` actuators that are the actuator law of
+:mod:`cpg_actor.envs.actuator` (PD, torque-speed line, torque limit; see
+:func:`cpg_actor.envs.robot.mjcf.actuator_xml`), their control being the desired joint
+positions. A control step is one call of ``mujoco.rollout`` with ``nstep`` = the substeps: the
 C++ side loops over the K robots on its own thread pool (GIL released), doing per robot
-``mj_setState`` -> joint torques into ``qfrc_applied`` -> ``mj_step`` -> ``mj_getState``. The
-state of all robots therefore lives in one contiguous numpy array, so the PD law of
-:mod:`cpg_actor.envs.actuator` runs vectorised over all K robots between substeps with no
-per-robot Python. A single environment is the same code with K = 1 on the calling thread, so
-the vector env and N single envs compute bit-identical trajectories.
+``mj_setState`` -> desired positions into ``ctrl`` -> ``nstep`` x ``mj_step`` ->
+``mj_getState``, with no Python between substeps. The state of all robots lives in one
+contiguous numpy array. A single environment is the same code with K = 1 on the calling
+thread, so the vector env and N single envs compute bit-identical trajectories.
 
-The solver warm start (``qacc_warmstart``) is zero at every substep: ``rollout`` does not
-return it. The constraint solver converges to its tolerance either way.
+The solver warm start (``qacc_warmstart``) is zero at the first substep of every control step
+(``rollout`` does not return it) and carried between the substeps of one call. The constraint
+solver converges to its tolerance either way, and a control step starts from nothing but the
+returned state, so restoring that state is exact.
 
 Headless rendering: ``MUJOCO_GL`` must be chosen before ``mujoco`` is first imported. On Linux
 without a ``DISPLAY`` this module defaults it (:func:`headless_gl`) to ``egl`` where libEGL is
@@ -40,18 +44,25 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 from mujoco import rollout as mj_rollout  # noqa: E402
 
+from cpg_actor.envs.actuator import Actuator  # noqa: E402
 from cpg_actor.envs.backends.base import Backend  # noqa: E402
-from cpg_actor.envs.robot import MJCF_PATH  # noqa: E402
+from cpg_actor.envs.robot import MJCF_PATH, mjcf_text  # noqa: E402
 from cpg_actor.machine import usable_cores  # noqa: E402
 
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS.value  # [time, qpos, qvel, (act, ...)]
-CONTROL_SPEC = mujoco.mjtState.mjSTATE_QFRC_APPLIED.value  # joint torques
+CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL.value  # desired joint positions
 CLOCK_START = 1000.0  # s, simulation time of every robot after a reset (see reset_robots)
 
 
-def load_model(physics_dt: float, foot_friction: float) -> mujoco.MjModel:
-    """The hopper's MjModel with the configured timestep and foot-ground friction."""
-    model = mujoco.MjModel.from_xml_path(str(MJCF_PATH))
+def load_model(
+    physics_dt: float, foot_friction: float, actuator: Actuator | None = None
+) -> mujoco.MjModel:
+    """The hopper's MjModel with the configured actuators, timestep and foot-ground friction
+    (the shipped MJCF, ``MJCF_PATH``, when ``actuator`` is None)."""
+    if actuator is None:
+        model = mujoco.MjModel.from_xml_path(str(MJCF_PATH))
+    else:
+        model = mujoco.MjModel.from_xml_string(mjcf_text(actuator))
     model.opt.timestep = physics_dt
     for name in ("foot", "ground"):
         model.geom_friction[model.geom(name).id, 0] = foot_friction
@@ -68,12 +79,13 @@ class MujocoBackend(Backend):
 
     def __init__(
         self,
+        actuator: Actuator,
         physics_dt: float,
         foot_friction: float,
         num_robots: int = 1,
         num_threads: int | None = None,
     ) -> None:
-        self.model = load_model(physics_dt, foot_friction)
+        self.model = load_model(physics_dt, foot_friction, actuator)
         self.num_robots = int(num_robots)
         self.num_threads = default_threads(num_robots) if num_threads is None else int(num_threads)
         if self.num_threads < 1:
@@ -89,9 +101,7 @@ class MujocoBackend(Backend):
         nq, nv = self.model.nq, self.model.nv
         self.nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
         self._state = np.zeros((self.num_robots, self.nstate))
-        self._next = np.zeros((self.num_robots, 1, self.nstate))
-        self._next_state = self._next.reshape(self.num_robots, self.nstate)
-        self._control = np.zeros((self.num_robots, 1, nv))
+        self._substeps = 0  # the buffers below are sized by track() for its substeps
         self.qpos = self._state[:, 1 : 1 + nq]
         self.qvel = self._state[:, 1 + nq : 1 + nq + nv]
         self._time = self._state[:, 0]
@@ -109,14 +119,21 @@ class MujocoBackend(Backend):
         self.qpos[index] = qpos
         self.qvel[index] = qvel
 
-    def step(self, joint_torque: np.ndarray) -> None:
-        self._control[:, 0, 1:3] = joint_torque
+    def track(self, desired: np.ndarray, substeps: int) -> np.ndarray:
+        if substeps != self._substeps:
+            shape = (self.num_robots, substeps)
+            self._control = np.zeros((*shape, self.model.nu))
+            self._next = np.zeros((*shape, self.nstate))
+            self._torque = np.zeros((*shape, self.model.nsensordata))  # actuatorfrc sensors
+            self._substeps = substeps
+        self._control[:] = desired[:, None, :]
         self._rollout.rollout(
             self._models, self._datas, self._state, self._control,
-            control_spec=CONTROL_SPEC, skip_checks=True, nstep=1, initial_warmstart=None,
-            state=self._next, sensordata=None, chunk_size=self._chunk,
+            control_spec=CONTROL_SPEC, skip_checks=True, nstep=substeps, initial_warmstart=None,
+            state=self._next, sensordata=self._torque, chunk_size=self._chunk,
         )  # fmt: skip
-        np.copyto(self._state, self._next_state)
+        np.copyto(self._state, self._next[:, -1])
+        return self._torque.sum(axis=1) / substeps
 
     def get_state(self) -> np.ndarray:
         """The full physics state of every robot (``mjSTATE_FULLPHYSICS``: time, qpos, qvel,

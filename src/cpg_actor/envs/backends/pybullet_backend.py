@@ -61,6 +61,7 @@ with quiet_stdout():
     import pybullet
     from pybullet_utils import bullet_client
 
+from cpg_actor.envs.actuator import Actuator  # noqa: E402
 from cpg_actor.envs.backends.base import Backend  # noqa: E402
 from cpg_actor.envs.robot import URDF_PATH  # noqa: E402
 from cpg_actor.envs.robot import description as robot  # noqa: E402
@@ -137,11 +138,13 @@ class PybulletBackend(Backend):
 
     def __init__(
         self,
+        actuator: Actuator,
         physics_dt: float,
         foot_friction: float,
         num_robots: int = 1,
         num_threads: int | None = None,  # accepted for interface symmetry; unused
     ) -> None:
+        self.actuator = actuator
         self.num_robots = int(num_robots)
         self.num_threads = 1
         sizes = [
@@ -201,13 +204,19 @@ class PybulletBackend(Backend):
         self._unstable[index] = False
         self._read()
 
-    def step(self, joint_torque: np.ndarray) -> None:
-        torque = joint_torque.tolist()
-        for i, c, body in self._robots():
-            c.setJointMotorControlArray(body, (HFE, KFE), pybullet.TORQUE_CONTROL, forces=torque[i])
-        for world in self._worlds:
-            world.client.stepSimulation()
-        self._read()
+    def track(self, desired: np.ndarray, substeps: int) -> np.ndarray:
+        """The actuator law in numpy once per substep, applied with TORQUE_CONTROL."""
+        torque_sum = np.zeros((self.num_robots, 2))
+        for _ in range(substeps):
+            torque = self.actuator(desired, self.joint_pos, self.joint_vel)
+            torque_sum += torque
+            rows = torque.tolist()
+            for i, c, body in self._robots():
+                c.setJointMotorControlArray(body, (HFE, KFE), pybullet.TORQUE_CONTROL, forces=rows[i])
+            for world in self._worlds:
+                world.client.stepSimulation()
+            self._read()
+        return torque_sum / substeps
 
     def unstable(self) -> np.ndarray:
         return self._unstable.copy()

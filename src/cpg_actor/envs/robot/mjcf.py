@@ -4,9 +4,14 @@ The physics timestep written here is a placeholder: the backend sets ``opt.times
 ``HopperConfig.physics_dt`` (and the foot friction from ``HopperConfig.foot_friction``).
 Contacts: elliptic friction cone with ``impratio`` 100, which makes MuJoCo's soft friction hard
 enough that a standing foot sticks like PyBullet's rigid one instead of creeping (with the
-defaults it creeps by ~1 cm/s under the standing load). Joints carry no actuators: torques
-from :mod:`cpg_actor.envs.actuator` are written to ``qfrc_applied``, exactly as the PyBullet
-backend applies them with TORQUE_CONTROL.
+defaults it creeps by ~1 cm/s under the standing load).
+
+Each leg joint carries a ``dcmotor`` actuator that is the law of
+:mod:`cpg_actor.envs.actuator` (PD on the desired position, torque-speed line, torque limit),
+so the simulator runs it at every substep with no Python in between; its control is the
+desired joint position. An ``actuatorfrc`` sensor per joint reports the torque applied. The
+shipped file has the default actuator constants; the backend writes the configured ones
+(:func:`actuator_xml`).
 """
 
 from __future__ import annotations
@@ -59,8 +64,38 @@ def _body(name: str, indent: str) -> list[str]:
     return lines
 
 
-def mjcf_text() -> str:
-    """The complete MJCF document."""
+def actuator_xml(actuator=None, indent: str = "  ") -> list[str]:
+    """The ``<actuator>`` and ``<sensor>`` elements for :class:`cpg_actor.envs.actuator.Actuator`
+    constants (default: those of the default ``HopperConfig``).
+
+    MuJoCo's ``dcmotor`` with ``input="pos"`` commands the torque ``Kp (u - q) - Kd q_dot``
+    through a driver voltage clamped to ``V``; ``nominal="V tau_sat v_max"`` makes the motor's
+    torque-speed line ``tau_sat (+-1 - q_dot / v_max)`` at that clamp, and ``saturation`` clips
+    the torque to ``tau_max``. ``V`` = 1 volt is arbitrary: only the ratios matter.
+    """
+    if actuator is None:
+        from cpg_actor.envs.actuator import Actuator
+        from cpg_actor.envs.config import HopperConfig
+
+        actuator = Actuator.from_config(HopperConfig())
+    a = actuator
+    motor = (
+        f'input="pos" nominal="1 {a.saturation_torque:.17g} {a.velocity_limit:.17g}" '
+        f'controller="{a.kp:.17g} 0 {a.kd:.17g} 0 0 1" saturation="{a.torque_limit:.17g} 0 0"'
+    )
+    inner = indent + "  "
+    return [
+        f"{indent}<actuator>",
+        *(f'{inner}<dcmotor name="{j}" joint="{j}" {motor}/>' for j in robot.JOINT_NAMES),
+        f"{indent}</actuator>",
+        f"{indent}<sensor>",
+        *(f'{inner}<actuatorfrc name="{j}_torque" actuator="{j}"/>' for j in robot.JOINT_NAMES),
+        f"{indent}</sensor>",
+    ]
+
+
+def mjcf_text(actuator=None) -> str:
+    """The complete MJCF document, with the actuators of :func:`actuator_xml`."""
     rail = robot.JOINTS[0]
     lo, hi = rail.limits
     body = _body("hip", "      ")
@@ -98,6 +133,7 @@ def mjcf_text() -> str:
             *body,
             "    </body>",
             "  </worldbody>",
+            *actuator_xml(actuator),
             "</mujoco>",
             "",
         ]
