@@ -1,6 +1,7 @@
 """K hoppers stepped together: reset pose, a control step of ``decimation`` physics substeps
-(the backend runs the joint actuators at every substep), observation, reward, termination. :class:`HopperEnv` is K = 1 and :class:`HopperVectorEnv` is K = N of
-this same code, which is why they produce identical trajectories.
+(the backend runs the joint actuators at every substep), observation, reward, termination.
+:class:`HopperEnv` is K = 1 and :class:`HopperVectorEnv` is K = N of this same code, which is
+why they produce identical trajectories.
 """
 
 from __future__ import annotations

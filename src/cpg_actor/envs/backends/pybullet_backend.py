@@ -212,7 +212,9 @@ class PybulletBackend(Backend):
             torque_sum += torque
             rows = torque.tolist()
             for i, c, body in self._robots():
-                c.setJointMotorControlArray(body, (HFE, KFE), pybullet.TORQUE_CONTROL, forces=rows[i])
+                c.setJointMotorControlArray(
+                    body, (HFE, KFE), pybullet.TORQUE_CONTROL, forces=rows[i]
+                )
             for world in self._worlds:
                 world.client.stepSimulation()
             self._read()
