@@ -10,7 +10,7 @@ import torch
 
 from cpg_actor.checkpoint import load_checkpoint
 from cpg_actor.cli import main
-from cpg_actor.config import TrainConfig, apply_dict, parse_override, parse_steps
+from cpg_actor.config import TrainConfig, apply_dict, compose_config, parse_override, parse_steps
 
 # tiny runs: 2 envs x 8 steps per iteration
 TINY = [
@@ -435,3 +435,23 @@ def test_a_full_disk_or_a_read_only_run_is_one_line_and_keeps_what_was_saved(
     code = main(["eval", str(run_dir), "--episodes", "1"])
     err = capsys.readouterr().err
     assert code == 1 and err.count("\n") == 1 and "Read-only file system" in err, err
+
+
+def test_compose_config_applies_each_layer_in_order(tmp_path):
+    """defaults < preset < config file < values (the flags) < each --set, in that order."""
+    path = tmp_path / "c.yaml"
+    path.write_text("preset: throughput\nseed: 3\nnum_envs: 64\nppo:\n  num_epochs: 7\n")
+    config = compose_config(
+        config_file=path,
+        values={"num_envs": 8, "env": {"sim": "pybullet"}},
+        overrides=["ppo.num_epochs=2", "ppo.num_epochs=3"],
+    )
+    assert config.preset == "throughput" and config.ppo.num_minibatches == 4  # the file's preset
+    assert (config.seed, config.num_envs, config.ppo.num_epochs) == (3, 8, 3)
+    assert config.env.sim == "pybullet"
+    assert compose_config(preset="paper", config_file=path).ppo.num_minibatches == 32
+    assert compose_config().preset == "paper"
+    with pytest.raises(ValueError, match="unknown config key 'ppo.epochs'"):
+        compose_config(overrides=["ppo.epochs=3"])
+    with pytest.raises(FileNotFoundError, match="does not exist"):
+        compose_config(config_file=tmp_path / "missing.yaml")

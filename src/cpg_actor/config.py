@@ -124,6 +124,41 @@ class TrainConfig:
         return cls.from_dict(read_config_file(path))
 
 
+def compose_config(
+    preset: str | None = None,
+    config_file: str | Path | None = None,
+    values: dict[str, Any] | None = None,
+    overrides: typing.Iterable[str] = (),
+) -> TrainConfig:
+    """The one place a run's config is put together, in this order (later wins): the
+    defaults, the preset (``preset``, else the config file's, else ``paper``), the YAML
+    ``config_file``, ``values`` (a nested mapping: the command-line flags), then each
+    ``KEY=VALUE`` of ``overrides`` (``--set``). Validated; a clear ValueError (or
+    FileNotFoundError) names what is wrong."""
+    from cpg_actor.presets import preset_values
+
+    file_data: dict[str, Any] = {}
+    if config_file is not None:
+        path = Path(config_file)
+        if path.is_dir():
+            raise ValueError(
+                f"--config {path} is a directory; give a YAML file (e.g. a run's config.yaml)"
+            )
+        if not path.is_file():
+            raise FileNotFoundError(f"config file {path} does not exist")
+        file_data = read_config_file(path)
+    preset = preset or file_data.get("preset") or "paper"
+    config = TrainConfig()
+    apply_dict(config, preset_values(preset), prefix="")
+    apply_dict(config, file_data, prefix="")
+    config.preset = preset
+    apply_dict(config, dict(values or {}), prefix="")
+    for text in overrides:
+        apply_dict(config, parse_override(text), prefix="")
+    config.validate()
+    return config
+
+
 def read_config_file(path: Path) -> dict[str, Any]:
     """The mapping of config keys in a YAML file; a clear ValueError if it is not one."""
     try:

@@ -10,13 +10,11 @@ from pathlib import Path
 from cpg_actor.commands import add_set_option
 from cpg_actor.config import (
     TrainConfig,
-    apply_dict,
-    parse_override,
+    compose_config,
     parse_steps,
-    read_config_file,
 )
 from cpg_actor.ppo.algorithm import cpp_compiler
-from cpg_actor.presets import PRESETS, preset_values
+from cpg_actor.presets import PRESETS
 from cpg_actor.run_lock import LOCK_NAME, RunLock
 
 HELP = "train an agent (cpg-actor, cpg-actor-open-loop, mlp, cho2019, cho2019-warm) with PPO"
@@ -86,23 +84,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def build_config(args: argparse.Namespace) -> TrainConfig:
-    """Defaults, then the preset (--preset, else the --config file's, else paper), then
-    --config, then the flags, then each --set, in that order."""
-    file_data: dict = {}
-    if args.config:
-        path = Path(args.config)
-        if path.is_dir():
-            raise ValueError(
-                f"--config {path} is a directory; give a YAML file (e.g. a run's config.yaml)"
-            )
-        if not path.is_file():
-            raise FileNotFoundError(f"config file {path} does not exist")
-        file_data = read_config_file(path)
-    preset = getattr(args, "preset", None) or file_data.get("preset") or "paper"
-    config = TrainConfig()
-    apply_dict(config, preset_values(preset), prefix="")
-    apply_dict(config, file_data, prefix="")
-    config.preset = preset
+    """The flags as config values, composed by :func:`cpg_actor.config.compose_config`
+    (defaults, preset, --config, the flags, each --set)."""
     flags: dict = {}
     if args.agent is not None:
         flags["agent"] = args.agent
@@ -116,9 +99,12 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
         flags["env"] = {"sim": args.sim}
     if getattr(args, "device", None) is not None:
         flags["device"] = args.device
-    apply_dict(config, flags, prefix="")
-    for text in args.overrides:
-        apply_dict(config, parse_override(text), prefix="")
+    config = compose_config(getattr(args, "preset", None), args.config, flags, args.overrides)
+    return without_compile_if_no_compiler(config)
+
+
+def without_compile_if_no_compiler(config: TrainConfig) -> TrainConfig:
+    """``ppo.compile`` off, with a note, where no C++ compiler is installed."""
     if config.ppo.compile and cpp_compiler() is None:
         print(
             "note: no C++ compiler found (g++, c++, clang++), so ppo.compile is off: the same "
@@ -126,7 +112,6 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
             file=sys.stderr,
         )
         config.ppo.compile = False
-    config.validate()
     return config
 
 

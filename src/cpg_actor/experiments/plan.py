@@ -8,7 +8,6 @@ How the runs are executed (workers, Ray address) may change between invocations.
 
 from __future__ import annotations
 
-import argparse
 import math
 import shutil
 from dataclasses import asdict, dataclass, field
@@ -98,19 +97,16 @@ def _override_keys(overrides: list[str]) -> set[str]:
 
 def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
     """The :class:`TrainConfig` ``cpg-actor train`` will build for one run (validates it)."""
-    from cpg_actor.commands.train import build_config
+    from cpg_actor.commands.train import without_compile_if_no_compiler
+    from cpg_actor.config import compose_config
 
-    args = argparse.Namespace(
-        config=None,
-        preset=None,
-        agent=variant,
-        seed=seed,
-        total_steps=str(settings.total_steps),
-        num_envs=settings.num_envs,
-        sim=settings.sim,
-        overrides=list(settings.overrides),
-    )
-    return build_config(args)
+    values = {"agent": variant, "seed": seed, "total_steps": settings.total_steps}
+    if settings.num_envs is not None:
+        values["num_envs"] = settings.num_envs
+    if settings.sim is not None:
+        values["env"] = {"sim": settings.sim}
+    config = compose_config(values=values, overrides=settings.overrides)
+    return without_compile_if_no_compiler(config)
 
 
 def checkpoint_interval(config) -> int:
