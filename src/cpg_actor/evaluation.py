@@ -14,7 +14,21 @@ from typing import Any
 import numpy as np
 import torch
 
-HIP_HEIGHT = 6  # index of the hip height in the hopper observation
+
+def observation_columns(robot) -> dict[str, list[int]]:
+    """Where the traces' quantities are in the observation, by the names the env's
+    :class:`cpg_actor.robot.RobotSpec` gives its columns: measured joint positions
+    (``p_m_<joint>``) and velocities (``v_m_<joint>``) in joint order, and the hip height
+    where the robot has one. A quantity the robot does not observe is left out."""
+    names = list(robot.observation_names)
+    columns = {}
+    for key, prefix in (("measured_position", "p_m_"), ("measured_velocity", "v_m_")):
+        wanted = [prefix + joint for joint in robot.joint_names]
+        if all(name in names for name in wanted):
+            columns[key] = [names.index(name) for name in wanted]
+    if "hip_height" in names:
+        columns["hip_height"] = [names.index("hip_height")]
+    return columns
 
 
 @torch.no_grad()
@@ -36,11 +50,14 @@ def evaluate(
     episode ended are NaN).
     """
     num_envs = env.num_envs
+    columns = observation_columns(env.robot)
     obs, _ = env.reset(seed=seed)
     obs = np.asarray(obs, dtype=np.float32)
-    standing = float(obs[:, HIP_HEIGHT].mean())
+    hip = columns.get("hip_height")
+    standing = float(obs[:, hip[0]].mean()) if hip else float("nan")
     policy.reset(num_envs)
-    previous_desired = obs[:, 4:6].copy()
+    # every episode starts tracking the nominal pose
+    previous_desired = np.tile(np.asarray(env.robot.nominal_pose), (num_envs, 1))
     active = np.ones(num_envs, dtype=bool)
     length = np.zeros(num_envs, dtype=np.int64)
     returns = np.zeros(num_envs)
@@ -61,8 +78,9 @@ def evaluate(
             metric[ended] = np.asarray(values)[ended]
         if traces:
             row = _trace_row(
-                step.agent.extras, info, desired, previous_desired, measured, reward, control_dt
-            )
+                step.agent.extras, info, desired, previous_desired, measured, columns, reward,
+                control_dt,
+            )  # fmt: skip
             for key, value in row.items():
                 value = np.asarray(value, dtype=np.float64).copy()
                 value[~active] = np.nan
@@ -85,19 +103,18 @@ def evaluate(
     return result
 
 
-def _trace_row(extras, info, desired, previous_desired, measured, reward, dt) -> dict[str, Any]:
-    # the desired positions the hopper tracked: the clipped action for agents acting on joint
+def _trace_row(
+    extras, info, desired, previous_desired, measured, columns, reward, dt
+) -> dict[str, Any]:
+    # the desired positions the robot tracked: the clipped action for agents acting on joint
     # positions, the CPG's output for agents whose env holds the CPG (cho2019)
     applied = np.asarray(info.get("desired_position", desired), dtype=np.float64)
     num_envs = applied.shape[0]
-    row = {
-        "desired_position": applied,
-        "measured_position": measured[:, 0:2],
-        "measured_velocity": measured[:, 2:4],
-        "hip_height": measured[:, HIP_HEIGHT],
-        "foot_height": np.asarray(info.get("foot_height", np.full(num_envs, np.nan))),
-        "reward": np.asarray(reward, dtype=np.float64),
-    }
+    row = {"desired_position": applied}
+    for key, where in columns.items():
+        row[key] = measured[:, where[0]] if key == "hip_height" else measured[:, where]
+    row["foot_height"] = np.asarray(info.get("foot_height", np.full(num_envs, np.nan)))
+    row["reward"] = np.asarray(reward, dtype=np.float64)
     if "desired_velocity" in extras:
         row["desired_velocity"] = extras["desired_velocity"].cpu().numpy()
     elif "desired_velocity" in info:  # CPG inside the environment

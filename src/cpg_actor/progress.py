@@ -8,11 +8,23 @@ import sys
 import time
 from typing import Any
 
+NOT_ENV_METRICS = ("return", "return_min", "length")  # eval/ keys that are the runner's own
+
+
+def metrics_text(metrics: dict[str, float]) -> str:
+    """``"hop_height 0.312"``: an env's episode metrics (name -> value) for the display."""
+    return " ".join(f"{name} {value:.3f}" for name, value in metrics.items())
+
 
 def evaluation_text(evaluation: dict[str, float]) -> str:
-    """One evaluation for the progress display."""
-    hop = evaluation.get("eval/hop_height", math.nan)
-    return f"eval return {evaluation['eval/return']:.1f} hop {hop:.3f} m"
+    """One evaluation for the progress display: its return and the env's episode metrics."""
+    env_metrics = {
+        key.removeprefix("eval/"): value
+        for key, value in evaluation.items()
+        if key.startswith("eval/") and key.removeprefix("eval/") not in NOT_ENV_METRICS
+    }
+    return " ".join(filter(None, [f"eval return {evaluation['eval/return']:.1f}",
+                                  metrics_text(env_metrics)]))  # fmt: skip
 
 
 class PlainProgress:
@@ -40,8 +52,8 @@ class PlainProgress:
         print(
             f"[train {self.name}] {done:,}/{self.total:,} steps ({100 * done / self.total:.1f}%), "
             f"{self.fields.get('sps', '-')} SPS, elapsed {elapsed:.0f} s, ETA {eta:.0f} s, "
-            f"return {self.fields.get('ret', '-')} hop {self.fields.get('hop', '-')} m "
-            f"{self.fields['evaluation']}".rstrip(),
+            f"return {self.fields.get('ret', '-')} {self.fields.get('metrics', '')} "
+            f"{self.fields['evaluation']}".replace("  ", " ").rstrip(),
             flush=True,
         )
 
@@ -51,8 +63,8 @@ class PlainProgress:
 
 def make_progress(name: str, total: int, completed: int, interval: float, evaluation: str):
     """``(progress, task)``: a started rich progress bar (stdout a terminal) or a
-    :class:`PlainProgress`; both take ``update(task, completed=, sps=, ret=, hop=,
-    evaluation=)`` and ``stop()``."""
+    :class:`PlainProgress`; both take ``update(task, completed=, sps=, ret=, metrics=,
+    evaluation=)`` and ``stop()`` (``metrics``: :func:`metrics_text` of the env's metrics)."""
     if not sys.stdout.isatty():
         return PlainProgress(name, total, completed, interval), None
     from rich.progress import (
@@ -72,11 +84,11 @@ def make_progress(name: str, total: int, completed: int, interval: float, evalua
         TimeElapsedColumn(),
         TextColumn("ETA"),
         TimeRemainingColumn(),
-        TextColumn("return {task.fields[ret]} hop {task.fields[hop]} m"),
+        TextColumn("return {task.fields[ret]} {task.fields[metrics]}"),
         TextColumn("{task.fields[evaluation]}"),
     )
     task = progress.add_task(
-        name, total=total, completed=completed, sps="-", ret="-", hop="-", evaluation=evaluation
+        name, total=total, completed=completed, sps="-", ret="-", metrics="", evaluation=evaluation
     )
     progress.start()
     return progress, task

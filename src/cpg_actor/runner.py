@@ -56,7 +56,7 @@ from cpg_actor.ppo import (
     RolloutStorage,
     RunningNormalizer,
 )
-from cpg_actor.progress import evaluation_text, make_progress
+from cpg_actor.progress import evaluation_text, make_progress, metrics_text
 
 WARM_START_SEED_KEY = 2**31  # derived_seed(seed, this) seeds the warm start's environments
 EVAL_SEED_KEY = 2**31 + 1  # derived_seed(seed, this) resets the evaluation envs, every time
@@ -279,6 +279,14 @@ class Runner:
     def _remember(self, key: str, value: float, window: int = 100) -> None:
         self.recent.setdefault(key, deque(maxlen=window)).append(float(value))
 
+    def recent_env_metrics(self) -> dict[str, float]:
+        """The env's episode metrics (e.g. ``hop_height``), each a mean over recent episodes."""
+        return {
+            key.removeprefix("charts/"): self.mean_recent(key)
+            for key in sorted(self.recent)
+            if key.startswith("charts/")
+        }
+
     def mean_recent(self, key: str) -> float:
         values = self.recent.get(key)
         return float(np.mean(values)) if values else math.nan
@@ -345,7 +353,7 @@ class Runner:
                         completed=self.global_step,
                         sps=f"{sps:,.0f}",
                         ret=f"{self.mean_recent('return'):.2f}",
-                        hop=f"{self.mean_recent('charts/hop_height'):.3f}",
+                        metrics=metrics_text(self.recent_env_metrics()),
                         evaluation=getattr(self, "_evaluation_text", ""),
                     )
                 at_interval = self.iteration % cfg.checkpoint_interval == 0

@@ -8,6 +8,8 @@ from pathlib import Path
 
 import numpy as np
 
+from cpg_actor.progress import metrics_text
+
 HELP = "evaluate a trained run deterministically; save per-step traces (and a video)"
 
 
@@ -84,14 +86,17 @@ def run(args: argparse.Namespace) -> int:
         os.replace(tmp, output)
     finally:
         tmp.unlink(missing_ok=True)
+    names = [str(name) for name in traces["metric_names"]]  # the env's (hop_height)
     for i in range(args.episodes):
+        metrics = metrics_text({name: traces[name][i] for name in names})
         print(
-            f"episode {i}: return {traces['episode_return'][i]:.3f}, hop height "
-            f"{traces['hop_height'][i]:.3f} m, {traces['length'][i]} steps"
+            f"episode {i}: return {traces['episode_return'][i]:.3f}, "
+            f"{metrics + ', ' if metrics else ''}{traces['length'][i]} steps"
         )
+    means = metrics_text({f"mean {name}": float(np.nanmean(traces[name])) for name in names})
     print(
-        f"mean return {traces['episode_return'].mean():.3f}, mean hop height "
-        f"{traces['hop_height'].mean():.3f} m over {args.episodes} episodes; traces in {output}"
+        f"mean return {traces['episode_return'].mean():.3f}{', ' + means if means else ''} "
+        f"over {args.episodes} episodes; traces in {output}"
     )
     figures = plot_training_curves(run_dir / "metrics.jsonl", output.parent / "training_curves.png")
     figures += plot_traces(traces, output.parent / "traces.png")

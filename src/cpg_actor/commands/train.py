@@ -15,6 +15,7 @@ from cpg_actor.config import (
 )
 from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.presets import PRESETS
+from cpg_actor.progress import evaluation_text, metrics_text
 from cpg_actor.run_lock import LOCK_NAME, RunLock
 
 HELP = "train an agent (cpg-actor, cpg-actor-open-loop, mlp, cho2019, cho2019-warm) with PPO"
@@ -263,16 +264,12 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
     row = getattr(runner, "last_row", {})
     nan = float("nan")
     evaluation = getattr(runner, "last_evaluation", None)
-    evaluated = (
-        f"; deterministic eval return {evaluation['eval/return']:.3f}, hop height "
-        f"{evaluation.get('eval/hop_height', nan):.3f} m"
-        if evaluation
-        else ""
-    )
+    evaluated = f"; deterministic {evaluation_text(evaluation)}" if evaluation else ""
     episode_return = row.get("charts/episode_return", nan)
     training = (
-        f"mean episode return {episode_return:.3f}, hop height "
-        f"{row.get('charts/hop_height', nan):.3f} m"
+        " ".join(
+            [f"mean episode return {episode_return:.3f}", metrics_text(runner.recent_env_metrics())]
+        ).rstrip()
         if episode_return == episode_return
         else "no training episode finished (runs shorter than an episode)"
     )
