@@ -47,6 +47,7 @@ from cpg_actor.checkpoint import (
 )
 from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
+from cpg_actor.envs.torch_env import EnvStep, TorchVectorEnv
 from cpg_actor.evaluation import evaluate
 from cpg_actor.policy import Policy
 from cpg_actor.ppo import (
@@ -137,10 +138,11 @@ class Runner:
         self.device = resolve_device(config.device)
         seed_everything(config.seed)
         self.spec = get_agent_spec(config.agent)
-        self.env = (
+        self.env = TorchVectorEnv(
             env
             if env is not None
-            else self.spec.make_env(config.num_envs, config.env, config.env_threads)
+            else self.spec.make_env(config.num_envs, config.env, config.env_threads),
+            self.device,
         )
         if self.env.num_envs != config.num_envs:
             raise ValueError(
@@ -186,8 +188,7 @@ class Runner:
     def start_episodes(self) -> None:
         """Reset every environment and every agent state (at the start of a run)."""
         self.env_seed = derived_seed(self.config.seed, self.iteration)
-        obs, _ = self.env.reset(seed=self.env_seed)
-        self.obs = torch.as_tensor(np.asarray(obs, dtype=np.float32))
+        self.obs, _ = self.env.reset(seed=self.env_seed)
         self.policy.reset(self.config.num_envs)
         self.reward_normalizer.reset()
         self.episode = EpisodeStats.zeros(self.config.num_envs)
@@ -211,25 +212,19 @@ class Runner:
             acted = self.policy.act(self.obs, deterministic=False, update_normalizer=True)
             step = acted.agent
             start = time.perf_counter()
-            next_obs, reward, terminated, truncated, info = self.env.step(acted.action)
+            out = self.env.step(acted.action)
             sim_time += time.perf_counter() - start
 
-            device = self.device
-            terminated_t = torch.as_tensor(np.asarray(terminated, np.float32), device=device)
-            truncated_t = torch.as_tensor(np.asarray(truncated, np.float32), device=device)
-            done = np.logical_or(terminated, truncated)
-            final_values = torch.zeros(cfg.num_envs, device=device)
-            bootstrap = np.logical_and(truncated, np.logical_not(terminated))
-            if bootstrap.any():
-                rows = torch.as_tensor(np.flatnonzero(bootstrap), device=device)
-                final_obs = np.asarray(info["final_obs"], dtype=np.float32)
-                final_obs = torch.as_tensor(final_obs, device=device)[rows]
-                final_values[rows] = self.agent.value(
-                    self.normalize(final_obs, update=False), step.next_state[rows]
-                )
-            rewards = torch.as_tensor(np.asarray(reward, dtype=np.float32), device=device)
+            done = out.terminated | out.truncated
+            final_values = torch.zeros(cfg.num_envs, device=self.device)
+            bootstrap = out.truncated & ~out.terminated
+            if bootstrap.any():  # the value of a cut episode's last state
+                rows = bootstrap.nonzero().squeeze(-1)
+                final_obs = self.normalize(out.final_obs[rows], update=False)
+                final_values[rows] = self.agent.value(final_obs, step.next_state[rows])
+            rewards = out.reward.to(torch.float32)
             if cfg.ppo.normalize_rewards:
-                rewards = self.reward_normalizer(rewards, torch.as_tensor(done, device=device))
+                rewards = self.reward_normalizer(rewards, done)
             self.storage.add(
                 observations=acted.observation,
                 states=acted.state,
@@ -239,34 +234,35 @@ class Runner:
                 action_mean=step.mean,
                 action_std=step.std,
                 rewards=rewards,
-                terminated=terminated_t,
-                truncated=truncated_t,
+                terminated=out.terminated.float(),
+                truncated=out.truncated.float(),
                 final_values=final_values,
             )
             self.policy.end_episodes(done)
-            self.obs = torch.as_tensor(np.asarray(next_obs, dtype=np.float32))
-            self._track_episodes(reward, done, info)
+            self.obs = out.obs
+            self._track_episodes(out, done)
 
-        obs = self.obs.to(self.device)
-        last_values = self.agent.value(self.normalize(obs, update=False), self.agent_state)
+        last_values = self.agent.value(self.normalize(self.obs, update=False), self.agent_state)
         self.storage.compute_returns(last_values, cfg.ppo.gamma, cfg.ppo.gae_lambda)
         return {"simulation_time": sim_time}
 
-    def _track_episodes(self, reward, done, info) -> None:
+    def _track_episodes(self, out: EnvStep, done: torch.Tensor) -> None:
         """Returns, lengths and reward terms summed per episode; the env's own episode metrics
-        (``info["episode_metrics"]``, e.g. the hopper's hop height) as it reports them."""
+        (``EnvStep.episode_metrics``, e.g. the hopper's hop height) as it reports them."""
         ep = self.episode
-        ep.returns += np.asarray(reward, dtype=np.float64)
+        ep.returns += out.reward.cpu().numpy().astype(np.float64)
         ep.lengths += 1
-        for name, value in info.get("reward_terms", {}).items():
+        for name, value in out.reward_terms.items():
             ep.terms.setdefault(name, np.zeros_like(ep.returns))
-            ep.terms[name] += np.asarray(value, dtype=np.float64)
+            ep.terms[name] += value.cpu().numpy()
+        done = done.cpu().numpy()
         if not done.any():
             return
+        metrics = {name: values.cpu().numpy() for name, values in out.episode_metrics.items()}
         for i in np.flatnonzero(done):
             self._remember("return", ep.returns[i])
             self._remember("length", ep.lengths[i])
-            for name, values in info.get("episode_metrics", {}).items():
+            for name, values in metrics.items():
                 if np.isfinite(values[i]):
                     self._remember(f"charts/{name}", values[i])  # logged under this name
             for name, value in ep.terms.items():
@@ -377,7 +373,9 @@ class Runner:
         cfg = self.config
         seed = derived_seed(cfg.seed, WARM_START_SEED_KEY)
         normalizer = self.normalizer if cfg.ppo.normalize_observations else None
-        losses = self.spec.warm_start(self.agent, normalizer, self.env, cfg.warm_start, seed)
+        losses = self.spec.warm_start(
+            self.agent, normalizer, self.env.unwrapped, cfg.warm_start, seed
+        )
         self._episodes_started = False
         if self.show_progress:
             print(
@@ -552,7 +550,7 @@ class Runner:
     def episodes_state(self) -> dict[str, Any] | None:
         """The episodes in progress (see the module docstring); None if the env cannot save
         its state (a resumed run then starts new episodes)."""
-        if not self._episodes_started or not hasattr(self.env, "get_state"):
+        if not self._episodes_started or not hasattr(self.env.unwrapped, "get_state"):
             return None
         return {
             "env": self.env.get_state(),
@@ -580,7 +578,8 @@ class Runner:
             raise ValueError(
                 f"the checkpoint's episodes do not fit this run's environments: {error}"
             ) from None
-        self.obs, self.policy.state = obs.clone().cpu(), agent_state.to(self.device).clone()
+        self.obs = obs.to(self.device).clone()
+        self.policy.state = agent_state.to(self.device).clone()
         self._episodes_started = True
 
     def save_checkpoint(self) -> Path:
@@ -619,7 +618,7 @@ class Runner:
         set_rng_state(data["rng"])
         self.env_seed = data.get("env_seed")
         episodes = data.get("episodes")
-        if episodes is not None and hasattr(self.env, "set_state"):
+        if episodes is not None and hasattr(self.env.unwrapped, "set_state"):
             self.restore_episodes(episodes)
         else:  # a checkpoint without episodes (an env that cannot save them): new ones
             self.start_episodes()

@@ -43,14 +43,14 @@ def test_reference_action_maps_back_to_the_reference_parameters():
 
 def test_warm_start_brings_the_actor_mean_to_the_reference(tmp_path):
     runner = Runner(config("cho2019-warm"), tmp_path / "run", tensorboard=False)
-    obs, _ = runner.env.reset(seed=123)
+    obs, _ = runner.env.unwrapped.reset(seed=123)
     before = np.abs(mean_action(runner, obs) - reference_action()).max()
     losses = runner.run_warm_start()
     assert len(losses) == 100  # the paper's 100 epochs
     assert losses[-1] < 1e-3 * losses[0]
     # on observations of a different episode, driven by the reference itself
     for _ in range(30):
-        obs, *_ = runner.env.step(np.tile(reference_action(), (4, 1)))
+        obs, *_ = runner.env.unwrapped.step(np.tile(reference_action(), (4, 1)))
     after = np.abs(mean_action(runner, obs) - reference_action()).max()
     assert before > 0.3 and after < 0.05, (before, after)
     assert json.loads((tmp_path / "run" / "warm_start.json").read_text())["loss"] == losses
