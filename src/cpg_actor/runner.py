@@ -23,12 +23,9 @@ bit for bit (MuJoCo; PyBullet restores joint states but not its contact caches).
 from __future__ import annotations
 
 import json
-import math
 import random
 import time
-from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -47,7 +44,8 @@ from cpg_actor.checkpoint import (
 )
 from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
-from cpg_actor.envs.torch_env import EnvStep, TorchVectorEnv
+from cpg_actor.envs.torch_env import TorchVectorEnv
+from cpg_actor.episodes import EpisodeLog, EpisodeStats
 from cpg_actor.evaluation import evaluate
 from cpg_actor.policy import Policy
 from cpg_actor.ppo import (
@@ -58,6 +56,7 @@ from cpg_actor.ppo import (
     RunningNormalizer,
 )
 from cpg_actor.progress import evaluation_text, make_progress, metrics_text
+from cpg_actor.run_log import RunLog
 
 WARM_START_SEED_KEY = 2**31  # derived_seed(seed, this) seeds the warm start's environments
 EVAL_SEED_KEY = 2**31 + 1  # derived_seed(seed, this) resets the evaluation envs, every time
@@ -76,34 +75,6 @@ def seed_everything(seed: int) -> None:
     random.seed(seed)
     np.random.seed(seed % 2**32)  # noqa: NPY002 (third-party code may use the global RNG)
     torch.manual_seed(seed)
-
-
-@dataclass
-class EpisodeStats:
-    """Per-environment accumulators of the episode in progress."""
-
-    returns: np.ndarray
-    lengths: np.ndarray
-    terms: dict[str, np.ndarray]
-
-    @classmethod
-    def zeros(cls, num_envs: int) -> EpisodeStats:
-        return cls(np.zeros(num_envs), np.zeros(num_envs, dtype=np.int64), {})
-
-    def state_dict(self) -> dict[str, Any]:
-        arrays = {"returns": self.returns, "lengths": self.lengths}
-        return {
-            **{k: torch.from_numpy(v.copy()) for k, v in arrays.items()},
-            "terms": {k: torch.from_numpy(v.copy()) for k, v in self.terms.items()},
-        }
-
-    @classmethod
-    def from_state_dict(cls, state: dict[str, Any]) -> EpisodeStats:
-        return cls(
-            state["returns"].numpy().copy(),
-            state["lengths"].numpy().copy(),
-            {k: v.numpy().copy() for k, v in state["terms"].items()},
-        )
 
 
 class Runner:
@@ -133,7 +104,7 @@ class Runner:
         self.run_dir = Path(run_dir) if run_dir is not None else None
         self.show_progress = progress
         self.progress_interval = progress_interval  # seconds between plain-text progress lines
-        self.use_tensorboard = tensorboard and self.run_dir is not None
+        self.run_log = RunLog(self.run_dir, tensorboard)
         torch.set_num_threads(config.torch_threads)
         self.device = resolve_device(config.device)
         seed_everything(config.seed)
@@ -179,8 +150,7 @@ class Runner:
         self.global_step = 0
         self.train_wall = 0.0  # seconds of collection + update, over the whole run
         self.env_seed: int | None = None
-        self.recent: dict[str, deque] = {}
-        self._writer = None
+        self.episodes = EpisodeLog(config.num_envs)
         self._episodes_started = False
         self._resumed = False  # loaded from a checkpoint: no warm start, no "before" again
 
@@ -191,7 +161,7 @@ class Runner:
         self.obs, _ = self.env.reset(seed=self.env_seed)
         self.policy.reset(self.config.num_envs)
         self.reward_normalizer.reset()
-        self.episode = EpisodeStats.zeros(self.config.num_envs)
+        self.episodes.running = EpisodeStats.zeros(self.config.num_envs)
         self._episodes_started = True
 
     def normalize(self, obs: torch.Tensor, update: bool) -> torch.Tensor:
@@ -240,52 +210,11 @@ class Runner:
             )
             self.policy.end_episodes(done)
             self.obs = out.obs
-            self._track_episodes(out, done)
+            self.episodes.track(out, done)
 
         last_values = self.agent.value(self.normalize(self.obs, update=False), self.agent_state)
         self.storage.compute_returns(last_values, cfg.ppo.gamma, cfg.ppo.gae_lambda)
         return {"simulation_time": sim_time}
-
-    def _track_episodes(self, out: EnvStep, done: torch.Tensor) -> None:
-        """Returns, lengths and reward terms summed per episode; the env's own episode metrics
-        (``EnvStep.episode_metrics``, e.g. the hopper's hop height) as it reports them."""
-        ep = self.episode
-        ep.returns += out.reward.cpu().numpy().astype(np.float64)
-        ep.lengths += 1
-        for name, value in out.reward_terms.items():
-            ep.terms.setdefault(name, np.zeros_like(ep.returns))
-            ep.terms[name] += value.cpu().numpy()
-        done = done.cpu().numpy()
-        if not done.any():
-            return
-        metrics = {name: values.cpu().numpy() for name, values in out.episode_metrics.items()}
-        for i in np.flatnonzero(done):
-            self._remember("return", ep.returns[i])
-            self._remember("length", ep.lengths[i])
-            for name, values in metrics.items():
-                if np.isfinite(values[i]):
-                    self._remember(f"charts/{name}", values[i])  # logged under this name
-            for name, value in ep.terms.items():
-                self._remember(f"reward_terms/{name}", value[i])
-        ep.returns[done] = 0.0
-        ep.lengths[done] = 0
-        for value in ep.terms.values():
-            value[done] = 0.0
-
-    def _remember(self, key: str, value: float, window: int = 100) -> None:
-        self.recent.setdefault(key, deque(maxlen=window)).append(float(value))
-
-    def recent_env_metrics(self) -> dict[str, float]:
-        """The env's episode metrics (e.g. ``hop_height``), each a mean over recent episodes."""
-        return {
-            key.removeprefix("charts/"): self.mean_recent(key)
-            for key in sorted(self.recent)
-            if key.startswith("charts/")
-        }
-
-    def mean_recent(self, key: str) -> float:
-        values = self.recent.get(key)
-        return float(np.mean(values)) if values else math.nan
 
     # -- training ----------------------------------------------------------------------------
     def learn(self, stop_when: Callable[[dict[str, float]], bool] | None = None) -> None:
@@ -348,8 +277,8 @@ class Runner:
                         self._task,
                         completed=self.global_step,
                         sps=f"{sps:,.0f}",
-                        ret=f"{self.mean_recent('return'):.2f}",
-                        metrics=metrics_text(self.recent_env_metrics()),
+                        ret=f"{self.episodes.mean('return'):.2f}",
+                        metrics=metrics_text(self.episodes.env_metrics()),
                         evaluation=getattr(self, "_evaluation_text", ""),
                     )
                 at_interval = self.iteration % cfg.checkpoint_interval == 0
@@ -360,8 +289,7 @@ class Runner:
         finally:
             if progress is not None:
                 progress.stop()
-            if self._writer is not None:
-                self._writer.flush()
+            self.run_log.flush()
 
     def run_warm_start(self) -> list[float]:
         """The agent's supervised warm start (e.g. cho2019-warm), before any PPO iteration.
@@ -385,9 +313,8 @@ class Runner:
         if self.run_dir is not None:
             self.run_dir.mkdir(parents=True, exist_ok=True)
             atomic_write_text(json.dumps({"loss": losses}) + "\n", self.run_dir / "warm_start.json")
-            if self.use_tensorboard:
-                for epoch, loss in enumerate(losses):
-                    self.writer.add_scalar("warm_start/loss", loss, epoch)
+            for epoch, loss in enumerate(losses):
+                self.run_log.scalar("warm_start/loss", loss, epoch)
         return losses
 
     def run_evaluation(self) -> dict[str, float]:
@@ -428,7 +355,11 @@ class Runner:
         evaluation = self.run_evaluation()
         self._evaluation_text = evaluation_text(evaluation)
         self.last_evaluation = evaluation
-        self._write_row(dict(evaluation, **{"time/train_wall": self.train_wall}))
+        self.run_log.write(
+            self.iteration,
+            self.global_step,
+            dict(evaluation, **{"time/train_wall": self.train_wall}),
+        )
         return evaluation
 
     def _make_progress(self, num_iterations: int):
@@ -445,21 +376,8 @@ class Runner:
         return progress
 
     # -- logging -----------------------------------------------------------------------------
-    @property
-    def writer(self):
-        if self._writer is None and self.use_tensorboard:
-            from torch.utils.tensorboard import SummaryWriter
-
-            self._writer = SummaryWriter(log_dir=str(self.run_dir / "tensorboard"))
-        return self._writer
-
     def scalars(self, stats: dict[str, float], timing: dict[str, float]) -> dict[str, float]:
-        row: dict[str, float] = {}
-        row["charts/episode_return"] = self.mean_recent("return")
-        row["charts/episode_length"] = self.mean_recent("length")
-        for key in sorted(self.recent):  # the env's episode metrics and reward terms
-            if key.startswith(("charts/", "reward_terms/")):
-                row[key] = self.mean_recent(key)
+        row = self.episodes.scalars()  # return, length, the env's metrics, reward terms
         row["charts/SPS"] = timing["SPS"]
         row["charts/learning_rate"] = stats["learning_rate"]
         for key in (
@@ -490,31 +408,10 @@ class Runner:
             row.update(evaluation)
             self.last_evaluation = evaluation
         self.last_row = row
-        writer = self._write_row(row)
-        if writer is not None and self.iteration % self.config.histogram_interval == 0:
-            self.log_histograms(writer)
-
-    def _write_row(self, row: dict[str, float]):
-        """Append ``row`` to ``metrics.jsonl`` and TensorBoard; returns the writer (or None)."""
-        if self.run_dir is None:
-            return None
-        self.run_dir.mkdir(parents=True, exist_ok=True)
-        record = {"iteration": self.iteration, "global_step": self.global_step}
-        record.update({k: (None if not math.isfinite(v) else v) for k, v in row.items()})
-        with open(self.run_dir / "metrics.jsonl", "a") as f:
-            f.write(json.dumps(record) + "\n")
-        writer = self.writer
-        if writer is None:
-            return None
-        for key, value in row.items():
-            if math.isfinite(value):
-                writer.add_scalar(key, value, self.global_step)
-        return writer
-
-    def log_histograms(self, writer) -> None:
-        """The agent's histograms (paper Fig. 5: CPG parameters, the feedback's output layer)."""
-        for tag, values in self.agent.log_histograms().items():
-            writer.add_histogram(tag, values, self.global_step)
+        self.run_log.write(self.iteration, self.global_step, row)
+        if self.run_log.use_tensorboard and self.iteration % self.config.histogram_interval == 0:
+            # the agent's own (paper Fig. 5: CPG parameters, the feedback's output layer)
+            self.run_log.histograms(self.global_step, self.agent.log_histograms())
 
     # -- checkpoints -------------------------------------------------------------------------
     def checkpoint_dir(self) -> Path:
@@ -543,7 +440,7 @@ class Runner:
             "learning_rate": self.ppo.learning_rate,
             "rng": rng_state(),
             "env_seed": self.env_seed,
-            "recent": {k: list(v) for k, v in self.recent.items()},
+            "recent": self.episodes.recent_state(),
             "episodes": self.episodes_state(),
         }
 
@@ -556,7 +453,7 @@ class Runner:
             "env": self.env.get_state(),
             "obs": self.obs.cpu().clone(),
             "agent_state": self.policy.state.cpu().clone(),
-            "statistics": self.episode.state_dict(),
+            "statistics": self.episodes.running.state_dict(),
             "discounted_returns": self.reward_normalizer.discounted.cpu().clone(),
         }
 
@@ -569,7 +466,7 @@ class Runner:
                 raise ValueError(f"observations of shape {tuple(obs.shape)}")
             if agent_state.shape != (self.config.num_envs, *self.agent.state_shape):
                 raise ValueError(f"agent states of shape {tuple(agent_state.shape)}")
-            self.episode = EpisodeStats.from_state_dict(state["statistics"])
+            running = EpisodeStats.from_state_dict(state["statistics"])
             discounted = state["discounted_returns"]
             if discounted.shape != self.reward_normalizer.discounted.shape:
                 raise ValueError(f"discounted returns of shape {tuple(discounted.shape)}")
@@ -578,6 +475,7 @@ class Runner:
             raise ValueError(
                 f"the checkpoint's episodes do not fit this run's environments: {error}"
             ) from None
+        self.episodes.running = running
         self.obs = obs.to(self.device).clone()
         self.policy.state = agent_state.to(self.device).clone()
         self._episodes_started = True
@@ -614,7 +512,7 @@ class Runner:
         self._resumed = True
         self.iteration = data["iteration"]
         self.global_step = data["global_step"]
-        self.recent = {k: deque(v, maxlen=100) for k, v in data["recent"].items()}
+        self.episodes.load_recent(data["recent"])
         set_rng_state(data["rng"])
         self.env_seed = data.get("env_seed")
         episodes = data.get("episodes")
@@ -624,9 +522,7 @@ class Runner:
             self.start_episodes()
 
     def close(self) -> None:
-        if self._writer is not None:
-            self._writer.close()
-            self._writer = None
+        self.run_log.close()
         self.env.close()
         if self.eval_env is not None:
             self.eval_env.close()

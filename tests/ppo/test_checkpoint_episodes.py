@@ -33,9 +33,9 @@ def test_checkpoint_every_iteration_changes_nothing_and_cuts_no_episode(tmp_path
     try:
         for key, value in params(saved).items():
             assert torch.equal(value, params(plain)[key]), key
-        assert list(saved.recent["return"]) == list(plain.recent["return"])
+        assert list(saved.episodes.recent["return"]) == list(plain.episodes.recent["return"])
         # every episode ran to its time limit: 6 iterations x 8 steps = 4 episodes of 12
-        assert list(saved.recent["length"]) == [EPISODE] * 8
+        assert list(saved.episodes.recent["length"]) == [EPISODE] * 8
         assert len(list((tmp_path / "saved" / "checkpoints").glob("iter_*.pt"))) == 7
     finally:
         saved.close()
@@ -55,7 +55,7 @@ def test_resume_from_a_middle_checkpoint_equals_the_uninterrupted_run(tmp_path, 
             assert torch.equal(value, params(resumed)[key]), key
         assert torch.equal(straight.obs, resumed.obs)
         assert torch.equal(straight.agent_state, resumed.agent_state)
-        assert list(straight.recent["return"]) == list(resumed.recent["return"])
+        assert list(straight.episodes.recent["return"]) == list(resumed.episodes.recent["return"])
         a, b = straight.env.get_state(), resumed.env.get_state()
         assert torch.equal(a["simulation"]["backend"], b["simulation"]["backend"])
         assert a["rngs"] == b["rngs"]

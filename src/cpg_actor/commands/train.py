@@ -268,7 +268,10 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
     episode_return = row.get("charts/episode_return", nan)
     training = (
         " ".join(
-            [f"mean episode return {episode_return:.3f}", metrics_text(runner.recent_env_metrics())]
+            [
+                f"mean episode return {episode_return:.3f}",
+                metrics_text(runner.episodes.env_metrics()),
+            ]
         ).rstrip()
         if episode_return == episode_return
         else "no training episode finished (runs shorter than an episode)"

@@ -1,0 +1,59 @@
+"""What a training run writes about itself: a row of scalars per logged iteration in
+``metrics.jsonl`` (non-finite values as null) and TensorBoard events (scalars, histograms) in
+``tensorboard/``. Without a run directory nothing is written."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+from torch import Tensor
+
+
+class RunLog:
+    def __init__(self, run_dir: Path | None, tensorboard: bool = True) -> None:
+        self.run_dir = run_dir
+        self.use_tensorboard = tensorboard and run_dir is not None
+        self._writer = None
+
+    @property
+    def writer(self):
+        """The TensorBoard writer, opened at first use; None without TensorBoard."""
+        if self._writer is None and self.use_tensorboard:
+            from torch.utils.tensorboard import SummaryWriter
+
+            self._writer = SummaryWriter(log_dir=str(self.run_dir / "tensorboard"))
+        return self._writer
+
+    def write(self, iteration: int, global_step: int, row: dict[str, float]) -> None:
+        """Append ``row`` to ``metrics.jsonl`` and to TensorBoard at ``global_step``."""
+        if self.run_dir is None:
+            return
+        self.run_dir.mkdir(parents=True, exist_ok=True)
+        record = {"iteration": iteration, "global_step": global_step}
+        record.update({k: (None if not math.isfinite(v) else v) for k, v in row.items()})
+        with open(self.run_dir / "metrics.jsonl", "a") as f:
+            f.write(json.dumps(record) + "\n")
+        if self.writer is not None:
+            for key, value in row.items():
+                if math.isfinite(value):
+                    self.writer.add_scalar(key, value, global_step)
+
+    def scalar(self, tag: str, value: float, step: int) -> None:
+        if self.writer is not None:
+            self.writer.add_scalar(tag, value, step)
+
+    def histograms(self, global_step: int, histograms: dict[str, Tensor]) -> None:
+        if self.writer is not None:
+            for tag, values in histograms.items():
+                self.writer.add_histogram(tag, values, global_step)
+
+    def flush(self) -> None:
+        if self._writer is not None:
+            self._writer.flush()
+
+    def close(self) -> None:
+        if self._writer is not None:
+            self._writer.close()
+            self._writer = None
