@@ -33,9 +33,14 @@ AGENTS = ("mlp", "cpg-actor", "cpg-actor-open-loop")
 
 
 def make_config(
-    agent: str, preset: str, compile: bool, device: str = "cpu", num_envs: int | None = None
+    agent: str,
+    preset: str,
+    compile: bool,
+    device: str = "cpu",
+    num_envs: int | None = None,
+    torch_threads: int = 1,
 ) -> TrainConfig:
-    config = TrainConfig(agent=agent)
+    config = TrainConfig(agent=agent, torch_threads=torch_threads)
     apply_dict(config, preset_values(preset), "")
     config.eval_interval = 0
     config.ppo.compile = compile  # the presets compile; rows say which
@@ -53,9 +58,10 @@ def measure(
     compile: bool = False,
     device: str = "cpu",
     num_envs: int | None = None,
+    torch_threads: int = 1,
 ) -> dict[str, float]:
     """One warm-up iteration (and the compile), then ``iterations`` timed ones."""
-    config = make_config(agent, preset, compile, device, num_envs)
+    config = make_config(agent, preset, compile, device, num_envs, torch_threads)
     config.total_steps = (iterations + 1) * config.steps_per_iteration
     runner = Runner(config, run_dir=None, tensorboard=False)
     collect = update = simulation = 0.0
