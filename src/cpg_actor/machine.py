@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import os
 import platform
+import subprocess
+from pathlib import Path
 
 
 def cpu_model() -> str:
@@ -31,3 +33,22 @@ def load_average() -> str:
     if not hasattr(os, "getloadavg"):
         return "n/a"
     return ", ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
+def git_commit(path: str | Path | None = None) -> str:
+    """The short git commit of the checkout holding ``path`` (default: this package), marked
+    "(uncommitted changes)" when the tree differs from it; "unknown" outside a checkout."""
+    root = Path(path) if path is not None else Path(__file__).resolve().parent
+
+    def git(*args: str) -> subprocess.CompletedProcess:
+        return subprocess.run(
+            ["git", "-C", str(root), *args], capture_output=True, text=True, timeout=5, check=False
+        )
+
+    try:
+        head, dirty = git("rev-parse", "--short", "HEAD"), git("status", "--porcelain")
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+    if head.returncode != 0:
+        return "unknown"
+    return head.stdout.strip() + (" (uncommitted changes)" if dirty.stdout.strip() else "")

@@ -57,7 +57,7 @@ def test_missing_variants_are_skipped_with_notes(tmp_path):
 
     report = write_report(out).read_text()
     assert "| MLP actor (`mlp`) | 2 (2) |" in report
-    assert report.count("not tested in this run") == 5
+    assert report.count("not tested in this run") == 6
     assert "cpg_actor_training_over_time: cpg-actor was not run" in report
 
 
@@ -68,7 +68,7 @@ def test_report_verdicts_from_constructed_traces(tmp_path):
     write_report(out)
     summary = json.loads((out / "summary.json").read_text())
     verdicts = {c["claim"]: c["verdict"] for c in summary["claims"]}
-    assert len(verdicts) == 5
+    assert len(verdicts) == 6
     smooth = [v for claim, v in verdicts.items() if "bang-bang" in claim]
     assert smooth == ["supported"]  # a sine vs a square wave
     cho = [v for claim, v in verdicts.items() if "Cho" in claim]
@@ -92,3 +92,65 @@ def test_progress_lines_read_metrics(tmp_path):
     console = Console(record=True, width=120)
     console.print(progress.table())
     assert "mlp/seed0" in console.export_text()
+
+
+def _curve_run(out, variant, seed, returns, hops, total=2_000_000, p99=14.0, square=False):
+    """A run whose logged evaluations follow ``returns`` and ``hops`` (evenly spaced to
+    ``total`` steps) and whose final traces have desired velocities of p99 about ``p99``."""
+    run = _fake_run(out, variant, seed, bang_bang=square)
+    steps = np.linspace(total / len(returns), total, len(returns))
+    rows = [
+        {"iteration": i + 1, "global_step": float(step), "eval/return": float(r),
+         "eval/hop_height": float(h)}
+        for i, (step, r, h) in enumerate(zip(steps, returns, hops, strict=True))
+    ]  # fmt: skip
+    (run / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    traces = dict(np.load(run / "eval" / "stage0" / "traces.npz"))
+    velocity = traces["desired_velocity"]
+    traces["desired_velocity"] = velocity * (p99 / np.percentile(np.abs(velocity), 99))
+    np.savez(run / "eval" / "stage0" / "traces.npz", **traces)
+
+
+def _claims(out):
+    (out / "reproduce.yaml").write_text(
+        "settings:\n  total_steps: 2000000\n  variants: [cpg-actor, cpg-actor-open-loop, "
+        "cho2019-warm, mlp]\n"
+    )
+    write_report(out)
+    summary = json.loads((out / "summary.json").read_text())
+    return {c["claim"]: c["verdict"] for c in summary["claims"]}
+
+
+def test_every_verdict_can_come_out_negative(tmp_path):
+    """Synthetic results that contradict each claim of the paper: every verdict must say
+    "not supported" (a verdict that cannot fail would say "supported" here)."""
+    out = tmp_path / "out"
+    n = 20
+    for seed in range(3):
+        jitter = 5.0 * seed
+        # the CPG-Actor: no better than Cho et al., worst during training, flat hop height,
+        # bang-bang desired positions, desired velocities far beyond the motor limit
+        flat = np.full(n, 0.2 + 0.01 * seed)
+        _curve_run(out, "cpg-actor", seed, np.full(n, 300.0 + jitter), flat, p99=45, square=True)
+        _curve_run(out, "cpg-actor-open-loop", seed, np.full(n, 100.0 + jitter), np.full(n, 0.1))
+        _curve_run(out, "cho2019-warm", seed, np.full(n, 400.0 + jitter), np.full(n, 0.3))
+        _curve_run(out, "mlp", seed, np.full(n, 500.0 + jitter), np.full(n, 0.3), square=True)
+    verdicts = _claims(out)
+    assert len(verdicts) == 6
+    assert set(verdicts.values()) == {"not supported"}, verdicts
+
+
+def test_results_that_agree_with_the_paper_are_supported(tmp_path):
+    """The same report on results shaped like the paper's: every claim that this set of variants
+    can test is supported."""
+    out = tmp_path / "out"
+    n = 20
+    rising = np.linspace(0.2, 1.0, n)
+    for seed in range(3):
+        jitter = 5.0 * seed
+        _curve_run(out, "cpg-actor", seed, 3000.0 * rising + jitter, 0.15 + 0.25 * rising**2)
+        _curve_run(out, "cpg-actor-open-loop", seed, 800.0 * rising + jitter, np.full(n, 0.1))
+        _curve_run(out, "cho2019-warm", seed, 500.0 * rising + jitter, np.full(n, 0.1))
+        _curve_run(out, "mlp", seed, 600.0 * rising + jitter, np.full(n, 0.2), square=True)
+    verdicts = _claims(out)
+    assert set(verdicts.values()) == {"supported"}, verdicts

@@ -104,10 +104,18 @@ def test_claim_verdicts():
     assert m.verdict_near_limits(40.0, 0.5)[0] == m.NOT_SUPPORTED  # far above it
     assert m.verdict_near_limits(float("nan"), float("nan"))[0] == m.NOT_TESTED
 
-    assert m.verdict_hop_doubles(0.05, 0.11)[0] == m.SUPPORTED
-    assert m.verdict_hop_doubles(0.05, 0.06)[0] == m.NOT_SUPPORTED
-    assert m.verdict_hop_doubles(0.0, 0.02)[0] == m.SUPPORTED
-    assert m.verdict_hop_doubles(float("nan"), 0.1)[0] == m.NOT_TESTED
+    doubled = m.bootstrap_ratio([0.22, 0.24, 0.2], [0.1, 0.11, 0.12])
+    flat = m.bootstrap_ratio([0.3, 0.2, 0.25], [0.2, 0.22, 0.24])
+    assert m.verdict_hop_doubles(doubled, 1e6, 2e6)[0] == m.SUPPORTED
+    assert m.verdict_hop_doubles(flat, 1e6, 20e6)[0] == m.NOT_SUPPORTED
+    assert m.verdict_hop_doubles(doubled, 1e6, 1.5e6)[0] == m.NOT_TESTED  # too short a run
+    assert m.verdict_hop_doubles(None, 1e6, 2e6)[0] == m.NOT_TESTED
+
+    above = {"mlp": m.bootstrap_difference([5.0, 6.0, 7.0], [1.0, 2.0, 1.5])}
+    mixed = dict(above, cho=m.bootstrap_difference([5.0, 6.0, 7.0], [8.0, 9.0, 8.5]))
+    assert m.verdict_best_during_training(above, ran=True)[0] == m.SUPPORTED
+    assert m.verdict_best_during_training(mixed, ran=True)[0] == m.NOT_SUPPORTED
+    assert m.verdict_best_during_training({}, ran=True)[0] == m.NOT_TESTED
 
 
 def test_stage_checkpoints_are_the_nearest():

@@ -38,6 +38,7 @@ def test_reproduce_runs_variants_and_seeds_then_skips_and_resumes(tmp_path, caps
             assert (run / "checkpoints" / "last.pt").is_file()
             marker = json.loads((run / "reproduce_run.json").read_text())
             assert marker["status"] == "done" and len(marker["stages"]) == 3
+            assert marker["commit"]  # the code that trained it (or "unknown" outside git)
             for k in range(3):
                 assert (run / "eval" / f"stage{k}" / "traces.npz").is_file()
     for name in (

@@ -27,6 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from cpg_actor.experiments.plan import RunTask
+from cpg_actor.machine import git_commit
 
 MARKER = "reproduce_run.json"
 STAGES_FILE = "stages.json"
@@ -154,6 +155,7 @@ def run_one(task: RunTask, status: Status | None = None) -> dict[str, Any]:
         "status": "done",
         "total_steps": task.total_steps,
         "num_iterations": task.num_iterations,
+        "commit": git_commit(),  # the code that finished the run
         "stages": stages,
     }
     (run_dir / MARKER).write_text(json.dumps(marker, indent=2) + "\n")

@@ -201,18 +201,51 @@ def verdict_near_limits(p99: float, share: float, limit: float = VELOCITY_LIMIT)
     )
 
 
-def verdict_hop_doubles(early: float, final: float, threshold: float = 1.5) -> Verdict:
-    """ "The hop height about doubles with training": final / early hop height >= 1.5."""
-    if not (np.isfinite(early) and np.isfinite(final)):
-        return NOT_TESTED, "needs cpg-actor stage evaluations"
-    if early <= 0:
-        ok = final > 0
-        return (
-            SUPPORTED if ok else NOT_SUPPORTED,
-            f"hop height {early:.3g} m -> {final:.3g} m (no hop at the first stage)",
+def verdict_hop_doubles(
+    ratio: Interval | None, early_step: float, total_steps: float, threshold: float = 1.5
+) -> Verdict:
+    """ "The hop height about doubles with training" (paper: 1M -> 60M steps): the CPG-Actor's
+    mean hop height in the deterministic evaluations at the end over that at ``early_step``
+    (1M), over seeds, is >= ``threshold`` and its 95% CI lies above 1. Judged only on runs of at
+    least twice ``early_step``: the hop height of an untrained agent is no baseline."""
+    if total_steps < 2 * early_step:
+        return NOT_TESTED, (
+            f"needs runs of at least {2 * early_step:,.0f} steps (the paper compares "
+            f"{early_step:,.0f} steps with the end); this run: {total_steps:,.0f}"
         )
-    ratio = final / early
+    if ratio is None:
+        return NOT_TESTED, f"needs cpg-actor hop heights logged at {early_step:,.0f} steps"
+    ok = ratio.estimate >= threshold and ratio.low > 1
     return (
-        SUPPORTED if ratio >= threshold else NOT_SUPPORTED,
-        f"hop height {early:.3g} m -> {final:.3g} m, x{ratio:.2f} (supported if >= x{threshold:g})",
+        SUPPORTED if ok else NOT_SUPPORTED,
+        f"hop height at the end / at {early_step:,.0f} steps: x{ratio} (supported if "
+        f">= x{threshold:g} and CI above 1)",
     )
+
+
+def verdict_best_during_training(differences: dict[str, Interval | None], ran: bool) -> Verdict:
+    """ "The CPG-Actor performs best during training": the mean evaluation return over the
+    whole run (the area under the curve, per seed) is above every other variant's, the 95% CI
+    of each difference above 0."""
+    if not ran or not differences:
+        return NOT_TESTED, "needs cpg-actor and another variant with evaluation curves"
+    parts, ok = [], True
+    for name, diff in differences.items():
+        if diff is None:
+            ok = False
+            parts.append(f"vs {name}: no data")
+            continue
+        ok &= diff.low > 0
+        parts.append(f"vs {name}: {diff}")
+    return (
+        SUPPORTED if ok else NOT_SUPPORTED,
+        "mean eval return over the run, difference " + "; ".join(parts)
+        + " (supported if every CI is above 0)",
+    )  # fmt: skip
+
+
+def curve_mean(steps: Sequence[float], values: Sequence[float | None]) -> float:
+    """Mean of the finite values of a logged curve (evaluations are evenly spaced in steps)."""
+    a = np.array([np.nan if v is None else v for v in values], dtype=float)
+    a = a[np.isfinite(a)]
+    return float(a.mean()) if a.size else float("nan")

@@ -78,6 +78,14 @@ class Run:
         except (OSError, ValueError):
             return False
 
+    @property
+    def commit(self) -> str:
+        """The commit the run was trained at (its marker's record; older runs did not keep it)."""
+        try:
+            return json.loads((self.path / MARKER).read_text()).get("commit") or "not recorded"
+        except (OSError, ValueError):
+            return "not recorded"
+
     @cached_property
     def stages(self) -> list[dict[str, Any]]:
         path = self.path / "eval" / STAGES_FILE
