@@ -242,7 +242,7 @@ def main(argv: list[str] | None = None) -> int:
         "hold the joint torques constant (no actuator law, no observation).",
         "",
         "*threads*: the env's MuJoCo stepping threads (`HopperVectorEnv` default: the usable "
-        "cores, at least 16 robots per thread); the bare loop and rollout use as many. When "
+        "cores, at least 8 robots per thread); the bare loop and rollout use as many. When "
         "the load average above is close to the core count, other processes held cores during "
         "the run and multi-threaded figures show little or no thread scaling.",
         "",

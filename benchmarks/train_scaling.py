@@ -5,7 +5,7 @@
 
 For each core count C and number of envs N, a subprocess pinned to C cores
 (``os.sched_setaffinity``) trains the throughput preset with N envs: the simulator's threads
-follow the usable cores (at least 16 robots per thread) and PyTorch gets C threads. It
+follow the usable cores (at least 8 robots per thread) and PyTorch gets C threads. It
 reports the training SPS after a warm-up iteration, next to the physics ceiling
 (``mujoco.rollout`` of N robots on the same C cores), both measured in the same subprocess.
 Core counts above the machine's are skipped.

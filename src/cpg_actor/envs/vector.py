@@ -1,9 +1,9 @@
 """`HopperVectorEnv`: N hoppers stepped in one call, a Gymnasium ``VectorEnv`` (SAME_STEP reset).
 
-* MuJoCo: the N robots are rows of one state array; every physics substep is one
-  ``mujoco.rollout`` call that steps them on a C++ thread pool (``num_threads``, default: the
-  usable cores, at least 16 robots per thread), and the PD law runs vectorised in numpy between
-  substeps (see :mod:`cpg_actor.envs.backends.mujoco_backend`).
+* MuJoCo: the N robots are rows of one state array; every control step is one
+  ``mujoco.rollout`` call that steps them through the physics substeps on a C++ thread pool
+  (``num_threads``, default: the usable cores, at least 8 robots per thread), the joint
+  actuators running inside MuJoCo (see :mod:`cpg_actor.envs.backends.mujoco_backend`).
 * PyBullet: the N robots share one world, collision-filtered so that they never touch each
   other; ``num_threads`` is ignored (PyBullet holds the GIL).
 
@@ -50,7 +50,7 @@ class HopperVectorEnv(VectorEnv):
     Args:
         num_envs: N.
         config: a :class:`HopperConfig` (or a dict of its keys); defaults if None.
-        num_threads: MuJoCo stepping threads; None: the usable cores (>= 16 robots each).
+        num_threads: MuJoCo stepping threads; None: the usable cores (>= 8 robots each).
         sim: ``"mujoco"`` or ``"pybullet"``, overrides ``config.sim``.
         max_episode_steps: what ``gymnasium.make_vec`` passes from the registered spec; must
             equal ``episode_steps`` (the env truncates its episodes itself).

@@ -69,9 +69,12 @@ def load_model(
     return model
 
 
+ROBOTS_PER_THREAD = 8  # fewer, and handing work to a thread costs more than it saves
+
+
 def default_threads(num_robots: int) -> int:
-    """Threads for K robots: the cores this process may use, at least 16 robots per thread."""
-    return max(1, min(usable_cores(), num_robots // 16))
+    """Threads for K robots: the cores this process may use, at least 8 robots per thread."""
+    return max(1, min(usable_cores(), num_robots // ROBOTS_PER_THREAD))
 
 
 class MujocoBackend(Backend):
