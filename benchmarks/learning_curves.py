@@ -27,6 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
+from cpg_actor.machine import git_commit
+
 HERE = Path(__file__).resolve().parent
 
 
@@ -39,13 +41,6 @@ def train(src: Path, agent: str, seed: int, total_steps: str, run_dir: Path) -> 
     subprocess.run(command, env=env, check=True, capture_output=True, text=True)
     records = [json.loads(line) for line in (run_dir / "metrics.jsonl").read_text().splitlines()]
     return [r for r in records if "eval/return" in r]
-
-
-def commit_of(src: Path) -> str:
-    out = subprocess.run(
-        ["git", "-C", str(src), "rev-parse", "--short", "HEAD"], capture_output=True, text=True
-    )
-    return out.stdout.strip() or "unknown"
 
 
 def welch_t(a: list[float], b: list[float]) -> float:
@@ -99,6 +94,7 @@ def main() -> None:
     parser.add_argument("--output", default=str(HERE / "results" / "learning_curves.md"))
     args = parser.parse_args()
     trees = {"this tree": HERE.parent / "src", "reference": Path(args.reference_src).resolve()}
+    commits = {tree: git_commit(src) for tree, src in trees.items()}  # the code the runs use
     curves: dict[tuple[str, str, int], list[dict]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for agent in args.agents:
@@ -117,8 +113,8 @@ def main() -> None:
         f"Measured {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC with "
         f"`python benchmarks/learning_curves.py --reference-src REF/src --agents "
         f"{' '.join(args.agents)} --seeds {args.seeds} --total-steps {args.total_steps}`: this "
-        f"tree at commit {commit_of(trees['this tree'])}, REF at commit "
-        f"{commit_of(trees['reference'])}; each tree's default (`paper`) preset, seeds "
+        f"tree at commit {commits['this tree']}, REF at commit "
+        f"{commits['reference']} (at the start); each tree's default (`paper`) preset, seeds "
         f"0..{args.seeds - 1}. Figure: `{output.with_suffix('.png').name}`.",
         "",
         "| agent | tree | final eval return per seed | mean | final hop height (m) | "
