@@ -100,6 +100,22 @@ def test_torque_speed_curve_models_the_velocity_limit():
     assert (lower[0], upper[0]) == (-20.0, 40.0)
 
 
+def test_coast_law_never_brakes_beyond_the_velocity_limit():
+    """``actuator_law="coast"`` (the law before 26 Nov 2026): the torque-speed line is clipped
+    at 0, so past v_max the drive gives nothing in the direction of motion but is not braked."""
+    actuator = Actuator.from_config(HopperConfig(actuator_law="coast"))
+    push = np.array([10.0])
+    for velocity, expected in [(7.5, 40.0), (11.25, 20.0), (15.0, 0.0), (20.0, 0.0), (30.0, 0.0)]:
+        assert actuator(push, np.zeros(1), np.array([velocity]))[0] == pytest.approx(expected)
+    assert actuator(-push, np.zeros(1), np.array([-20.0]))[0] == 0.0
+    assert actuator(-push, np.zeros(1), np.array([20.0]))[0] == -40.0  # braking is still there
+    lower, upper = actuator.torque_bounds(np.array([20.0, -20.0, 3.0]))
+    np.testing.assert_array_equal(upper, [0.0, 40.0, 40.0])
+    np.testing.assert_array_equal(lower, [-40.0, 0.0, -40.0])
+    with pytest.raises(ValueError, match="actuator_law must be one of dc-motor, coast"):
+        HopperConfig(actuator_law="ideal")
+
+
 @pytest.mark.parametrize("overrides", [{}, {"kp": 300.0, "kd": 5.0, "saturation_torque": 60.0}])
 def test_mujoco_dcmotor_actuator_is_the_same_law(overrides):
     """The MuJoCo backend runs the law inside the simulator (a ``dcmotor`` actuator): at random

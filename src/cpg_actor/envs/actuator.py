@@ -16,7 +16,13 @@ Beyond ``v_max`` the back-EMF exceeds the supply voltage and the motor brakes th
 whatever it is asked; braking torque is never limited below ``tau_max``. Gravity or an
 impact can still push a joint past ``v_max``, as on a robot.
 
-This is exactly MuJoCo's ``dcmotor`` actuator with ``input="pos"``, controller gains
+``actuator_law="coast"`` (the law before 26 Nov 2026) instead clips ``tau_sat (1 - v / v_max)``
+at 0 from below (and ``tau_sat (-1 - v / v_max)`` at 0 from above): beyond ``v_max`` the drive
+gives no torque in the direction of motion but is not made to brake. A real DC motor cannot
+do that (its back-EMF then exceeds the supply and drives a braking current); the option keeps
+earlier runs reproducible, and is run in numpy at every substep on both simulators.
+
+The ``dc-motor`` law is exactly MuJoCo's ``dcmotor`` actuator with ``input="pos"``, controller gains
 ``Kp, Kd``, drive voltage limit ``V`` and ``nominal="V tau_sat v_max"`` and ``saturation``
 ``tau_max`` (no inductance, no friction): the MuJoCo backend runs the law inside the
 simulator (:func:`cpg_actor.envs.robot.mjcf.actuator_xml`), the PyBullet backend calls this
@@ -39,6 +45,7 @@ class Actuator:
     torque_limit: float
     velocity_limit: float
     saturation_torque: float
+    law: str = "dc-motor"  # or "coast" (module docstring)
 
     @classmethod
     def from_config(cls, config) -> Actuator:
@@ -48,14 +55,17 @@ class Actuator:
             torque_limit=float(config.torque_limit),
             velocity_limit=float(config.velocity_limit),
             saturation_torque=float(config.saturation_torque),
+            law=str(getattr(config, "actuator_law", "dc-motor")),
         )
 
     def torque_bounds(self, velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) torque the drive can produce at joint velocity ``velocity``."""
         # np.minimum / np.maximum rather than np.clip: same result, a third of the overhead
         limit, drop = self.torque_limit, velocity * (self.saturation_torque / self.velocity_limit)
-        upper = np.minimum(np.maximum(self.saturation_torque - drop, -limit), limit)
-        lower = np.minimum(np.maximum(-self.saturation_torque - drop, -limit), limit)
+        coast = self.law == "coast"  # never forced to brake: the line is clipped at 0
+        floor, ceiling = (0.0, 0.0) if coast else (-limit, limit)
+        upper = np.minimum(np.maximum(self.saturation_torque - drop, floor), limit)
+        lower = np.maximum(np.minimum(-self.saturation_torque - drop, ceiling), -limit)
         return lower, upper
 
     def __call__(

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from typing import Any
 
 SIMULATORS = ("mujoco", "pybullet")
+ACTUATOR_LAWS = ("dc-motor", "coast")  # see cpg_actor.envs.actuator
 
 
 @dataclass
@@ -29,6 +30,9 @@ class HopperConfig:
     torque_limit: float = 40.0  # N m, |tau| <= torque_limit
     velocity_limit: float = 15.0  # rad/s, no-load speed: only braking torque beyond it
     saturation_torque: float = 80.0  # N m, stall torque: line tau_sat (1 - v / v_max)
+    # beyond v_max: "dc-motor" brakes (back-EMF; run inside MuJoCo), "coast" gives no torque in
+    # the direction of motion (the law before 26 Nov 2026; numpy at every substep, slower)
+    actuator_law: str = "dc-motor"
     # -- reward, paper eq. 4 (c1 >= 0, c2..c5 <= 0) --------------------------------------------
     c1: float = 1.0  # r1 = (c1 * max(v_hip, 0))^2: upward hip velocity, (m/s)^2
     c2: float = -1.0  # r2 = c2 * sum_j (p_d - p_m)^2: tracking error, rad^2
@@ -82,6 +86,10 @@ class HopperConfig:
                     raise ValueError(f"{field.name} must be finite, got {value!r}")
         if self.sim not in SIMULATORS:
             raise ValueError(f"sim must be one of {', '.join(SIMULATORS)}, got {self.sim!r}")
+        if self.actuator_law not in ACTUATOR_LAWS:
+            raise ValueError(
+                f"actuator_law must be one of {', '.join(ACTUATOR_LAWS)}, got {self.actuator_law!r}"
+            )
         positive = (
             "physics_dt decimation episode_steps kp torque_limit velocity_limit "
             "saturation_torque blowup_joint_velocity blowup_hip_velocity "

@@ -51,6 +51,7 @@ from cpg_actor.machine import usable_cores  # noqa: E402
 
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS.value  # [time, qpos, qvel, (act, ...)]
 CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL.value  # desired joint positions
+TORQUE_SPEC = mujoco.mjtState.mjSTATE_QFRC_APPLIED.value  # joint torques (actuator_law "coast")
 CLOCK_START = 1000.0  # s, simulation time of every robot after a reset (see reset_robots)
 
 
@@ -89,6 +90,9 @@ class MujocoBackend(Backend):
         num_threads: int | None = None,
     ) -> None:
         self.model = load_model(physics_dt, foot_friction, actuator)
+        self.actuator = actuator
+        if actuator.law == "coast":  # the law in numpy, applied as joint torques: actuators off
+            self.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ACTUATION.value
         self.num_robots = int(num_robots)
         self.num_threads = default_threads(num_robots) if num_threads is None else int(num_threads)
         if self.num_threads < 1:
@@ -123,6 +127,8 @@ class MujocoBackend(Backend):
         self.qvel[index] = qvel
 
     def track(self, desired: np.ndarray, substeps: int) -> np.ndarray:
+        if self.actuator.law == "coast":
+            return self._track_per_substep(desired, substeps)
         if substeps != self._substeps:
             shape = (self.num_robots, substeps)
             self._control = np.zeros((*shape, self.model.nu))
@@ -137,6 +143,25 @@ class MujocoBackend(Backend):
         )  # fmt: skip
         np.copyto(self._state, self._next[:, -1])
         return self._torque.sum(axis=1) / substeps
+
+    def _track_per_substep(self, desired: np.ndarray, substeps: int) -> np.ndarray:
+        """``actuator_law="coast"``: the law in numpy before every substep, one ``rollout``
+        call per substep with the torques as ``qfrc_applied`` (the MuJoCo actuators are off)."""
+        if getattr(self, "_torque_control", None) is None:
+            self._torque_control = np.zeros((self.num_robots, 1, self.model.nv))
+            self._one_step = np.zeros((self.num_robots, 1, self.nstate))
+        torque_sum = np.zeros((self.num_robots, 2))
+        for _ in range(substeps):
+            torque = self.actuator(desired, self.joint_pos, self.joint_vel)
+            self._torque_control[:, 0, 1:3] = torque
+            self._rollout.rollout(
+                self._models, self._datas, self._state, self._torque_control,
+                control_spec=TORQUE_SPEC, skip_checks=True, nstep=1, initial_warmstart=None,
+                state=self._one_step, sensordata=None, chunk_size=self._chunk,
+            )  # fmt: skip
+            np.copyto(self._state, self._one_step[:, 0])
+            torque_sum += torque
+        return torque_sum / substeps
 
     def get_state(self) -> np.ndarray:
         """The full physics state of every robot (``mjSTATE_FULLPHYSICS``: time, qpos, qvel,
