@@ -201,7 +201,8 @@ def main(argv: list[str] | None = None) -> int:
         "# Time to hop: wall-clock time until a deterministic evaluation reaches a threshold",
         "",
         f"Measured {datetime.date.today().isoformat()} by `python benchmarks/time_to_hop.py "
-        f"--seeds {args.seeds}"
+        f"--seeds {args.seeds} --agents {args.agents} --presets {args.presets}"
+        + (" --no-sb3" if args.no_sb3 else "")
         + "".join(f" --set {o}" for o in overrides)
         + f"` on {cpu_model()}, {usable_cores()} usable cores (load "
         f"{load_average()} at the end), torch {torch.__version__}, 1 torch thread.",

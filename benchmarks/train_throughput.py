@@ -71,7 +71,7 @@ def measure(
             start = time.perf_counter()
             info = runner.collect()
             collected = time.perf_counter()
-            runner.ppo.update(runner.storage)
+            runner.update()
             end = time.perf_counter()
             if i > 0:
                 collect += collected - start

@@ -46,6 +46,9 @@ class TrainConfig:
     log_interval: int = 1  # iterations between TensorBoard / metrics.csv rows
     histogram_interval: int = 10  # iterations between parameter histograms
     torch_threads: int = 1  # torch intra-op threads (the simulator uses the other cores)
+    # torch threads during the PPO update, when the simulator is idle; None: every usable core
+    # for minibatches of at least 1,024 samples (the throughput preset), else torch_threads
+    update_threads: int | None = None
     device: str = "cpu"  # networks, storage and PPO: cpu | cuda | cuda:N | auto (cpg_actor.device)
     env_threads: int | None = None  # simulator threads, None: the env's default
     agent_config: AgentConfig = field(default_factory=AgentConfig)
@@ -94,6 +97,13 @@ class TrainConfig:
                 raise ValueError(f"{name} must be a positive integer, got {value!r}")
         if not isinstance(self.seed, int) or self.seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
+        threads = self.update_threads
+        if threads is not None and (
+            not isinstance(threads, int) or isinstance(threads, bool) or threads < 1
+        ):
+            raise ValueError(
+                f"update_threads must be a positive integer or null (automatic), got {threads!r}"
+            )
         if getattr(self.env, "normalized_actions", False):
             raise ValueError(
                 "env.normalized_actions is for off-the-shelf RL libraries (gymnasium.make); "

@@ -47,6 +47,7 @@ from cpg_actor.device import resolve_device
 from cpg_actor.envs.torch_env import TorchVectorEnv
 from cpg_actor.episodes import EpisodeLog, EpisodeStats
 from cpg_actor.evaluation import evaluate
+from cpg_actor.machine import usable_cores
 from cpg_actor.policy import Policy
 from cpg_actor.ppo import (
     PPO,
@@ -245,7 +246,7 @@ class Runner:
                 collect_time = time.perf_counter() - start
                 start_learn = time.perf_counter()
                 try:
-                    stats = self.ppo.update(self.storage)
+                    stats = self.update()
                 except NonFiniteLossError as error:
                     raise TrainingDiverged(
                         f"iteration {self.iteration + 1}: {error}. "
@@ -290,6 +291,23 @@ class Runner:
             if progress is not None:
                 progress.stop()
             self.run_log.flush()
+
+    def update_threads(self) -> int:
+        """Torch threads for the PPO update (``config.update_threads``; see TrainConfig)."""
+        cfg = self.config
+        if cfg.update_threads is not None:
+            return cfg.update_threads
+        minibatch = cfg.steps_per_iteration // cfg.ppo.num_minibatches
+        return usable_cores() if minibatch >= 1024 else cfg.torch_threads
+
+    def update(self) -> dict[str, float]:
+        """The PPO update of the collected rollout, on :meth:`update_threads` torch threads
+        (the simulator's threads are idle meanwhile); the rollout runs on ``torch_threads``."""
+        torch.set_num_threads(self.update_threads())
+        try:
+            return self.ppo.update(self.storage)
+        finally:
+            torch.set_num_threads(self.config.torch_threads)
 
     def run_warm_start(self) -> list[float]:
         """The agent's supervised warm start (e.g. cho2019-warm), before any PPO iteration.

@@ -60,6 +60,28 @@ def test_same_seed_gives_identical_numbers_and_other_seed_differs():
     assert not torch.equal(runs[0][0]["log_std"], runs[2][0]["log_std"])
 
 
+def test_update_on_several_threads_is_reproducible():
+    """Large minibatches update on every usable core (the simulator is idle then), compiled:
+    the same seed still gives the same numbers, and the rollout is back on torch_threads."""
+    runs = []
+    for _ in range(2):
+        cfg = TrainConfig(
+            agent="cpg-actor", seed=5, num_envs=8, total_steps=2 * 8 * 256, eval_interval=0,
+            ppo=PPOConfig(num_steps=256, num_epochs=2, num_minibatches=2, compile=True),
+            env=FakeConfig(episode_steps=40, fall_probability=0.02), update_threads=2,
+        )  # fmt: skip
+        r = runner(cfg)
+        assert r.update_threads() == 2
+        r.learn()
+        assert torch.get_num_threads() == cfg.torch_threads
+        runs.append(params(r))
+    assert_same(runs[0], runs[1])
+    auto = config(1)  # minibatches of 32 samples: the update stays on torch_threads
+    assert runner(auto).update_threads() == auto.torch_threads
+    with pytest.raises(ValueError, match="update_threads must be a positive integer or null"):
+        TrainConfig(update_threads=0).validate()
+
+
 @pytest.mark.parametrize("agent", ["cpg-actor", "mlp"])
 def test_resume_after_a_kill_equals_uninterrupted_run(tmp_path, agent):
     """Killed in iteration 4 (after the checkpoint at 2), resumed from that checkpoint: the

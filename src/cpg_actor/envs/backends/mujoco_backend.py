@@ -70,12 +70,11 @@ def load_model(
     return model
 
 
-ROBOTS_PER_THREAD = 8  # fewer, and handing work to a thread costs more than it saves
-
-
-def default_threads(num_robots: int) -> int:
-    """Threads for K robots: the cores this process may use, at least 8 robots per thread."""
-    return max(1, min(usable_cores(), num_robots // ROBOTS_PER_THREAD))
+def default_threads(num_robots: int, robots_per_thread: int = 8) -> int:
+    """Threads for K robots: the cores this process may use, at least ``robots_per_thread``
+    robots per thread (fewer, and handing them to a thread costs more than it saves: 8 with a
+    control step per ``rollout`` call, 16 with a substep per call, ``actuator_law="coast"``)."""
+    return max(1, min(usable_cores(), num_robots // robots_per_thread))
 
 
 class MujocoBackend(Backend):
@@ -94,7 +93,10 @@ class MujocoBackend(Backend):
         if actuator.law == "coast":  # the law in numpy, applied as joint torques: actuators off
             self.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ACTUATION.value
         self.num_robots = int(num_robots)
-        self.num_threads = default_threads(num_robots) if num_threads is None else int(num_threads)
+        per_thread = 16 if actuator.law == "coast" else 8
+        self.num_threads = (
+            default_threads(num_robots, per_thread) if num_threads is None else int(num_threads)
+        )
         if self.num_threads < 1:
             raise ValueError(f"num_threads must be >= 1, got {num_threads}")
         self.num_threads = min(self.num_threads, self.num_robots)
