@@ -71,7 +71,10 @@ def measure(
             start = time.perf_counter()
             info = runner.collect()
             collected = time.perf_counter()
-            runner.update()
+            if hasattr(runner, "update"):  # on the run's update threads
+                runner.update()
+            else:  # a reference tree from before Runner.update
+                runner.ppo.update(runner.storage)
             end = time.perf_counter()
             if i > 0:
                 collect += collected - start

@@ -9,6 +9,7 @@ from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.execute import select_stage_checkpoints
 from cpg_actor.experiments.plan import (
     ReproduceSettings,
+    build_tasks,
     checkpoint_interval,
     parse_variants,
     prepare_out_dir,
@@ -146,6 +147,26 @@ def test_variants_are_checked_against_the_registry():
         parse_variants("cpg-actor,nope")
     with pytest.raises(ValueError, match="twice"):
         parse_variants("mlp,mlp")
+
+
+def test_a_variant_is_an_agent_with_settings_of_its_own(tmp_path):
+    """cpg-actor-unbounded trains cpg-actor with the paper's linear feedback; the
+    reproduction's own --set still wins over the variant's settings."""
+    assert parse_variants("cpg-actor-unbounded") == ["cpg-actor-unbounded"]
+    settings = ReproduceSettings(
+        variants=["cpg-actor-unbounded"], seeds=1, total_steps=4096,
+        overrides=["agent_config.kappa_scale=2.0"],
+    )  # fmt: skip
+    config = resolve_config(settings, "cpg-actor-unbounded")
+    assert config.agent == "cpg-actor" and config.agent_config.feedback_tanh is False
+    assert (config.agent_config.xi_scale, config.agent_config.kappa_scale) == (1.0, 2.0)
+    (task,) = build_tasks(settings, tmp_path, workers=1)
+    args = list(task.train_args)
+    assert args[args.index("--agent") + 1] == "cpg-actor"
+    assert args.index("agent_config.feedback_tanh=false") < args.index(
+        "agent_config.kappa_scale=2.0"
+    )
+    assert task.run_dir.endswith("runs/cpg-actor-unbounded/seed0")
 
 
 def test_out_dir_with_other_settings_is_refused(tmp_path):

@@ -34,6 +34,26 @@ IDENTITY_KEYS = (
 )
 
 
+# Variants that are an agent with settings of their own: name -> (agent, --set overrides).
+# Their settings come before the reproduction's own --set, which can still change them.
+VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
+    # the paper's feedback: the MLP's linear output is xi (rad/s) and kappa (rad/s^2)
+    "cpg-actor-unbounded": (
+        "cpg-actor",
+        (
+            "agent_config.feedback_tanh=false",
+            "agent_config.xi_scale=1.0",
+            "agent_config.kappa_scale=1.0",
+        ),
+    ),
+}
+
+
+def variant_agent(variant: str) -> tuple[str, tuple[str, ...]]:
+    """The agent a variant trains and the overrides that make it that variant."""
+    return VARIANTS.get(variant, (variant, ()))
+
+
 @dataclass
 class ReproduceSettings:
     """The settings that decide a reproduction's results (see ``IDENTITY_KEYS``)."""
@@ -75,16 +95,18 @@ class RunTask:
 
 
 def parse_variants(text: str) -> list[str]:
-    """``"cpg-actor,mlp"`` -> ``["cpg-actor", "mlp"]``; checked against the agent registry."""
+    """``"cpg-actor,mlp"`` -> ``["cpg-actor", "mlp"]``; checked against the agent registry and
+    :data:`VARIANTS`."""
     from cpg_actor.agents import AGENTS
 
+    available = sorted({*AGENTS, *VARIANTS})
     variants = [v.strip() for v in text.split(",") if v.strip()]
     if not variants:
-        raise ValueError("--variants is empty; available: " + ", ".join(sorted(AGENTS)))
-    unknown = [v for v in variants if v not in AGENTS]
+        raise ValueError("--variants is empty; available: " + ", ".join(available))
+    unknown = [v for v in variants if v not in available]
     if unknown:
         raise ValueError(
-            f"unknown variant(s) {', '.join(unknown)}; available: {', '.join(sorted(AGENTS))}"
+            f"unknown variant(s) {', '.join(unknown)}; available: {', '.join(available)}"
         )
     if len(set(variants)) != len(variants):
         raise ValueError(f"--variants lists a variant twice: {text}")
@@ -100,12 +122,13 @@ def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
     from cpg_actor.commands.train import without_compile_if_no_compiler
     from cpg_actor.config import compose_config
 
-    values = {"agent": variant, "seed": seed, "total_steps": settings.total_steps}
+    agent, variant_overrides = variant_agent(variant)
+    values = {"agent": agent, "seed": seed, "total_steps": settings.total_steps}
     if settings.num_envs is not None:
         values["num_envs"] = settings.num_envs
     if settings.sim is not None:
         values["env"] = {"sim": settings.sim}
-    config = compose_config(values=values, overrides=settings.overrides)
+    config = compose_config(values=values, overrides=[*variant_overrides, *settings.overrides])
     return without_compile_if_no_compiler(config)
 
 
@@ -145,21 +168,24 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
             extra += ["--set", f"checkpoint_interval={checkpoint_interval(config)}"]
         if "torch_threads" not in keys:
             extra += ["--set", "torch_threads=1"]
-        if "env_threads" not in keys:
-            import os
+        import os
 
-            threads = max(1, (os.cpu_count() or 1) // max(1, workers))
+        threads = max(1, (os.cpu_count() or 1) // max(1, workers))  # this run's share of cores
+        if "env_threads" not in keys:
             extra += ["--set", f"env_threads={threads}"]
+        if "update_threads" not in keys:
+            extra += ["--set", f"update_threads={threads}"]
         for seed in range(settings.seeds):
             run_dir = out / "runs" / variant / f"seed{seed}"
-            args = ["--agent", variant, "--seed", str(seed)]
+            agent, variant_overrides = variant_agent(variant)
+            args = ["--agent", agent, "--seed", str(seed)]
             args += ["--total-steps", str(settings.total_steps), "--run-dir", str(run_dir)]
             if settings.num_envs is not None:
                 args += ["--num-envs", str(settings.num_envs)]
             if settings.sim is not None:
                 args += ["--sim", settings.sim]
             args += extra
-            for text in settings.overrides:
+            for text in [*variant_overrides, *settings.overrides]:
                 args += ["--set", text]
             args.append("--no-progress")
             tasks.append(

@@ -15,6 +15,7 @@ from cpg_actor.experiments.execute import MARKER, STAGES_FILE, list_checkpoints
 LABELS = {
     "cpg-actor": "CPG-Actor",
     "cpg-actor-open-loop": "CPG-Actor (open loop)",
+    "cpg-actor-unbounded": "CPG-Actor (unbounded feedback)",
     "cho2019-warm": "Cho et al. (warm)",
     "cho2019": "Cho et al.",
     "mlp": "MLP actor",
@@ -23,6 +24,7 @@ LABELS = {
 COLORS = {
     "cpg-actor": "tab:green",
     "cpg-actor-open-loop": "tab:orange",
+    "cpg-actor-unbounded": "tab:olive",
     "cho2019-warm": "tab:red",
     "cho2019": "tab:blue",
     "mlp": "tab:purple",
