@@ -224,7 +224,7 @@ def main(argv: list[str] | None = None) -> int:
         per_seed = "; ".join(
             f"{r['steps'] / 1000:.0f}k, {r['wall']:.0f} s"
             if r["reached"]
-            else f"best {r['return']:.0f} (hop {r['hop']:.2f} m)"
+            else f"best {r['return']:.0f} (hop {r['hop']:.2f} m), budget in {r['wall']:.0f} s"
             for r in runs
         )
         lines.append(f"| {label} | {hit} | {steps} | {wall} | {per_seed} |")
