@@ -4,6 +4,7 @@ not run are skipped with a note; progress lines read metrics.jsonl."""
 import json
 
 import numpy as np
+import pytest
 
 from cpg_actor.experiments.execute import Progress, read_progress
 from cpg_actor.experiments.figures import make_figures
@@ -101,7 +102,9 @@ def _curve_run(out, variant, seed, returns, hops, total=2_000_000, p99=14.0, squ
     steps = np.linspace(total / len(returns), total, len(returns))
     rows = [
         {"iteration": i + 1, "global_step": float(step), "eval/return": float(r),
-         "eval/hop_height": float(h)}
+         "eval/hop_height": float(h), "charts/episode_return": float(r),
+         "reward_terms/r1": 1.25 * float(r), "reward_terms/r2": -0.25 * float(r),
+         "reward_terms/r3": 0.0, "reward_terms/r4": 0.0, "reward_terms/r5": 0.0}
         for i, (step, r, h) in enumerate(zip(steps, returns, hops, strict=True))
     ]  # fmt: skip
     (run / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
@@ -154,3 +157,9 @@ def test_results_that_agree_with_the_paper_are_supported(tmp_path):
         _curve_run(out, "mlp", seed, 600.0 * rising + jitter, np.full(n, 0.2), square=True)
     verdicts = _claims(out)
     assert set(verdicts.values()) == {"supported"}, verdicts
+    # the return split into its terms: the means of the last 10 logged values, over seeds
+    summary = json.loads((out / "summary.json").read_text())
+    mlp_final = np.mean([np.mean(600.0 * rising[-10:] + 5.0 * seed) for seed in range(3)])
+    assert summary["variants"]["mlp"]["term_r1"][0] == pytest.approx(1.25 * mlp_final)
+    assert summary["variants"]["mlp"]["training_return"][0] == pytest.approx(mlp_final)
+    assert "| MLP actor | " in (out / "report.md").read_text().split("reward terms")[1]

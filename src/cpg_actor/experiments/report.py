@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from cpg_actor.envs.reward import REWARD_TERMS
 from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.figures import make_figures, steps_per_iteration
 from cpg_actor.experiments.plan import STAGE_LABELS, load_settings_file
@@ -39,6 +40,8 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
             "hop_height_at_1M",
             "final_hop_height_logged",
             "mean_eval_return",
+            "training_return",
+            *(f"term_{name}" for name in REWARD_TERMS),
         )
     }
     for run in results.runs.get(variant, []):
@@ -52,6 +55,10 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
         out["final_hop_height_logged"].append(m.final_return(hop_steps, hops, rows=EARLY_ROWS))
         eval_steps, eval_returns = run.curve("eval/return")
         out["mean_eval_return"].append(m.curve_mean(eval_steps, eval_returns))
+        # the return of the last training episodes, split into the reward terms r1..r5
+        out["training_return"].append(m.final_return(*run.curve("charts/episode_return")))
+        for name in REWARD_TERMS:
+            out[f"term_{name}"].append(m.final_return(*run.curve(f"reward_terms/{name}")))
         traces = run.traces()
         first = run.traces(0) if run.stages else None
         nan = float("nan")
@@ -393,6 +400,27 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
         ]
 
     lines += [
+        "## The return split into its reward terms",
+        "",
+        "Paper eq. 4: r1 pays upward hip speed, r2..r5 penalise tracking error, joint speed, "
+        "torque and foot slip. Each is the sum over an episode, the mean of the last training "
+        "episodes (exploration noise on, the last 10 logged values of the 100-episode means), "
+        "mean +- std over seeds; *r1 share* is r1 over the sum of the terms' magnitudes.",
+        "",
+        "| variant | training return | " + " | ".join(REWARD_TERMS) + " | r1 share |",
+        "| --- | --- | " + " | ".join("---" for _ in REWARD_TERMS) + " | --- |",
+    ]
+    for variant, row in summary["variants"].items():
+        terms = [row[f"term_{name}"][0] for name in REWARD_TERMS]
+        magnitude = sum(abs(t) for t in terms if np.isfinite(t))
+        share = terms[0] / magnitude if magnitude > 0 and np.isfinite(terms[0]) else float("nan")
+        lines.append(
+            f"| {label(variant)} | {_pm(row['training_return'])} | "
+            + " | ".join(_pm(row[f"term_{name}"]) for name in REWARD_TERMS)
+            + f" | {'-' if not np.isfinite(share) else f'{100 * share:.0f}%'} |"
+        )
+    lines += [
+        "",
         "## Stages of training",
         "",
         "Deterministic evaluation at the checkpoints nearest to 1/60, 1/3 and 1 of the budget "
