@@ -39,8 +39,11 @@ def make_config(
     device: str = "cpu",
     num_envs: int | None = None,
     torch_threads: int = 1,
+    update_threads: int | None = None,
 ) -> TrainConfig:
     config = TrainConfig(agent=agent, torch_threads=torch_threads)
+    if update_threads is not None:  # (a reference tree may predate the field)
+        config.update_threads = update_threads
     apply_dict(config, preset_values(preset), "")
     config.eval_interval = 0
     config.ppo.compile = compile  # the presets compile; rows say which
@@ -59,9 +62,10 @@ def measure(
     device: str = "cpu",
     num_envs: int | None = None,
     torch_threads: int = 1,
+    update_threads: int | None = None,
 ) -> dict[str, float]:
     """One warm-up iteration (and the compile), then ``iterations`` timed ones."""
-    config = make_config(agent, preset, compile, device, num_envs, torch_threads)
+    config = make_config(agent, preset, compile, device, num_envs, torch_threads, update_threads)
     config.total_steps = (iterations + 1) * config.steps_per_iteration
     runner = Runner(config, run_dir=None, tensorboard=False)
     collect = update = simulation = 0.0
@@ -118,6 +122,11 @@ def main() -> None:
     parser.add_argument("--device", default="cpu", help="cpu (default) or cuda")
     parser.add_argument("--num-envs", type=int, default=None, help="override the preset's")
     parser.add_argument("--reference-src", help="a src/ folder holding the reference cpg_actor")
+    parser.add_argument(
+        "--update-threads-ab",
+        action="store_true",
+        help="also the compiled rows with the PPO update on 1 thread (update_threads=1)",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON line, write nothing")
     parser.add_argument("--output", default="benchmarks/results/train_throughput.md")
     args = parser.parse_args()
@@ -134,6 +143,12 @@ def main() -> None:
             for agent in args.agents:
                 results[f"{preset} + compile/{agent}"] = measure(
                     agent, preset, args.iterations, compile=True, **extra
+                )
+    if args.update_threads_ab:
+        for preset in args.presets:
+            for agent in args.agents:
+                results[f"{preset} + compile, update on 1 thread/{agent}"] = measure(
+                    agent, preset, args.iterations, compile=True, update_threads=1, **extra
                 )
     if args.json:
         print(json.dumps(results))
@@ -158,11 +173,13 @@ def main() -> None:
         + (" --compile" if args.compile else "")
         + (f" --device {args.device}" if args.device != "cpu" else "")
         + (f" --num-envs {args.num_envs}" if args.num_envs else "")
+        + (" --update-threads-ab" if args.update_threads_ab else "")
         + (" --reference-src REF/src`" if args.reference_src else "`")
         + ".",
         "",
         f"Machine: {cpu_model()}, {usable_cores()} usable cores (load {load_average()}), "
-        f"torch {torch.__version__}, 1 torch thread"
+        f"torch {torch.__version__}, 1 torch thread for the rollout, the runs' `update_threads` "
+        "for the update (every core for minibatches of >= 1,024 samples)"
         + (f", networks and PPO on {torch.cuda.get_device_name()}" if args.device != "cpu" else "")
         + ".",
         "",
