@@ -59,6 +59,8 @@ def main() -> None:
     from cpg_actor.machine import cpu_model, load_average, usable_cores
 
     available = sorted(os.sched_getaffinity(0))
+    if any(c != "all" and not (c.isdigit() and int(c) > 0) for c in args.cores):
+        parser.error(f"--cores takes positive integers or 'all', got {' '.join(args.cores)}")
     counts = sorted({len(available) if c == "all" else int(c) for c in args.cores})
     rows = []
     for cores in counts:

@@ -455,3 +455,15 @@ def test_compose_config_applies_each_layer_in_order(tmp_path):
         compose_config(overrides=["ppo.epochs=3"])
     with pytest.raises(FileNotFoundError, match="does not exist"):
         compose_config(config_file=tmp_path / "missing.yaml")
+
+
+def test_a_config_saved_before_a_field_existed_keeps_what_it_trained_with():
+    """Runs saved before ``env.actuator_law`` and ``update_threads`` resume with the drive law
+    and update threads they trained with; a new config gets today's defaults."""
+    saved = TrainConfig().to_dict()
+    del saved["env"]["actuator_law"], saved["update_threads"]
+    old = TrainConfig.from_dict(saved)
+    assert old.env.actuator_law == "coast" and old.update_threads == old.torch_threads
+    new = TrainConfig.from_dict(TrainConfig().to_dict())
+    assert new.env.actuator_law == "dc-motor" and new.update_threads is None
+    assert compose_config().env.actuator_law == "dc-motor"

@@ -122,6 +122,15 @@ class TrainConfig:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
+        """A saved config (a run's ``config.yaml``, a checkpoint's). One saved before a field
+        existed keeps what it trained with: the drives coasting past v_max (``env.actuator_law``
+        "coast") and the update on ``torch_threads`` (``update_threads``)."""
+        data = dict(data)
+        env = data.get("env")
+        if isinstance(env, dict) and "actuator_law" not in env:
+            data["env"] = {**env, "actuator_law": "coast"}
+        if "update_threads" not in data and "torch_threads" in data:
+            data["update_threads"] = data["torch_threads"]
         config = cls()
         apply_dict(config, data, prefix="")
         return config

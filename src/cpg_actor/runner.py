@@ -4,10 +4,11 @@ logging (console, TensorBoard, metrics.jsonl) and atomic, resumable checkpoints.
 Evaluation during training. Every ``eval_interval`` iterations (and before the first and
 after the last) the policy's mean action runs one episode on each of ``eval_episodes``
 environments of its own, always reset with the same seed (:mod:`cpg_actor.evaluation`); the
-mean return and hop height are logged as ``eval/return`` and ``eval/hop_height``. It draws no
-random numbers and touches neither the training envs nor the normaliser, so a run trains the
-same with or without it. ``time/train_wall`` is the run's wall time without evaluation and
-checkpoints (what ``benchmarks/time_to_hop.py`` reports).
+mean return and the env's episode metrics are logged as ``eval/return`` and ``eval/<metric>``
+(the hopper's ``eval/hop_height``). It draws no random numbers and touches neither the
+training envs nor the normaliser, so a run trains the same with or without it.
+``time/train_wall`` is the run's wall time without evaluation and checkpoints (what
+``benchmarks/time_to_hop.py`` reports).
 
 Reproducibility. Everything random is seeded from ``TrainConfig.seed``: torch (action noise,
 minibatch order, initialisation), numpy and python RNGs, and the environments'

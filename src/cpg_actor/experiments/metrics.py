@@ -164,15 +164,18 @@ def verdict_better(differences: dict[str, Interval | None], ran: bool) -> Verdic
             "needs cpg-actor-open-loop and cho2019-warm or cho2019, with finished training "
             "episodes logged"
         )
+    ok, parts = _cis_above_zero(differences, "difference ")
+    return SUPPORTED if ok else NOT_SUPPORTED, "; ".join(parts) + " (supported if CI above 0)"
+
+
+def _cis_above_zero(differences: dict[str, Interval | None], prefix: str = "") -> tuple[bool, list]:
+    """Whether every difference's 95% CI lies above 0 (a missing one fails), and a
+    ``"vs NAME: ..."`` part per difference."""
     parts, ok = [], True
     for name, diff in differences.items():
-        if diff is None:
-            ok = False
-            parts.append(f"vs {name}: no data")
-            continue
-        ok &= diff.low > 0
-        parts.append(f"vs {name}: difference {diff}")
-    return SUPPORTED if ok else NOT_SUPPORTED, "; ".join(parts) + " (supported if CI above 0)"
+        ok &= diff is not None and diff.low > 0
+        parts.append(f"vs {name}: {prefix}{diff}" if diff is not None else f"vs {name}: no data")
+    return ok, parts
 
 
 def verdict_smooth(cpg: float, mlp: float, factor: float = 10.0) -> Verdict:
@@ -229,14 +232,7 @@ def verdict_best_during_training(differences: dict[str, Interval | None], ran: b
     of each difference above 0."""
     if not ran or not differences:
         return NOT_TESTED, "needs cpg-actor and another variant with evaluation curves"
-    parts, ok = [], True
-    for name, diff in differences.items():
-        if diff is None:
-            ok = False
-            parts.append(f"vs {name}: no data")
-            continue
-        ok &= diff.low > 0
-        parts.append(f"vs {name}: {diff}")
+    ok, parts = _cis_above_zero(differences)
     return (
         SUPPORTED if ok else NOT_SUPPORTED,
         "mean eval return over the run, difference " + "; ".join(parts)
@@ -244,7 +240,7 @@ def verdict_best_during_training(differences: dict[str, Interval | None], ran: b
     )  # fmt: skip
 
 
-def curve_mean(steps: Sequence[float], values: Sequence[float | None]) -> float:
+def curve_mean(values: Sequence[float | None]) -> float:
     """Mean of the finite values of a logged curve (evaluations are evenly spaced in steps)."""
     a = np.array([np.nan if v is None else v for v in values], dtype=float)
     a = a[np.isfinite(a)]

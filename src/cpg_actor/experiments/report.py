@@ -53,8 +53,7 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
             m.final_return(hop_steps, hops, at_step=PAPER_STAGE_STEPS[0], rows=EARLY_ROWS)
         )
         out["final_hop_height_logged"].append(m.final_return(hop_steps, hops, rows=EARLY_ROWS))
-        eval_steps, eval_returns = run.curve("eval/return")
-        out["mean_eval_return"].append(m.curve_mean(eval_steps, eval_returns))
+        out["mean_eval_return"].append(m.curve_mean(run.curve("eval/return")[1]))
         # the return of the last training episodes, split into the reward terms r1..r5
         out["training_return"].append(m.final_return(*run.curve("charts/episode_return")))
         for name in REWARD_TERMS:
