@@ -20,6 +20,7 @@ COMMANDS: dict[str, str] = {
     "reproduce": "reproduce",
     "sweep": "sweep",
     "figures": "figures",
+    "gradient": "gradient",
 }
 
 

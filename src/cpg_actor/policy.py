@@ -123,7 +123,9 @@ class Policy:
         normalized = self.normalize(obs_t, update=update_normalizer)
         state = self.state
         step = self.agent.act(normalized, state, deterministic=deterministic)
-        action = np.clip(step.action.cpu().numpy(), self.action_low, self.action_high)
+        # the env's action is the sample's first entries (the agent may draw more: feedback)
+        sampled = step.action[:, : self.action_low.shape[0]]
+        action = np.clip(sampled.cpu().numpy(), self.action_low, self.action_high)
         self.state = step.next_state
         return PolicyStep(action, normalized, state, step)
 

@@ -24,6 +24,7 @@ bit for bit (MuJoCo; PyBullet restores joint states but not its contact caches).
 from __future__ import annotations
 
 import json
+import math
 import random
 import time
 from collections.abc import Callable
@@ -125,9 +126,13 @@ class Runner:
         self.action_low = np.asarray(action_space.low, dtype=np.float32)
         self.action_high = np.asarray(action_space.high, dtype=np.float32)
         obs_dim = int(self.env.single_observation_space.shape[0])
-        action_dim = int(action_space.shape[0])
         self.agent = self.spec.build(config.agent_config, self.env)
         self.agent.to(self.device)
+        if config.ppo.bptt_steps > 1 and math.prod(self.agent.state_shape) == 0:
+            raise ValueError(
+                f"ppo.bptt_steps={config.ppo.bptt_steps} needs an agent with a recurrent state "
+                f"(cpg-actor, cpg-actor-open-loop); '{config.agent}' has none: use 1"
+            )
         self.normalizer = RunningNormalizer(obs_dim).to(self.device)
         self.policy = Policy(
             self.agent,
@@ -144,7 +149,7 @@ class Runner:
             config.ppo.num_steps,
             config.num_envs,
             obs_dim,
-            action_dim,
+            self.agent.sample_dim,
             tuple(self.agent.state_shape),
             self.device,
         )

@@ -43,6 +43,11 @@ class AgentConfig:
     xi_scale: float = 4.0
     kappa_scale: float = 25.0
     feedback_tanh: bool = True
+    # exploration in feedback space (beyond the paper): xi and kappa are sampled around the
+    # feedback MLP's output with a trained std, initially feedback_noise x (xi_scale,
+    # kappa_scale); the policy gradient then reaches the MLP through the feedback's own
+    # likelihood instead of the one-step lever dx/dxi. 0 (the paper): deterministic feedback.
+    feedback_noise: float = 0.0
     cpg_initial: dict = field(default_factory=dict)  # overrides of cpg.HOPPER_INITIAL
 
     def validate(self) -> None:
@@ -58,6 +63,10 @@ class AgentConfig:
         for name in ("init_std", "output_gain", "xi_scale", "kappa_scale"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"agent_config.{name} must be > 0, got {getattr(self, name)!r}")
+        if not self.feedback_noise >= 0:
+            raise ValueError(
+                f"agent_config.feedback_noise must be >= 0, got {self.feedback_noise!r}"
+            )
 
 
 ACTIVATIONS = {"tanh": nn.Tanh, "elu": nn.ELU}
@@ -128,6 +137,9 @@ class Agent(nn.Module):
             raise ValueError(f"action_scale must be positive and finite, got {scale.tolist()}")
         self.obs_dim = obs_dim
         self.action_dim = int(scale.shape[0])
+        # entries of a sampled ActStep.action: the env's action first, then any other random
+        # choice the agent makes and the storage keeps (the CPG-Actor's noisy feedback)
+        self.sample_dim = self.action_dim
         # (high - low) / 2 of the action space: the unit of init_std (and of the MLP's mean)
         self.register_buffer("action_scale", scale)
         self.log_std = nn.Parameter(torch.log(config.init_std * scale))
@@ -162,6 +174,12 @@ class Agent(nn.Module):
         return ActStep(
             action, log_prob, self.value(obs, state), out.mean, out.std, out.next_state, out.extras
         )
+
+    def replay_state(self, obs: Tensor, state: Tensor, sample: Tensor) -> Tensor:
+        """The state after the step from ``(obs, state)`` that drew ``sample`` (a stored
+        :attr:`ActStep.action`), with gradients: used to replay several steps
+        (``ppo.bptt_steps``). Here the sample does not change the state."""
+        return self.actor(obs, state).next_state
 
     def evaluate(self, obs: Tensor, state: Tensor, actions: Tensor) -> tuple[Tensor, ...]:
         """Replay one step from stored (obs, state): ``(log_prob, entropy, value, mean, std)``."""

@@ -13,7 +13,15 @@ from collections.abc import Sequence
 import torch
 from torch import Tensor
 
-from cpg_actor.agents.base import ActorOutput, Agent, AgentConfig, mlp
+from cpg_actor.agents.base import (
+    ActorOutput,
+    ActStep,
+    Agent,
+    AgentConfig,
+    gaussian_entropy,
+    gaussian_log_prob,
+    mlp,
+)
 from cpg_actor.cpg import CPGNetwork, CPGState, JointMap, hopper_cpg
 from cpg_actor.robot import RobotSpec
 
@@ -29,6 +37,11 @@ class CPGActorAgent(Agent):
       ``scale * tanh(MLP(obs))`` with ``feedback_tanh`` (bounded feedback).
     * ``feedback=False`` (``cpg-actor-open-loop``): ``xi = kappa = 0``; only the CPG vector V
       and the log-std are trained.
+    * ``agent_config.feedback_noise > 0`` (beyond the paper): the feedback is sampled,
+      ``[xi, kappa] ~ N(MLP output, sigma_f^2)``, the CPG steps with the sample and the action
+      is drawn around its output. The sample is kept after the action in
+      :attr:`ActStep.action` (``sample_dim = 2N + 2N``) and the log-probability is that of
+      both draws, so PPO's ratio moves the feedback MLP through its own likelihood.
 
     The critic sees the observation and the CPG state as ``cos(phase), sin(phase), amplitude``.
     The CPG state is reset to :meth:`CPGNetwork.initial_state` (rest, amplitude 0, the preset
@@ -68,6 +81,16 @@ class CPGActorAgent(Agent):
             if feedback
             else None
         )
+        self.feedback_log_std: torch.nn.Parameter | None = None
+        if config.feedback_noise > 0:
+            if not feedback:
+                raise ValueError(
+                    "agent_config.feedback_noise needs an agent with feedback (cpg-actor); "
+                    "the open-loop CPG-Actor has none: set it to 0"
+                )
+            scales = torch.tensor([config.xi_scale] * n + [config.kappa_scale] * n)
+            self.feedback_log_std = torch.nn.Parameter(torch.log(config.feedback_noise * scales))
+            self.sample_dim = self.action_dim + 2 * n
 
     def initial_state(self, batch_size: int) -> Tensor:
         return self.cpg.initial_state(batch_size).as_tensor()
@@ -82,6 +105,11 @@ class CPGActorAgent(Agent):
         per edge of the topology."""
         row = super().log_scalars()
         names = self.cpg.topology.names
+        if self.feedback_log_std is not None:
+            stds = self.feedback_log_std.detach().exp().tolist()
+            for i, name in enumerate(names):
+                row[f"feedback/xi_std_{name}"] = stds[i]
+                row[f"feedback/kappa_std_{name}"] = stds[len(names) + i]
         values = {k: v.detach() for k, v in self.cpg.parametrisation.values().items()}
         for field, short in (("frequency", "nu"), ("amplitude", "rho"), ("convergence", "a")):
             for i, name in enumerate(names):
@@ -105,15 +133,23 @@ class CPGActorAgent(Agent):
             out["feedback/output_bias"] = last.bias.detach()
         return out
 
-    def actor(self, obs: Tensor, state: Tensor) -> ActorOutput:
+    def feedback_mean(self, obs: Tensor) -> Tensor:
+        """``[xi, kappa]`` of the feedback MLP, ``(B, 2N)`` (zeros without feedback)."""
         n = self.cpg.num_oscillators
-        if self.feedback is not None:
-            out = self.feedback(obs)
-            if self.feedback_tanh:
-                out = torch.tanh(out)
-            xi, kappa = self.xi_scale * out[:, :n], self.kappa_scale * out[:, n:]
-        else:
-            xi = kappa = torch.zeros(obs.shape[0], n, dtype=obs.dtype, device=obs.device)
+        if self.feedback is None:
+            return torch.zeros(obs.shape[0], 2 * n, dtype=obs.dtype, device=obs.device)
+        out = self.feedback(obs)
+        if self.feedback_tanh:
+            out = torch.tanh(out)
+        return torch.cat([self.xi_scale * out[:, :n], self.kappa_scale * out[:, n:]], dim=-1)
+
+    def actor(self, obs: Tensor, state: Tensor, feedback: Tensor | None = None) -> ActorOutput:
+        """One CPG step from ``state`` with ``feedback`` ``[xi, kappa]`` (default: the MLP's
+        output, the mean when the feedback is sampled)."""
+        n = self.cpg.num_oscillators
+        if feedback is None:
+            feedback = self.feedback_mean(obs)
+        xi, kappa = feedback[:, :n], feedback[:, n:]
         output, next_state = self.cpg(CPGState.from_tensor(state), 0.0, xi, kappa)
         mean = self.joint_map(output.position)
         extras = {
@@ -125,3 +161,46 @@ class CPGActorAgent(Agent):
             "cpg_position": output.position,
         }
         return ActorOutput(mean, self.std(obs.shape[0]), next_state.as_tensor(), extras)
+
+    # -- sampled feedback (feedback_noise > 0) -----------------------------------------------
+    def act(self, obs: Tensor, state: Tensor, deterministic: bool = False) -> ActStep:
+        if self.feedback_log_std is None:
+            return super().act(obs, state, deterministic)
+        feedback_mean = self.feedback_mean(obs)
+        feedback_std = self.feedback_log_std.exp().expand_as(feedback_mean)
+        with torch.no_grad():
+            feedback = feedback_mean if deterministic else torch.normal(feedback_mean, feedback_std)
+        out = self.actor(obs, state, feedback)
+        with torch.no_grad():
+            action = (
+                out.mean if deterministic else torch.normal(out.mean.expand(out.std.shape), out.std)
+            )
+        sample = torch.cat([action, feedback], dim=-1)
+        mean = torch.cat([out.mean, feedback_mean], dim=-1)
+        std = torch.cat([out.std, feedback_std], dim=-1)
+        log_prob = gaussian_log_prob(sample, mean, std).sum(-1)
+        value = self.value(obs, state)
+        return ActStep(sample, log_prob, value, mean, std, out.next_state, out.extras)
+
+    def _sampled(self, obs: Tensor, state: Tensor, sample: Tensor) -> tuple[ActorOutput, ...]:
+        feedback = sample[:, self.action_dim :]
+        return self.actor(obs, state, feedback), self.feedback_mean(obs)
+
+    def replay_state(self, obs: Tensor, state: Tensor, sample: Tensor) -> Tensor:
+        if self.feedback_log_std is None:
+            return super().replay_state(obs, state, sample)
+        return self._sampled(obs, state, sample)[0].next_state
+
+    def evaluate(self, obs: Tensor, state: Tensor, actions: Tensor) -> tuple[Tensor, ...]:
+        if self.feedback_log_std is None:
+            return super().evaluate(obs, state, actions)
+        out, feedback_mean = self._sampled(obs, state, actions)
+        mean = torch.cat([out.mean, feedback_mean], dim=-1)
+        std = torch.cat([out.std, self.feedback_log_std.exp().expand_as(feedback_mean)], dim=-1)
+        return (
+            gaussian_log_prob(actions, mean, std).sum(-1),
+            gaussian_entropy(std).sum(-1),
+            self.value(obs, state),
+            mean,
+            std,
+        )

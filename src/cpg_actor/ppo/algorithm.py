@@ -1,7 +1,8 @@
 """The PPO update (Schulman et al. 2017): clipped surrogate, clipped value loss, entropy bonus.
 
 Each minibatch replays one agent step from the stored (normalised observation, recurrent
-state): for the CPG-Actor that is one CPG step from the stored CPG state (paper III-B).
+state): for the CPG-Actor that is one CPG step from the stored CPG state (paper III-B), or,
+with ``ppo.bptt_steps = k``, k CPG steps from the state stored k - 1 steps earlier.
 """
 
 from __future__ import annotations
@@ -29,6 +30,29 @@ def gaussian_kl(mu_old: Tensor, std_old: Tensor, mu: Tensor, std: Tensor) -> Ten
     ).sum(-1)
 
 
+def replay_states(agent: Agent, batch: dict[str, Tensor]) -> Tensor:
+    """The recurrent state each sample's step starts from, as the PPO loss sees it.
+
+    Without window fields (``ppo.bptt_steps = 1``, the paper): the stored state, a constant,
+    so the gradient reaches the CPG through one step only. With them (``bptt_steps = k``):
+    the state recomputed with the current parameters from the stored state ``k - 1`` steps
+    earlier (:meth:`RolloutStorage.windows`), through the stored observations and sampled
+    actions of those steps: truncated backpropagation through time over k CPG steps. Where
+    an episode began inside the window (or the window reaches before the rollout), the
+    stored state at that step is used from there on."""
+    if "window_states" not in batch:
+        return batch["states"]
+    state = batch["window_states"]
+    restart = batch["window_restart"] > 0
+    for j in range(restart.shape[1]):
+        stepped = agent.replay_state(
+            batch["window_observations"][:, j], state, batch["window_actions"][:, j]
+        )
+        mask = restart[:, j].reshape(-1, *([1] * (state.dim() - 1)))
+        state = torch.where(mask, batch["window_restart_states"][:, j], stepped)
+    return state
+
+
 def ppo_loss(agent: Agent, batch: dict[str, Tensor], config: PPOConfig) -> tuple[Tensor, Tensor]:
     """The PPO loss of one minibatch and its statistics, ``(loss, stats)``, ``stats`` being
     ``(policy_loss, value_loss, entropy, approx_kl, clipfrac, kl)`` (detached).
@@ -38,7 +62,7 @@ def ppo_loss(agent: Agent, batch: dict[str, Tensor], config: PPOConfig) -> tuple
     same inputs give the same outputs, so it can be compiled (``ppo.compile``)."""
     cfg = config
     log_prob, entropy, value, mean, std = agent.evaluate(
-        batch["observations"], batch["states"], batch["actions"]
+        batch["observations"], replay_states(agent, batch), batch["actions"]
     )
     log_ratio = log_prob - batch["log_probs"]
     ratio = log_ratio.exp()
@@ -147,7 +171,7 @@ class PPO:
         # if it did, so nothing non-finite is ever used, logged or saved
         snapshot = [p.detach().clone() for p in self._parameters()]
         for _ in range(cfg.num_epochs):
-            for batch in storage.minibatches(cfg.num_minibatches):
+            for batch in storage.minibatches(cfg.num_minibatches, cfg.bptt_steps):
                 loss, stats = self.loss(self.agent, batch, cfg)
                 if cfg.lr_schedule == "adaptive":
                     kl_value = stats[5].item()

@@ -53,9 +53,14 @@ class PPOConfig:
     # fast at small minibatches after a compile of a few seconds per run; needs a C++
     # compiler (inductor). Results differ from eager in the last bits, not run to run.
     compile: bool = False
+    # the gradient through the CPG (beyond the paper): the PPO loss replays each step's CPG
+    # state from the state stored k - 1 steps earlier, so the gradient reaches the CPG and
+    # feedback parameters through k steps (truncated BPTT). 1 is the paper's one-step
+    # gradient; agents without a recurrent state accept only 1. Cost: k actor passes.
+    bptt_steps: int = 1
 
     def validate(self) -> None:
-        positive_int = ("num_steps", "num_epochs", "num_minibatches")
+        positive_int = ("num_steps", "num_epochs", "num_minibatches", "bptt_steps")
         for name in positive_int:
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
@@ -86,5 +91,10 @@ class PPOConfig:
             )
         if self.target_kl is not None and not self.target_kl > 0:
             raise ValueError(f"ppo.target_kl must be > 0 or null, got {self.target_kl!r}")
+        if self.bptt_steps > self.num_steps:
+            raise ValueError(
+                f"ppo.bptt_steps ({self.bptt_steps}) must be <= ppo.num_steps "
+                f"({self.num_steps}): the window lies inside one rollout"
+            )
         if not 0 < self.min_learning_rate <= self.max_learning_rate:
             raise ValueError("ppo.min_learning_rate must be > 0 and <= ppo.max_learning_rate")

@@ -3,7 +3,9 @@
 The storage keeps, per control step and environment, the *normalised* observation the agent
 acted on and the agent's recurrent state *before* the step (the CPG state of section III-B;
 an empty ``(0,)`` tensor for stateless agents). The PPO update replays one step of the agent
-from exactly these two inputs, so no backpropagation through time is needed.
+from exactly these two inputs, so no backpropagation through time is needed (the paper); with
+``ppo.bptt_steps = k`` it replays the state from ``k - 1`` steps earlier instead
+(:meth:`RolloutStorage.windows`).
 """
 
 from __future__ import annotations
@@ -124,8 +126,38 @@ class RolloutStorage:
             gae_lambda,
         )
 
-    def minibatches(self, num_minibatches: int) -> Iterator[dict[str, Tensor]]:
-        """Flatten ``(T, N)`` and yield random minibatches (torch's global RNG: reproducible)."""
+    def windows(self, bptt_steps: int) -> dict[str, Tensor]:
+        """What replaying each step's recurrent state from ``k = bptt_steps`` steps earlier
+        needs, ``(T, N, ...)`` per field (see :func:`cpg_actor.ppo.algorithm.replay_states`):
+
+        * ``window_states``: the stored state at step ``max(t - k + 1, 0)``;
+        * ``window_observations``, ``window_actions``: the inputs of the k - 1 steps after it,
+          at ``s - 1`` for ``s = t - k + 2 .. t`` (``(T, N, k - 1, ...)``);
+        * ``window_restart``: 1 where the state at ``s`` is not the previous step's successor:
+          a new episode began at ``s`` (``done[s - 1]``) or ``s`` is at or before the rollout's
+          first step; ``window_restart_states``: the stored state at ``s`` (used there).
+        """
+        k, t = bptt_steps, self.num_steps
+        steps = torch.arange(t, device=self.device)
+        start = (steps - k + 1).clamp(min=0)
+        # s = t - k + 2 + j for j = 0 .. k - 2: rows (T, k - 1)
+        s = steps[:, None] - k + 2 + torch.arange(k - 1, device=self.device)[None, :]
+        done = torch.maximum(self.terminated, self.truncated)
+        previous = (s - 1).clamp(min=0)
+        restart = (s <= 0)[:, :, None] | (done[previous] > 0)  # (T, k - 1, N)
+        moved = lambda x: x.transpose(1, 2)  # (T, k-1, N, ...) -> (T, N, k-1, ...)  # noqa: E731
+        return {
+            "window_states": self.states[start],
+            "window_observations": moved(self.observations[previous]),
+            "window_actions": moved(self.actions[previous]),
+            "window_restart": restart.transpose(1, 2).float(),
+            "window_restart_states": moved(self.states[s.clamp(min=0)]),
+        }
+
+    def minibatches(self, num_minibatches: int, bptt_steps: int = 1) -> Iterator[dict[str, Tensor]]:
+        """Flatten ``(T, N)`` and yield random minibatches (torch's global RNG: reproducible).
+
+        ``bptt_steps`` > 1 adds the fields of :meth:`windows` to each minibatch."""
         batch_size = self.num_steps * self.num_envs
         if num_minibatches > batch_size:
             raise ValueError(f"{num_minibatches} minibatches for a batch of {batch_size} samples")
@@ -143,6 +175,8 @@ class RolloutStorage:
                 "returns",
             )
         }
+        if bptt_steps > 1:
+            flat.update({k: v.flatten(0, 1) for k, v in self.windows(bptt_steps).items()})
         order = torch.randperm(batch_size).to(self.device)  # the CPU generator on any device
         # each field gathered on its own: contiguous tensors (torch.compile's CPU kernels for
         # strided views of one shared table gave gradients that varied from run to run)
