@@ -139,3 +139,31 @@ def test_cho2019_agents_declare_the_cpg_wrapper_around_the_robot_env():
     assert get_agent_spec("mlp").wrapper is None
     with pytest.raises(ValueError, match="belong to the wrapped env"):
         CPGParameterVectorEnv(HopperVectorEnv(1), config=HopperConfig())
+
+
+def test_the_papers_cho2019_acts_on_frequency_and_amplitude_and_sees_the_hopper_only(tmp_path):
+    """cho2019-paper: 4 actions (nu, rho per joint; the phase bias stays the preset's pi), 8
+    observations (no CPG state), warm-started toward Ijspeert et al. 2007's limb oscillators
+    at drive 3 (0.6 Hz, 0.524 rad), which lie inside the action ranges."""
+    from cpg_actor.agents.cho2019 import ijspeert_2007_parameters
+    from cpg_actor.envs.cho2019 import PAPER_PARAMETER_RANGES, parameters_to_action
+
+    np.testing.assert_allclose(ijspeert_2007_parameters(), [0.6, 0.6, 0.524, 0.524])
+    target = parameters_to_action(ijspeert_2007_parameters(), PAPER_PARAMETER_RANGES)
+    assert np.abs(target).max() < 0.9
+    runner = Runner(config("cho2019-paper"), tmp_path / "run", tensorboard=False)
+    env = runner.env.unwrapped
+    assert env.single_action_space.shape == (4,) and env.single_observation_space.shape == (8,)
+    losses = runner.run_warm_start()
+    assert losses[-1] < 1e-3 * losses[0]
+    obs, _ = env.reset(seed=5)
+    for _ in range(30):
+        obs, _, _, _, info = env.step(np.tile(target, (4, 1)))
+    np.testing.assert_allclose(mean_action(runner, obs), np.tile(target, (4, 1)), atol=0.05)
+    np.testing.assert_allclose(info["cpg_parameters"][:, 4], np.pi)
+    np.testing.assert_allclose(info["cpg_parameters"][:, :4], [[0.6, 0.6, 0.524, 0.524]] * 4)
+    with pytest.raises(ValueError, match=r"shape \(4, 4\) \(CPG parameters nu_HFE"):
+        env.step(np.zeros((4, 5)))
+    runner.learn()  # PPO trains on it end to end
+    assert runner.global_step == runner.config.total_steps
+    runner.close()

@@ -210,3 +210,30 @@ def test_default_weights_make_hopping_beat_standing_still():
     assert hopping > 50.0
     penalties = -(terms["r2"] + terms["r3"] + terms["r4"] + terms["r5"])
     assert 0.05 * terms["r1"] < penalties < 0.5 * terms["r1"]  # penalties shape, r1 drives
+
+
+@pytest.mark.parametrize("sim", ["mujoco", "pybullet"])
+def test_apex_reward_pays_the_ballistic_apex_height_once(sim):
+    """A leg launched upward at v0 from `lift` above its standing height flies to
+    lift + v0^2 / 2g (hand calculation, frictionless rail): the apex reward pays exactly that
+    height, once, and nothing on the way up or down."""
+    from cpg_actor.envs.simulation import NOMINAL_POSE, HopperSimulation
+
+    config = HopperConfig(sim=sim, hop_reward="apex", apex_weight=100.0)
+    simulation = HopperSimulation(config, 1)
+    lift, v0 = 0.1, 1.5
+    qpos = np.array([[simulation.standing_height + lift, *NOMINAL_POSE]])
+    simulation.backend.reset_robots(np.array([0]), qpos, np.array([[v0, 0.0, 0.0]]))
+    r1 = [simulation.step(NOMINAL_POSE[None]).reward_terms["r1"][0] for _ in range(25)]
+    simulation.close()
+    paid = [r for r in r1 if r != 0.0]
+    assert len(paid) == 1
+    assert paid[0] == pytest.approx(100.0 * (lift + v0**2 / (2 * 9.81)), abs=100.0 * 0.003)
+    assert r1.index(paid[0]) in (14, 15)  # t = v0 / g = 0.153 s: the 15th or 16th step
+
+
+def test_hop_reward_is_checked():
+    with pytest.raises(ValueError, match=r"hop_reward must be one of \('hip-velocity', 'apex'\)"):
+        HopperConfig(hop_reward="height")
+    with pytest.raises(ValueError, match="apex_weight must be >= 0"):
+        HopperConfig(apex_weight=-1.0)

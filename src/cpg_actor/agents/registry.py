@@ -15,7 +15,13 @@ from typing import Any
 import numpy as np
 
 from cpg_actor.agents.base import Agent, AgentConfig
-from cpg_actor.agents.cho2019 import build_cho2019, cpg_parameter_wrapper, warm_start_cho2019
+from cpg_actor.agents.cho2019 import (
+    build_cho2019,
+    cpg_parameter_wrapper,
+    paper_cpg_parameter_wrapper,
+    warm_start_cho2019,
+    warm_start_cho2019_paper,
+)
 from cpg_actor.agents.cpg_actor import CPGActorAgent
 from cpg_actor.agents.mlp import MLPAgent
 
@@ -117,5 +123,15 @@ register_agent(
         build_cho2019,
         wrapper=cpg_parameter_wrapper,
         warm_start=warm_start_cho2019,
+    )
+)
+register_agent(
+    AgentSpec(
+        "cho2019-paper",
+        "Cho et al. 2019 as the paper has it: frequency and amplitude actions, no CPG state "
+        "observed, warm-started toward Ijspeert et al. 2007's limb parameters",
+        build_cho2019,
+        wrapper=paper_cpg_parameter_wrapper,
+        warm_start=warm_start_cho2019_paper,
     )
 )

@@ -25,6 +25,11 @@ they shape transients, not the gait, and leaving them out keeps the action small
 
 Observation, float32 ``(16,)``: the hopper's 8 observations (``OBS_NAMES``), then the CPG state
 the environment now owns: ``cos(theta)`` (2), ``sin(theta)`` (2), ``r`` (2), ``r_dot`` (2).
+
+``action_set="paper", observe_cpg=False`` is the baseline as the paper describes it: the
+actions are the first four parameters (frequency and amplitude; ranges
+:data:`PAPER_PARAMETER_RANGES`), the phase bias stays at the hopper preset's pi, and the
+observation is the hopper's 8 values only.
 ``info`` adds ``cpg_parameters`` (N, 5, physical units), ``theta_dot``, ``r_ddot``,
 ``cpg_position`` (x) and ``desired_velocity`` (x_dot), each (N, 2).
 """
@@ -56,21 +61,38 @@ CPG_OBS_NAMES = (
 )  # fmt: skip
 
 
-def action_to_parameters(action: np.ndarray) -> np.ndarray:
-    """Map actions in [-1, 1] (clipped) to physical CPG parameters, ``(..., 5)``."""
+# The paper's action set for Cho et al. (``action_set="paper"``): frequency and amplitude per
+# oscillator only (the phase bias stays at the hopper preset's pi). Its frequency range
+# reaches down to 0.2 Hz so that the Ijspeert et al. 2007 warm-start target (0.6 Hz, see
+# cpg_actor.agents.cho2019) lies well inside it.
+PAPER_PARAMETER_RANGES = np.array(
+    [[0.2, 4.0], [0.2, 4.0], [0.02, 0.6], [0.02, 0.8]], dtype=np.float64
+)
+ACTION_SETS = {
+    "extended": (PARAMETER_NAMES, PARAMETER_RANGES),
+    "paper": (PARAMETER_NAMES[:4], PAPER_PARAMETER_RANGES),
+}
+
+
+def action_to_parameters(action: np.ndarray, ranges: np.ndarray = PARAMETER_RANGES) -> np.ndarray:
+    """Map actions in [-1, 1] (clipped) to physical CPG parameters, ``(..., P)`` for the
+    ``(P, 2)`` ``ranges`` of an action set (default the extended set's)."""
     unit = (np.clip(action, -1.0, 1.0) + 1.0) / 2.0
-    low, high = PARAMETER_RANGES[:, 0], PARAMETER_RANGES[:, 1]
+    low, high = ranges[:, 0], ranges[:, 1]
     return low + unit * (high - low)
 
 
-def parameters_to_action(parameters: np.ndarray) -> np.ndarray:
+def parameters_to_action(
+    parameters: np.ndarray, ranges: np.ndarray = PARAMETER_RANGES
+) -> np.ndarray:
     """Inverse of :func:`action_to_parameters` (inside the ranges)."""
     parameters = np.asarray(parameters, dtype=np.float64)
-    low, high = PARAMETER_RANGES[:, 0], PARAMETER_RANGES[:, 1]
+    low, high = ranges[:, 0], ranges[:, 1]
     if np.any(parameters < low) or np.any(parameters > high):
+        names = PARAMETER_NAMES[: len(ranges)]
         raise ValueError(
             f"CPG parameters {parameters.tolist()} are outside the ranges "
-            f"{dict(zip(PARAMETER_NAMES, PARAMETER_RANGES.tolist(), strict=True))}"
+            f"{dict(zip(names, ranges.tolist(), strict=True))}"
         )
     return 2.0 * (parameters - low) / (high - low) - 1.0
 
@@ -87,6 +109,9 @@ class CPGParameterVectorEnv(VectorEnv):
         config: with N, the hopper's :class:`HopperConfig` (or dict); the CPG runs at its
             control rate.
         num_threads: with N, passed to :class:`HopperVectorEnv`.
+        action_set: ``"extended"`` (5 actions, the phase bias included) or ``"paper"`` (4:
+            frequency and amplitude; the phase bias fixed at the preset's).
+        observe_cpg: append the CPG state to the observation (16 values; False: 8).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
@@ -96,7 +121,14 @@ class CPGParameterVectorEnv(VectorEnv):
         env_or_num_envs: HopperVectorEnv | int,
         config: HopperConfig | dict | None = None,
         num_threads: int | None = None,
+        action_set: str = "extended",
+        observe_cpg: bool = True,
     ) -> None:
+        if action_set not in ACTION_SETS:
+            raise ValueError(f"action_set must be one of {sorted(ACTION_SETS)}, got {action_set!r}")
+        self.action_set = action_set
+        self.parameter_names, self.parameter_ranges = ACTION_SETS[action_set]
+        self.observe_cpg = observe_cpg
         if isinstance(env_or_num_envs, HopperVectorEnv):
             if config is not None or num_threads is not None:
                 raise ValueError("config and num_threads belong to the wrapped env, not here")
@@ -118,11 +150,14 @@ class CPGParameterVectorEnv(VectorEnv):
         self._convergence = values["convergence"].detach()
         self._coupling_weight = values["coupling_weight"].detach()
         self._coupling = self.cpg.parametrisation.coupling
+        self._phase_bias = float(values["phase_bias"][0, 1].detach())  # when not an action
         self.robot = self.env.robot  # the hopper it drives (the actions are CPG parameters)
         self._offset = torch.as_tensor(self.robot.nominal_pose, dtype=torch.float64)
-        bound = np.full(len(OBS_NAMES) + len(CPG_OBS_NAMES), OBS_BOUND, dtype=np.float32)
+        obs_dim = len(OBS_NAMES) + (len(CPG_OBS_NAMES) if observe_cpg else 0)
+        bound = np.full(obs_dim, OBS_BOUND, dtype=np.float32)
         self.single_observation_space = spaces.Box(-bound, bound, dtype=np.float32)
-        self.single_action_space = spaces.Box(-1.0, 1.0, shape=(5,), dtype=np.float32)
+        self.action_dim = len(self.parameter_names)
+        self.single_action_space = spaces.Box(-1.0, 1.0, shape=(self.action_dim,), dtype=np.float32)
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.metadata = {**self.metadata, "render_fps": self.env.metadata["render_fps"]}
@@ -131,6 +166,15 @@ class CPGParameterVectorEnv(VectorEnv):
     # -- CPG -----------------------------------------------------------------------------------
     def _initial_state(self, count: int) -> CPGState:
         return self.cpg.initial_state(count)
+
+    def parameters(self, actions: np.ndarray) -> np.ndarray:
+        """Actions ``(N, P)`` -> all five physical parameters ``(N, 5)`` (the phase bias
+        fixed at the preset's when it is not an action)."""
+        parameters = action_to_parameters(actions, self.parameter_ranges)
+        if parameters.shape[-1] == len(PARAMETER_NAMES):
+            return parameters
+        fixed = np.full((*parameters.shape[:-1], 1), self._phase_bias)
+        return np.concatenate([parameters, fixed], axis=-1)
 
     def oscillator_parameters(self, parameters: np.ndarray) -> OscillatorParameters:
         """Physical parameters ``(N, 5)`` -> the :class:`OscillatorParameters` of eq. 1."""
@@ -154,6 +198,8 @@ class CPGParameterVectorEnv(VectorEnv):
         return features.numpy()
 
     def _observation(self, env_obs: np.ndarray, state: CPGState) -> np.ndarray:
+        if not self.observe_cpg:
+            return np.clip(env_obs, -OBS_BOUND, OBS_BOUND).astype(np.float32)
         obs = np.concatenate([env_obs, self._cpg_observation(state)], axis=-1)
         return np.clip(obs, -OBS_BOUND, OBS_BOUND).astype(np.float32)
 
@@ -184,15 +230,17 @@ class CPGParameterVectorEnv(VectorEnv):
         try:
             array = np.asarray(actions, dtype=np.float64)
         except (TypeError, ValueError):
-            raise ValueError(f"actions must be numbers of shape ({self.num_envs}, 5)") from None
-        if array.shape != (self.num_envs, 5):
             raise ValueError(
-                f"actions must have shape ({self.num_envs}, 5) (CPG parameters "
-                f"{', '.join(PARAMETER_NAMES)} in [-1, 1]), got {array.shape}"
+                f"actions must be numbers of shape ({self.num_envs}, {self.action_dim})"
+            ) from None
+        if array.shape != (self.num_envs, self.action_dim):
+            raise ValueError(
+                f"actions must have shape ({self.num_envs}, {self.action_dim}) (CPG parameters "
+                f"{', '.join(self.parameter_names)} in [-1, 1]), got {array.shape}"
             )
         if not np.isfinite(array).all():
             raise ValueError("actions contain NaN or inf; CPG parameters must be finite")
-        parameters = action_to_parameters(array)
+        parameters = self.parameters(array)
         with torch.no_grad():
             output, next_state = hopf_step(
                 self.oscillator_parameters(parameters), self.state, self._coupling,

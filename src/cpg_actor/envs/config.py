@@ -12,6 +12,7 @@ from typing import Any
 
 SIMULATORS = ("mujoco", "pybullet")
 ACTUATOR_LAWS = ("dc-motor", "coast")  # see cpg_actor.envs.actuator
+HOP_REWARDS = ("hip-velocity", "apex")  # see cpg_actor.envs.reward
 
 
 @dataclass
@@ -39,6 +40,11 @@ class HopperConfig:
     c3: float = -1e-3  # r3 = c3 * sum_j v_m^2: joint velocity, (rad/s)^2
     c4: float = -1e-4  # r4 = c4 * sum_j tau_d^2: joint torque, (N m)^2
     c5: float = -0.1  # r5 = c5 * |v_foot_xy|: foot slip, m/s
+    # r1 (beyond the paper): "hip-velocity" is eq. 4's (c1 max(v_hip, 0))^2 at every step;
+    # "apex" pays apex_weight x (hip height - standing hip height) once per flight, at its
+    # apex: the hop height itself, nothing for pushing up in stance
+    hop_reward: str = "hip-velocity"
+    apex_weight: float = 200.0  # reward per m of apex height ("apex" only)
     # -- reset --------------------------------------------------------------------------------
     reset_noise: float = 0.1  # rad, uniform noise on each joint around the nominal pose
     reset_clearance: float = 0.0  # m, foot height above the ground at reset
@@ -110,6 +116,10 @@ class HopperConfig:
                 f"saturation_torque ({self.saturation_torque}) must be >= torque_limit "
                 f"({self.torque_limit})"
             )
+        if self.hop_reward not in HOP_REWARDS:
+            raise ValueError(f"hop_reward must be one of {HOP_REWARDS}, got {self.hop_reward!r}")
+        if not self.apex_weight >= 0:
+            raise ValueError(f"apex_weight must be >= 0, got {self.apex_weight!r}")
         if self.c1 < 0:
             raise ValueError(f"c1 must be >= 0 (paper eq. 4: r1 rewards hopping), got {self.c1}")
         for name in ("c2", "c3", "c4", "c5"):

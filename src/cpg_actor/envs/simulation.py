@@ -12,7 +12,7 @@ import numpy as np
 
 from cpg_actor.envs.backends import make_backend
 from cpg_actor.envs.config import HopperConfig
-from cpg_actor.envs.reward import reward_terms, total_reward
+from cpg_actor.envs.reward import apex_reward, reward_terms, total_reward
 from cpg_actor.envs.robot import description as robot
 from cpg_actor.envs.robot import kinematics
 
@@ -60,6 +60,7 @@ class HopperSimulation:
         self.backend = make_backend(config, self.num_robots, num_threads)
         self.weights = config.reward_weights
         self.desired = np.tile(NOMINAL_POSE, (self.num_robots, 1))
+        self.standing_height = float(kinematics.standing_hip_height(NOMINAL_POSE))
         self.elapsed_steps = np.zeros(self.num_robots, dtype=np.int64)
 
     # -- reset -------------------------------------------------------------------------------
@@ -97,6 +98,8 @@ class HopperSimulation:
         """Track ``desired`` (K, 2) for one control step (``decimation`` physics substeps)."""
         backend = self.backend
         np.copyto(self.desired, desired)
+        apex = self.config.hop_reward == "apex"
+        hip_velocity_before = backend.qvel[:, 0].copy() if apex else None
         joint_torque = backend.track(self.desired, self.config.decimation)
         self.elapsed_steps += 1
 
@@ -108,6 +111,11 @@ class HopperSimulation:
                 self.weights, qvel[:, 0], self.desired, qpos[:, 1:3], qvel[:, 1:3],
                 joint_torque, foot_velocity_xy,
             )  # fmt: skip
+            if apex:
+                terms["r1"] = apex_reward(
+                    self.config.apex_weight, hip_velocity_before, qvel[:, 0], qpos[:, 0],
+                    self.standing_height, self.foot_height(),
+                )  # fmt: skip
         terminated = self._blown_up()
         result = StepResult(
             obs=self.observation(),

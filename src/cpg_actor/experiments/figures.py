@@ -88,7 +88,7 @@ def ep_reward(results: Results, directory: Path) -> Output:
 
 
 # -- fig:cpg_output, fig:cpg_theta_dot, fig:cpg_r_dot_dot ------------------------------------------
-CPG_VARIANTS = ("cho2019", "cho2019-warm", "cpg-actor-open-loop", "cpg-actor")
+CPG_VARIANTS = ("cho2019", "cho2019-warm", "cho2019-paper", "cpg-actor-open-loop", "cpg-actor")
 
 
 def _final_traces(

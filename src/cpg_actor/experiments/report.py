@@ -21,7 +21,7 @@ from cpg_actor.machine import cpu_model, git_commit
 
 PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
 PAPER_STAGE_STEPS = (1_000_000, 20_000_000, 60_000_000)
-CHO_VARIANTS = ("cho2019-warm", "cho2019")
+CHO_VARIANTS = ("cho2019-warm", "cho2019", "cho2019-paper")
 EARLY_ROWS = 3  # logged evaluations averaged for a hop height "at" a step
 
 

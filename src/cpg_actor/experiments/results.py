@@ -18,7 +18,12 @@ LABELS = {
     "cpg-actor-unbounded": "CPG-Actor (unbounded feedback)",
     "cho2019-warm": "Cho et al. (warm)",
     "cho2019": "Cho et al.",
+    "cho2019-paper": "Cho et al. (paper's, warm)",
     "mlp": "MLP actor",
+    "cpg-actor-apex": "CPG-Actor (apex reward)",
+    "mlp-apex": "MLP actor (apex reward)",
+    "cpg-actor-bptt32": "CPG-Actor (32-step gradient)",
+    "cpg-actor-feedback-noise": "CPG-Actor (feedback noise)",
 }
 # the paper's colours: CPG-Actor green, open loop orange, Cho et al. warm red, cold blue
 COLORS = {
@@ -27,7 +32,12 @@ COLORS = {
     "cpg-actor-unbounded": "tab:olive",
     "cho2019-warm": "tab:red",
     "cho2019": "tab:blue",
+    "cho2019-paper": "tab:pink",
     "mlp": "tab:purple",
+    "cpg-actor-apex": "darkgreen",
+    "mlp-apex": "indigo",
+    "cpg-actor-bptt32": "tab:cyan",
+    "cpg-actor-feedback-noise": "tab:brown",
 }
 
 
