@@ -163,3 +163,57 @@ def test_results_that_agree_with_the_paper_are_supported(tmp_path):
     assert summary["variants"]["mlp"]["term_r1"][0] == pytest.approx(1.25 * mlp_final)
     assert summary["variants"]["mlp"]["training_return"][0] == pytest.approx(mlp_final)
     assert "| MLP actor | " in (out / "report.md").read_text().split("reward terms")[1]
+
+
+def test_comparisons_beyond_the_paper_name_the_better_variant_only_when_resolved(tmp_path):
+    """bptt32 clearly above cpg-actor in return (hop heights equal: not resolved); mlp-apex
+    below cpg-actor-apex in hop height; pairs that did not run are left out."""
+    out = tmp_path / "out"
+    n = 12
+    for seed in range(4):
+        jitter = 3.0 * seed
+        same_hop = np.full(n, 0.25 + 0.01 * (seed % 2))
+        _curve_run(out, "cpg-actor", seed, np.full(n, 400.0 + jitter), same_hop)
+        _curve_run(out, "cpg-actor-bptt32", seed, np.full(n, 600.0 + jitter), same_hop[::-1])
+        _curve_run(out, "mlp-apex", seed, np.full(n, 500.0 + jitter), np.full(n, 0.2))
+        shuffled = 3.0 * ((seed + 2) % 4)  # the same returns as mlp-apex, other seeds
+        _curve_run(out, "cpg-actor-apex", seed, np.full(n, 500.0 + shuffled), np.full(n, 0.3))
+    write_report(out)
+    rows = {
+        (r["first"], r["second"]): r
+        for r in json.loads((out / "summary.json").read_text())["comparisons"]
+    }
+    assert set(rows) == {("cpg-actor-bptt32", "cpg-actor"), ("mlp-apex", "cpg-actor-apex")}
+    bptt = rows[("cpg-actor-bptt32", "cpg-actor")]
+    assert bptt["return_better"] == "cpg-actor-bptt32" and bptt["return"][0] == pytest.approx(200)
+    assert bptt["hop_better"] == "not resolved"
+    apex = rows[("mlp-apex", "cpg-actor-apex")]
+    assert apex["hop_better"] == "cpg-actor-apex" and apex["return_better"] == "not resolved"
+    assert "## Comparisons beyond the paper" in (out / "report.md").read_text()
+
+
+def test_open_loop_floor_is_the_best_grid_return_and_the_report_places_variants_against_it(
+    tmp_path,
+):
+    from cpg_actor.envs import HopperConfig
+    from cpg_actor.envs.cho2019_reference import evaluate_parameters, grid_candidates
+    from cpg_actor.experiments.floor import FLOOR_FILE, open_loop_floor
+
+    grid = {"frequency": (1.5, 3.0), "amplitude_hip": (0.3,), "amplitude_knee": (0.6,),
+            "phase_bias": (0.0, np.pi)}  # fmt: skip
+    config = HopperConfig(episode_steps=60)
+    floor = open_loop_floor(config, grid)
+    returns = [c.episode_return for c in evaluate_parameters(grid_candidates(grid), config)]
+    assert floor["candidates"] == 4
+    assert floor["best_return"]["episode_return"] == pytest.approx(max(returns))
+
+    out = tmp_path / "out"
+    for seed in range(3):
+        _curve_run(out, "cpg-actor", seed, np.full(10, 600.0 + seed), np.full(10, 0.3))
+        _curve_run(out, "mlp", seed, np.full(10, 100.0 + seed), np.full(10, 0.3))
+    floor["best_return"]["episode_return"] = 400.0
+    (out / FLOOR_FILE).write_text(json.dumps(floor))
+    write_report(out)
+    text = (out / "report.md").read_text()
+    assert "returns **400**" in text
+    assert "above it `cpg-actor` (+201); below it `mlp` (-299)" in text

@@ -64,6 +64,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import parse_steps
     from cpg_actor.experiments import execute, plan
+    from cpg_actor.experiments.floor import ensure_floor
     from cpg_actor.experiments.report import write_report
 
     settings = plan.ReproduceSettings(
@@ -122,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
         if result.get("error"):
             line += f": {result['error']}"
         print(line)
+    print("reproduce: the open-loop grid floor (960 constant CPG parameter sets)", flush=True)
+    ensure_floor(out, settings)
     report = write_report(out, results)
     print(f"report {report}; figures in {out / 'figures'}")
     failed = [r for r in results if r["status"] == "failed"]

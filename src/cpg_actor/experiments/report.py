@@ -15,6 +15,7 @@ import numpy as np
 from cpg_actor.envs.reward import REWARD_TERMS
 from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.figures import make_figures, steps_per_iteration
+from cpg_actor.experiments.floor import FLOOR_FILE, load_floor
 from cpg_actor.experiments.plan import STAGE_LABELS, load_settings_file
 from cpg_actor.experiments.results import Results, label
 from cpg_actor.machine import cpu_model, git_commit
@@ -248,7 +249,110 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         "comparison_step": comparison_step,
         "variants": variants,
         "claims": claims,
+        "comparisons": _comparisons(seeds),
     }
+
+
+# Questions beyond the paper's claims, each a pair (first, second) of variants run together:
+# is the first better than the second?
+COMPARISONS = (
+    ("cpg-actor-bptt32", "cpg-actor", "32-step gradient vs the paper's one step"),
+    ("cpg-actor-feedback-noise", "cpg-actor", "feedback noise vs the paper's gradient"),
+    ("cpg-actor-unbounded", "cpg-actor", "the paper's unbounded feedback vs bounded"),
+    ("mlp", "cpg-actor", "MLP vs CPG-Actor, eq. 4 reward"),
+    ("mlp-apex", "cpg-actor-apex", "MLP vs CPG-Actor, apex (hop-height) reward"),
+    ("cpg-actor", "cho2019-paper", "CPG-Actor vs Cho et al. as the paper has it"),
+    ("cho2019-warm", "cho2019-paper", "the stronger Cho et al. vs the paper's"),
+)
+
+
+def _comparisons(seeds: dict[str, dict[str, list[float]]]) -> list[dict[str, Any]]:
+    """For each pair of :data:`COMPARISONS` that ran: the differences of the final
+    (logged, deterministic) return and hop height, with bootstrap CIs over seeds, and which
+    one is better where a CI excludes 0."""
+    rows = []
+    for first, second, question in COMPARISONS:
+        if first not in seeds or second not in seeds:
+            continue
+        row: dict[str, Any] = {"first": first, "second": second, "question": question}
+        for key, name in (("final_return", "return"), ("final_hop_height_logged", "hop")):
+            interval = m.bootstrap_difference(seeds[first][key], seeds[second][key])
+            row[name] = (
+                None if interval is None else [interval.estimate, interval.low, interval.high]
+            )
+            if interval is None:
+                row[f"{name}_better"] = "-"
+            elif interval.low > 0:
+                row[f"{name}_better"] = first
+            elif interval.high < 0:
+                row[f"{name}_better"] = second
+            else:
+                row[f"{name}_better"] = "not resolved"
+        rows.append(row)
+    return rows
+
+
+def seeds_of(summary: dict[str, Any]) -> dict[str, dict[str, list[float]]]:
+    return {variant: row["per_seed"] for variant, row in summary["variants"].items()}
+
+
+def _floor_lines(
+    floor: dict[str, Any] | None, seeds: dict[str, dict[str, list[float]]]
+) -> list[str]:
+    """The open-loop grid floor and which trained variants clear it (CI above it)."""
+    if floor is None:
+        return []
+    best = floor["best_return"]
+    value = best["episode_return"]
+    described = ", ".join(f"{k} {v:.3g}" for k, v in best["parameters"].items())
+    above, below, unresolved = [], [], []
+    for variant, per_seed in seeds.items():
+        interval = m.bootstrap_difference(per_seed["final_return"], [value])
+        if interval is None:
+            continue
+        target = above if interval.low > 0 else below if interval.high < 0 else unresolved
+        target.append(f"`{variant}` ({interval.estimate:+.0f})")
+    return [
+        f"**Open-loop grid floor** (no learning; `{FLOOR_FILE}`): the best of "
+        f"{floor['candidates']} constant CPG parameter sets ({described}; a, w at the preset's; "
+        f"one episode, no reset noise, eq. 4's reward with this reproduction's env settings) "
+        f"returns **{value:.0f}** (hop height p90 {best['hop_height_p90']:.2f} m; the highest "
+        f"hopping set: {floor['best_hop']['hop_height_p90']:.2f} m, return "
+        f"{floor['best_hop']['episode_return']:.0f}). Final return minus the floor, CI over "
+        f"seeds: above it {', '.join(above) or 'none'}; below it {', '.join(below) or 'none'}; "
+        f"not resolved {', '.join(unresolved) or 'none'}.",
+        "",
+    ]
+
+
+def _comparison_lines(comparisons: list[dict[str, Any]]) -> list[str]:
+    if not comparisons:
+        return []
+
+    def cell(values: list[float] | None, digits: int) -> str:
+        if values is None:
+            return "-"
+        value, low, high = values
+        return f"{value:+.{digits}f} [{low:+.{digits}f}, {high:+.{digits}f}]"
+
+    lines = [
+        "## Comparisons beyond the paper",
+        "",
+        "First minus second variant: final return (the last logged deterministic evaluations) "
+        "and hop height (the last 3 logged evaluations), mean difference over seeds with its "
+        "bootstrap 95% CI; *better* names the variant a CI excluding 0 favours.",
+        "",
+        "| question | first - second | return difference | better (return) | "
+        "hop height difference (m) | better (hop) |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for row in comparisons:
+        lines.append(
+            f"| {row['question']} | `{row['first']}` - `{row['second']}` | "
+            f"{cell(row['return'], 1)} | {row['return_better']} | {cell(row['hop'], 3)} | "
+            f"{row['hop_better']} |"
+        )
+    return lines + [""]
 
 
 def environment() -> dict[str, Any]:
@@ -380,7 +484,7 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
             f"{_pm(row['hop_height'])} | {_pm(row['smoothness'])} | "
             f"{_pct(row['velocity_share'])} | {_pm(row['velocity_p99'])} |"
         )
-    lines += [""]
+    lines += [""] + _floor_lines(load_floor(out), seeds_of(summary))
     if "cpg-actor" in summary["variants"] and "cho2019-warm" in summary["variants"]:
         ratio = m.bootstrap_ratio(
             summary["variants"]["cpg-actor"]["per_seed"]["return_at_comparison"],
@@ -436,8 +540,8 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
                 f"| {label(variant)} | {name} | {steps} | {_pm(stage['eval_return'])} | "
                 f"{_pm(stage['hop_height'])} |"
             )
+    lines += [""] + _comparison_lines(summary["comparisons"])
     lines += [
-        "",
         "## The paper's claims",
         "",
         f"Verdicts computed from the numbers above, at a budget of {total_steps:,} steps per "

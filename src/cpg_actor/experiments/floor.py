@@ -1,0 +1,69 @@
+"""The open-loop grid floor: what a grid search over constant CPG parameters reaches with no
+learning at all, for a reproduction's environment.
+
+The open-loop CPG-Actor learns constant CPG parameters; a grid over the same parameters
+(:data:`cpg_actor.envs.cho2019_reference.DEFAULT_GRID`: 960 sets of frequency, hip and knee
+amplitude and hip-knee phase bias, a and w at the preset's values) run for one episode each
+with no reset noise gives a floor any CPG agent's trained return should clear. The report
+shows it next to the trained variants (``OUT/open_loop_floor.json``).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+FLOOR_FILE = "open_loop_floor.json"
+
+
+def open_loop_floor(env_config: Any, grid: dict | None = None) -> dict[str, Any]:
+    """The best grid candidate by episode return (and, for reference, by hop height);
+    ``grid`` entries replace those of the default grid."""
+    from cpg_actor.envs.cho2019 import PARAMETER_NAMES
+    from cpg_actor.envs.cho2019_reference import evaluate_parameters, grid_candidates
+
+    candidates = evaluate_parameters(grid_candidates(grid), env_config)
+    by_return = max(candidates, key=lambda c: c.episode_return)
+    by_hop = max(candidates, key=lambda c: c.hop_height)
+
+    def row(candidate) -> dict[str, Any]:
+        return {
+            "parameters": dict(zip(PARAMETER_NAMES, candidate.parameters, strict=True)),
+            "episode_return": candidate.episode_return,
+            "hop_height_p90": candidate.hop_height,
+        }
+
+    return {"candidates": len(candidates), "best_return": row(by_return), "best_hop": row(by_hop)}
+
+
+def write_floor(out: Path, env_config: Any) -> dict[str, Any]:
+    """Compute the floor for ``env_config`` and save it in ``out`` (atomically)."""
+    from cpg_actor.checkpoint import atomic_write_text
+
+    floor = open_loop_floor(env_config)
+    floor["env"] = env_config.to_dict()
+    atomic_write_text(json.dumps(floor, indent=1) + "\n", Path(out) / FLOOR_FILE)
+    return floor
+
+
+def ensure_floor(out: Path, settings: Any) -> dict[str, Any]:
+    """The floor of a reproduction (:class:`~cpg_actor.experiments.plan.ReproduceSettings`),
+    computed once for its environment (the config of its ``cpg-actor-open-loop`` runs: the
+    reproduction's ``--sim`` and ``--set env.*``, eq. 4's reward) and then reused."""
+    from cpg_actor.experiments.plan import resolve_config
+
+    floor = load_floor(out)
+    if floor is None:
+        floor = write_floor(out, resolve_config(settings, "cpg-actor-open-loop").env)
+    return floor
+
+
+def load_floor(out: Path) -> dict[str, Any] | None:
+    path = Path(out) / FLOOR_FILE
+    if not path.is_file():
+        return None
+    try:
+        return json.loads(path.read_text())
+    except (json.JSONDecodeError, OSError):
+        return None
