@@ -48,3 +48,20 @@ def test_sweep_trains_each_setting_and_summarises_the_evaluations(tmp_path, caps
     assert main(argv) == 0
     assert json.loads((out / "sensitivity.json").read_text()) == summary
     assert main(["sweep", "--out", str(tmp_path / "none"), "--summary-only"]) == 2
+
+
+def test_first_seed_tunes_on_seeds_that_are_never_reported(tmp_path):
+    out = tmp_path / "tuning"
+    argv = [
+        "sweep", "--out", str(out), "--variants", "mlp", "--seeds", "1", "--first-seed", "100",
+        "--total-steps", "32", "--workers", "1", "--no-progress", "--set", "num_envs=2",
+        "--set", "ppo.num_steps=16", "--set", "ppo.num_minibatches=2", "--set",
+        "ppo.num_epochs=1", "--set", "env.episode_steps=10", "--set", "eval_interval=1",
+    ]  # fmt: skip
+    assert main(argv) == 0
+    assert sorted(p.name for p in (out / "default" / "runs" / "mlp").iterdir()) == ["seed100"]
+    config = (out / "default" / "runs" / "mlp" / "seed100" / "config.yaml").read_text()
+    assert "seed: 100" in config
+    summary = json.loads((out / "sensitivity.json").read_text())
+    assert len(summary["settings"]["default"]["variants"]["mlp"]["return"]) == 1
+    assert main([*argv[:8], "-1", *argv[9:]]) == 2  # --first-seed -1

@@ -21,6 +21,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--seeds", type=int, default=5, help="seeds 0..N-1 per variant (default 5)")
     parser.add_argument(
+        "--first-seed", type=int, default=0, help="seeds FIRST..FIRST+N-1 instead (default 0)"
+    )
+    parser.add_argument(
         "--variants",
         default=DEFAULT_VARIANTS,
         help=f"comma-separated agent names (default {DEFAULT_VARIANTS})",
@@ -75,6 +78,7 @@ def run(args: argparse.Namespace) -> int:
         sim=args.sim,
         overrides=list(args.overrides),
         eval_episodes=args.eval_episodes,
+        first_seed=args.first_seed,
     )
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     if workers < 1:
@@ -140,6 +144,8 @@ def run(args: argparse.Namespace) -> int:
 def _as_argv(args: argparse.Namespace) -> list[str]:
     """The command line of ``args`` (when ``run`` is called without ``sys.argv``)."""
     argv = ["--total-steps", str(args.total_steps), "--seeds", str(args.seeds)]
+    if getattr(args, "first_seed", 0):
+        argv += ["--first-seed", str(args.first_seed)]
     argv += ["--variants", args.variants, "--out", str(args.out)]
     if args.num_envs is not None:
         argv += ["--num-envs", str(args.num_envs)]

@@ -20,6 +20,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--variants", default="mlp,cpg-actor", help="agents (default mlp,cpg-actor)"
     )
     parser.add_argument("--seeds", type=int, default=3, help="seeds 0..N-1 (default 3)")
+    parser.add_argument(
+        "--first-seed",
+        type=int,
+        default=0,
+        help="seeds FIRST..FIRST+N-1 instead (tuning on seeds that are never reported)",
+    )
     parser.add_argument("--total-steps", default="300k", help="steps per run (default 300k)")
     parser.add_argument(
         "--vary",
@@ -59,7 +65,7 @@ def run(args: argparse.Namespace) -> int:
     plans = []
     for setting in settings:  # validate every setting before anything is written
         reproduction = sweep.reproduce_settings(
-            setting, variants, args.seeds, total_steps, args.overrides
+            setting, variants, args.seeds, total_steps, args.overrides, args.first_seed
         )
         plans.append(
             (setting, reproduction, plan.build_tasks(reproduction, out / setting.label, workers))
@@ -91,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
         if results is None:
             return 130
     failed = [r for r in results if r["status"] == "failed"]
-    summary = sweep.summarize(out, settings, variants, args.seeds)
+    summary = sweep.summarize(out, settings, variants, args.seeds, args.first_seed)
     for path in sweep.write_summary(out, summary, command, args.seeds):
         print(f"wrote {path}")
     if failed:

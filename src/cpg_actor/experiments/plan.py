@@ -73,10 +73,19 @@ class ReproduceSettings:
     overrides: list[str] = field(default_factory=list)
     eval_episodes: int = 5
     stage_fractions: list[float] = field(default_factory=lambda: list(STAGE_FRACTIONS))
+    # seeds first_seed .. first_seed + seeds - 1: tuning on seeds that are never reported
+    first_seed: int = 0
+
+    @property
+    def seed_range(self) -> range:
+        return range(self.first_seed, self.first_seed + self.seeds)
 
     def identity(self) -> dict[str, Any]:
         data = asdict(self)
-        return {key: data[key] for key in IDENTITY_KEYS}
+        identity = {key: data[key] for key in IDENTITY_KEYS}
+        if self.first_seed:  # absent when 0: directories made before the option still match
+            identity["first_seed"] = self.first_seed
+        return identity
 
 
 @dataclass(frozen=True)
@@ -151,6 +160,8 @@ def checkpoint_interval(config) -> int:
 def validate(settings: ReproduceSettings) -> None:
     if not isinstance(settings.seeds, int) or settings.seeds < 1:
         raise ValueError(f"--seeds must be >= 1, got {settings.seeds}")
+    if not isinstance(settings.first_seed, int) or settings.first_seed < 0:
+        raise ValueError(f"--first-seed must be >= 0, got {settings.first_seed}")
     if settings.total_steps <= 0:
         raise ValueError(f"--total-steps must be > 0, got {settings.total_steps}")
     if settings.num_envs is not None and settings.num_envs < 1:
@@ -182,7 +193,7 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
             extra += ["--set", f"env_threads={threads}"]
         if "update_threads" not in keys:
             extra += ["--set", f"update_threads={threads}"]
-        for seed in range(settings.seeds):
+        for seed in settings.seed_range:
             run_dir = out / "runs" / variant / f"seed{seed}"
             agent, variant_overrides = variant_agent(variant)
             args = ["--agent", agent, "--seed", str(seed)]

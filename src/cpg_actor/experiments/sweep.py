@@ -65,7 +65,12 @@ def build_settings(varies: list[str]) -> list[Setting]:
 
 
 def reproduce_settings(
-    setting: Setting, variants: list[str], seeds: int, total_steps: int, overrides: list[str]
+    setting: Setting,
+    variants: list[str],
+    seeds: int,
+    total_steps: int,
+    overrides: list[str],
+    first_seed: int = 0,
 ) -> plan.ReproduceSettings:
     return plan.ReproduceSettings(
         variants=variants,
@@ -73,6 +78,7 @@ def reproduce_settings(
         total_steps=total_steps,
         overrides=[*overrides, *setting.overrides],
         stage_fractions=[1.0],
+        first_seed=first_seed,
     )
 
 
@@ -95,7 +101,7 @@ def read_evaluations(run_dir: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray,
 
 
 def summarize(
-    out: Path, settings: list[Setting], variants: list[str], seeds: int
+    out: Path, settings: list[Setting], variants: list[str], seeds: int, first_seed: int = 0
 ) -> dict[str, Any]:
     """Per setting and variant: each seed's score (mean of the last evaluations) and curve."""
     summary: dict[str, Any] = {"final_evals": FINAL_EVALS, "settings": {}}
@@ -103,7 +109,7 @@ def summarize(
         entry: dict[str, Any] = {"overrides": list(setting.overrides), "variants": {}}
         for variant in variants:
             returns, hops, curves = [], [], []
-            for seed in range(seeds):
+            for seed in range(first_seed, first_seed + seeds):
                 steps, ret, hop, wall = read_evaluations(
                     out / setting.label / "runs" / variant / f"seed{seed}"
                 )
