@@ -13,7 +13,7 @@ from cpg_actor.experiments.report import write_report
 from cpg_actor.experiments.results import Results
 
 
-def _fake_run(out, variant, seed, bang_bang=False, steps=500):
+def _fake_run(out, variant, seed, bang_bang=False, steps=500, responsive=False):
     run = out / "runs" / variant / f"seed{seed}"
     (run / "eval" / "stage0").mkdir(parents=True)
     rows = [
@@ -33,6 +33,11 @@ def _fake_run(out, variant, seed, bang_bang=False, steps=500):
         "foot_height": 0.02 * np.abs(np.sin(4 * np.pi * t))[:, None],
         "episode_return": np.array([10.0]),
         "hop_height": np.array([0.05]),
+        # CPG signals (T, E, N): flat, or moving with the environment (feedback)
+        "theta_dot": np.full((200, 1, 2), 4 * np.pi)
+        + (3.0 * np.sin(2 * np.pi * 1.3 * t)[:, None, None] if responsive else 0.0),
+        "r_ddot": (20.0 * np.sin(2 * np.pi * 2.1 * t)[:, None, None] if responsive else 0.0)
+        + np.zeros((200, 1, 2)),
     }
     np.savez(run / "eval" / "stage0" / "traces.npz", **traces)
     stages = [{"stage": 0, "fraction": 1.0, "iteration": 5, "checkpoint": "x",
@@ -58,7 +63,7 @@ def test_missing_variants_are_skipped_with_notes(tmp_path):
 
     report = write_report(out).read_text()
     assert "| MLP actor (`mlp`) | 2 (2) |" in report
-    assert report.count("not tested in this run") == 6
+    assert report.count("not tested in this run") == 7
     assert "cpg_actor_training_over_time: cpg-actor was not run" in report
 
 
@@ -69,11 +74,11 @@ def test_report_verdicts_from_constructed_traces(tmp_path):
     write_report(out)
     summary = json.loads((out / "summary.json").read_text())
     verdicts = {c["claim"]: c["verdict"] for c in summary["claims"]}
-    assert len(verdicts) == 6
+    assert len(verdicts) == 7
     smooth = [v for claim, v in verdicts.items() if "bang-bang" in claim]
     assert smooth == ["supported"]  # a sine vs a square wave
     cho = [v for claim, v in verdicts.items() if "Cho" in claim]
-    assert cho == ["not tested in this run"] * 2
+    assert cho == ["not tested in this run"] * 3
     assert summary["variants"]["cpg-actor"]["seeds"] == 1
     assert summary["variants"]["mlp"]["smoothness"][0] > 0
 
@@ -95,10 +100,12 @@ def test_progress_lines_read_metrics(tmp_path):
     assert "mlp/seed0" in console.export_text()
 
 
-def _curve_run(out, variant, seed, returns, hops, total=2_000_000, p99=14.0, square=False):
+def _curve_run(
+    out, variant, seed, returns, hops, total=2_000_000, p99=14.0, square=False, responsive=False
+):
     """A run whose logged evaluations follow ``returns`` and ``hops`` (evenly spaced to
     ``total`` steps) and whose final traces have desired velocities of p99 about ``p99``."""
-    run = _fake_run(out, variant, seed, bang_bang=square)
+    run = _fake_run(out, variant, seed, bang_bang=square, responsive=responsive)
     steps = np.linspace(total / len(returns), total, len(returns))
     rows = [
         {"iteration": i + 1, "global_step": float(step), "eval/return": float(r),
@@ -136,10 +143,13 @@ def test_every_verdict_can_come_out_negative(tmp_path):
         flat = np.full(n, 0.2 + 0.01 * seed)
         _curve_run(out, "cpg-actor", seed, np.full(n, 300.0 + jitter), flat, p99=45, square=True)
         _curve_run(out, "cpg-actor-open-loop", seed, np.full(n, 100.0 + jitter), np.full(n, 0.1))
-        _curve_run(out, "cho2019-warm", seed, np.full(n, 400.0 + jitter), np.full(n, 0.3))
+        _curve_run(
+            out, "cho2019-warm", seed, np.full(n, 400.0 + jitter), np.full(n, 0.3),
+            responsive=True,
+        )  # fmt: skip
         _curve_run(out, "mlp", seed, np.full(n, 500.0 + jitter), np.full(n, 0.3), square=True)
     verdicts = _claims(out)
-    assert len(verdicts) == 6
+    assert len(verdicts) == 7
     assert set(verdicts.values()) == {"not supported"}, verdicts
 
 
@@ -151,7 +161,10 @@ def test_results_that_agree_with_the_paper_are_supported(tmp_path):
     rising = np.linspace(0.2, 1.0, n)
     for seed in range(3):
         jitter = 5.0 * seed
-        _curve_run(out, "cpg-actor", seed, 3000.0 * rising + jitter, 0.15 + 0.25 * rising**2)
+        _curve_run(
+            out, "cpg-actor", seed, 3000.0 * rising + jitter, 0.15 + 0.25 * rising**2,
+            responsive=True,
+        )  # fmt: skip
         _curve_run(out, "cpg-actor-open-loop", seed, 800.0 * rising + jitter, np.full(n, 0.1))
         _curve_run(out, "cho2019-warm", seed, 500.0 * rising + jitter, np.full(n, 0.1))
         _curve_run(out, "mlp", seed, 600.0 * rising + jitter, np.full(n, 0.2), square=True)

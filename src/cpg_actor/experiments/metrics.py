@@ -57,6 +57,17 @@ def smoothness(desired_position: np.ndarray) -> float:
     return float(np.mean(second**2)) if second.size else float("nan")
 
 
+def variability(signal: np.ndarray, skip: int = 50) -> float:
+    """How much a CPG signal (theta_dot, r_ddot; ``(T, E, N)``) moves within an episode: its
+    standard deviation over time after the first ``skip`` steps (the start-up transient),
+    mean over episodes and oscillators. 0 for a signal that stays flat."""
+    x = np.asarray(signal, dtype=float)
+    if x.shape[0] <= skip + 1:
+        return float("nan")
+    std = np.nanstd(x[skip:], axis=0)
+    return float(np.nanmean(std)) if np.isfinite(std).any() else float("nan")
+
+
 def velocity_share(desired_velocity: np.ndarray, limit: float = VELOCITY_LIMIT) -> float:
     """Share of finite desired velocities with ``|v| <= limit``."""
     v = np.asarray(desired_velocity, dtype=float)
@@ -237,6 +248,31 @@ def verdict_best_during_training(differences: dict[str, Interval | None], ran: b
         SUPPORTED if ok else NOT_SUPPORTED,
         "mean eval return over the run, difference " + "; ".join(parts)
         + " (supported if every CI is above 0)",
+    )  # fmt: skip
+
+
+def verdict_cho_flat(
+    cpg: dict[str, float], cho: dict[str, dict[str, float]], factor: float = 3.0
+) -> Verdict:
+    """ "Cho et al.'s theta_dot and r_ddot stay almost flat (not responsive to the
+    environment) where the CPG-Actor's are reshaped by feedback" (paper section V): the
+    CPG-Actor's :func:`variability` of both signals is at least ``factor`` times every Cho
+    variant's. ``cpg`` and each ``cho[variant]`` map ``theta_dot`` and ``r_ddot`` to it."""
+    names = ("theta_dot", "r_ddot")
+    runs = {k: v for k, v in cho.items() if all(np.isfinite(v[n]) for n in names)}
+    if not all(np.isfinite(cpg[n]) for n in names) or not runs:
+        return NOT_TESTED, "needs cpg-actor and a Cho et al. variant with CPG traces"
+    ok = all(cpg[n] >= factor * values[n] for values in runs.values() for n in names)
+    parts = [
+        f"{variant}: theta_dot {values['theta_dot']:.3g} rad/s, r_ddot "
+        f"{values['r_ddot']:.3g} rad/s^2"
+        for variant, values in runs.items()
+    ]
+    return (
+        SUPPORTED if ok else NOT_SUPPORTED,
+        f"std over an episode: CPG-Actor theta_dot {cpg['theta_dot']:.3g} rad/s, r_ddot "
+        f"{cpg['r_ddot']:.3g} rad/s^2; " + "; ".join(parts)
+        + f" (supported if the CPG-Actor's are >= {factor:g}x every Cho variant's)",
     )  # fmt: skip
 
 

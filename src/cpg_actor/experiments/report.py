@@ -42,6 +42,8 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
             "final_hop_height_logged",
             "mean_eval_return",
             "training_return",
+            "theta_dot_variability",
+            "r_ddot_variability",
             *(f"term_{name}" for name in REWARD_TERMS),
         )
     }
@@ -69,6 +71,8 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
                 "smoothness",
                 "velocity_share",
                 "velocity_p99",
+                "theta_dot_variability",
+                "r_ddot_variability",
             ):
                 out[key].append(nan)
         else:
@@ -82,6 +86,11 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
             per_joint = velocity is not None and velocity.ndim == 3 and velocity.shape[-1] == 2
             out["velocity_share"].append(m.velocity_share(velocity) if per_joint else nan)
             out["velocity_p99"].append(m.velocity_p99(velocity) if per_joint else nan)
+            for name in ("theta_dot", "r_ddot"):
+                signal = traces.get(name)
+                out[f"{name}_variability"].append(
+                    m.variability(signal) if signal is not None and signal.ndim == 3 else nan
+                )
         out["first_stage_hop_height"].append(
             float(np.mean(first["hop_height"])) if first is not None else nan
         )
@@ -240,6 +249,22 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
     claims.append(
         {
             "claim": "the CPG-Actor performs best during training",
+            "verdict": verdict,
+            "detail": detail,
+        }
+    )
+
+    # 7. Cho et al.'s theta_dot and r_ddot stay flat; the CPG-Actor's respond (section V)
+    def flatness(variant: str) -> dict[str, float]:
+        return {n: variants[variant][f"{n}_variability"][0] for n in ("theta_dot", "r_ddot")}
+
+    cpg_flatness = flatness("cpg-actor") if has("cpg-actor") else {"theta_dot": nan, "r_ddot": nan}
+    cho_flatness = {cho: flatness(cho) for cho in CHO_VARIANTS if has(cho)}
+    verdict, detail = m.verdict_cho_flat(cpg_flatness, cho_flatness)
+    claims.append(
+        {
+            "claim": "Cho et al.'s theta_dot and r_ddot stay almost flat, the CPG-Actor's are "
+            "reshaped by its feedback",
             "verdict": verdict,
             "detail": detail,
         }
@@ -594,7 +619,9 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
         "et al. if the CI of the difference of mean final returns is above 0 for each Cho "
         "variant run; smooth vs bang-bang if the MLP's smoothness measure is >= 10x the "
         "CPG-Actor's; near the limits if the 99th percentile of |desired velocity| lies in "
-        "[9, 18] rad/s; hop height doubles if final / first-stage hop height >= 1.5.",
+        "[9, 18] rad/s; hop height doubles if final / first-stage hop height >= 1.5; "
+        "Cho et al. flat if the CPG-Actor's standard deviation over an episode (after 50 "
+        "steps) of theta_dot and of r_ddot is >= 3x every Cho variant's.",
         "",
     ]
     if notes:
