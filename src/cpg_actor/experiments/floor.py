@@ -49,14 +49,33 @@ def write_floor(out: Path, env_config: Any) -> dict[str, Any]:
 
 def ensure_floor(out: Path, settings: Any) -> dict[str, Any]:
     """The floor of a reproduction (:class:`~cpg_actor.experiments.plan.ReproduceSettings`),
-    computed once for its environment (the config of its ``cpg-actor-open-loop`` runs: the
-    reproduction's ``--sim`` and ``--set env.*``, eq. 4's reward) and then reused."""
-    from cpg_actor.experiments.plan import resolve_config
-
+    computed once for its environment (:func:`floor_env_config`) and then reused."""
     floor = load_floor(out)
     if floor is None:
-        floor = write_floor(out, resolve_config(settings, "cpg-actor-open-loop").env)
+        floor = write_floor(out, floor_env_config(out, settings))
     return floor
+
+
+def floor_env_config(out: Path, settings: Any) -> Any:
+    """The env the runs in ``out`` trained on (the saved config of a ``cpg-actor-open-loop``
+    or ``cpg-actor`` run, else of any run: a run saved before an option existed keeps what it
+    trained with), or else what ``settings`` resolve to; always with eq. 4's reward."""
+    import yaml
+
+    from cpg_actor.config import TrainConfig
+    from cpg_actor.experiments.plan import resolve_config
+
+    runs = Path(out) / "runs"
+    paths = [
+        *sorted(runs.glob("cpg-actor-open-loop/seed*/config.yaml")),
+        *sorted(runs.glob("cpg-actor/seed*/config.yaml")),
+        *sorted(runs.glob("*/seed*/config.yaml")),
+    ]
+    if paths:
+        env = TrainConfig.from_dict(yaml.safe_load(paths[0].read_text())).env
+    else:
+        env = resolve_config(settings, "cpg-actor-open-loop").env
+    return env.replace(hop_reward="hip-velocity")
 
 
 def load_floor(out: Path) -> dict[str, Any] | None:
