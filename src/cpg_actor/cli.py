@@ -21,6 +21,7 @@ COMMANDS: dict[str, str] = {
     "sweep": "sweep",
     "figures": "figures",
     "gradient": "gradient",
+    "transfer": "transfer",
 }
 
 

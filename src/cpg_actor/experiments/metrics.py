@@ -127,6 +127,30 @@ def bootstrap_ratio(
     return Interval(float(a.mean() / b.mean()), float(low), float(high))
 
 
+def bootstrap_paired_ratio(
+    numerator: Sequence[float],
+    denominator: Sequence[float],
+    resamples: int = 10_000,
+    confidence: float = 0.95,
+    seed: int = 0,
+) -> Interval | None:
+    """``mean(numerator) / mean(denominator)`` for paired values (the same seeds measured
+    twice), seeds resampled together; None as :func:`bootstrap_ratio`."""
+    a = np.asarray(numerator, dtype=float)
+    b = np.asarray(denominator, dtype=float)
+    keep = np.isfinite(a) & np.isfinite(b)
+    a, b = a[keep], b[keep]
+    if a.size == 0 or b.mean() <= 0:
+        return None
+    index = np.random.default_rng(seed).integers(0, a.size, (resamples, a.size))
+    mean_b = b[index].mean(axis=1)
+    if np.any(mean_b <= 0):
+        return None
+    tail = 100 * (1 - confidence) / 2
+    low, high = np.percentile(a[index].mean(axis=1) / mean_b, [tail, 100 - tail])
+    return Interval(float(a.mean() / b.mean()), float(low), float(high))
+
+
 def bootstrap_difference(
     first: Sequence[float],
     second: Sequence[float],

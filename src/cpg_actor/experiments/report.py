@@ -18,6 +18,7 @@ from cpg_actor.experiments.figures import make_figures, steps_per_iteration
 from cpg_actor.experiments.floor import FLOOR_FILE, load_floor
 from cpg_actor.experiments.plan import STAGE_LABELS, load_settings_file
 from cpg_actor.experiments.results import Results, label
+from cpg_actor.experiments.transfer import load_transfer, transfer_lines
 from cpg_actor.machine import cpu_model, git_commit
 
 PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
@@ -566,6 +567,7 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
                 f"{_pm(stage['hop_height'])} |"
             )
     lines += [""] + _comparison_lines(summary["comparisons"])
+    lines += transfer_lines(load_transfer(out))
     lines += [
         "## The paper's claims",
         "",

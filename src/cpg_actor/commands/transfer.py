@@ -1,0 +1,32 @@
+"""`cpg-actor transfer`: every final policy of a reproduction evaluated in both simulators."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+HELP = "evaluate a reproduction's final policies in both simulators (cross-simulator transfer)"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("out", help="results directory written by `cpg-actor reproduce`")
+    parser.add_argument("--episodes", type=int, default=5, help="episodes per policy and sim")
+    parser.add_argument("--seed", type=int, default=1000, help="environment seed (default 1000)")
+    parser.add_argument("--overwrite", action="store_true", help="replace OUT/transfer.json")
+
+
+def run(args: argparse.Namespace) -> int:
+    from cpg_actor.experiments.report import write_report
+    from cpg_actor.experiments.transfer import TRANSFER_FILE, write_transfer
+
+    out = Path(args.out)
+    if not (out / "runs").is_dir():
+        raise FileNotFoundError(f"{out} is not a reproduce results directory (no runs/)")
+    if args.episodes < 1:
+        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
+    if (out / TRANSFER_FILE).exists() and not args.overwrite:
+        raise FileExistsError(f"{out / TRANSFER_FILE} exists; pass --overwrite to replace it")
+    path = write_transfer(out, args.episodes, args.seed)
+    report = write_report(out)
+    print(f"transfer results {path}; report {report}")
+    return 0

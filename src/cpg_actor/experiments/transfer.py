@@ -1,0 +1,122 @@
+"""Cross-simulator transfer: every final policy of a reproduction evaluated in both simulators.
+
+A policy trained in MuJoCo (or PyBullet) is evaluated deterministically, with the same env
+seed, in its own simulator and in the other one; per variant the report gives how much of its
+return and hop height it keeps (other / own, mean over seeds, paired bootstrap CI).
+``cpg-actor transfer OUT`` writes ``OUT/transfer.json``; ``cpg-actor figures`` renders it.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cpg_actor.experiments import metrics as m
+
+TRANSFER_FILE = "transfer.json"
+SIMULATORS = ("mujoco", "pybullet")
+
+
+def evaluate_run(run_dir: Path, episodes: int, seed: int) -> dict[str, dict[str, float]]:
+    """``{sim: {"return": mean, "hop_height": mean}}`` of a run's last checkpoint."""
+    from cpg_actor.commands.eval import evaluate
+    from cpg_actor.config import TrainConfig
+    from cpg_actor.policy import load_policy
+
+    config = TrainConfig.load(run_dir / "config.yaml")
+    out: dict[str, Any] = {"trained_in": config.env.sim}
+    for sim in SIMULATORS:
+        config.env = config.env.replace(sim=sim)
+        policy = load_policy(run_dir / "checkpoints" / "last.pt", env_config=config.env)
+        traces = evaluate(policy, config, episodes, seed=seed)
+        out[sim] = {
+            "return": float(np.mean(traces["episode_return"])),
+            "hop_height": float(np.nanmean(traces["hop_height"])),
+        }
+    return out
+
+
+def write_transfer(out: Path, episodes: int = 5, seed: int = 1000, progress=print) -> Path:
+    """Evaluate every run of ``out`` that has a last checkpoint; write ``TRANSFER_FILE``."""
+    from cpg_actor.checkpoint import atomic_write_text
+    from cpg_actor.experiments.results import Results
+
+    results = Results.load(Path(out))
+    runs: dict[str, dict[str, Any]] = {}
+    for variant, variant_runs in results.runs.items():
+        for run in variant_runs:
+            if not (run.path / "checkpoints" / "last.pt").is_file():
+                continue
+            progress(f"transfer: {variant}/seed{run.seed}")
+            runs.setdefault(variant, {})[str(run.seed)] = evaluate_run(run.path, episodes, seed)
+    data = {"episodes": episodes, "seed": seed, "runs": runs}
+    path = Path(out) / TRANSFER_FILE
+    atomic_write_text(json.dumps(data, indent=1) + "\n", path)
+    return path
+
+
+def load_transfer(out: Path) -> dict[str, Any] | None:
+    path = Path(out) / TRANSFER_FILE
+    try:
+        return json.loads(path.read_text()) if path.is_file() else None
+    except (json.JSONDecodeError, OSError):
+        return None
+
+
+def kept(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
+    """Per variant: the share of return and hop height kept in the other simulator."""
+    table = {}
+    for variant, seeds in data["runs"].items():
+        own = {"return": [], "hop_height": []}
+        other = {"return": [], "hop_height": []}
+        trained = set()
+        for values in seeds.values():
+            sim = values["trained_in"]
+            trained.add(sim)
+            target = next(s for s in SIMULATORS if s != sim)
+            for key in own:
+                own[key].append(values[sim][key])
+                other[key].append(values[target][key])
+        table[variant] = {
+            "trained_in": ", ".join(sorted(trained)),
+            "seeds": len(seeds),
+            **{f"{key}_own": m.mean_std(own[key]) for key in own},
+            **{f"{key}_other": m.mean_std(other[key]) for key in other},
+            **{f"{key}_kept": m.bootstrap_paired_ratio(other[key], own[key]) for key in own},
+        }
+    return table
+
+
+def transfer_lines(data: dict[str, Any] | None) -> list[str]:
+    if data is None:
+        return []
+
+    def kept_text(interval) -> str:
+        if interval is None:
+            return "undefined (return not positive)"
+        return (
+            f"{100 * interval.estimate:.0f}% [{100 * interval.low:.0f}, {100 * interval.high:.0f}]"
+        )
+
+    lines = [
+        "## Cross-simulator transfer",
+        "",
+        f"Each final policy evaluated deterministically ({data['episodes']} episodes, env seed "
+        f"{data['seed']}) in the simulator it trained in and in the other one (`cpg-actor "
+        "transfer`); *kept*: other / own, mean over seeds with a paired bootstrap 95% CI.",
+        "",
+        "| variant | trained in | seeds | return own | return other | return kept | "
+        "hop own (m) | hop other (m) | hop kept |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
+    ]
+    for variant, row in kept(data).items():
+        lines.append(
+            f"| `{variant}` | {row['trained_in']} | {row['seeds']} | "
+            f"{row['return_own'][0]:.0f} | {row['return_other'][0]:.0f} | "
+            f"{kept_text(row['return_kept'])} | {row['hop_height_own'][0]:.3f} | "
+            f"{row['hop_height_other'][0]:.3f} | {kept_text(row['hop_height_kept'])} |"
+        )
+    return lines + [""]
