@@ -28,6 +28,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from cpg_actor.agents.base import gaussian_log_prob
 from cpg_actor.agents.cpg_actor import CPGActorAgent
 from cpg_actor.policy import Policy
 from cpg_actor.ppo.algorithm import replay_states
@@ -182,12 +183,9 @@ def feedback_score_share(agent: CPGActorAgent, rollout: Rollout) -> float | None
     )
     weights = rollout.advantages.flatten()
     feedback = samples[:, agent.action_dim :]
-    out = agent.actor(obs, states, feedback)
-    lever = agent.actor(obs, states)  # the same step with the feedback's mean: the lever
-    from cpg_actor.agents.base import gaussian_log_prob
-
+    lever = agent.actor(obs, states)  # the CPG step with the feedback's mean: the lever
     own = gaussian_log_prob(feedback, agent.feedback_mean(obs), agent.feedback_log_std.exp())
-    through_cpg = gaussian_log_prob(samples[:, : agent.action_dim], lever.mean, out.std)
+    through_cpg = gaussian_log_prob(samples[:, : agent.action_dim], lever.mean, lever.std)
     params = list(agent.feedback.parameters())
     score = torch.autograd.grad((weights * own.sum(-1)).mean(), params)
     pathwise = torch.autograd.grad((weights * through_cpg.sum(-1)).mean(), params)
