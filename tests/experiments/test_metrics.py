@@ -186,3 +186,17 @@ def test_out_dir_with_other_settings_is_refused(tmp_path):
     (foreign / "data.txt").write_text("x")
     with pytest.raises(FileExistsError, match="not written by"):
         prepare_out_dir(foreign, settings, overwrite=True)
+
+
+def test_bound_share_counts_feedback_at_its_bound_and_variability_flat_signals():
+    from cpg_actor.experiments.metrics import bound_share, variability
+
+    t = np.linspace(0, 5, 500)
+    bang_bang = 4.0 * np.tanh(50 * np.sin(2 * np.pi * 2 * t))  # at +-4 nearly always
+    smooth = 4.0 * np.tanh(0.5 * np.sin(2 * np.pi * 2 * t))
+    assert bound_share(bang_bang, 4.0) > 0.9
+    assert bound_share(smooth, 4.0) == 0.0
+    flat = np.full((500, 3, 2), 4 * np.pi)
+    moving = flat + 2.0 * np.sin(2 * np.pi * t)[:, None, None]
+    assert variability(flat) == pytest.approx(0.0, abs=1e-9)
+    assert variability(moving) == pytest.approx(2.0 / np.sqrt(2), rel=0.02)

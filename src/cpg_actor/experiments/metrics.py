@@ -68,6 +68,14 @@ def variability(signal: np.ndarray, skip: int = 50) -> float:
     return float(np.nanmean(std)) if np.isfinite(std).any() else float("nan")
 
 
+def bound_share(feedback: np.ndarray, bound: float, level: float = 0.95) -> float:
+    """Share of feedback values (xi or kappa traces, any shape) at ``level`` or more of their
+    bound (``xi_scale``, ``kappa_scale``): near 1 for a bang-bang feedback."""
+    x = np.abs(np.asarray(feedback, dtype=float))
+    x = x[np.isfinite(x)]
+    return float(np.mean(x >= level * bound)) if x.size and bound > 0 else float("nan")
+
+
 def velocity_share(desired_velocity: np.ndarray, limit: float = VELOCITY_LIMIT) -> float:
     """Share of finite desired velocities with ``|v| <= limit``."""
     v = np.asarray(desired_velocity, dtype=float)

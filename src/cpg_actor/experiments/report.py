@@ -45,6 +45,8 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
             "training_return",
             "theta_dot_variability",
             "r_ddot_variability",
+            "xi_at_bound",
+            "kappa_at_bound",
             *(f"term_{name}" for name in REWARD_TERMS),
         )
     }
@@ -74,6 +76,8 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
                 "velocity_p99",
                 "theta_dot_variability",
                 "r_ddot_variability",
+                "xi_at_bound",
+                "kappa_at_bound",
             ):
                 out[key].append(nan)
         else:
@@ -91,6 +95,19 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
                 signal = traces.get(name)
                 out[f"{name}_variability"].append(
                     m.variability(signal) if signal is not None and signal.ndim == 3 else nan
+                )
+            # bounded feedback (xi = xi_scale tanh(.)): how often it sits at its bound
+            agent_config = run.config.get("agent_config") or {}
+            bounded = agent_config.get("feedback_tanh", True)
+            for name, scale in (("xi", "xi_scale"), ("kappa", "kappa_scale")):
+                values = traces.get(name)
+                out[f"{name}_at_bound"].append(
+                    m.bound_share(values, float(agent_config[scale]))
+                    if values is not None
+                    and bounded
+                    and scale in agent_config
+                    and np.any(np.nan_to_num(values) != 0)  # the open loop's feedback is 0
+                    else nan
                 )
         out["first_stage_hop_height"].append(
             float(np.mean(first["hop_height"])) if first is not None else nan
@@ -528,6 +545,31 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
             "",
         ]
 
+    feedback_rows = [
+        (variant, row)
+        for variant, row in summary["variants"].items()
+        if np.isfinite(row["xi_at_bound"][0]) or np.isfinite(row["theta_dot_variability"][0])
+    ]
+    if feedback_rows:
+        lines += [
+            "## CPG signals and feedback",
+            "",
+            "From the final evaluation traces, mean +- std over seeds: the standard deviation "
+            "over an episode (after 50 steps) of theta_dot and r_ddot (how much the CPG "
+            "responds), and for bounded feedback the share of xi and kappa values at 95 % or "
+            "more of their bound (near 100 %: bang-bang feedback).",
+            "",
+            "| variant | std theta_dot (rad/s) | std r_ddot (rad/s^2) | xi at bound | "
+            "kappa at bound |",
+            "| --- | --- | --- | --- | --- |",
+        ]
+        for variant, row in feedback_rows:
+            lines.append(
+                f"| {label(variant)} | {_pm(row['theta_dot_variability'])} | "
+                f"{_pm(row['r_ddot_variability'])} | {_pct(row['xi_at_bound'])} | "
+                f"{_pct(row['kappa_at_bound'])} |"
+            )
+        lines += [""]
     lines += [
         "## The return split into its reward terms",
         "",

@@ -99,6 +99,16 @@ class Run:
             return "not recorded"
 
     @cached_property
+    def config(self) -> dict[str, Any]:
+        """The run's saved ``config.yaml`` as a mapping (empty if it has none)."""
+        import yaml
+
+        try:
+            return yaml.safe_load((self.path / "config.yaml").read_text()) or {}
+        except (OSError, yaml.YAMLError):
+            return {}
+
+    @cached_property
     def stages(self) -> list[dict[str, Any]]:
         path = self.path / "eval" / STAGES_FILE
         try:
