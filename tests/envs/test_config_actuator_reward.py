@@ -214,15 +214,17 @@ def test_default_weights_make_hopping_beat_standing_still():
 
 @pytest.mark.parametrize("sim", ["mujoco", "pybullet"])
 def test_apex_reward_pays_the_ballistic_apex_height_once(sim):
-    """A leg launched upward at v0 from `lift` above its standing height flies to
-    lift + v0^2 / 2g (hand calculation, frictionless rail): the apex reward pays exactly that
-    height, once, and nothing on the way up or down."""
+    """A leg launched upward at v0 with its foot `lift` above the ground flies to a clearance
+    of lift + v0^2 / 2g (hand calculation, frictionless rail): the apex reward pays exactly
+    that, once, and nothing on the way up or down."""
+    from cpg_actor.envs.robot import kinematics
     from cpg_actor.envs.simulation import NOMINAL_POSE, HopperSimulation
 
     config = HopperConfig(sim=sim, hop_reward="apex", apex_weight=100.0)
     simulation = HopperSimulation(config, 1)
     lift, v0 = 0.1, 1.5
-    qpos = np.array([[simulation.standing_height + lift, *NOMINAL_POSE]])
+    standing = float(kinematics.standing_hip_height(NOMINAL_POSE))
+    qpos = np.array([[standing + lift, *NOMINAL_POSE]])
     simulation.backend.reset_robots(np.array([0]), qpos, np.array([[v0, 0.0, 0.0]]))
     r1 = [simulation.step(NOMINAL_POSE[None]).reward_terms["r1"][0] for _ in range(25)]
     simulation.close()
@@ -230,6 +232,27 @@ def test_apex_reward_pays_the_ballistic_apex_height_once(sim):
     assert len(paid) == 1
     assert paid[0] == pytest.approx(100.0 * (lift + v0**2 / (2 * 9.81)), abs=100.0 * 0.003)
     assert r1.index(paid[0]) in (14, 15)  # t = v0 / g = 0.153 s: the 15th or 16th step
+
+
+def test_apex_reward_pays_nothing_for_raising_the_hip_by_extending_the_leg():
+    """Standing up slowly from the nominal pose raises the hip by centimetres with the foot
+    on the ground: eq. 4's r1 pays for the upward hip speed, the apex reward pays nothing."""
+    from cpg_actor.envs.simulation import NOMINAL_POSE
+
+    totals = {}
+    for hop_reward in ("hip-velocity", "apex"):
+        env = HopperEnv(HopperConfig(hop_reward=hop_reward, reset_noise=0.0))
+        env.reset(seed=0)
+        start = env.unwrapped.sim.backend.hip_height[0]
+        totals[hop_reward] = 0.0
+        for t in range(150):  # the knee straightens from -0.8 to -0.3 rad over 1.2 s
+            knee = NOMINAL_POSE[1] + 0.5 * min(1.0, t / 120)
+            *_, info = env.step(np.array([NOMINAL_POSE[0], knee]))
+            totals[hop_reward] += info["reward_terms"]["r1"]
+        risen = env.unwrapped.sim.backend.hip_height[0] - start
+        env.close()
+    assert risen > 0.03
+    assert totals["hip-velocity"] > 0.0 and totals["apex"] == 0.0
 
 
 def test_hop_reward_is_checked():

@@ -60,7 +60,6 @@ class HopperSimulation:
         self.backend = make_backend(config, self.num_robots, num_threads)
         self.weights = config.reward_weights
         self.desired = np.tile(NOMINAL_POSE, (self.num_robots, 1))
-        self.standing_height = float(kinematics.standing_hip_height(NOMINAL_POSE))
         self.elapsed_steps = np.zeros(self.num_robots, dtype=np.int64)
 
     # -- reset -------------------------------------------------------------------------------
@@ -113,9 +112,8 @@ class HopperSimulation:
             )  # fmt: skip
             if apex:
                 terms["r1"] = apex_reward(
-                    self.config.apex_weight, hip_velocity_before, qvel[:, 0], qpos[:, 0],
-                    self.standing_height, self.foot_height(),
-                )  # fmt: skip
+                    self.config.apex_weight, hip_velocity_before, qvel[:, 0], self.foot_height()
+                )
         terminated = self._blown_up()
         result = StepResult(
             obs=self.observation(),
