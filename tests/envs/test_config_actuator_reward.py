@@ -212,26 +212,54 @@ def test_default_weights_make_hopping_beat_standing_still():
     assert 0.05 * terms["r1"] < penalties < 0.5 * terms["r1"]  # penalties shape, r1 drives
 
 
-@pytest.mark.parametrize("sim", ["mujoco", "pybullet"])
-def test_apex_reward_pays_the_ballistic_apex_height_once(sim):
-    """A leg launched upward at v0 with its foot `lift` above the ground flies to a clearance
-    of lift + v0^2 / 2g (hand calculation, frictionless rail): the apex reward pays exactly
-    that, once, and nothing on the way up or down."""
+def launched(sim, lift, v0, config_changes=None):
+    """A hopper simulation with the leg in the nominal pose, its foot `lift` above the ground,
+    moving up at v0."""
     from cpg_actor.envs.robot import kinematics
     from cpg_actor.envs.simulation import NOMINAL_POSE, HopperSimulation
 
-    config = HopperConfig(sim=sim, hop_reward="apex", apex_weight=100.0)
+    config = HopperConfig(sim=sim, hop_reward="apex", apex_weight=100.0, **(config_changes or {}))
     simulation = HopperSimulation(config, 1)
-    lift, v0 = 0.1, 1.5
     standing = float(kinematics.standing_hip_height(NOMINAL_POSE))
     qpos = np.array([[standing + lift, *NOMINAL_POSE]])
     simulation.backend.reset_robots(np.array([0]), qpos, np.array([[v0, 0.0, 0.0]]))
+    com = standing + lift + float(kinematics.com_height_offset(NOMINAL_POSE))
+    return simulation, com
+
+
+@pytest.mark.parametrize("sim", ["mujoco", "pybullet"])
+def test_apex_reward_pays_the_ballistic_apex_height_once(sim):
+    """Launched upward at v0, the centre of mass flies to com0 + v0^2 / 2g (hand calculation,
+    frictionless rail): the apex reward pays that height above the highest standing centre of
+    mass, once, at t = v0 / g, and nothing on the way up or down."""
+    from cpg_actor.envs.simulation import NOMINAL_POSE
+
+    simulation, com0 = launched(sim, lift=0.1, v0=1.5)
     r1 = [simulation.step(NOMINAL_POSE[None]).reward_terms["r1"][0] for _ in range(25)]
+    expected = 100.0 * (com0 + 1.5**2 / (2 * 9.81) - simulation.highest_standing_com)
     simulation.close()
     paid = [r for r in r1 if r != 0.0]
-    assert len(paid) == 1
-    assert paid[0] == pytest.approx(100.0 * (lift + v0**2 / (2 * 9.81)), abs=100.0 * 0.003)
+    assert len(paid) == 1 and expected > 5.0
+    assert paid[0] == pytest.approx(expected, abs=100.0 * 0.003)
     assert r1.index(paid[0]) in (14, 15)  # t = v0 / g = 0.153 s: the 15th or 16th step
+
+
+def test_apex_reward_pays_once_per_flight_however_the_leg_swings():
+    """Folding and swinging the leg in flight moves the hip up and down many times, but not
+    the centre of mass: one payment per flight."""
+    from cpg_actor.envs.simulation import NOMINAL_POSE
+
+    simulation, _ = launched("mujoco", lift=0.15, v0=2.0)
+    r1, hip_velocity = [], []
+    for t in range(30):  # the knee swings +-0.5 rad at 12.5 Hz while the leg flies
+        knee = NOMINAL_POSE[1] + (0.5 if (t // 4) % 2 else -0.5)
+        result = simulation.step(np.array([[NOMINAL_POSE[0], knee]]))
+        r1.append(result.reward_terms["r1"][0])
+        hip_velocity.append(simulation.backend.qvel[0, 0])
+    simulation.close()
+    turns = np.sum((np.array(hip_velocity[:-1]) > 0) & (np.array(hip_velocity[1:]) <= 0))
+    assert turns >= 2  # the hip's velocity turned down more than once
+    assert sum(r != 0.0 for r in r1) == 1
 
 
 def test_apex_reward_pays_nothing_for_raising_the_hip_by_extending_the_leg():
@@ -260,3 +288,20 @@ def test_hop_reward_is_checked():
         HopperConfig(hop_reward="height")
     with pytest.raises(ValueError, match="apex_weight must be >= 0"):
         HopperConfig(apex_weight=-1.0)
+
+
+def test_batched_centre_of_mass_agrees_with_the_per_link_one():
+    from cpg_actor.envs.robot import description as robot
+    from cpg_actor.envs.robot import kinematics
+
+    poses = np.random.default_rng(0).uniform([-0.5, -1.7], [1.3, 0.1], size=(20, 2))
+    batched = kinematics.com_height_offset(poses)
+    for pose, value in zip(poses, batched, strict=True):
+        links = kinematics.com_positions(pose)
+        expected = sum(robot.LINKS[n].mass * links[n][1] for n in links) / robot.TOTAL_MASS
+        assert value == pytest.approx(expected, abs=1e-12)
+    # the centre of mass moves with the joints as d/dt of the offset
+    q, qd = poses[:1], np.array([[2.0, -3.0]])
+    dt = 1e-7
+    numeric = (kinematics.com_height_offset(q + dt * qd) - kinematics.com_height_offset(q)) / dt
+    assert kinematics.com_vertical_velocity(np.zeros(1), q, qd) == pytest.approx(numeric, rel=1e-4)

@@ -41,10 +41,10 @@ class HopperConfig:
     c4: float = -1e-4  # r4 = c4 * sum_j tau_d^2: joint torque, (N m)^2
     c5: float = -0.1  # r5 = c5 * |v_foot_xy|: foot slip, m/s
     # r1 (beyond the paper): "hip-velocity" is eq. 4's (c1 max(v_hip, 0))^2 at every step;
-    # "apex" pays apex_weight x the foot's clearance once per flight, at its apex: the hop
-    # height itself, nothing for pushing up in stance
+    # "apex" pays apex_weight x the centre of mass's apex above the highest standing centre of
+    # mass, once per flight: the hop height itself, nothing for pushing up in stance
     hop_reward: str = "hip-velocity"
-    apex_weight: float = 200.0  # reward per m of foot clearance at the apex ("apex" only)
+    apex_weight: float = 200.0  # reward per m of apex height ("apex" only)
     # -- reset --------------------------------------------------------------------------------
     reset_noise: float = 0.1  # rad, uniform noise on each joint around the nominal pose
     reset_clearance: float = 0.0  # m, foot height above the ground at reset

@@ -56,20 +56,24 @@ AIRBORNE = 1e-3  # m: the foot's lowest point above the ground (contacts penetra
 
 def apex_reward(
     weight: float,
-    hip_velocity_before: np.ndarray,
-    hip_velocity: np.ndarray,
+    com_velocity_before: np.ndarray,
+    com_velocity: np.ndarray,
+    com_height: np.ndarray,
+    highest_standing_com: float,
     foot_height: np.ndarray,
 ) -> np.ndarray:
-    """``weight * foot_height`` at a flight's apex, 0 elsewhere: the hop height, paid once.
+    """``weight * max(com_height - highest_standing_com, 0)`` at a flight's apex, else 0.
 
-    The apex is the control step in which the hip's vertical velocity turns from up
-    (``hip_velocity_before > 0``) to down (``hip_velocity <= 0``) with the foot in the air
-    (its lowest point above ``AIRBORNE``); the foot's clearance then is the hop height to
-    within ``v * dt``. The clearance, not the hip's height above its standing height, is paid:
-    extending the leg raises the hip with no hop, and a policy paid for that learned to
-    chatter on an extended leg (tiny flights at 28 Hz)."""
-    apex = (hip_velocity_before > 0.0) & (hip_velocity <= 0.0) & (foot_height > AIRBORNE)
-    return np.where(apex, weight * foot_height, 0.0)
+    The apex is the control step in which the vertical velocity of the robot's centre of mass
+    turns from up (``com_velocity_before > 0``) to down (``com_velocity <= 0``) with the foot
+    in the air (its lowest point above ``AIRBORNE``). In flight the centre of mass follows a
+    parabola whatever the joints do, so each flight has one apex and pays once; its height is
+    paid above the highest any standing pose lifts it, so only a real hop pays. (Two earlier
+    versions were gamed by the MLP: paying the hip's height above its standing height, it
+    chattered on a straightened leg; paying the foot's clearance at each turn of the hip's
+    velocity, it folded and swung the leg in flight to turn the hip many times per flight.)"""
+    apex = (com_velocity_before > 0.0) & (com_velocity <= 0.0) & (foot_height > AIRBORNE)
+    return np.where(apex, weight * np.maximum(com_height - highest_standing_com, 0.0), 0.0)
 
 
 def total_reward(terms: dict[str, np.ndarray]) -> np.ndarray:

@@ -60,6 +60,7 @@ class HopperSimulation:
         self.backend = make_backend(config, self.num_robots, num_threads)
         self.weights = config.reward_weights
         self.desired = np.tile(NOMINAL_POSE, (self.num_robots, 1))
+        self.highest_standing_com = kinematics.highest_standing_com()  # the apex reward's zero
         self.elapsed_steps = np.zeros(self.num_robots, dtype=np.int64)
 
     # -- reset -------------------------------------------------------------------------------
@@ -98,7 +99,10 @@ class HopperSimulation:
         backend = self.backend
         np.copyto(self.desired, desired)
         apex = self.config.hop_reward == "apex"
-        hip_velocity_before = backend.qvel[:, 0].copy() if apex else None
+        if apex:
+            com_velocity_before = kinematics.com_vertical_velocity(
+                backend.qvel[:, 0], backend.qpos[:, 1:3], backend.qvel[:, 1:3]
+            )
         joint_torque = backend.track(self.desired, self.config.decimation)
         self.elapsed_steps += 1
 
@@ -112,7 +116,12 @@ class HopperSimulation:
             )  # fmt: skip
             if apex:
                 terms["r1"] = apex_reward(
-                    self.config.apex_weight, hip_velocity_before, qvel[:, 0], self.foot_height()
+                    self.config.apex_weight,
+                    com_velocity_before,
+                    kinematics.com_vertical_velocity(qvel[:, 0], qpos[:, 1:3], qvel[:, 1:3]),
+                    qpos[:, 0] + kinematics.com_height_offset(qpos[:, 1:3]),
+                    self.highest_standing_com,
+                    self.foot_height(),
                 )
         terminated = self._blown_up()
         result = StepResult(

@@ -85,6 +85,50 @@ def com_positions(joint_pos) -> dict[str, tuple[float, float]]:
     }
 
 
+def com_height_offset(joint_pos: np.ndarray) -> np.ndarray:
+    """Height of the whole robot's centre of mass above the hip (HFE axis frame origin), for
+    joint positions ``(..., 2)``: the mass-weighted z of :func:`com_positions`, batched."""
+    q = np.asarray(joint_pos, dtype=np.float64)
+    links = robot.LINKS
+    knee_z = knee_position(q)[..., 1]
+    thigh, shank, adapter = links["thigh"].com, links["shank"].com, links["adapter"].com
+    thigh_z = HFE_ORIGIN[1] + _rotate(q[..., 0], thigh[0], thigh[2])[1]
+    leg = q[..., 0] + q[..., 1]
+    shank_z = knee_z + _rotate(leg, shank[0], shank[2])[1]
+    adapter_z = (
+        knee_z + _rotate(leg, ADAPTER_IN_SHANK[0] + adapter[0], ADAPTER_IN_SHANK[1] + adapter[2])[1]
+    )
+    weighted = (
+        links["hip"].mass * links["hip"].com[2]
+        + links["thigh"].mass * thigh_z
+        + links["shank"].mass * shank_z
+        + links["adapter"].mass * adapter_z
+    )
+    return weighted / robot.TOTAL_MASS
+
+
+def com_vertical_velocity(
+    hip_velocity: np.ndarray, joint_pos: np.ndarray, joint_vel: np.ndarray
+) -> np.ndarray:
+    """Vertical velocity of the centre of mass: the hip's plus d/dt of
+    :func:`com_height_offset` (central difference along the joint velocity)."""
+    q = np.asarray(joint_pos, dtype=np.float64)
+    qd = np.asarray(joint_vel, dtype=np.float64)
+    h = 1e-6
+    rate = (com_height_offset(q + h * qd) - com_height_offset(q - h * qd)) / (2 * h)
+    return np.asarray(hip_velocity, dtype=np.float64) + rate
+
+
+def highest_standing_com(resolution: int = 61) -> float:
+    """The highest the centre of mass gets with the foot on the ground, over a grid of poses
+    within the joint limits: a hop's apex above it is height no standing pose reaches."""
+    hfe, kfe = (robot.JOINT_LIMITS[name] for name in robot.JOINT_NAMES)
+    grid = np.stack(
+        np.meshgrid(np.linspace(*hfe, resolution), np.linspace(*kfe, resolution)), axis=-1
+    ).reshape(-1, 2)
+    return float(np.max(standing_hip_height(grid) + com_height_offset(grid)))
+
+
 def standing_torques(joint_pos, gravity: float = robot.GRAVITY) -> np.ndarray:
     """Joint torques (HFE, KFE) that hold the leg still, standing on a frictionless floor.
 
