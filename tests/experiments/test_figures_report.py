@@ -191,7 +191,15 @@ def test_comparisons_beyond_the_paper_name_the_better_variant_only_when_resolved
         _curve_run(out, "mlp-apex", seed, np.full(n, 500.0 + jitter), np.full(n, 0.2))
         shuffled = 3.0 * ((seed + 2) % 4)  # the same returns as mlp-apex, other seeds
         _curve_run(out, "cpg-actor-apex", seed, np.full(n, 500.0 + shuffled), np.full(n, 0.3))
+        for variant in ("mlp-apex", "cpg-actor-apex"):
+            run = out / "runs" / variant / f"seed{seed}"
+            (run / "config.yaml").write_text("env:\n  hop_reward: apex\n")
     write_report(out)
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["variants"]["mlp-apex"]["reward"].endswith("hop_reward=apex, apex_weight=200.0")
+    # "best during training" compares the CPG-Actor with variants of its own reward only
+    best = next(c for c in summary["claims"] if "best during training" in c["claim"])
+    assert "cpg-actor-bptt32" in best["detail"] and "apex" not in best["detail"]
     rows = {
         (r["first"], r["second"]): r
         for r in json.loads((out / "summary.json").read_text())["comparisons"]

@@ -150,6 +150,22 @@ def _stages(results: Results, variant: str) -> list[dict[str, Any]]:
     return stages
 
 
+REWARD_KEYS = ("c1", "c2", "c3", "c4", "c5", "hop_reward", "apex_weight")
+DEFAULT_REWARD = {"c1": 1.0, "c2": -1.0, "c3": -1e-3, "c4": -1e-4, "c5": -0.1,
+                  "hop_reward": "hip-velocity", "apex_weight": 200.0}  # fmt: skip
+
+
+def reward_of(results: Results, variant: str) -> str:
+    """The reward a variant trained on, from its first run's saved config (runs saved before
+    a key existed: its default); returns are comparable only between equal rewards."""
+    runs = results.runs.get(variant) or []
+    env = (runs[0].config.get("env") or {}) if runs else {}
+    values = {key: env.get(key, DEFAULT_REWARD[key]) for key in REWARD_KEYS}
+    if values["hop_reward"] != "apex":
+        del values["apex_weight"]
+    return ", ".join(f"{k}={v}" for k, v in values.items())
+
+
 def summarise(results: Results, total_steps: int) -> dict[str, Any]:
     """Per-variant numbers (means and stds over seeds) and the claim verdicts."""
     comparison_step = min(total_steps, PAPER_COMPARISON_STEPS)
@@ -162,6 +178,7 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         at_comparison = _per_seed(results, variant, at_step=comparison_step)["final_return"]
         seeds[variant]["return_at_comparison"] = at_comparison
         variants[variant] = {
+            "reward": reward_of(results, variant),
             "seeds": len(results.runs[variant]),
             "finished": sum(run.finished for run in results.runs[variant]),
             **{key: m.mean_std(values) for key, values in seeds[variant].items()},
@@ -255,12 +272,16 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         }
     )
     # 6. the CPG-Actor performs best during training (paper Fig. 6)
+    # against the variants trained on the same reward only (returns of other rewards differ)
     differences = {
         other: m.bootstrap_difference(
             seeds["cpg-actor"]["mean_eval_return"], seeds[other]["mean_eval_return"]
         )
         for other in variants
-        if other != "cpg-actor" and has("cpg-actor") and _finite(seeds[other]["mean_eval_return"])
+        if other != "cpg-actor"
+        and has("cpg-actor")
+        and variants[other]["reward"] == variants["cpg-actor"]["reward"]
+        and _finite(seeds[other]["mean_eval_return"])
     }
     ran = has("cpg-actor") and _finite(seeds["cpg-actor"]["mean_eval_return"])
     verdict, detail = m.verdict_best_during_training(differences, ran)
@@ -335,8 +356,25 @@ def _comparisons(seeds: dict[str, dict[str, list[float]]]) -> list[dict[str, Any
     return rows
 
 
-def seeds_of(summary: dict[str, Any]) -> dict[str, dict[str, list[float]]]:
-    return {variant: row["per_seed"] for variant, row in summary["variants"].items()}
+def seeds_of(
+    summary: dict[str, Any], reward: str | None = None
+) -> dict[str, dict[str, list[float]]]:
+    """Per-seed numbers per variant (only those trained on ``reward``, if given)."""
+    return {
+        variant: row["per_seed"]
+        for variant, row in summary["variants"].items()
+        if reward is None or row.get("reward") == reward
+    }
+
+
+def _floor_reward(floor: dict[str, Any] | None) -> str | None:
+    """The reward the floor was computed with, in :func:`reward_of`'s form."""
+    if floor is None:
+        return None
+    env = floor.get("env") or {}
+    values = {key: env.get(key, DEFAULT_REWARD[key]) for key in REWARD_KEYS}
+    del values["apex_weight"]  # the floor is always eq. 4's reward
+    return ", ".join(f"{k}={v}" for k, v in values.items())
 
 
 def _floor_lines(
@@ -362,8 +400,8 @@ def _floor_lines(
         f"returns **{value:.0f}** (hop height p90 {best['hop_height_p90']:.2f} m; the highest "
         f"hopping set: {floor['best_hop']['hop_height_p90']:.2f} m, return "
         f"{floor['best_hop']['episode_return']:.0f}). Final return minus the floor, CI over "
-        f"seeds: above it {', '.join(above) or 'none'}; below it {', '.join(below) or 'none'}; "
-        f"not resolved {', '.join(unresolved) or 'none'}.",
+        f"seeds (variants trained on this reward): above it {', '.join(above) or 'none'}; "
+        f"below it {', '.join(below) or 'none'}; not resolved {', '.join(unresolved) or 'none'}.",
         "",
     ]
 
@@ -527,7 +565,9 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
             f"{_pm(row['hop_height'])} | {_pm(row['smoothness'])} | "
             f"{_pct(row['velocity_share'])} | {_pm(row['velocity_p99'])} |"
         )
-    lines += [""] + _floor_lines(load_floor(out), seeds_of(summary))
+    floor = load_floor(out)
+    floor_reward = _floor_reward(floor)
+    lines += [""] + _floor_lines(floor, seeds_of(summary, floor_reward))
     if "cpg-actor" in summary["variants"] and "cho2019-warm" in summary["variants"]:
         ratio = m.bootstrap_ratio(
             summary["variants"]["cpg-actor"]["per_seed"]["return_at_comparison"],
