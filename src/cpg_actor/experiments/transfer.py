@@ -96,7 +96,7 @@ def transfer_lines(data: dict[str, Any] | None) -> list[str]:
 
     def kept_text(interval) -> str:
         if interval is None:
-            return "undefined (return not positive)"
+            return "undefined (own value not positive)"
         return (
             f"{100 * interval.estimate:.0f}% [{100 * interval.low:.0f}, {100 * interval.high:.0f}]"
         )
