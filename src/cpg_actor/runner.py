@@ -202,18 +202,8 @@ class Runner:
             rewards = out.reward.to(torch.float32)
             if cfg.ppo.normalize_rewards:
                 rewards = self.reward_normalizer(rewards, done)
-            self.storage.add(
-                observations=acted.observation,
-                states=acted.state,
-                actions=step.action,
-                log_probs=step.log_prob,
-                values=step.value,
-                action_mean=step.mean,
-                action_std=step.std,
-                rewards=rewards,
-                terminated=out.terminated.float(),
-                truncated=out.truncated.float(),
-                final_values=final_values,
+            self.storage.add_policy_step(
+                acted, rewards, out.terminated, out.truncated, final_values
             )
             self.policy.end_episodes(done)
             self.obs = out.obs

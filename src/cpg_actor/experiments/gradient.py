@@ -72,19 +72,8 @@ def collect_rollout(policy: Policy, env, num_steps: int, seed: int, gamma: float
     for t in range(num_steps):
         acted = policy.act(obs, deterministic=False)
         out = env.step(acted.action)
-        step = acted.agent
-        storage.add(
-            observations=acted.observation,
-            states=acted.state,
-            actions=step.action,
-            log_probs=step.log_prob,
-            values=step.value,
-            action_mean=step.mean,
-            action_std=step.std,
-            rewards=out.reward.float(),
-            terminated=out.terminated.float(),
-            truncated=out.truncated.float(),
-            final_values=torch.zeros(n),
+        storage.add_policy_step(
+            acted, out.reward.float(), out.terminated, out.truncated, torch.zeros(n)
         )
         rewards[t] = out.reward
         policy.end_episodes(out.terminated | out.truncated)

@@ -114,48 +114,32 @@ def bootstrap_ratio(
     resamples: int = 10_000,
     confidence: float = 0.95,
     seed: int = 0,
+    paired: bool = False,
 ) -> Interval | None:
     """``mean(numerator) / mean(denominator)`` with a percentile bootstrap CI over seeds.
 
-    None when it is undefined: a group is empty, or the denominator's mean (or any resampled
-    mean) is not positive (a ratio of returns is only meaningful for positive returns)."""
+    ``paired``: the two are the same seeds measured twice (e.g. one policy in two
+    simulators); seeds are resampled together and non-finite pairs dropped. Otherwise each
+    group is resampled on its own. None when it is undefined: a group is empty, or the
+    denominator's mean (or any resampled mean) is not positive (a ratio of returns is only
+    meaningful for positive returns)."""
     a = np.asarray(numerator, dtype=float)
     b = np.asarray(denominator, dtype=float)
-    a, b = a[np.isfinite(a)], b[np.isfinite(b)]
+    if paired:
+        keep = np.isfinite(a) & np.isfinite(b)
+        a, b = a[keep], b[keep]
+    else:
+        a, b = a[np.isfinite(a)], b[np.isfinite(b)]
     if a.size == 0 or b.size == 0 or b.mean() <= 0:
         return None
     rng = np.random.default_rng(seed)
-    mean_a = a[rng.integers(0, a.size, (resamples, a.size))].mean(axis=1)
-    mean_b = b[rng.integers(0, b.size, (resamples, b.size))].mean(axis=1)
-    if np.any(mean_b <= 0):
-        return None
-    ratios = mean_a / mean_b
-    tail = 100 * (1 - confidence) / 2
-    low, high = np.percentile(ratios, [tail, 100 - tail])
-    return Interval(float(a.mean() / b.mean()), float(low), float(high))
-
-
-def bootstrap_paired_ratio(
-    numerator: Sequence[float],
-    denominator: Sequence[float],
-    resamples: int = 10_000,
-    confidence: float = 0.95,
-    seed: int = 0,
-) -> Interval | None:
-    """``mean(numerator) / mean(denominator)`` for paired values (the same seeds measured
-    twice), seeds resampled together; None as :func:`bootstrap_ratio`."""
-    a = np.asarray(numerator, dtype=float)
-    b = np.asarray(denominator, dtype=float)
-    keep = np.isfinite(a) & np.isfinite(b)
-    a, b = a[keep], b[keep]
-    if a.size == 0 or b.mean() <= 0:
-        return None
-    index = np.random.default_rng(seed).integers(0, a.size, (resamples, a.size))
-    mean_b = b[index].mean(axis=1)
+    index_a = rng.integers(0, a.size, (resamples, a.size))
+    index_b = index_a if paired else rng.integers(0, b.size, (resamples, b.size))
+    mean_a, mean_b = a[index_a].mean(axis=1), b[index_b].mean(axis=1)
     if np.any(mean_b <= 0):
         return None
     tail = 100 * (1 - confidence) / 2
-    low, high = np.percentile(a[index].mean(axis=1) / mean_b, [tail, 100 - tail])
+    low, high = np.percentile(mean_a / mean_b, [tail, 100 - tail])
     return Interval(float(a.mean() / b.mean()), float(low), float(high))
 
 

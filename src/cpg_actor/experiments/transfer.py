@@ -85,7 +85,7 @@ def kept(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
             "seeds": len(seeds),
             **{f"{key}_own": m.mean_std(own[key]) for key in own},
             **{f"{key}_other": m.mean_std(other[key]) for key in other},
-            **{f"{key}_kept": m.bootstrap_paired_ratio(other[key], own[key]) for key in own},
+            **{f"{key}_kept": m.bootstrap_ratio(other[key], own[key], paired=True) for key in own},
         }
     return table
 

@@ -111,6 +111,26 @@ class RolloutStorage:
             getattr(self, name)[self.step].copy_(value)
         self.step += 1
 
+    def add_policy_step(
+        self, acted, rewards: Tensor, terminated: Tensor, truncated: Tensor, final_values: Tensor
+    ) -> None:
+        """Store one :class:`cpg_actor.policy.PolicyStep` (what the agent saw and drew) with
+        the env's outcome of it."""
+        step = acted.agent
+        self.add(
+            observations=acted.observation,
+            states=acted.state,
+            actions=step.action,
+            log_probs=step.log_prob,
+            values=step.value,
+            action_mean=step.mean,
+            action_std=step.std,
+            rewards=rewards,
+            terminated=terminated.float(),
+            truncated=truncated.float(),
+            final_values=final_values,
+        )
+
     def clear(self) -> None:
         self.step = 0
 
