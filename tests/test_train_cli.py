@@ -272,6 +272,8 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
     assert paper.agent_config.init_std == 1.0
     fast = build_config(parser.parse_args(["--preset", "throughput"]))
     assert fast.preset == "throughput" and fast.num_envs == 256 and fast.ppo.num_minibatches == 4
+    gpu = build_config(parser.parse_args(["--preset", "gpu"]))
+    assert (gpu.env.sim, gpu.device, gpu.num_envs * gpu.ppo.num_steps) == ("mjx", "auto", 98_304)
     assert (fast.ppo.lr_schedule, fast.ppo.learning_rate) == ("adaptive", 1e-3)
     fast.save(tmp_path / "fast.yaml")
     # the flags and --set win over the preset; a config file brings its preset along
@@ -297,7 +299,7 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
     assert main(["train", "--run-dir", str(run_dir), "--resume", "--preset", "paper"]) == 2
     with pytest.raises(SystemExit):
         parser.parse_args(["--preset", "fastest"])
-    with pytest.raises(ValueError, match="unknown preset 'fastest'; available: paper, throughput"):
+    with pytest.raises(ValueError, match="unknown preset 'fastest'; available: gpu, paper, throughput"):
         TrainConfig(preset="fastest").validate()
 
 

@@ -14,6 +14,10 @@ saved in the run's ``config.yaml`` (``preset``).
   steps per 8,192 samples; paper: 320 per 2,048), learning rate 1e-3 adapted to KL 0.01. It
   keeps a 2-core CPU near the physics ceiling (``benchmarks/train_throughput.py``) and learns
   less per sample; what it reaches and when: ``docs/training.md``, "Presets".
+* ``gpu``: the same recipe at GPU scale on the MJX simulator (``docs/gpu.md``): 4,096 envs x 24
+  steps = 98,304 samples per iteration (legged_gym's rollout length for 4,096 envs), 5 epochs
+  of 4 minibatches of 24,576, learning rate 1e-3 adapted to KL 0.01, ``device`` auto (CUDA if
+  torch sees it). It runs on a CPU too (JAX's CPU backend), slowly.
 """
 
 from __future__ import annotations
@@ -27,6 +31,20 @@ PRESETS: dict[str, dict[str, Any]] = {
         "eval_interval": 10,
         "ppo": {
             "num_steps": 32,
+            "num_epochs": 5,
+            "num_minibatches": 4,
+            "lr_schedule": "adaptive",
+            "learning_rate": 1e-3,
+            "compile": True,
+        },
+    },
+    "gpu": {
+        "num_envs": 4096,
+        "device": "auto",
+        "eval_interval": 10,
+        "env": {"sim": "mjx"},
+        "ppo": {
+            "num_steps": 24,
             "num_epochs": 5,
             "num_minibatches": 4,
             "lr_schedule": "adaptive",

@@ -7,17 +7,20 @@ import gymnasium
 
 ENV_ID = "cpg_actor/AnymalHopper-v0"
 PYBULLET_ENV_ID = "cpg_actor/AnymalHopper-pybullet-v0"
+MJX_ENV_ID = "cpg_actor/AnymalHopper-mjx-v0"  # batched only: gymnasium.make_vec
 EPISODE_STEPS = 500  # HopperConfig.episode_steps (a test checks they agree)
 
 
 def register() -> None:
-    for env_id, sim in ((ENV_ID, "mujoco"), (PYBULLET_ENV_ID, "pybullet")):
+    for env_id, sim in ((ENV_ID, "mujoco"), (PYBULLET_ENV_ID, "pybullet"), (MJX_ENV_ID, "mjx")):
         if env_id in gymnasium.registry:
             continue
+        vector = "mjx.vector:MjxHopperVectorEnv" if sim == "mjx" else "vector:HopperVectorEnv"
         gymnasium.register(
             id=env_id,
+            # gymnasium.make on the MJX id says to use make_vec (no single-robot MJX env)
             entry_point="cpg_actor.envs.hopper:HopperEnv",
-            vector_entry_point="cpg_actor.envs.vector:HopperVectorEnv",
+            vector_entry_point=f"cpg_actor.envs.{vector}",
             kwargs={"sim": sim},
             # the env truncates its episodes itself (HopperConfig.episode_steps, 500); this
             # makes spec.max_episode_steps say so. A longer episode needs both:

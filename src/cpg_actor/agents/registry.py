@@ -27,10 +27,11 @@ from cpg_actor.agents.mlp import MLPAgent
 
 
 def make_hopper_env(num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
-    """The plain hopper vector env: actions are desired joint positions [HFE, KFE]."""
-    from cpg_actor.envs import HopperVectorEnv
+    """The plain hopper vector env on ``env_config.sim``: actions are desired joint positions
+    [HFE, KFE]."""
+    from cpg_actor.envs import make_vector_env
 
-    return HopperVectorEnv(num_envs, config=env_config, num_threads=num_threads)
+    return make_vector_env(num_envs, config=env_config, num_threads=num_threads)
 
 
 def env_shapes(env: Any) -> tuple[int, np.ndarray]:

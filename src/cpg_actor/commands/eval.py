@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from cpg_actor.envs.config import SIMULATORS
 from cpg_actor.progress import metrics_text
 
 HELP = "evaluate a trained run deterministically; save per-step traces (and a video)"
@@ -24,7 +25,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--sim",
         default=None,
-        choices=("mujoco", "pybullet"),
+        choices=SIMULATORS,
         help="physics backend (default: the run's)",
     )
     parser.add_argument("--seed", type=int, default=1000, help="environment seed (default 1000)")

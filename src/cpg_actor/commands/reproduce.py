@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from cpg_actor.commands import add_set_option
+from cpg_actor.envs.config import SIMULATORS
 
 HELP = "reproduce the paper: train variants x seeds in parallel (or on Ray), figures and a report"
 
@@ -36,12 +37,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"parallel runs on this machine (default: the core count, {os.cpu_count()})",
     )
     parser.add_argument("--num-envs", type=int, default=None, help="parallel envs per run")
-    parser.add_argument("--sim", default=None, choices=("mujoco", "pybullet"))
+    parser.add_argument("--sim", default=None, choices=SIMULATORS)
     add_set_option(
         parser, "training config override for every run (repeatable), as in `cpg-actor train`"
     )
     parser.add_argument(
         "--eval-episodes", type=int, default=5, help="episodes per stage evaluation (default 5)"
+    )
+    parser.add_argument(
+        "--gpus-per-run",
+        type=float,
+        default=0.0,
+        help="with --ray: the share of a GPU each run asks Ray for (e.g. 0.2: five runs per "
+        "GPU; use with --sim mjx --set device=cuda, docs/gpu.md). Default 0",
     )
     parser.add_argument(
         "--ray",
@@ -85,6 +93,13 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--workers must be >= 1, got {workers}")
     if args.ray is not None:
         execute.import_ray()  # a clear error before anything is written
+    if args.gpus_per_run and args.ray is None:
+        raise ValueError(
+            "--gpus-per-run is for --ray; on one machine, runs share its GPU as processes: "
+            "--workers N with --set device=cuda"
+        )
+    if not args.gpus_per_run >= 0:
+        raise ValueError(f"--gpus-per-run must be >= 0, got {args.gpus_per_run}")
     out = Path(args.out)
     tasks = plan.build_tasks(settings, out, workers)  # validates before anything is written
     state = plan.prepare_out_dir(out, settings, args.overwrite)
@@ -97,7 +112,12 @@ def run(args: argparse.Namespace) -> int:
         out,
         settings,
         shlex.join(command),
-        {"workers": workers, "ray": args.ray, "runs": len(tasks)},
+        {
+            "workers": workers,
+            "ray": args.ray,
+            "gpus_per_run": args.gpus_per_run,
+            "runs": len(tasks),
+        },
     )
     finished = sum(execute.run_is_finished(task) for task in tasks)
     print(
@@ -113,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
     progress = execute.Progress(tasks, args.progress_interval, live=live)
     try:
         if args.ray is not None:
-            results = execute.run_ray(tasks, args.ray, progress)
+            results = execute.run_ray(tasks, args.ray, progress, args.gpus_per_run)
         else:
             results = execute.run_local(tasks, workers, progress)
     except KeyboardInterrupt:
@@ -124,6 +144,8 @@ def run(args: argparse.Namespace) -> int:
         return 130
     for result in results:
         line = f"  {result['name']}: {result['status']} ({result['action']})"
+        if result.get("resources", {}).get("GPU"):
+            line += f" on {result['resources']['GPU']:g} GPU"
         if result.get("error"):
             line += f": {result['error']}"
         print(line)
@@ -151,6 +173,8 @@ def _as_argv(args: argparse.Namespace) -> list[str]:
         argv += ["--num-envs", str(args.num_envs)]
     if args.sim is not None:
         argv += ["--sim", args.sim]
+    if getattr(args, "gpus_per_run", 0):
+        argv += ["--gpus-per-run", str(args.gpus_per_run)]
     for text in args.overrides:
         argv += ["--set", text]
     return argv

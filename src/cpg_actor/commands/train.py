@@ -13,6 +13,7 @@ from cpg_actor.config import (
     compose_config,
     parse_steps,
 )
+from cpg_actor.envs.config import SIMULATORS
 from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.presets import PRESETS
 from cpg_actor.progress import evaluation_text, metrics_text
@@ -32,15 +33,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--sim",
         default=None,
-        choices=("mujoco", "pybullet"),
-        help="physics backend (default mujoco)",
+        choices=SIMULATORS,
+        help="physics backend (default mujoco; mjx: MuJoCo XLA on JAX's device, docs/gpu.md)",
     )
     parser.add_argument(
         "--preset",
         default=None,
         choices=sorted(PRESETS),
         help="starting config values: paper (OpenAI Baselines' ppo2 MuJoCo settings, the "
-        "default) or throughput (fewer, larger gradient steps; see docs/training.md)",
+        "default), throughput (fewer, larger gradient steps; see docs/training.md) or gpu "
+        "(4,096 MJX envs on the GPU; docs/gpu.md)",
     )
     parser.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
     parser.add_argument(
@@ -55,7 +57,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--device",
         default=None,
         help="networks, storage and PPO: cpu (default), cuda, cuda:N or auto; the simulator "
-        "stays on the CPU",
+        "stays on the CPU, except --sim mjx (on JAX's device)",
     )
     parser.add_argument(
         "--run-dir", default=None, help=f"output directory (default {DEFAULT_RUN_DIR})"

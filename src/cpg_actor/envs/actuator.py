@@ -35,10 +35,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cpg_actor.envs.array_namespace import namespace
+
 
 @dataclass(frozen=True)
 class Actuator:
-    """Actuator constants; call it on arrays of any matching shape (float64 recommended)."""
+    """Actuator constants; call it on arrays of any matching shape (float64 recommended;
+    JAX arrays too, inside ``jax.jit``: the MJX backend runs the law at every substep)."""
 
     kp: float
     kd: float
@@ -60,12 +63,13 @@ class Actuator:
 
     def torque_bounds(self, velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) torque the drive can produce at joint velocity ``velocity``."""
-        # np.minimum / np.maximum rather than np.clip: same result, a third of the overhead
+        # minimum / maximum rather than clip: same result, a third of numpy's overhead
+        xp = namespace(velocity)
         limit, drop = self.torque_limit, velocity * (self.saturation_torque / self.velocity_limit)
         coast = self.law == "coast"  # never forced to brake: the line is clipped at 0
         floor, ceiling = (0.0, 0.0) if coast else (-limit, limit)
-        upper = np.minimum(np.maximum(self.saturation_torque - drop, floor), limit)
-        lower = np.maximum(np.minimum(-self.saturation_torque - drop, ceiling), -limit)
+        upper = xp.minimum(xp.maximum(self.saturation_torque - drop, floor), limit)
+        lower = xp.maximum(xp.minimum(-self.saturation_torque - drop, ceiling), -limit)
         return lower, upper
 
     def __call__(
@@ -74,4 +78,5 @@ class Actuator:
         """Joint torque for desired / measured positions and measured velocities."""
         torque = self.kp * (desired - position) - self.kd * velocity
         lower, upper = self.torque_bounds(velocity)
-        return np.minimum(np.maximum(torque, lower), upper)
+        xp = namespace(torque)
+        return xp.minimum(xp.maximum(torque, lower), upper)

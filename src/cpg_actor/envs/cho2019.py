@@ -49,7 +49,7 @@ from gymnasium.vector.utils import batch_space
 from cpg_actor.cpg import CPGState, OscillatorParameters, hopf_step, hopper_cpg
 from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.simulation import OBS_BOUND, OBS_NAMES
-from cpg_actor.envs.vector import HopperVectorEnv
+from cpg_actor.envs.vector import make_vector_env
 
 PARAMETER_NAMES = ("nu_HFE", "nu_KFE", "rho_HFE", "rho_KFE", "phi_HFE_KFE")
 PARAMETER_RANGES = np.array(
@@ -105,10 +105,10 @@ class CPGParameterVectorEnv(VectorEnv):
     ``CPGParameterVectorEnv(N, config)`` builds that hopper env first.
 
     Args:
-        env_or_num_envs: a :class:`HopperVectorEnv` to wrap, or N.
+        env_or_num_envs: a hopper vector env to wrap (:func:`make_vector_env`: any simulator), or N.
         config: with N, the hopper's :class:`HopperConfig` (or dict); the CPG runs at its
             control rate.
-        num_threads: with N, passed to :class:`HopperVectorEnv`.
+        num_threads: with N, passed to :func:`make_vector_env`.
         action_set: ``"extended"`` (5 actions, the phase bias included) or ``"paper"`` (4:
             frequency and amplitude; the phase bias fixed at the preset's).
         observe_cpg: append the CPG state to the observation (16 values; False: 8).
@@ -118,7 +118,7 @@ class CPGParameterVectorEnv(VectorEnv):
 
     def __init__(
         self,
-        env_or_num_envs: HopperVectorEnv | int,
+        env_or_num_envs: VectorEnv | int,
         config: HopperConfig | dict | None = None,
         num_threads: int | None = None,
         action_set: str = "extended",
@@ -129,12 +129,12 @@ class CPGParameterVectorEnv(VectorEnv):
         self.action_set = action_set
         self.parameter_names, self.parameter_ranges = ACTION_SETS[action_set]
         self.observe_cpg = observe_cpg
-        if isinstance(env_or_num_envs, HopperVectorEnv):
+        if isinstance(env_or_num_envs, VectorEnv):  # a hopper vector env (any simulator)
             if config is not None or num_threads is not None:
                 raise ValueError("config and num_threads belong to the wrapped env, not here")
             self.env = env_or_num_envs
         else:
-            self.env = HopperVectorEnv(env_or_num_envs, config=config, num_threads=num_threads)
+            self.env = make_vector_env(env_or_num_envs, config=config, num_threads=num_threads)
         if self.env.config.normalized_actions:
             self.env.close()
             raise ValueError(

@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-SIMULATORS = ("mujoco", "pybullet")
+SIMULATORS = ("mujoco", "pybullet", "mjx")
 ACTUATOR_LAWS = ("dc-motor", "coast")  # see cpg_actor.envs.actuator
 HOP_REWARDS = ("hip-velocity", "apex")  # see cpg_actor.envs.reward
 
@@ -20,7 +20,9 @@ class HopperConfig:
     """The single-leg ANYmal hopper (paper section IV): simulation, actuator, reward, episode."""
 
     # -- simulation ------------------------------------------------------------------------
-    sim: str = "mujoco"  # "mujoco" (fast default) or "pybullet" (the paper's simulator)
+    # "mujoco" (fast default), "pybullet" (the paper's simulator) or "mjx" (MuJoCo XLA: JAX on a
+    # GPU; batched only, docs/gpu.md)
+    sim: str = "mujoco"
     physics_dt: float = 0.001  # s, physics substep (1 kHz)
     decimation: int = 10  # physics substeps per control step: control at 100 Hz
     episode_steps: int = 500  # control steps per episode: 5 s, then truncated

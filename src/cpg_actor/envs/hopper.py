@@ -45,6 +45,12 @@ def resolve_config(
     return config.replace(**changes) if changes else config.replace()
 
 
+def check_num_envs(num_envs: Any) -> None:
+    """ValueError unless ``num_envs`` is a positive integer."""
+    if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
+        raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+
+
 def robot_spec(config: HopperConfig) -> RobotSpec:
     """The hopper as the agents see it (joints, nominal pose, limits from the description)."""
     return RobotSpec(

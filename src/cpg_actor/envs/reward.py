@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cpg_actor.envs.array_namespace import namespace
+
 REWARD_TERMS = ("r1", "r2", "r3", "r4", "r5")
 REWARD_TERM_MEANING = {
     "r1": "upward hip velocity (c1 * max(v_h, 0))^2",
@@ -40,14 +42,16 @@ def reward_terms(
     joint_torque: np.ndarray,
     foot_velocity_xy: np.ndarray,
 ) -> dict[str, np.ndarray]:
-    """The five terms of eq. 4, batched: scalars ``(...)``, per-joint / x-y pairs ``(..., 2)``."""
+    """The five terms of eq. 4, batched: scalars ``(...)``, per-joint / x-y pairs ``(..., 2)``
+    (numpy or JAX arrays: :mod:`cpg_actor.envs.array_namespace`)."""
     c1, c2, c3, c4, c5 = weights
+    xp = namespace(hip_velocity, measured_position, joint_torque)
     return {
-        "r1": np.square(c1 * np.maximum(hip_velocity, 0.0)),
-        "r2": c2 * np.sum(np.square(desired_position - measured_position), axis=-1),
-        "r3": c3 * np.sum(np.square(joint_velocity), axis=-1),
-        "r4": c4 * np.sum(np.square(joint_torque), axis=-1),
-        "r5": c5 * np.linalg.norm(foot_velocity_xy, axis=-1),
+        "r1": xp.square(c1 * xp.maximum(hip_velocity, 0.0)),
+        "r2": c2 * xp.sum(xp.square(desired_position - measured_position), axis=-1),
+        "r3": c3 * xp.sum(xp.square(joint_velocity), axis=-1),
+        "r4": c4 * xp.sum(xp.square(joint_torque), axis=-1),
+        "r5": c5 * xp.linalg.norm(foot_velocity_xy, axis=-1),
     }
 
 
@@ -72,8 +76,9 @@ def apex_reward(
     versions were gamed by the MLP: paying the hip's height above its standing height, it
     chattered on a straightened leg; paying the foot's clearance at each turn of the hip's
     velocity, it folded and swung the leg in flight to turn the hip many times per flight.)"""
+    xp = namespace(com_velocity, com_height)
     apex = (com_velocity_before > 0.0) & (com_velocity <= 0.0) & (foot_height > AIRBORNE)
-    return np.where(apex, weight * np.maximum(com_height - highest_standing_com, 0.0), 0.0)
+    return xp.where(apex, weight * xp.maximum(com_height - highest_standing_com, 0.0), 0.0)
 
 
 def total_reward(terms: dict[str, np.ndarray]) -> np.ndarray:

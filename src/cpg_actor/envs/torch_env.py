@@ -12,9 +12,10 @@ hopper's :class:`~cpg_actor.envs.HopperVectorEnv`, the Cho et al. CPG wrapper, a
 * ``robot`` (:class:`cpg_actor.robot.RobotSpec`), ``num_envs``, the single-env spaces,
   ``get_state`` / ``set_state`` (episodes in checkpoints) and ``close`` pass through.
 
-A simulator that runs on the CPU and speaks numpy pays one copy per step here; a simulator
-that already holds its state in tensors on the device (a GPU backend) returns them as they are
-(``torch.as_tensor`` does not copy a tensor that is already of the right type and device).
+A simulator that runs on the CPU and speaks numpy pays one copy per step here. An env with a
+tensor face of its own (``reset_tensors`` / ``step_tensors``, as the MJX hopper,
+:class:`cpg_actor.envs.mjx.MjxHopperVectorEnv`) is called through it instead: its tensors come
+as they are (``torch.as_tensor`` does not copy a tensor already of the right type and device).
 """
 
 from __future__ import annotations
@@ -43,6 +44,12 @@ def _is_double(value: Any) -> bool:
     return getattr(value, "dtype", None) in (np.float64, torch.float64)
 
 
+def _to(value: Any, device: torch.device) -> Any:
+    if isinstance(value, dict):
+        return {name: tensor.to(device) for name, tensor in value.items()}
+    return value.to(device)
+
+
 class TorchVectorEnv:
     """Torch tensors on ``device`` in and out of a Gymnasium-style vector env (module doc)."""
 
@@ -60,10 +67,18 @@ class TorchVectorEnv:
         return torch.as_tensor(value, device=self.device).to(dtype)
 
     def reset(self, seed: int | None = None) -> tuple[Tensor, dict[str, Any]]:
-        obs, info = self.unwrapped.reset(seed=seed)
+        if hasattr(self.unwrapped, "reset_tensors"):
+            obs, info = self.unwrapped.reset_tensors(seed)
+        else:
+            obs, info = self.unwrapped.reset(seed=seed)
         return self._tensor(obs, torch.float32), info
 
     def step(self, actions: Tensor | np.ndarray) -> EnvStep:
+        if hasattr(self.unwrapped, "step_tensors"):
+            out = self.unwrapped.step_tensors(torch.as_tensor(actions))
+            if out.obs.device == self.device:
+                return out
+            return EnvStep(*(_to(value, self.device) for value in out[:-1]), out.info)
         if isinstance(actions, Tensor):
             actions = actions.detach().cpu().numpy()
         obs, reward, terminated, truncated, info = self.unwrapped.step(actions)

@@ -37,6 +37,7 @@ from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.hopper import (
     action_space,
     check_actions,
+    check_num_envs,
     observation_space,
     resolve_config,
     robot_spec,
@@ -68,10 +69,7 @@ class HopperVectorEnv(VectorEnv):
         max_episode_steps: int | None = None,
         **overrides: Any,
     ) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)):
-            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
-        if num_envs < 1:
-            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        check_num_envs(num_envs)
         if num_threads is not None and (
             isinstance(num_threads, bool) or not isinstance(num_threads, int) or num_threads < 1
         ):
@@ -229,6 +227,13 @@ def make_vector_env(
     config: HopperConfig | dict | None = None,
     num_threads: int | None = None,
     **overrides: Any,
-) -> HopperVectorEnv:
-    """``HopperVectorEnv(num_envs, config, num_threads, **overrides)``."""
-    return HopperVectorEnv(num_envs, config=config, num_threads=num_threads, **overrides)
+) -> VectorEnv:
+    """N hoppers on the simulator ``config.sim`` names (or ``sim=``): a
+    :class:`HopperVectorEnv` (MuJoCo, PyBullet) or, for ``"mjx"``, a
+    :class:`cpg_actor.envs.mjx.MjxHopperVectorEnv` (JAX, imported only then)."""
+    config = resolve_config(config, overrides.pop("sim", None), overrides)
+    if config.sim == "mjx":
+        from cpg_actor.envs.mjx.vector import MjxHopperVectorEnv
+
+        return MjxHopperVectorEnv(num_envs, config=config)
+    return HopperVectorEnv(num_envs, config=config, num_threads=num_threads)

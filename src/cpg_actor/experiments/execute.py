@@ -366,16 +366,39 @@ def import_ray():
     return ray
 
 
-def run_ray(tasks: list[RunTask], address: str, progress: Progress) -> list[dict[str, Any]]:
-    """One Ray task (``num_cpus=1``) per run on the cluster at ``address`` ("local": start a
-    local Ray instance). ``OUT`` must be on a file system shared by every node."""
+def run_one_on_ray(task: RunTask) -> dict[str, Any]:
+    """:func:`run_one` as a Ray task, with the resources Ray gave it (``resources``: CPU, and
+    GPU shares; Ray sets ``CUDA_VISIBLE_DEVICES`` for the run's subprocess)."""
+    import ray
+
+    result = run_one(task)
+    result["resources"] = dict(ray.get_runtime_context().get_assigned_resources())
+    return result
+
+
+def run_ray(
+    tasks: list[RunTask],
+    address: str,
+    progress: Progress,
+    gpus_per_run: float = 0.0,
+    local_gpus: int | None = None,
+) -> list[dict[str, Any]]:
+    """One Ray task per run on the cluster at ``address`` ("local": start a local Ray
+    instance, with ``local_gpus`` GPUs declared, None: the GPUs it finds), each asking for one
+    CPU and ``gpus_per_run`` of a GPU (e.g. 0.2: five runs share a GPU; Ray places them and
+    sets ``CUDA_VISIBLE_DEVICES``). ``OUT`` must be on a file system shared by every node."""
+    if not gpus_per_run >= 0:
+        raise ValueError(f"gpus_per_run must be >= 0, got {gpus_per_run!r}")
     ray = import_ray()
     if address == "local":
-        ray.init(include_dashboard=False, log_to_driver=False)
+        ray.init(include_dashboard=False, log_to_driver=False, num_gpus=local_gpus)
     else:
         ray.init(address=address, log_to_driver=False)
     try:
-        remote = ray.remote(num_cpus=1, max_retries=0)(run_one)
+        options = {"num_cpus": 1, "max_retries": 0}
+        if gpus_per_run > 0:
+            options["num_gpus"] = gpus_per_run
+        remote = ray.remote(**options)(run_one_on_ray)
         pending = {remote.remote(task): task for task in tasks}
         for task in tasks:
             progress.set(task.name, "submitted")

@@ -24,7 +24,13 @@ def make_backend(config, num_robots: int = 1, num_threads: int | None = None) ->
         from cpg_actor.envs.backends.pybullet_backend import PybulletBackend
 
         return PybulletBackend(**kwargs)
-    raise ValueError(f"unknown simulator {config.sim!r}; use 'mujoco' or 'pybullet'")
+    if config.sim == "mjx":
+        raise ValueError(
+            "sim='mjx' steps a batch of robots on JAX's device and has no single-robot backend: "
+            "use make_vector_env(num_envs, sim='mjx') (cpg_actor.envs.mjx.MjxHopperVectorEnv) "
+            "or the id cpg_actor/AnymalHopper-mjx-v0 with gymnasium.make_vec"
+        )
+    raise ValueError(f"unknown simulator {config.sim!r}; use 'mujoco', 'pybullet' or 'mjx'")
 
 
 __all__ = ["Backend", "make_backend"]

@@ -1,5 +1,7 @@
-"""Planar kinematics and statics of the hopper, by hand (numpy): used to place the robot on the
-ground at reset, and by the tests as the independent reference the simulators are checked on.
+"""Planar kinematics and statics of the hopper, by hand: used to place the robot on the ground
+at reset, by the reward, and by the tests as the independent reference the simulators are
+checked on. The batched functions take numpy arrays (float64) or JAX arrays (the MJX backend
+calls them inside ``jax.jit``; :mod:`cpg_actor.envs.array_namespace`).
 
 The leg moves in the x-z plane; y offsets in the description change nothing here. A rotation
 by ``q`` about +y maps a vector ``(x, z)`` to ``(x cos q + z sin q, -x sin q + z cos q)``.
@@ -9,11 +11,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from cpg_actor.envs.array_namespace import as_float, namespace
 from cpg_actor.envs.robot import description as robot
 
 
 def _rotate(angle: np.ndarray, x: float | np.ndarray, z: float | np.ndarray):
-    c, s = np.cos(angle), np.sin(angle)
+    xp = namespace(angle)
+    c, s = xp.cos(angle), xp.sin(angle)
     return x * c + z * s, -x * s + z * c
 
 
@@ -32,33 +36,35 @@ FOOT_IN_SHANK = (
 
 def knee_position(joint_pos: np.ndarray) -> np.ndarray:
     """KFE axis (x, z) in the hip frame, for joint positions ``(..., 2)``."""
-    q = np.asarray(joint_pos, dtype=np.float64)
+    xp = namespace(joint_pos)
+    q = as_float(xp, joint_pos)
     dx, dz = _rotate(q[..., 0], *KNEE_IN_THIGH)
-    return np.stack([HFE_ORIGIN[0] + dx, HFE_ORIGIN[1] + dz], axis=-1)
+    return xp.stack([HFE_ORIGIN[0] + dx, HFE_ORIGIN[1] + dz], axis=-1)
 
 
 def foot_position(joint_pos: np.ndarray) -> np.ndarray:
     """Centre of the foot sphere (x, z) in the hip frame, for joint positions ``(..., 2)``."""
-    q = np.asarray(joint_pos, dtype=np.float64)
+    xp = namespace(joint_pos)
+    q = as_float(xp, joint_pos)
     knee = knee_position(q)
     dx, dz = _rotate(q[..., 0] + q[..., 1], *FOOT_IN_SHANK)
-    return np.stack([knee[..., 0] + dx, knee[..., 1] + dz], axis=-1)
+    return xp.stack([knee[..., 0] + dx, knee[..., 1] + dz], axis=-1)
 
 
 def foot_velocity(joint_pos: np.ndarray, joint_vel: np.ndarray) -> np.ndarray:
     """Velocity (x, z) of the foot sphere centre relative to the hip, ``(..., 2)``."""
-    q = np.asarray(joint_pos, dtype=np.float64)
-    qd = np.asarray(joint_vel, dtype=np.float64)
+    xp = namespace(joint_pos, joint_vel)
+    q, qd = as_float(xp, joint_pos), as_float(xp, joint_vel)
     a1, a12 = q[..., 0], q[..., 0] + q[..., 1]
     kx, kz = KNEE_IN_THIGH
     fx, fz = FOOT_IN_SHANK
     # d/dq R(q)(x, z) = (-x sin q + z cos q, -x cos q - z sin q)
-    knee_dx = -kx * np.sin(a1) + kz * np.cos(a1)
-    knee_dz = -kx * np.cos(a1) - kz * np.sin(a1)
-    foot_dx = -fx * np.sin(a12) + fz * np.cos(a12)
-    foot_dz = -fx * np.cos(a12) - fz * np.sin(a12)
+    knee_dx = -kx * xp.sin(a1) + kz * xp.cos(a1)
+    knee_dz = -kx * xp.cos(a1) - kz * xp.sin(a1)
+    foot_dx = -fx * xp.sin(a12) + fz * xp.cos(a12)
+    foot_dz = -fx * xp.cos(a12) - fz * xp.sin(a12)
     w1, w12 = qd[..., 0], qd[..., 0] + qd[..., 1]
-    return np.stack([knee_dx * w1 + foot_dx * w12, knee_dz * w1 + foot_dz * w12], axis=-1)
+    return xp.stack([knee_dx * w1 + foot_dx * w12, knee_dz * w1 + foot_dz * w12], axis=-1)
 
 
 def standing_hip_height(joint_pos: np.ndarray) -> np.ndarray:
@@ -88,7 +94,7 @@ def com_positions(joint_pos) -> dict[str, tuple[float, float]]:
 def com_height_offset(joint_pos: np.ndarray) -> np.ndarray:
     """Height of the whole robot's centre of mass above the hip (HFE axis frame origin), for
     joint positions ``(..., 2)``: the mass-weighted z of :func:`com_positions`, batched."""
-    q = np.asarray(joint_pos, dtype=np.float64)
+    q = as_float(namespace(joint_pos), joint_pos)
     links = robot.LINKS
     knee_z = knee_position(q)[..., 1]
     thigh, shank, adapter = links["thigh"].com, links["shank"].com, links["adapter"].com
@@ -112,11 +118,16 @@ def com_vertical_velocity(
 ) -> np.ndarray:
     """Vertical velocity of the centre of mass: the hip's plus d/dt of
     :func:`com_height_offset` (central difference along the joint velocity)."""
-    q = np.asarray(joint_pos, dtype=np.float64)
-    qd = np.asarray(joint_vel, dtype=np.float64)
-    h = 1e-6
-    rate = (com_height_offset(q + h * qd) - com_height_offset(q - h * qd)) / (2 * h)
-    return np.asarray(hip_velocity, dtype=np.float64) + rate
+    xp = namespace(hip_velocity, joint_pos, joint_vel)
+    q, qd = as_float(xp, joint_pos), as_float(xp, joint_vel)
+    if xp is np:
+        h = 1e-6
+        rate = (com_height_offset(q + h * qd) - com_height_offset(q - h * qd)) / (2 * h)
+    else:  # float32: the exact directional derivative instead of a difference
+        import jax
+
+        rate = jax.jvp(com_height_offset, (q,), (qd,))[1]
+    return as_float(xp, hip_velocity) + rate
 
 
 def highest_standing_com(resolution: int = 61) -> float:

@@ -64,7 +64,7 @@ def _body(name: str, indent: str) -> list[str]:
     return lines
 
 
-def actuator_xml(actuator=None, indent: str = "  ") -> list[str]:
+def actuator_xml(actuator=None, indent: str = "  ", torque_control: bool = False) -> list[str]:
     """The ``<actuator>`` and ``<sensor>`` elements for :class:`cpg_actor.envs.actuator.Actuator`
     constants (default: those of the default ``HopperConfig``).
 
@@ -72,7 +72,18 @@ def actuator_xml(actuator=None, indent: str = "  ") -> list[str]:
     through a driver voltage clamped to ``V``; ``nominal="V tau_sat v_max"`` makes the motor's
     torque-speed line ``tau_sat (+-1 - q_dot / v_max)`` at that clamp, and ``saturation`` clips
     the torque to ``tau_max``. ``V`` = 1 volt is arbitrary: only the ratios matter.
+
+    ``torque_control``: plain ``motor`` actuators whose control is the joint torque, and no
+    sensors, for MJX (which has no ``dcmotor``): the MJX backend computes the same law itself
+    at every substep (:mod:`cpg_actor.envs.mjx.dynamics`).
     """
+    inner = indent + "  "
+    if torque_control:
+        return [
+            f"{indent}<actuator>",
+            *(f'{inner}<motor name="{j}" joint="{j}"/>' for j in robot.JOINT_NAMES),
+            f"{indent}</actuator>",
+        ]
     if actuator is None:
         from cpg_actor.envs.actuator import Actuator
         from cpg_actor.envs.config import HopperConfig
@@ -83,7 +94,6 @@ def actuator_xml(actuator=None, indent: str = "  ") -> list[str]:
         f'input="pos" nominal="1 {a.saturation_torque:.17g} {a.velocity_limit:.17g}" '
         f'controller="{a.kp:.17g} 0 {a.kd:.17g} 0 0 1" saturation="{a.torque_limit:.17g} 0 0"'
     )
-    inner = indent + "  "
     return [
         f"{indent}<actuator>",
         *(f'{inner}<dcmotor name="{j}" joint="{j}" {motor}/>' for j in robot.JOINT_NAMES),
@@ -94,7 +104,7 @@ def actuator_xml(actuator=None, indent: str = "  ") -> list[str]:
     ]
 
 
-def mjcf_text(actuator=None) -> str:
+def mjcf_text(actuator=None, torque_control: bool = False) -> str:
     """The complete MJCF document, with the actuators of :func:`actuator_xml`."""
     rail = robot.JOINTS[0]
     lo, hi = rail.limits
@@ -133,7 +143,7 @@ def mjcf_text(actuator=None) -> str:
             *body,
             "    </body>",
             "  </worldbody>",
-            *actuator_xml(actuator),
+            *actuator_xml(actuator, torque_control=torque_control),
             "</mujoco>",
             "",
         ]

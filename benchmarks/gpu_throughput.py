@@ -1,0 +1,195 @@
+"""The MJX hopper's throughput on JAX's device (an NVIDIA GPU where there is one, else JAX's
+CPU backend), per batch size: the physics alone, the env, and end-to-end PPO training per agent
+(the ``gpu`` preset, networks and PPO on the same device), with the device named.
+
+    python benchmarks/gpu_throughput.py [--envs 1024 4096 32768 131072]
+        [--agents cpg-actor cpg-actor-open-loop mlp] [--iterations 3]
+        [--output benchmarks/results/gpu_throughput.md]
+
+* physics: ``decimation`` x ``mjx.step`` per control step for every robot, the actuator law at
+  every substep, constant desired positions: the ceiling of this env on this device;
+* env: ``MjxHopperVectorEnv.step_tensors`` with a constant torch action (physics, reward,
+  autoreset, DLPack both ways): the env stepped with nothing else;
+* training: ``Runner.collect`` + ``Runner.update`` with the ``gpu`` preset (its rollout of 24
+  steps, 5 epochs of 4 minibatches) at each batch size, after one warm-up iteration (the JIT
+  and ``torch.compile``), and the paper's budget (5 variants x 5 seeds x 20M steps)
+  extrapolated from it, run after run on one device.
+
+It installs nothing and reads nothing from the network; every figure is measured in this run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from cpg_actor.config import TrainConfig, apply_dict
+from cpg_actor.envs import make_vector_env
+from cpg_actor.envs.mjx.dynamics import jax
+from cpg_actor.machine import cpu_model, git_commit, usable_cores
+from cpg_actor.presets import preset_values
+from cpg_actor.runner import Runner
+
+AGENTS = ("cpg-actor", "cpg-actor-open-loop", "mlp")
+PAPER_BUDGET = 5 * 5 * 20_000_000  # control steps: 5 variants x 5 seeds x 20M
+
+
+def device_name() -> str:
+    device = jax.devices()[0]
+    if device.platform == "cpu":
+        return f"JAX CPU backend on {cpu_model()} ({usable_cores()} usable cores); no GPU"
+    return f"{device.device_kind} (JAX {device.platform}:{device.id})"
+
+
+def timed(step, repeats: int) -> float:
+    """Seconds per call of ``step()`` (which blocks until its work is done), after a warm-up."""
+    step()
+    start = time.perf_counter()
+    for _ in range(repeats):
+        step()
+    return (time.perf_counter() - start) / repeats
+
+
+def physics_and_env(num_envs: int, repeats: int) -> dict[str, float]:
+    env = make_vector_env(num_envs, sim="mjx")
+    try:
+        env.reset_tensors(seed=0)
+        dynamics = env.dynamics
+        control = jax.jit(jax.vmap(dynamics._control))
+        desired = jax.numpy.tile(dynamics._nominal, (num_envs, 1))
+        data = [env._state.data]
+
+        def physics():
+            data[0], torque = control(data[0], desired)
+            torque.block_until_ready()
+
+        action = torch.tensor(np.tile([0.4, -0.8], (num_envs, 1)), dtype=torch.float32)
+        action = action.to(env.device)
+
+        def env_step():
+            out = env.step_tensors(action)
+            if out.obs.is_cuda:
+                torch.cuda.synchronize()
+
+        return {
+            "physics": num_envs / timed(physics, repeats),
+            "env": num_envs / timed(env_step, repeats),
+        }
+    finally:
+        env.close()
+
+
+def cpu_ceiling(num_envs: int) -> float:
+    """``mujoco.rollout`` on this machine's CPU cores, same MJCF and robots (env_throughput)."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from env_throughput import bench_size
+
+    return bench_size("mujoco", num_envs, repeats=2, budget=50_000)["rollout"]
+
+
+def training(agent: str, num_envs: int, iterations: int, device: str) -> dict[str, float]:
+    config = TrainConfig(agent=agent)
+    apply_dict(config, preset_values("gpu"), "")
+    config.num_envs, config.device, config.eval_interval = num_envs, device, 0
+    config.total_steps = (iterations + 1) * config.steps_per_iteration
+    runner = Runner(config, run_dir=None, tensorboard=False)
+    sync = torch.cuda.synchronize if runner.device.type == "cuda" else (lambda: None)
+    collect = update = 0.0
+    try:
+        runner.start_episodes()
+        for i in range(iterations + 1):
+            start = time.perf_counter()
+            runner.collect()
+            sync()
+            collected = time.perf_counter()
+            runner.update()
+            sync()
+            if i > 0:
+                collect += collected - start
+                update += time.perf_counter() - collected
+    finally:
+        runner.close()
+    samples = iterations * config.steps_per_iteration
+    return {"SPS": samples / (collect + update), "collect_share": collect / (collect + update)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--envs", type=int, nargs="+", default=[1024, 4096, 32768, 131072])
+    parser.add_argument("--agents", nargs="+", default=list(AGENTS))
+    parser.add_argument("--iterations", type=int, default=3, help="timed training iterations")
+    parser.add_argument("--repeats", type=int, default=20, help="timed env steps per size")
+    parser.add_argument("--device", default="auto", help="torch device for training (auto)")
+    parser.add_argument("--output", default="benchmarks/results/gpu_throughput.md")
+    args = parser.parse_args()
+
+    name = device_name()
+    print(f"device: {name}", flush=True)
+    rows = []
+    for num_envs in args.envs:
+        speeds = physics_and_env(num_envs, args.repeats)
+        speeds["cpu"] = cpu_ceiling(num_envs)
+        print(f"{num_envs} envs: {speeds}", flush=True)
+        trained = {}
+        for agent in args.agents:
+            trained[agent] = training(agent, num_envs, args.iterations, args.device)
+            print(f"  {agent}: {trained[agent]}", flush=True)
+        rows.append((num_envs, speeds, trained))
+
+    command = "python benchmarks/gpu_throughput.py --envs " + " ".join(map(str, args.envs))
+    command += f" --agents {' '.join(args.agents)} --iterations {args.iterations}"
+    lines = [
+        "# MJX throughput",
+        "",
+        f"Measured {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC at commit "
+        f"{git_commit() or 'unknown'} with `{command}`.",
+        "",
+        f"Device: **{name}**; JAX {jax.__version__}, torch {torch.__version__}"
+        + (f" on {torch.cuda.get_device_name()}" if torch.cuda.is_available() else "")
+        + ".",
+        "",
+        "Control steps per second (one control step = 10 physics substeps of 1 ms).",
+        "",
+        "| envs | physics | env | "
+        + " | ".join(f"training {a}" for a in args.agents)
+        + " | MuJoCo C on the CPU |",
+        "| ---: | ---: | ---: | " + " | ".join("---:" for _ in args.agents) + " | ---: |",
+    ]
+    for num_envs, speeds, trained in rows:
+        cells = [f"{trained[a]['SPS']:,.0f} ({trained[a]['SPS'] / speeds['env']:.0%})"
+                 for a in args.agents]  # fmt: skip
+        lines.append(
+            f"| {num_envs:,} | {speeds['physics']:,.0f} | {speeds['env']:,.0f} | "
+            + " | ".join(cells) + f" | {speeds['cpu']:,.0f} |"
+        )  # fmt: skip
+    best = max(rows, key=lambda row: row[2][args.agents[0]]["SPS"])
+    sps = best[2][args.agents[0]]["SPS"]
+    lines += [
+        "",
+        f"MuJoCo C on the CPU: `mujoco.rollout` of the same MJCF and robots on this machine's "
+        f"{usable_cores()} CPU cores, in the same run (the CPU simulators' ceiling).",
+        "",
+        "Training: the `gpu` preset at each size (percent: of the env's own rate); collection",
+        "share of the training time at the largest size: "
+        + ", ".join(f"{a} {rows[-1][2][a]['collect_share']:.0%}" for a in args.agents)
+        + ".",
+        "",
+        f"The paper's budget (5 variants x 5 seeds x 20M = {PAPER_BUDGET / 1e6:,.0f}M steps) at "
+        f"{args.agents[0]}'s best rate here ({sps:,.0f} SPS at {best[0]:,} envs), one run after "
+        f"another on this device: **{PAPER_BUDGET / sps / 3600:,.1f} h**.",
+        "",
+    ]
+    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.output).write_text("\n".join(lines))
+    print("\n".join(lines))
+
+
+if __name__ == "__main__":
+    main()
