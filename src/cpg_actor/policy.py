@@ -31,7 +31,8 @@ from cpg_actor.ppo.normalizer import RunningNormalizer
 class PolicyStep(NamedTuple):
     """One control step: the clipped action for the env and what training stores."""
 
-    action: np.ndarray  # (N, A) float32, clipped to the action space
+    action: np.ndarray | Tensor  # (N, A) float32 clipped to the action space (numpy, or a
+    # tensor on the policy's device with act(tensor_action=True))
     observation: Tensor  # (N, obs_dim) the normalised observation the agent acted on
     state: Tensor  # (N, *state_shape) the recurrent state before the step
     agent: ActStep  # the agent's output: sampled action, log-prob, value, mean, std, extras
@@ -82,6 +83,11 @@ class Policy:
         """Restart the state of the envs whose episode ended (``done``: (N,) bool)."""
         if self.state is None:
             raise RuntimeError("call Policy.reset(num_envs) before end_episodes()")
+        if isinstance(done, Tensor) and done.device.type != "cpu":  # no sync with the host
+            rows = done.to(self.state.device).reshape(-1, *[1] * (self.state.dim() - 1))
+            initial = self.agent.initial_state(len(done)).to(self.state)
+            self.state = torch.where(rows, initial, self.state)
+            return
         if isinstance(done, Tensor):
             done = done.cpu().numpy()
         rows = np.flatnonzero(np.asarray(done))
@@ -89,6 +95,12 @@ class Policy:
             state = self.state.clone()
             state[torch.as_tensor(rows, device=state.device)] = self.agent.initial_state(len(rows))
             self.state = state
+
+    def _bounds(self, device: torch.device) -> tuple[Tensor, Tensor]:
+        if getattr(self, "_bounds_on", (None,))[0] != device:
+            low = torch.as_tensor(self.action_low, device=device)
+            self._bounds_on = (device, low, torch.as_tensor(self.action_high, device=device))
+        return self._bounds_on[1], self._bounds_on[2]
 
     def normalize(self, obs: Tensor, update: bool = False) -> Tensor:
         """The agent's input; ``update`` first merges ``obs`` into the running statistics."""
@@ -104,12 +116,15 @@ class Policy:
         obs: np.ndarray | Tensor,
         deterministic: bool = True,
         update_normalizer: bool = False,
+        tensor_action: bool = False,
     ) -> PolicyStep:
         """One control step for every env: ``obs`` (N, obs_dim) -> clipped action (N, A).
 
         ``deterministic``: the Gaussian's mean (evaluation, deployment); False samples from
-        it (training). The recurrent state advances; call :meth:`end_episodes` for the envs
-        whose episode the step ended."""
+        it (training). ``tensor_action``: the action stays a tensor on the policy's device
+        (the trainer, whose env takes tensors: no copy to the host on a GPU), else numpy. The
+        recurrent state advances; call :meth:`end_episodes` for the envs whose episode the
+        step ended."""
         if self.state is None:
             raise RuntimeError("call Policy.reset(num_envs) before act()")
         if isinstance(obs, Tensor):
@@ -125,7 +140,11 @@ class Policy:
         step = self.agent.act(normalized, state, deterministic=deterministic)
         # the env's action is the sample's first entries (the agent may draw more: feedback)
         sampled = step.action[:, : self.action_low.shape[0]]
-        action = np.clip(sampled.cpu().numpy(), self.action_low, self.action_high)
+        if tensor_action:  # the same float32 clip as numpy's, on the device
+            low, high = self._bounds(sampled.device)
+            action = torch.minimum(torch.maximum(sampled, low), high)
+        else:
+            action = np.clip(sampled.cpu().numpy(), self.action_low, self.action_high)
         self.state = step.next_state
         return PolicyStep(action, normalized, state, step)
 

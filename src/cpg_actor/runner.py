@@ -186,7 +186,9 @@ class Runner:
         self.storage.clear()
         sim_time = 0.0
         for _ in range(cfg.ppo.num_steps):
-            acted = self.policy.act(self.obs, deterministic=False, update_normalizer=True)
+            acted = self.policy.act(
+                self.obs, deterministic=False, update_normalizer=True, tensor_action=True
+            )
             step = acted.agent
             start = time.perf_counter()
             out = self.env.step(acted.action)

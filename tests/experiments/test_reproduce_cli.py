@@ -101,3 +101,22 @@ def test_ray_missing_gives_install_hint(tmp_path, capsys):
     argv = ["reproduce", "--out", str(tmp_path / "r"), "--variants", "mlp", "--ray", "auto"]
     assert main(argv) == 2
     assert "pip install cpg-actor[ray]" in capsys.readouterr().err
+
+
+def test_a_preset_reaches_every_run_and_the_settings_file(tmp_path):
+    from cpg_actor.experiments import plan
+
+    settings = plan.ReproduceSettings(
+        variants=["mlp"], seeds=2, total_steps=1000, num_envs=8, preset="gpu"
+    )
+    tasks = plan.build_tasks(settings, tmp_path, workers=1)
+    assert [t.train_args[t.train_args.index("--preset") + 1] for t in tasks] == ["gpu", "gpu"]
+    config = plan.resolve_config(settings, "mlp")
+    assert (config.preset, config.env.sim, config.num_envs) == ("gpu", "mjx", 8)
+    out = tmp_path / "out"
+    assert plan.prepare_out_dir(out, settings, overwrite=False) == "new"
+    plan.write_settings_file(out, settings, "cpg-actor reproduce ...", {})
+    assert plan.settings_from_file(out) == settings
+    # directories made without a preset keep their identity
+    plain = plan.ReproduceSettings(variants=["mlp"], seeds=1, total_steps=10)
+    assert "preset" not in plain.identity()

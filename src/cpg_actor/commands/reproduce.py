@@ -10,6 +10,7 @@ from pathlib import Path
 
 from cpg_actor.commands import add_set_option
 from cpg_actor.envs.config import SIMULATORS
+from cpg_actor.presets import PRESETS
 
 HELP = "reproduce the paper: train variants x seeds in parallel (or on Ray), figures and a report"
 
@@ -38,6 +39,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--num-envs", type=int, default=None, help="parallel envs per run")
     parser.add_argument("--sim", default=None, choices=SIMULATORS)
+    parser.add_argument(
+        "--preset",
+        default=None,
+        choices=sorted(PRESETS),
+        help="every run's `cpg-actor train --preset` (default paper; gpu: 4,096 MJX envs)",
+    )
     add_set_option(
         parser, "training config override for every run (repeatable), as in `cpg-actor train`"
     )
@@ -84,6 +91,7 @@ def run(args: argparse.Namespace) -> int:
         total_steps=parse_steps(args.total_steps),
         num_envs=args.num_envs,
         sim=args.sim,
+        preset=getattr(args, "preset", None),
         overrides=list(args.overrides),
         eval_episodes=args.eval_episodes,
         first_seed=args.first_seed,
@@ -173,6 +181,8 @@ def _as_argv(args: argparse.Namespace) -> list[str]:
         argv += ["--num-envs", str(args.num_envs)]
     if args.sim is not None:
         argv += ["--sim", args.sim]
+    if getattr(args, "preset", None) is not None:
+        argv += ["--preset", args.preset]
     if getattr(args, "gpus_per_run", 0):
         argv += ["--gpus-per-run", str(args.gpus_per_run)]
     for text in args.overrides:

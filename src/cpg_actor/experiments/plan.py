@@ -75,6 +75,7 @@ class ReproduceSettings:
     stage_fractions: list[float] = field(default_factory=lambda: list(STAGE_FRACTIONS))
     # seeds first_seed .. first_seed + seeds - 1: tuning on seeds that are never reported
     first_seed: int = 0
+    preset: str | None = None  # cpg-actor train --preset (None: the default, paper)
 
     @property
     def seed_range(self) -> range:
@@ -85,6 +86,8 @@ class ReproduceSettings:
         identity = {key: data[key] for key in IDENTITY_KEYS}
         if self.first_seed:  # absent when 0: directories made before the option still match
             identity["first_seed"] = self.first_seed
+        if self.preset is not None:  # likewise absent unless given
+            identity["preset"] = self.preset
         return identity
 
 
@@ -144,7 +147,11 @@ def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
         values["num_envs"] = settings.num_envs
     if settings.sim is not None:
         values["env"] = {"sim": settings.sim}
-    config = compose_config(values=values, overrides=[*variant_overrides, *settings.overrides])
+    config = compose_config(
+        preset=settings.preset,
+        values=values,
+        overrides=[*variant_overrides, *settings.overrides],
+    )
     return without_compile_if_no_compiler(config)
 
 
@@ -197,6 +204,8 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
             run_dir = out / "runs" / variant / f"seed{seed}"
             agent, variant_overrides = variant_agent(variant)
             args = ["--agent", agent, "--seed", str(seed)]
+            if settings.preset is not None:
+                args += ["--preset", settings.preset]
             args += ["--total-steps", str(settings.total_steps), "--run-dir", str(run_dir)]
             if settings.num_envs is not None:
                 args += ["--num-envs", str(settings.num_envs)]
@@ -256,7 +265,9 @@ def settings_from_file(out: Path) -> ReproduceSettings:
     data = load_settings_file(out)
     if data is None:
         raise FileNotFoundError(f"{out / SETTINGS_FILE} does not exist; is {out} a results dir?")
-    return ReproduceSettings(**{key: data["settings"][key] for key in IDENTITY_KEYS})
+    saved = data["settings"]
+    optional = {key: saved[key] for key in ("first_seed", "preset") if key in saved}
+    return ReproduceSettings(**{key: saved[key] for key in IDENTITY_KEYS}, **optional)
 
 
 def prepare_out_dir(out: Path, settings: ReproduceSettings, overwrite: bool) -> str:
