@@ -65,3 +65,29 @@ def test_resume_on_mjx_equals_the_uninterrupted_run(tmp_path):
     finally:
         straight.close()
         resumed.close()
+
+
+def jax_has_gpu() -> bool:
+    import jax
+
+    return any(device.platform in ("gpu", "cuda") for device in jax.devices())
+
+
+@pytest.mark.skipif(
+    not (torch.cuda.is_available() and jax_has_gpu()),
+    reason="needs CUDA in both torch and JAX (docs/gpu.md)",
+)
+def test_training_on_the_gpu_keeps_every_tensor_there():
+    config = mjx_config("cpg-actor")
+    config.device = "cuda"
+    runner = Runner(config, tensorboard=False)
+    try:
+        assert runner.env.unwrapped.device.type == "cuda"
+        runner.learn()
+        assert runner.obs.is_cuda and runner.agent_state.is_cuda
+        assert all(p.is_cuda and torch.isfinite(p).all() for p in runner.agent.parameters())
+        hold = torch.tensor([[0.4, -0.8]] * 2, device="cuda")
+        out = runner.env.step(hold)  # DLPack both ways: every tensor stays on the GPU
+        assert out.obs.is_cuda and out.reward.is_cuda and out.terminated.is_cuda
+    finally:
+        runner.close()
