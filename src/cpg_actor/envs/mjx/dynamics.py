@@ -44,6 +44,11 @@ jax, mjx = load()
 jnp = jax.numpy
 
 
+# the fields of mjx.Data a step starts from (with ctrl, which the actuator law sets at every
+# substep); every other field is derived from them by mjx.step
+STATE_FIELDS = ("qpos", "qvel", "qacc_warmstart")
+
+
 class EnvState(NamedTuple):
     """Everything the next step depends on, N rows each (a JAX pytree)."""
 
@@ -200,8 +205,11 @@ class HopperDynamics:
         def pick(new, old):
             return jnp.where(done.reshape((-1,) + (1,) * (old.ndim - 1)), new, old)
 
+        # only the state a step starts from is reset; mjx.step derives everything else from it
+        data = data.replace(**{name: pick(getattr(fresh, name), getattr(data, name))
+                               for name in STATE_FIELDS})  # fmt: skip
         next_state = EnvState(
-            data=jax.tree.map(pick, fresh, data),
+            data=data,
             desired=pick(jnp.broadcast_to(self._nominal, desired.shape), desired),
             elapsed=jnp.where(done, 0, elapsed),
             standing=jnp.where(done, fresh.qpos[:, 0], state.standing),

@@ -31,10 +31,8 @@ from cpg_actor.envs.hopper import (
     resolve_config,
     robot_spec,
 )
-from cpg_actor.envs.mjx.dynamics import EnvState, dynamics_for, jax, seed_keys
+from cpg_actor.envs.mjx.dynamics import STATE_FIELDS, EnvState, dynamics_for, jax, seed_keys
 from cpg_actor.envs.torch_env import EnvStep
-
-STATE_FIELDS = ("qpos", "qvel", "qacc_warmstart")  # of mjx.Data, all a step starts from
 
 
 def torch_device(jax_device) -> torch.device:
