@@ -7,9 +7,11 @@ CPU backend), per batch size: the physics alone, the env, and end-to-end PPO tra
         [--output benchmarks/results/gpu_throughput.md]
 
 * physics: ``decimation`` x ``mjx.step`` per control step for every robot, the actuator law at
-  every substep, constant desired positions: the ceiling of this env on this device;
-* env: ``MjxHopperVectorEnv.step_tensors`` with a constant torch action (physics, reward,
-  autoreset, DLPack both ways): the env stepped with nothing else;
+  every substep: the ceiling of this env on this device;
+* env: ``MjxHopperVectorEnv.step_tensors`` with torch actions (physics, reward, autoreset,
+  DLPack both ways): the env stepped with nothing else;
+* both with desired positions drawn around the nominal pose, new each step (a moving leg
+  costs the contact solver more than a still one);
 * training: ``Runner.collect`` + ``Runner.update`` with the ``gpu`` preset (its rollout of 24
   steps, 5 epochs of 4 minibatches) at each batch size, after one warm-up iteration (the JIT
   and ``torch.compile``), and the paper's budget (5 variants x 5 seeds x 20M steps)
@@ -56,23 +58,31 @@ def timed(step, repeats: int) -> float:
 
 
 def physics_and_env(num_envs: int, repeats: int) -> dict[str, float]:
+    """Both driven by desired positions drawn around the nominal pose (+-0.3 rad, new each
+    step, as a policy's exploration): the contact solver works harder on a moving leg than on
+    a still one (3-4x on the CPU), so constant actions would flatter it."""
     env = make_vector_env(num_envs, sim="mjx")
     try:
         env.reset_tensors(seed=0)
         dynamics = env.dynamics
         control = jax.jit(jax.vmap(dynamics._control))
-        desired = jax.numpy.tile(dynamics._nominal, (num_envs, 1))
-        data = [env._state.data]
+        rng = np.random.default_rng(0)
+        draws = [
+            (np.array([0.4, -0.8]) + rng.uniform(-0.3, 0.3, (num_envs, 2))).astype(np.float32)
+            for _ in range(8)
+        ]
+        desired = [jax.device_put(d, env.jax_device) for d in draws]
+        actions = [torch.from_numpy(d).to(env.device) for d in draws]
+        data, count = [env._state.data], [0]
 
         def physics():
-            data[0], torque = control(data[0], desired)
+            count[0] += 1
+            data[0], torque = control(data[0], desired[count[0] % 8])
             torque.block_until_ready()
 
-        action = torch.tensor(np.tile([0.4, -0.8], (num_envs, 1)), dtype=torch.float32)
-        action = action.to(env.device)
-
         def env_step():
-            out = env.step_tensors(action)
+            count[0] += 1
+            out = env.step_tensors(actions[count[0] % 8])
             if out.obs.is_cuda:
                 torch.cuda.synchronize()
 
@@ -155,7 +165,9 @@ def main() -> None:
         + (f" on {torch.cuda.get_device_name()}" if torch.cuda.is_available() else "")
         + ".",
         "",
-        "Control steps per second (one control step = 10 physics substeps of 1 ms).",
+        "Control steps per second (one control step = 10 physics substeps of 1 ms); physics and",
+        "env driven by desired positions drawn within +-0.3 rad of the nominal pose, new each",
+        "step.",
         "",
         "| envs | physics | env | "
         + " | ".join(f"training {a}" for a in args.agents)
