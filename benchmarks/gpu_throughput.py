@@ -10,8 +10,8 @@ CPU backend), per batch size: the physics alone, the env, and end-to-end PPO tra
   every substep: the ceiling of this env on this device;
 * env: ``MjxHopperVectorEnv.step_tensors`` with torch actions (physics, reward, autoreset,
   DLPack both ways): the env stepped with nothing else;
-* both with desired positions drawn around the nominal pose, new each step (a moving leg
-  costs the contact solver more than a still one);
+* both driving every robot through a hopping gait (an open-loop 2 Hz pattern, random phase
+  per robot): a hopping leg costs the contact solver more than a still one;
 * training: ``Runner.collect`` + ``Runner.update`` with the ``gpu`` preset (its rollout of 24
   steps, 5 epochs of 4 minibatches) at each batch size, after one warm-up iteration (the JIT
   and ``torch.compile``), and the paper's budget (5 variants x 5 seeds x 20M steps)
@@ -58,31 +58,33 @@ def timed(step, repeats: int) -> float:
 
 
 def physics_and_env(num_envs: int, repeats: int) -> dict[str, float]:
-    """Both driven by desired positions drawn around the nominal pose (+-0.3 rad, new each
-    step, as a policy's exploration): the contact solver works harder on a moving leg than on
-    a still one (3-4x on the CPU), so constant actions would flatter it."""
+    """Both driven by a hopping gait: the open-loop squat-and-extend pattern of the agreement
+    tests (2 Hz, 0.35 / 0.7 rad on HFE / KFE) with a random phase per robot. The contact
+    solver works harder on a hopping leg than on a still one (3-4x on the CPU), so constant
+    actions would flatter it."""
     env = make_vector_env(num_envs, sim="mjx")
     try:
         env.reset_tensors(seed=0)
         dynamics = env.dynamics
         control = jax.jit(jax.vmap(dynamics._control))
-        rng = np.random.default_rng(0)
-        draws = [
-            (np.array([0.4, -0.8]) + rng.uniform(-0.3, 0.3, (num_envs, 2))).astype(np.float32)
-            for _ in range(8)
+        phase = np.random.default_rng(0).uniform(0, 2 * np.pi, (num_envs, 1))
+        draws = [  # one 2 Hz period of 50 control steps
+            np.array([0.4, -0.8]) + np.array([0.35, -0.7]) * np.sin(2 * np.pi * k / 50 + phase)
+            for k in range(50)
         ]
+        draws = [d.astype(np.float32) for d in draws]
         desired = [jax.device_put(d, env.jax_device) for d in draws]
         actions = [torch.from_numpy(d).to(env.device) for d in draws]
         data, count = [env._state.data], [0]
 
         def physics():
             count[0] += 1
-            data[0], torque = control(data[0], desired[count[0] % 8])
+            data[0], torque = control(data[0], desired[count[0] % 50])
             torque.block_until_ready()
 
         def env_step():
             count[0] += 1
-            out = env.step_tensors(actions[count[0] % 8])
+            out = env.step_tensors(actions[count[0] % 50])
             if out.obs.is_cuda:
                 torch.cuda.synchronize()
 
@@ -166,8 +168,7 @@ def main() -> None:
         + ".",
         "",
         "Control steps per second (one control step = 10 physics substeps of 1 ms); physics and",
-        "env driven by desired positions drawn within +-0.3 rad of the nominal pose, new each",
-        "step.",
+        "env drive every robot through an open-loop 2 Hz hopping gait (random phase per robot).",
         "",
         "| envs | physics | env | "
         + " | ".join(f"training {a}" for a in args.agents)
