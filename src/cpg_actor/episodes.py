@@ -19,29 +19,36 @@ WINDOW = 100  # finished episodes averaged in the logs
 
 @dataclass
 class EpisodeStats:
-    """Per-environment accumulators of the episode in progress."""
+    """Per-environment accumulators of the episode in progress, tensors on the env's device
+    (on a GPU they stay there: only the finished episodes' values go to the host)."""
 
-    returns: np.ndarray
-    lengths: np.ndarray
-    terms: dict[str, np.ndarray]
+    returns: torch.Tensor  # (N,) float64
+    lengths: torch.Tensor  # (N,) int64
+    terms: dict[str, torch.Tensor]  # (N,) float64 each
 
     @classmethod
-    def zeros(cls, num_envs: int) -> EpisodeStats:
-        return cls(np.zeros(num_envs), np.zeros(num_envs, dtype=np.int64), {})
+    def zeros(cls, num_envs: int, device: torch.device | str = "cpu") -> EpisodeStats:
+        return cls(
+            torch.zeros(num_envs, dtype=torch.float64, device=device),
+            torch.zeros(num_envs, dtype=torch.int64, device=device),
+            {},
+        )
 
     def state_dict(self) -> dict[str, Any]:
-        arrays = {"returns": self.returns, "lengths": self.lengths}
         return {
-            **{k: torch.from_numpy(v.copy()) for k, v in arrays.items()},
-            "terms": {k: torch.from_numpy(v.copy()) for k, v in self.terms.items()},
+            "returns": self.returns.cpu().clone(),
+            "lengths": self.lengths.cpu().clone(),
+            "terms": {k: v.cpu().clone() for k, v in self.terms.items()},
         }
 
     @classmethod
-    def from_state_dict(cls, state: dict[str, Any]) -> EpisodeStats:
+    def from_state_dict(
+        cls, state: dict[str, Any], device: torch.device | str = "cpu"
+    ) -> EpisodeStats:
         return cls(
-            state["returns"].numpy().copy(),
-            state["lengths"].numpy().copy(),
-            {k: v.numpy().copy() for k, v in state["terms"].items()},
+            state["returns"].to(device, torch.float64).clone(),
+            state["lengths"].to(device, torch.int64).clone(),
+            {k: v.to(device, torch.float64).clone() for k, v in state["terms"].items()},
         )
 
 
@@ -55,25 +62,32 @@ class EpisodeLog:
         self.recent: dict[str, deque] = {}
 
     def track(self, out: EnvStep, done: torch.Tensor) -> None:
-        """Add one env step; close the episodes that ``done`` marks."""
+        """Add one env step; close the episodes that ``done`` marks. On the device until an
+        episode ends; then one copy of the finished episodes' values to the host."""
         ep = self.running
-        ep.returns += out.reward.cpu().numpy().astype(np.float64)
+        device = ep.returns.device
+        ep.returns += out.reward.to(device, torch.float64)
         ep.lengths += 1
         for name, value in out.reward_terms.items():
-            ep.terms.setdefault(name, np.zeros_like(ep.returns))
-            ep.terms[name] += value.cpu().numpy()
-        done = done.cpu().numpy()
-        if not done.any():
+            if name not in ep.terms:
+                ep.terms[name] = torch.zeros_like(ep.returns)
+            ep.terms[name] += value.to(device, torch.float64)
+        done = done.to(device)
+        if not bool(done.any()):
             return
-        metrics = {name: values.cpu().numpy() for name, values in out.episode_metrics.items()}
-        for i in np.flatnonzero(done):
-            self.remember("return", ep.returns[i])
-            self.remember("length", ep.lengths[i])
-            for name, values in metrics.items():
-                if np.isfinite(values[i]):
-                    self.remember(f"charts/{name}", values[i])  # logged under this name
-            for name, value in ep.terms.items():
-                self.remember(f"reward_terms/{name}", value[i])
+        rows = done.nonzero().squeeze(-1)
+        # every finished value in one (k, columns) float64 tensor: one copy to the host
+        columns = {"return": ep.returns, "length": ep.lengths.to(torch.float64)}
+        for name, values in out.episode_metrics.items():
+            columns[f"charts/{name}"] = values.to(device, torch.float64)  # logged under this name
+        for name, value in ep.terms.items():
+            columns[f"reward_terms/{name}"] = value
+        finished = torch.stack([v[rows] for v in columns.values()], dim=1).cpu().numpy()
+        for row in finished:
+            for key, value in zip(columns, row, strict=True):
+                if key.startswith("charts/") and not np.isfinite(value):
+                    continue
+                self.remember(key, value)
         ep.returns[done] = 0.0
         ep.lengths[done] = 0
         for value in ep.terms.values():

@@ -168,7 +168,7 @@ class Runner:
         self.obs, _ = self.env.reset(seed=self.env_seed)
         self.policy.reset(self.config.num_envs)
         self.reward_normalizer.reset()
-        self.episodes.running = EpisodeStats.zeros(self.config.num_envs)
+        self.episodes.running = EpisodeStats.zeros(self.config.num_envs, self.device)
         self._episodes_started = True
 
     def normalize(self, obs: torch.Tensor, update: bool) -> torch.Tensor:
@@ -197,7 +197,11 @@ class Runner:
             done = out.terminated | out.truncated
             final_values = torch.zeros(cfg.num_envs, device=self.device)
             bootstrap = out.truncated & ~out.terminated
-            if bootstrap.any():  # the value of a cut episode's last state
+            if self.device.type != "cpu":  # no sync with the host: every env's, kept where cut
+                final_obs = self.normalize(out.final_obs, update=False)
+                cut_values = self.agent.value(final_obs, step.next_state)
+                final_values = torch.where(bootstrap, cut_values, final_values)
+            elif bootstrap.any():  # the value of a cut episode's last state
                 rows = bootstrap.nonzero().squeeze(-1)
                 final_obs = self.normalize(out.final_obs[rows], update=False)
                 final_values[rows] = self.agent.value(final_obs, step.next_state[rows])
@@ -482,7 +486,7 @@ class Runner:
                 raise ValueError(f"observations of shape {tuple(obs.shape)}")
             if agent_state.shape != (self.config.num_envs, *self.agent.state_shape):
                 raise ValueError(f"agent states of shape {tuple(agent_state.shape)}")
-            running = EpisodeStats.from_state_dict(state["statistics"])
+            running = EpisodeStats.from_state_dict(state["statistics"], self.device)
             discounted = state["discounted_returns"]
             if discounted.shape != self.reward_normalizer.discounted.shape:
                 raise ValueError(f"discounted returns of shape {tuple(discounted.shape)}")
