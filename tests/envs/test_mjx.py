@@ -257,3 +257,16 @@ def test_jax_does_not_preallocate_the_gpu():
 
     assert os.environ["XLA_PYTHON_CLIENT_PREALLOCATE"] == "false"
     assert jnp.zeros(1).dtype == jnp.float32  # no x64: float32 physics
+
+
+def test_render_frame_draws_the_mjx_state(env):
+    env.reset(seed=0)
+    try:
+        frame = env.render_frame(1)
+    except Exception as error:  # no OpenGL on this machine: MuJoCo's renderer cannot start
+        if "GL" not in str(error):
+            raise
+        pytest.skip(f"no MuJoCo GL context: {error}")
+    assert frame.shape == (480, 640, 3) and frame.dtype == np.uint8 and frame.std() > 10
+    with pytest.raises(ValueError, match="index must be in 0..2"):
+        env.render_frame(3)
