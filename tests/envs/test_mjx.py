@@ -270,3 +270,23 @@ def test_render_frame_draws_the_mjx_state(env):
     assert frame.shape == (480, 640, 3) and frame.dtype == np.uint8 and frame.std() > 10
     with pytest.raises(ValueError, match="index must be in 0..2"):
         env.render_frame(3)
+
+
+def test_the_cho2019_wrapper_keeps_the_tensor_face_and_its_numbers():
+    from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
+
+    assert not hasattr(CPGParameterVectorEnv(1, config={"sim": "mujoco"}), "step_tensors")
+    tensors = CPGParameterVectorEnv(make_vector_env(3, sim="mjx", episode_steps=5))
+    arrays = CPGParameterVectorEnv(make_vector_env(3, sim="mjx", episode_steps=5))
+    obs, _ = tensors.reset_tensors(seed=1)
+    np.testing.assert_array_equal(obs.numpy(), arrays.reset(seed=1)[0])
+    rng = np.random.default_rng(0)
+    for _ in range(7):  # across the end of the 5-step episodes
+        action = rng.uniform(-1.0, 1.0, (3, 5)).astype(np.float32)
+        out = tensors.step_tensors(torch.from_numpy(action))
+        obs, reward, terminated, truncated, info = arrays.step(action)
+        np.testing.assert_array_equal(out.obs.numpy(), obs)
+        np.testing.assert_array_equal(out.reward.numpy(), reward)
+        np.testing.assert_array_equal(out.truncated.numpy(), truncated)
+        np.testing.assert_array_equal(out.final_obs.numpy(), info["final_obs"])
+        np.testing.assert_array_equal(out.info["theta_dot"].numpy(), info["theta_dot"])

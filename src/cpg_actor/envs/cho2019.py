@@ -49,6 +49,7 @@ from gymnasium.vector.utils import batch_space
 from cpg_actor.cpg import CPGState, OscillatorParameters, hopf_step, hopper_cpg
 from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.simulation import OBS_BOUND, OBS_NAMES
+from cpg_actor.envs.torch_env import EnvStep
 from cpg_actor.envs.vector import make_vector_env
 
 PARAMETER_NAMES = ("nu_HFE", "nu_KFE", "rho_HFE", "rho_KFE", "phi_HFE_KFE")
@@ -102,7 +103,9 @@ class CPGParameterVectorEnv(VectorEnv):
 
     A wrapper: ``CPGParameterVectorEnv(env)`` puts the CPGs in front of an existing
     :class:`HopperVectorEnv` (what the ``cho2019`` agents declare they need);
-    ``CPGParameterVectorEnv(N, config)`` builds that hopper env first.
+    ``CPGParameterVectorEnv(N, config)`` builds that hopper env first. The CPGs run in torch
+    on the hopper env's device; around an env with a tensor face (MJX) the wrapper offers one
+    too (``reset_tensors`` / ``step_tensors``), with the numbers of its numpy face.
 
     Args:
         env_or_num_envs: a hopper vector env to wrap (:func:`make_vector_env`: any simulator), or N.
@@ -143,16 +146,23 @@ class CPGParameterVectorEnv(VectorEnv):
             )
         self.config = self.env.config
         self.num_envs = self.env.num_envs
+        # the CPGs run in torch (float64) where the hopper runs: the CPU for the numpy
+        # simulators, JAX's device for MJX (whose tensor face this wrapper then offers too)
+        self.device = torch.device(getattr(self.env, "device", "cpu"))
         # The hopper preset supplies a, w, the topology and the initial phases; its trainable
         # vector is never used for gradients here.
-        self.cpg = hopper_cpg(self.config.control_dt, dtype=torch.float64)
+        self.cpg = hopper_cpg(self.config.control_dt, dtype=torch.float64).to(self.device)
         values = self.cpg.parametrisation.values()
         self._convergence = values["convergence"].detach()
         self._coupling_weight = values["coupling_weight"].detach()
         self._coupling = self.cpg.parametrisation.coupling
         self._phase_bias = float(values["phase_bias"][0, 1].detach())  # when not an action
+        ranges = torch.as_tensor(self.parameter_ranges, dtype=torch.float64, device=self.device)
+        self._low, self._high = ranges[:, 0], ranges[:, 1]
         self.robot = self.env.robot  # the hopper it drives (the actions are CPG parameters)
-        self._offset = torch.as_tensor(self.robot.nominal_pose, dtype=torch.float64)
+        self._offset = torch.as_tensor(
+            self.robot.nominal_pose, dtype=torch.float64, device=self.device
+        )
         obs_dim = len(OBS_NAMES) + (len(CPG_OBS_NAMES) if observe_cpg else 0)
         bound = np.full(obs_dim, OBS_BOUND, dtype=np.float32)
         self.single_observation_space = spaces.Box(-bound, bound, dtype=np.float32)
@@ -162,24 +172,28 @@ class CPGParameterVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.metadata = {**self.metadata, "render_fps": self.env.metadata["render_fps"]}
         self.state = self._initial_state(self.num_envs)
+        if hasattr(self.env, "step_tensors"):  # a device env: tensors in and out, no host copy
+            self.reset_tensors, self.step_tensors = self._reset_tensors, self._step_tensors
 
-    # -- CPG -----------------------------------------------------------------------------------
+    # -- CPG (torch, on self.device) -------------------------------------------------------------
     def _initial_state(self, count: int) -> CPGState:
         return self.cpg.initial_state(count)
 
-    def parameters(self, actions: np.ndarray) -> np.ndarray:
-        """Actions ``(N, P)`` -> all five physical parameters ``(N, 5)`` (the phase bias
-        fixed at the preset's when it is not an action)."""
-        parameters = action_to_parameters(actions, self.parameter_ranges)
+    def parameters(self, actions: torch.Tensor) -> torch.Tensor:
+        """Actions ``(N, P)`` in [-1, 1] (clipped) -> all five physical parameters ``(N, 5)``
+        (:func:`action_to_parameters`; the phase bias fixed at the preset's when it is not an
+        action), float64 on ``self.device``."""
+        unit = (actions.to(self.device, torch.float64).clamp(-1.0, 1.0) + 1.0) / 2.0
+        parameters = self._low + unit * (self._high - self._low)
         if parameters.shape[-1] == len(PARAMETER_NAMES):
             return parameters
-        fixed = np.full((*parameters.shape[:-1], 1), self._phase_bias)
-        return np.concatenate([parameters, fixed], axis=-1)
+        fixed = parameters.new_full((*parameters.shape[:-1], 1), self._phase_bias)
+        return torch.cat([parameters, fixed], dim=-1)
 
-    def oscillator_parameters(self, parameters: np.ndarray) -> OscillatorParameters:
+    def oscillator_parameters(self, parameters: torch.Tensor) -> OscillatorParameters:
         """Physical parameters ``(N, 5)`` -> the :class:`OscillatorParameters` of eq. 1."""
-        p = torch.as_tensor(parameters, dtype=torch.float64)
-        phase_bias = torch.zeros(p.shape[0], 2, 2, dtype=torch.float64)
+        p = parameters
+        phase_bias = p.new_zeros(p.shape[0], 2, 2)
         phase_bias[:, 0, 1] = p[:, 4]
         phase_bias[:, 1, 0] = -p[:, 4]
         return OscillatorParameters(
@@ -190,91 +204,120 @@ class CPGParameterVectorEnv(VectorEnv):
             phase_bias=phase_bias,
         )
 
-    def _cpg_observation(self, state: CPGState) -> np.ndarray:
-        features = torch.cat(
-            [torch.cos(state.phase), torch.sin(state.phase), state.amplitude,
-             state.amplitude_velocity], dim=-1,
+    @torch.no_grad()
+    def _cpg_step(self, actions: torch.Tensor):
+        """The CPG step of eq. 1-2 from actions: ``(parameters, output, next_state)``."""
+        parameters = self.parameters(actions)
+        output, next_state = hopf_step(
+            self.oscillator_parameters(parameters), self.state, self._coupling,
+            self.config.control_dt,
         )  # fmt: skip
-        return features.numpy()
+        return parameters, output, next_state
 
-    def _observation(self, env_obs: np.ndarray, state: CPGState) -> np.ndarray:
+    def _observation(self, env_obs: torch.Tensor, state: CPGState) -> torch.Tensor:
+        """The hopper's observation, with the CPG state's features unless ``observe_cpg`` is
+        off, clipped to the bound: float32 on ``self.device``."""
+        env_obs = torch.as_tensor(env_obs, device=self.device)
         if not self.observe_cpg:
-            return np.clip(env_obs, -OBS_BOUND, OBS_BOUND).astype(np.float32)
-        obs = np.concatenate([env_obs, self._cpg_observation(state)], axis=-1)
-        return np.clip(obs, -OBS_BOUND, OBS_BOUND).astype(np.float32)
+            return env_obs.clamp(-OBS_BOUND, OBS_BOUND).to(torch.float32)
+        features = [torch.cos(state.phase), torch.sin(state.phase), state.amplitude,
+                    state.amplitude_velocity]  # fmt: skip
+        obs = torch.cat([env_obs.to(torch.float64), *features], dim=-1)
+        return obs.clamp(-OBS_BOUND, OBS_BOUND).to(torch.float32)
 
-    def _reset_state_rows(self, rows: np.ndarray) -> None:
-        fresh = self._initial_state(len(rows))
-        index = torch.as_tensor(rows, dtype=torch.long)
-        self.state = CPGState(
-            *(field.index_copy(0, index, new) for field, new in zip(self.state, fresh, strict=True))
+    def _end_episodes(self, done: torch.Tensor, state: CPGState) -> CPGState:
+        """``state`` with the rows of the envs that ended restarted."""
+        rows = done.to(self.device).reshape(-1, 1)
+        fresh = self._initial_state(self.num_envs)
+        return CPGState(
+            *(torch.where(rows, new, old) for old, new in zip(state, fresh, strict=True))
         )
 
-    # -- VectorEnv API ---------------------------------------------------------------------------
+    def _check_open(self, what: str) -> None:
+        if getattr(self, "env", None) is None:
+            raise gym.error.ClosedEnvironmentError(
+                f"{what}() on a closed environment; make a new one"
+            )
+
+    def _check_actions(self, actions: torch.Tensor) -> None:
+        if tuple(actions.shape) != (self.num_envs, self.action_dim):
+            raise ValueError(
+                f"actions must have shape ({self.num_envs}, {self.action_dim}) (CPG parameters "
+                f"{', '.join(self.parameter_names)} in [-1, 1]), got {tuple(actions.shape)}"
+            )
+        if not bool(torch.isfinite(actions).all()):
+            raise ValueError("actions contain NaN or inf; CPG parameters must be finite")
+
+    def _cpg_info(self, parameters, output, next_state) -> dict[str, torch.Tensor]:
+        return {
+            "cpg_parameters": parameters,
+            "theta_dot": next_state.phase_velocity.clone(),
+            "r_ddot": next_state.amplitude_acceleration.clone(),
+            "cpg_position": output.position.clone(),
+            "desired_velocity": output.velocity.clone(),
+        }
+
+    # -- VectorEnv API (numpy) -------------------------------------------------------------------
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[np.ndarray, dict[str, Any]]:
-        if getattr(self, "env", None) is None:
-            raise gym.error.ClosedEnvironmentError(
-                "reset() on a closed environment; make a new one"
-            )
+        self._check_open("reset")
         env_obs, info = self.env.reset(seed=seed, options=options)
         self.state = self._initial_state(self.num_envs)
-        return self._observation(env_obs, self.state), info
+        return self._observation(env_obs, self.state).cpu().numpy(), info
 
     def step(
         self, actions: Any
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
-        if getattr(self, "env", None) is None:
-            raise gym.error.ClosedEnvironmentError("step() on a closed environment; make a new one")
+        self._check_open("step")
         try:
             array = np.asarray(actions, dtype=np.float64)
         except (TypeError, ValueError):
             raise ValueError(
                 f"actions must be numbers of shape ({self.num_envs}, {self.action_dim})"
             ) from None
-        if array.shape != (self.num_envs, self.action_dim):
-            raise ValueError(
-                f"actions must have shape ({self.num_envs}, {self.action_dim}) (CPG parameters "
-                f"{', '.join(self.parameter_names)} in [-1, 1]), got {array.shape}"
-            )
-        if not np.isfinite(array).all():
-            raise ValueError("actions contain NaN or inf; CPG parameters must be finite")
-        parameters = self.parameters(array)
-        with torch.no_grad():
-            output, next_state = hopf_step(
-                self.oscillator_parameters(parameters), self.state, self._coupling,
-                self.config.control_dt,
-            )  # fmt: skip
-            desired = (output.position + self._offset).numpy()
+        self._check_actions(torch.from_numpy(array))
+        parameters, output, next_state = self._cpg_step(torch.from_numpy(array))
+        desired = (output.position + self._offset).cpu().numpy()
         env_obs, reward, terminated, truncated, info = self.env.step(desired)
-        done = terminated | truncated
-        final_state = next_state
-        self.state = next_state
+        done = torch.as_tensor(terminated | truncated)
         info = dict(info)
-        info["final_obs"] = self._observation(info["final_obs"], final_state)
-        if done.any():
-            self._reset_state_rows(np.flatnonzero(done))
+        info["final_obs"] = self._observation(info["final_obs"], next_state).cpu().numpy()
+        self.state = self._end_episodes(done, next_state)
         info.update(
-            cpg_parameters=parameters,
-            theta_dot=next_state.phase_velocity.numpy().copy(),
-            r_ddot=next_state.amplitude_acceleration.numpy().copy(),
-            cpg_position=output.position.numpy().copy(),
-            desired_velocity=output.velocity.numpy().copy(),
+            {k: v.cpu().numpy() for k, v in self._cpg_info(parameters, output, next_state).items()}
         )
-        return self._observation(env_obs, self.state), reward, terminated, truncated, info
+        obs = self._observation(env_obs, self.state).cpu().numpy()
+        return obs, reward, terminated, truncated, info
+
+    # -- the trainer's tensor face (only when the hopper env has one: MJX) ----------------------
+    def _reset_tensors(self, seed: int | list[int] | None = None):
+        self._check_open("reset")
+        env_obs, info = self.env.reset_tensors(seed)
+        self.state = self._initial_state(self.num_envs)
+        return self._observation(env_obs, self.state), info
+
+    def _step_tensors(self, actions: torch.Tensor) -> EnvStep:
+        self._check_open("step")
+        self._check_actions(actions)
+        parameters, output, next_state = self._cpg_step(actions)
+        out = self.env.step_tensors((output.position + self._offset).to(torch.float32))
+        final_obs = self._observation(out.final_obs, next_state)
+        self.state = self._end_episodes(out.terminated | out.truncated, next_state)
+        info = {**out.info, "final_obs": final_obs}
+        info.update(self._cpg_info(parameters, output, next_state))
+        obs = self._observation(out.obs, self.state)
+        return out._replace(obs=obs, final_obs=final_obs, info=info)
 
     def get_state(self) -> dict[str, Any]:
         """The hopper's state (:meth:`HopperVectorEnv.get_state`) and the CPG state."""
-        if getattr(self, "env", None) is None:
-            raise gym.error.ClosedEnvironmentError("get_state() on a closed environment")
-        return {"hopper": self.env.get_state(), "cpg": self.state.as_tensor().clone()}
+        self._check_open("get_state")
+        return {"hopper": self.env.get_state(), "cpg": self.state.as_tensor().cpu().clone()}
 
     def set_state(self, state: dict[str, Any]) -> None:
-        if getattr(self, "env", None) is None:
-            raise gym.error.ClosedEnvironmentError("set_state() on a closed environment")
+        self._check_open("set_state")
         self.env.set_state(state["hopper"])
-        self.state = CPGState.from_tensor(state["cpg"].to(torch.float64).clone())
+        self.state = CPGState.from_tensor(state["cpg"].to(self.device, torch.float64).clone())
 
     def render_frame(self, index: int = 0) -> np.ndarray:
         """An RGB frame of env ``index`` (see :meth:`HopperVectorEnv.render_frame`)."""
