@@ -23,17 +23,17 @@ It installs nothing and reads nothing from the network; every figure is measured
 from __future__ import annotations
 
 import argparse
-import datetime
 import time
 from pathlib import Path
 
 import numpy as np
 import torch
 
+from bench_report import measured, write
 from cpg_actor.config import TrainConfig, apply_dict
 from cpg_actor.envs import make_vector_env
 from cpg_actor.envs.mjx.dynamics import jax
-from cpg_actor.machine import cpu_model, git_commit, usable_cores
+from cpg_actor.machine import cpu_model, usable_cores
 from cpg_actor.presets import preset_values
 from cpg_actor.runner import Runner
 
@@ -160,8 +160,7 @@ def main() -> None:
     lines = [
         "# MJX throughput",
         "",
-        f"Measured {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC at commit "
-        f"{git_commit() or 'unknown'} with `{command}`.",
+        measured(command) + ".",
         "",
         f"Device: **{name}**; JAX {jax.__version__}, torch {torch.__version__}"
         + (f" on {torch.cuda.get_device_name()}" if torch.cuda.is_available() else "")
@@ -199,9 +198,7 @@ def main() -> None:
         f"another on this device: **{PAPER_BUDGET / sps / 3600:,.1f} h**.",
         "",
     ]
-    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.output).write_text("\n".join(lines))
-    print("\n".join(lines))
+    write(args.output, lines)
 
 
 if __name__ == "__main__":

@@ -9,17 +9,15 @@ calculation, standing statics, 3 s of open-loop hopping, its reward terms and ap
 from __future__ import annotations
 
 import argparse
-import datetime
-from pathlib import Path
 
 import numpy as np
 
+from bench_report import measured, write
 from cpg_actor.config import parse_override
 from cpg_actor.envs import make_vector_env
 from cpg_actor.envs.mjx.dynamics import jax
 from cpg_actor.envs.robot import description as robot
 from cpg_actor.envs.robot import kinematics
-from cpg_actor.machine import git_commit
 
 HOLD = np.array(robot.NOMINAL_POSE)
 TERMS = ("r1", "r2", "r3", "r4", "r5")
@@ -100,18 +98,15 @@ def main() -> None:
     lines = [
         "# MJX against MuJoCo (CPU)",
         "",
-        f"Measured {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC at commit "
-        f"{git_commit()} with `{command}`, MJX on JAX's {jax.devices()[0].platform} backend "
-        f"(float32), MuJoCo in float64.",
+        measured(command) + f", MJX on JAX's {jax.devices()[0].platform} backend (float32), "
+        "MuJoCo in float64.",
         "",
         "| check | measured |",
         "| --- | --- |",
         *(f"| {name} | {value} |" for name, value in rows),
         "",
     ]
-    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.output).write_text("\n".join(lines))
-    print("\n".join(lines))
+    write(args.output, lines)
 
 
 if __name__ == "__main__":

@@ -469,3 +469,18 @@ def test_a_config_saved_before_a_field_existed_keeps_what_it_trained_with():
     new = TrainConfig.from_dict(TrainConfig().to_dict())
     assert new.env.actuator_law == "dc-motor" and new.update_threads is None
     assert compose_config().env.actuator_law == "dc-motor"
+
+
+def test_sim_mjx_without_jax_says_how_to_install_it(tmp_path, capsys, monkeypatch):
+    from cpg_actor.envs.mjx import runtime
+
+    def missing():
+        raise runtime.MjxUnavailable(f"{runtime.INSTALL_HINT} (No module named 'jax')")
+
+    monkeypatch.setattr(runtime, "load", missing)
+    run_dir = tmp_path / "run"
+    argv = ["train", "--sim", "mjx", "--run-dir", str(run_dir), "--total-steps", "64"]
+    assert main(argv) == 2
+    assert 'pip install -e ".[mjx]"' in capsys.readouterr().err
+    # nothing half-made is left to refuse the next try
+    assert not run_dir.exists() or not any(run_dir.iterdir())

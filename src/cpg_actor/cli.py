@@ -10,6 +10,8 @@ import argparse
 import importlib
 import sys
 
+from cpg_actor.envs.mjx.runtime import MjxUnavailable
+
 # command name -> module in cpg_actor.commands
 COMMANDS: dict[str, str] = {
     "cpg-demo": "cpg_demo",
@@ -46,7 +48,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return int(args._run(args) or 0)
-    except (ValueError, FileNotFoundError, FileExistsError, NotADirectoryError) as error:
+    except (
+        ValueError, FileNotFoundError, FileExistsError, NotADirectoryError, MjxUnavailable,
+    ) as error:  # fmt: skip
         print(f"cpg-actor {args.command}: error: {error}", file=sys.stderr)
         return 2
     except OSError as error:  # unwritable or full disk, read-only file system, ...: one line

@@ -83,18 +83,11 @@ class Policy:
         """Restart the state of the envs whose episode ended (``done``: (N,) bool)."""
         if self.state is None:
             raise RuntimeError("call Policy.reset(num_envs) before end_episodes()")
-        if isinstance(done, Tensor) and done.device.type != "cpu":  # no sync with the host
-            rows = done.to(self.state.device).reshape(-1, *[1] * (self.state.dim() - 1))
-            initial = self.agent.initial_state(len(done)).to(self.state)
-            self.state = torch.where(rows, initial, self.state)
-            return
-        if isinstance(done, Tensor):
-            done = done.cpu().numpy()
-        rows = np.flatnonzero(np.asarray(done))
-        if len(rows):
-            state = self.state.clone()
-            state[torch.as_tensor(rows, device=state.device)] = self.agent.initial_state(len(rows))
-            self.state = state
+        # a selection on the device: no sync with the host, whatever ended
+        done = torch.as_tensor(np.asarray(done) if not isinstance(done, Tensor) else done)
+        rows = done.to(self.state.device).reshape(-1, *[1] * (self.state.dim() - 1))
+        initial = self.agent.initial_state(len(done)).to(self.state)
+        self.state = torch.where(rows, initial, self.state)
 
     def _bounds(self, device: torch.device) -> tuple[Tensor, Tensor]:
         if getattr(self, "_bounds_on", (None,))[0] != device:

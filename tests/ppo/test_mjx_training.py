@@ -1,6 +1,6 @@
 """Training on the MJX hopper (JAX's CPU backend here; the same code runs on a GPU): every
 kind of agent trains, the env's tensors reach PPO without numpy, the evaluation runs on MJX
-envs, and a run resumed from a checkpoint equals the uninterrupted one."""
+envs (resume on MJX: tests/ppo/test_checkpoint_episodes.py)."""
 
 import numpy as np
 import pytest
@@ -45,26 +45,6 @@ def test_every_kind_of_agent_trains_on_mjx(agent):
         assert evaluation["eval/hop_height"] >= 0
     finally:
         runner.close()
-
-
-def test_resume_on_mjx_equals_the_uninterrupted_run(tmp_path):
-    config = mjx_config("cpg-actor", iterations=4, checkpoint_interval=1)
-    straight = Runner(config, run_dir=tmp_path / "run", tensorboard=False)
-    straight.learn()
-    resumed = Runner(config, run_dir=tmp_path / "copy", tensorboard=False)
-    resumed.load_checkpoint(tmp_path / "run" / "checkpoints" / "iter_000002.pt")
-    resumed.learn()
-    try:
-        for key, value in params(straight).items():
-            assert torch.equal(value, params(resumed)[key]), key
-        assert torch.equal(straight.obs, resumed.obs)
-        assert torch.equal(straight.agent_state, resumed.agent_state)
-        # 4 iterations x 8 steps cross the 12-step episodes: episodes ended in both halves
-        assert list(straight.episodes.recent["length"]) == [12] * 4
-        assert list(straight.episodes.recent["return"]) == list(resumed.episodes.recent["return"])
-    finally:
-        straight.close()
-        resumed.close()
 
 
 def jax_has_gpu() -> bool:

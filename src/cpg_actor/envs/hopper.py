@@ -14,6 +14,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.vector.utils import batch_space
 
 from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.robot import description as robot
@@ -45,10 +46,43 @@ def resolve_config(
     return config.replace(**changes) if changes else config.replace()
 
 
-def check_num_envs(num_envs: Any) -> None:
-    """ValueError unless ``num_envs`` is a positive integer."""
+def init_vector_env(
+    env: Any,
+    num_envs: Any,
+    config: HopperConfig | dict | None,
+    sim: str | None,
+    max_episode_steps: int | None,
+    overrides: dict[str, Any],
+) -> None:
+    """What every hopper vector env (MuJoCo / PyBullet, MJX) sets up alike: the validated
+    ``config``, ``num_envs``, the single and batched spaces, the ``robot`` the agents are built
+    from and the render rate. ``max_episode_steps`` is what ``gymnasium.make_vec`` passes from
+    the registered spec: it must equal ``episode_steps`` (the env truncates its episodes)."""
     if isinstance(num_envs, bool) or not isinstance(num_envs, (int, np.integer)) or num_envs < 1:
         raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+    env.config = resolve_config(config, sim, overrides)
+    if max_episode_steps is not None and max_episode_steps != env.config.episode_steps:
+        raise ValueError(
+            f"max_episode_steps={max_episode_steps} differs from episode_steps="
+            f"{env.config.episode_steps}; give both the same value"
+        )
+    env.num_envs = int(num_envs)
+    env.single_observation_space = observation_space()
+    env.single_action_space = action_space(env.config.normalized_actions)
+    env.robot = robot_spec(env.config)  # what the agents are built from
+    env.observation_space = batch_space(env.single_observation_space, env.num_envs)
+    env.action_space = batch_space(env.single_action_space, env.num_envs)
+    env.metadata = {**env.metadata, "render_fps": round(1.0 / env.config.control_dt)}
+
+
+def env_seeds(seed: Any, num_envs: int) -> list[int]:
+    """The seed of every env from a vector env's ``reset(seed=...)``: an int s gives env i
+    ``s + i`` (Gymnasium's convention), a list gives one per env; ValueError otherwise."""
+    if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
+        return [int(seed) + i for i in range(num_envs)]
+    if isinstance(seed, (list, tuple)) and len(seed) == num_envs:
+        return [int(s) for s in seed]
+    raise ValueError(f"seed must be an int or a list of {num_envs} ints, got {seed!r}")
 
 
 def robot_spec(config: HopperConfig) -> RobotSpec:

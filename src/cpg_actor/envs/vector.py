@@ -31,17 +31,9 @@ import numpy as np
 import torch
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
-from gymnasium.vector.utils import batch_space
 
 from cpg_actor.envs.config import HopperConfig
-from cpg_actor.envs.hopper import (
-    action_space,
-    check_actions,
-    check_num_envs,
-    observation_space,
-    resolve_config,
-    robot_spec,
-)
+from cpg_actor.envs.hopper import check_actions, env_seeds, init_vector_env, resolve_config
 from cpg_actor.envs.simulation import NOMINAL_POSE, HopperSimulation
 
 
@@ -69,25 +61,11 @@ class HopperVectorEnv(VectorEnv):
         max_episode_steps: int | None = None,
         **overrides: Any,
     ) -> None:
-        check_num_envs(num_envs)
         if num_threads is not None and (
             isinstance(num_threads, bool) or not isinstance(num_threads, int) or num_threads < 1
         ):
             raise ValueError(f"num_threads must be a positive integer or None, got {num_threads!r}")
-        self.config = resolve_config(config, sim, overrides)
-        # gymnasium.make_vec passes the registered max_episode_steps: the episode length
-        if max_episode_steps is not None and max_episode_steps != self.config.episode_steps:
-            raise ValueError(
-                f"max_episode_steps={max_episode_steps} differs from episode_steps="
-                f"{self.config.episode_steps}; give both the same value"
-            )
-        self.num_envs = int(num_envs)
-        self.single_observation_space = observation_space()
-        self.single_action_space = action_space(self.config.normalized_actions)
-        self.robot = robot_spec(self.config)  # what the agents are built from
-        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
-        self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.config.control_dt)}
+        init_vector_env(self, num_envs, config, sim, max_episode_steps, overrides)
         self.sim = HopperSimulation(self.config, self.num_envs, num_threads)
         self._rngs: list[np.random.Generator] | None = None
         self._needs_reset = True
@@ -113,14 +91,7 @@ class HopperVectorEnv(VectorEnv):
             if self._rngs is None:
                 self._rngs = [seeding.np_random(None)[0] for _ in range(self.num_envs)]
         else:
-            if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-                seeds = [int(seed) + i for i in range(self.num_envs)]
-            elif isinstance(seed, (list, tuple)) and len(seed) == self.num_envs:
-                seeds = [int(s) for s in seed]
-            else:
-                raise ValueError(
-                    f"seed must be an int or a list of {self.num_envs} ints, got {seed!r}"
-                )
+            seeds = env_seeds(seed, self.num_envs)
             self._rngs = [seeding.np_random(s)[0] for s in seeds]
             self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
         index = np.arange(self.num_envs)
@@ -233,6 +204,9 @@ def make_vector_env(
     :class:`cpg_actor.envs.mjx.MjxHopperVectorEnv` (JAX, imported only then)."""
     config = resolve_config(config, overrides.pop("sim", None), overrides)
     if config.sim == "mjx":
+        from cpg_actor.envs.mjx import runtime
+
+        runtime.load()  # MjxUnavailable, with the install line, if JAX or MJX is missing
         from cpg_actor.envs.mjx.vector import MjxHopperVectorEnv
 
         return MjxHopperVectorEnv(num_envs, config=config)

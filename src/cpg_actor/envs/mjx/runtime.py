@@ -22,8 +22,12 @@ INSTALL_HINT = (
 )
 
 
+class MjxUnavailable(ImportError):
+    """JAX or MuJoCo XLA is not installed (the message says how to install them)."""
+
+
 def load():
-    """``(jax, mjx)``; ImportError with the install line if either is missing."""
+    """``(jax, mjx)``; :class:`MjxUnavailable` with the install line if either is missing."""
     os.environ.setdefault("XLA_PYTHON_CLIENT_PREALLOCATE", "false")
     import cpg_actor.envs.backends.mujoco_backend  # noqa: F401  (MUJOCO_GL, then mujoco)
 
@@ -33,7 +37,7 @@ def load():
         with contextlib.redirect_stdout(io.StringIO()):  # "Failed to import warp: ..."
             from mujoco import mjx
     except ImportError as error:
-        raise ImportError(f"{INSTALL_HINT} ({error})") from None
+        raise MjxUnavailable(f"{INSTALL_HINT} ({error})") from None
     return jax, mjx
 
 
@@ -41,6 +45,6 @@ def available() -> bool:
     """Whether JAX and MJX can be imported."""
     try:
         load()
-    except ImportError:
+    except MjxUnavailable:
         return False
     return True

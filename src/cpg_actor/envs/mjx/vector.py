@@ -20,17 +20,9 @@ import gymnasium as gym
 import numpy as np
 import torch
 from gymnasium.vector import AutoresetMode, VectorEnv
-from gymnasium.vector.utils import batch_space
 
 from cpg_actor.envs.config import HopperConfig
-from cpg_actor.envs.hopper import (
-    action_space,
-    check_actions,
-    check_num_envs,
-    observation_space,
-    resolve_config,
-    robot_spec,
-)
+from cpg_actor.envs.hopper import check_actions, env_seeds, init_vector_env
 from cpg_actor.envs.mjx.dynamics import STATE_FIELDS, EnvState, dynamics_for, jax, seed_keys
 from cpg_actor.envs.torch_env import EnvStep
 
@@ -57,22 +49,9 @@ class MjxHopperVectorEnv(VectorEnv):
         max_episode_steps: int | None = None,
         **overrides: Any,
     ) -> None:
-        check_num_envs(num_envs)
-        self.config = resolve_config(config, sim or "mjx", overrides)
+        init_vector_env(self, num_envs, config, sim or "mjx", max_episode_steps, overrides)
         if self.config.sim != "mjx":
             raise ValueError(f"MjxHopperVectorEnv simulates with MJX, got sim={self.config.sim!r}")
-        if max_episode_steps is not None and max_episode_steps != self.config.episode_steps:
-            raise ValueError(
-                f"max_episode_steps={max_episode_steps} differs from episode_steps="
-                f"{self.config.episode_steps}; give both the same value"
-            )
-        self.num_envs = int(num_envs)
-        self.single_observation_space = observation_space()
-        self.single_action_space = action_space(self.config.normalized_actions)
-        self.robot = robot_spec(self.config)
-        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
-        self.action_space = batch_space(self.single_action_space, self.num_envs)
-        self.metadata = {**self.metadata, "render_fps": round(1.0 / self.config.control_dt)}
         self.dynamics = dynamics_for(self.config)
         self.jax_device = jax.devices()[0]
         self.device = torch_device(self.jax_device)
@@ -105,13 +84,9 @@ class MjxHopperVectorEnv(VectorEnv):
         """Reset every env (seeds as :meth:`reset`): the first observations, on ``device``."""
         self._check_open("reset")
         if seed is None:
-            seeds = list(np.random.SeedSequence().generate_state(self.num_envs))
-        elif isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-            seeds = [int(seed) + i for i in range(self.num_envs)]
-        elif isinstance(seed, (list, tuple)) and len(seed) == self.num_envs:
-            seeds = [int(s) for s in seed]
+            seeds = [int(s) for s in np.random.SeedSequence().generate_state(self.num_envs)]
         else:
-            raise ValueError(f"seed must be an int or a list of {self.num_envs} ints, got {seed!r}")
+            seeds = env_seeds(seed, self.num_envs)
         if any(s < 0 for s in seeds):
             raise ValueError(f"seeds must be >= 0, got {seed!r}")
         keys = jax.device_put(seed_keys(seeds), self.jax_device)
