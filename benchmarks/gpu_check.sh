@@ -1,25 +1,40 @@
 #!/usr/bin/env bash
 # One call on a lent GPU machine (docs/gpu.md, "Measuring on a GPU"): the CUDA tests, the MJX
-# throughput table, and a `--preset gpu` training run, everything written under $OUT (at most
-# 8 files). The machine's image holds CUDA PyTorch and JAX; mujoco, mujoco-mjx, gymnasium and
-# the project's other missing packages travel as wheels in .whl/ (installed to /tmp/site).
-# Time limits (seconds) keep the call inside a 10-minute device command.
+# throughput table, a `--preset gpu` training run, and (the machine having 16 cores) the CPU
+# scaling table of benchmarks/train_scaling.py; at most 8 files, all under $OUT:
+#   cuda_tests.txt (device, then the tests), gpu_throughput.md + benchmark.log,
+#   train.log + metrics.jsonl + config.yaml, train_scaling.md + scaling.log.
+# The machine's image holds CUDA PyTorch and JAX; mujoco, mujoco-mjx, gymnasium and the
+# project's other missing packages travel as wheels in .whl/ (installed to /tmp/site).
+# Each part has a time limit (seconds) and writes as it goes: a part cut short keeps its output.
 set -o pipefail
 OUT="${OUT:-gpu-check}"
 mkdir -p "$OUT"
 export PYTHONUNBUFFERED=1 PYTHONPATH="$PWD/src:/tmp/site${PYTHONPATH:+:$PYTHONPATH}"
+# compiled XLA programs shared by the processes below (the same env at the same size)
+export JAX_COMPILATION_CACHE_DIR=/tmp/jax-cache JAX_PERSISTENT_CACHE_MIN_COMPILE_TIME_SECS=0
 if compgen -G ".whl/*.whl" >/dev/null; then
     python3 -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --upgrade \
         --target /tmp/site .whl/*.whl || exit 1
 fi
-{ nvidia-smi -L; python3 -c "import jax, torch; print(jax.devices(), torch.cuda.get_device_name())"; } \
-    2>&1 | tee "$OUT/device.txt"
-timeout "${TESTS_S:-150}" python3 -m pytest -q -p no:cacheprovider tests/envs/test_mjx.py \
-    tests/ppo/test_mjx_training.py tests/test_device.py 2>&1 | tee "$OUT/cuda_tests.txt"
-timeout "${BENCH_S:-240}" python3 benchmarks/gpu_throughput.py --envs ${ENVS:-1024 4096 32768 131072} \
-    --iterations 2 --output "$OUT/gpu_throughput.md" 2>&1 | tee "$OUT/benchmark.log"
+# fails fast (and stops here) if the simulator or CUDA is missing
+{ nvidia-smi -L; nproc; python3 - <<'EOF'
+import jax, torch
+from cpg_actor.envs import make_vector_env
+env = make_vector_env(4, sim="mjx")
+obs, _ = env.reset_tensors(seed=0)
+print(jax.devices(), jax.__version__, torch.__version__, torch.cuda.get_device_name(), obs.device)
+EOF
+} 2>&1 | tee "$OUT/cuda_tests.txt" || exit 2
+timeout "${TESTS_S:-120}" python3 -m pytest -q -p no:cacheprovider tests/test_device.py \
+    tests/ppo/test_mjx_training.py tests/envs/test_mjx.py 2>&1 | tee -a "$OUT/cuda_tests.txt"
+timeout "${BENCH_S:-170}" python3 benchmarks/gpu_throughput.py \
+    --envs ${ENVS:-1024 4096 32768 131072} --agents ${AGENTS:-cpg-actor mlp} --iterations 2 \
+    --output "$OUT/gpu_throughput.md" 2>&1 | tee "$OUT/benchmark.log"
 # learning at 4,096 envs: as far as the time allows (metrics.jsonl has the evaluation curve)
-timeout "${TRAIN_S:-150}" python3 -m cpg_actor.cli train --preset gpu --total-steps 20M \
+timeout "${TRAIN_S:-140}" python3 -m cpg_actor.cli train --preset gpu --total-steps 20M \
     --run-dir /tmp/gpu-run --no-progress --progress-interval 10 2>&1 | tee "$OUT/train.log"
 cp /tmp/gpu-run/metrics.jsonl /tmp/gpu-run/config.yaml "$OUT/" 2>/dev/null
+timeout "${SCALING_S:-80}" python3 benchmarks/train_scaling.py --cores 2 8 all \
+    --num-envs 64 1024 --output "$OUT/train_scaling.md" 2>&1 | tee "$OUT/scaling.log"
 exit 0

@@ -153,12 +153,26 @@ def test_step_is_pure_and_stateless():
 def test_amplitude_dynamics_stability_limit():
     # The linear r-subsystem of eq. 1-2 (state r, r_dot, previous r_ddot) has spectral radius
     # < 1 exactly for a dt < 6 - 2 sqrt(5) ~ 1.528 (docs/cpg.md): converge below, diverge above.
+    # The network caps a at 1 / dt (MAX_CONVERGENCE_STEP), so through it all three settle.
+    from cpg_actor.cpg import hopf_step
+    from cpg_actor.cpg.network import MAX_CONVERGENCE_STEP
+
     limit = 6 - 2 * math.sqrt(5)
     dt = 0.01
-    convergence = torch.tensor([0.9 * limit / dt, 0.97 * limit / dt, 1.05 * limit / dt])
+    convergence = torch.tensor([0.6 * limit / dt, 0.97 * limit / dt, 1.05 * limit / dt])
     initial = {"frequency": 1.0, "amplitude": 0.5, "convergence": convergence.double()}
     net = CPGNetwork(Topology(3), dt, initial, check_inputs=False).double()
+    params = net.parametrisation.oscillator_parameters()  # uncapped: the scheme itself
+    state = net.initial_state(1, amplitude=0.1)
+    with torch.no_grad():
+        for _ in range(1500):
+            _, state = hopf_step(params, state, net.parametrisation.coupling, dt)
+    r = state.amplitude[0].numpy()
+    assert np.abs(r[:2] - 0.5).max() < 1e-6  # stable: settled on rho
+    assert np.abs(r[2] - 0.5) > 10.0 or not np.isfinite(r[2])  # unstable: blew up
+
+    capped = net.oscillator_parameters().convergence
+    assert torch.equal(capped[0], params.convergence[0])  # below the cap (a dt = 0.92): unchanged
+    assert capped[1:].tolist() == pytest.approx([MAX_CONVERGENCE_STEP / dt] * 2)
     run = simulate(net, net.initial_state(1, amplitude=0.1), steps=1500)
-    r = run["amplitude"][:, 0]
-    assert np.abs(r[-100:, :2] - 0.5).max() < 1e-6  # stable: settled on rho
-    assert np.abs(r[-1, 2] - 0.5) > 10.0 or not np.isfinite(r[-1, 2])  # unstable: blew up
+    assert np.abs(run["amplitude"][-100:, 0] - 0.5).max() < 1e-6  # through the network: all

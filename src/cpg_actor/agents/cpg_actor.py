@@ -111,6 +111,7 @@ class CPGActorAgent(Agent):
                 row[f"feedback/xi_std_{name}"] = stds[i]
                 row[f"feedback/kappa_std_{name}"] = stds[len(names) + i]
         values = {k: v.detach() for k, v in self.cpg.parametrisation.values().items()}
+        values["convergence"] = values["convergence"].clamp(max=self.cpg.max_convergence)
         for field, short in (("frequency", "nu"), ("amplitude", "rho"), ("convergence", "a")):
             for i, name in enumerate(names):
                 row[f"cpg/{short}_{name}"] = float(values[field][i])

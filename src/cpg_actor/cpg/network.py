@@ -39,6 +39,16 @@ def _check_like(name: str, value: Tensor, reference: Tensor) -> None:
         )
 
 
+# The amplitude equation of eq. 1 is a critically damped oscillator of natural frequency a/2.
+# Integrated by eq. 2 with step dt, the error (r - rho, r_dot, r_ddot) is multiplied per step by
+# a matrix whose spectral radius exceeds 1 once a dt > 1.528 ((3 - sqrt 5) * 2): the amplitude
+# then grows without bound and the CPG outputs become NaN. PPO can push a (trained as
+# exp(V_k), eq. 3) there with large learning rates, so a step uses a <= 1 / dt, where the
+# radius is 0.78 (the scheme's fastest decay is 0.74, at a dt = 0.91); tests/cpg/test_network.py
+# checks both numbers.
+MAX_CONVERGENCE_STEP = 1.0
+
+
 class CPGNetwork(nn.Module):
     """A batched, differentiable network of N coupled Hopf oscillators (paper eq. 1-3).
 
@@ -99,8 +109,17 @@ class CPGNetwork(nn.Module):
     def num_oscillators(self) -> int:
         return self.topology.num_oscillators
 
+    @property
+    def max_convergence(self) -> float:
+        """The largest convergence rate ``a`` a step uses: ``MAX_CONVERGENCE_STEP / dt``."""
+        return MAX_CONVERGENCE_STEP / self.dt
+
     def oscillator_parameters(self, drive: Tensor | float = 0.0) -> OscillatorParameters:
-        return self.parametrisation.oscillator_parameters(drive)
+        """The parameters of eq. 1 at ``drive``, the convergence rate ``a`` capped at
+        :attr:`max_convergence` (eq. 2 diverges past ``a dt`` = 1.528; see
+        ``MAX_CONVERGENCE_STEP``). Below the cap they are the parametrisation's, unchanged."""
+        params = self.parametrisation.oscillator_parameters(drive)
+        return params._replace(convergence=params.convergence.clamp(max=self.max_convergence))
 
     def initial_state(
         self,
@@ -129,7 +148,7 @@ class CPGNetwork(nn.Module):
         """One step: ``(state, drive, xi, kappa) -> (CPGOutput(x, x_dot), next_state)``."""
         if self.check_inputs:
             self._validate(state, drive, xi, kappa)
-        params = self.parametrisation.oscillator_parameters(drive)
+        params = self.oscillator_parameters(drive)
         return hopf_step(params, state, self.parametrisation.coupling, self.dt, xi, kappa)
 
     def _validate(self, state: CPGState, drive, xi, kappa) -> None:

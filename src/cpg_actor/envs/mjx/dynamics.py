@@ -19,7 +19,8 @@ Same robot, same physics and the same task as the CPU simulators:
   whose episode ended is reset in the same step (Gymnasium's SAME_STEP autoreset) and its
   last observation returned as ``final_obs``.
 
-Differences from the CPU backends, by design: MJX computes in float32 (JAX's default), and its
+Differences from the CPU backends, by design: MJX computes in float32 (JAX's default; its
+matrix products in full float32 also on GPUs, whose default is TensorFloat32), and its
 constraint solver is not bit-identical to MuJoCo's C one, so trajectories agree within the
 tolerances ``tests/envs/test_mjx.py`` states, not exactly. The solver warm start
 (``qacc_warmstart``) is carried from substep to substep and from one control step to the next,
@@ -111,7 +112,10 @@ class HopperDynamics:
             return (data, total + torque), None
 
         start = (data, jnp.zeros(2, dtype=desired.dtype))
-        (data, total), _ = jax.lax.scan(substep, start, None, length=self.config.decimation)
+        # matrix products in full float32: JAX's default on recent NVIDIA GPUs is TensorFloat32
+        # (10-bit mantissa), too coarse for the mass matrix and the contact solver
+        with jax.default_matmul_precision("float32"):
+            (data, total), _ = jax.lax.scan(substep, start, None, length=self.config.decimation)
         return data, total / self.config.decimation
 
     def desired_positions(self, actions):
