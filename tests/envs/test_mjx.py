@@ -21,6 +21,7 @@ from cpg_actor.registration import MJX_ENV_ID
 if not runtime.available():
     pytest.skip('the MJX backend needs pip install -e ".[mjx]"', allow_module_level=True)
 
+import jax  # noqa: E402
 import jax.numpy as jnp  # noqa: E402
 
 from cpg_actor.envs.mjx.vector import MjxHopperVectorEnv  # noqa: E402
@@ -173,9 +174,9 @@ def test_seeds_follow_gymnasium_conventions(env):
 def test_tensor_face_passes_tensors_through_dlpack(env):
     obs, _ = env.reset_tensors(seed=0)
     assert isinstance(obs, torch.Tensor) and obs.device == env.device
-    x = jnp.arange(4.0)
+    x = jax.device_put(jnp.arange(4.0), env.jax_device)
     assert env._to_torch(x).data_ptr() == x.unsafe_buffer_pointer()  # no copy
-    t = torch.arange(4.0)
+    t = torch.arange(4.0, device=env.device)  # on the env's device (a GPU on a GPU machine)
     assert env._to_jax(t).unsafe_buffer_pointer() == t.data_ptr()
     step = env.step_tensors(torch.tensor(np.tile(HOLD, (3, 1)), dtype=torch.float32))
     assert step.obs.dtype == torch.float32 and step.terminated.dtype == torch.bool
