@@ -15,6 +15,7 @@ from cpg_actor.envs.mjx.runtime import MjxUnavailable
 # command name -> module in cpg_actor.commands
 COMMANDS: dict[str, str] = {
     "cpg-demo": "cpg_demo",
+    "gaits": "gaits",
     "train": "train",
     "eval": "eval",
     "export": "export",

@@ -34,6 +34,7 @@ class TrainConfig:
     """One training run. ``total_steps`` counts control steps summed over all environments."""
 
     agent: str = "cpg-actor"  # a name in cpg_actor.agents.AGENTS
+    robot: str = "hopper"  # hopper | anymal (cpg_actor.envs.robots); env holds its config
     preset: str = "paper"  # the preset the run started from (cpg_actor.presets.PRESETS)
     seed: int = 0
     num_envs: int = 16  # x ppo.num_steps = 2,048 samples per update, as Baselines' ppo2
@@ -54,7 +55,8 @@ class TrainConfig:
     agent_config: AgentConfig = field(default_factory=AgentConfig)
     ppo: PPOConfig = field(default_factory=PPOConfig)
     warm_start: WarmStartConfig = field(default_factory=WarmStartConfig)  # cho2019-warm only
-    env: Any = field(default_factory=_default_env_config)  # cpg_actor.envs.HopperConfig
+    # the robot's env config: cpg_actor.envs.HopperConfig, or QuadrupedConfig for the anymal
+    env: Any = field(default_factory=_default_env_config)
 
     @property
     def steps_per_iteration(self) -> int:
@@ -108,6 +110,20 @@ class TrainConfig:
             raise ValueError(
                 "env.normalized_actions is for off-the-shelf RL libraries (gymnasium.make); "
                 "the project's agents act on desired positions in rad: leave it false"
+            )
+        from cpg_actor.envs.robots import robot_env, robot_name
+
+        robot_env(self.robot)
+        try:
+            holds = robot_name(self.env)
+        except ValueError:  # a config of the caller's own env (a test double, an extension)
+            holds = self.robot
+        if holds != self.robot:
+            raise ValueError(f"env holds the config of robot {holds!r}, not of {self.robot!r}")
+        if self.robot != "hopper" and self.agent.startswith("cho2019"):
+            raise ValueError(
+                f"agent {self.agent!r} is built for the hopper (its CPG sits in the hopper's "
+                f"env); on robot {self.robot!r} use cpg-actor, cpg-actor-open-loop or mlp"
             )
         check_device_name(self.device)
         self.agent_config.validate()
@@ -259,7 +275,17 @@ def _coerce(value: Any, annotation: Any, key: str) -> Any:
 
 
 def apply_dict(obj: Any, data: dict[str, Any], prefix: str) -> None:
-    """Set fields of the dataclass ``obj`` from a nested mapping, validating keys and types."""
+    """Set fields of the dataclass ``obj`` from a nested mapping, validating keys and types.
+    A ``robot`` key of a ``TrainConfig`` comes first: it swaps ``env`` for that robot's
+    default config when ``env`` holds another robot's."""
+    if prefix == "" and isinstance(obj, TrainConfig) and "robot" in data:
+        from cpg_actor.envs.robots import robot_env, robot_name
+
+        config_class = robot_env(str(data["robot"])).config_class
+        obj.robot = str(data["robot"])
+        if not isinstance(obj.env, config_class) and robot_name(obj.env) != obj.robot:
+            obj.env = config_class()
+        data = {key: value for key, value in data.items() if key != "robot"}
     names = {f.name: f for f in dataclasses.fields(obj)}
     hints = _field_types(obj)
     for key, value in data.items():

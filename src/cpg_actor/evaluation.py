@@ -98,6 +98,7 @@ def evaluate(
     result["episode_return"] = returns
     result.update(metrics)
     result["metric_names"] = np.array(sorted(metrics), dtype=str)
+    result["joint_names"] = np.array(env.robot.joint_names, dtype=str)
     result["standing_hip_height"] = np.array(standing)
     result["control_dt"] = np.array(control_dt)
     return result
@@ -113,6 +114,8 @@ def _trace_row(
     row = {"desired_position": applied}
     for key, where in columns.items():
         row[key] = measured[:, where[0]] if key == "hip_height" else measured[:, where]
+    if "measured_position" not in row and "measured_position" in info:  # not observed as such
+        row["measured_position"] = np.asarray(info["measured_position"], dtype=np.float64)
     row["foot_height"] = np.asarray(info.get("foot_height", np.full(num_envs, np.nan)))
     row["reward"] = np.asarray(reward, dtype=np.float64)
     if "desired_velocity" in extras:

@@ -8,6 +8,7 @@ import gymnasium
 ENV_ID = "cpg_actor/AnymalHopper-v0"
 PYBULLET_ENV_ID = "cpg_actor/AnymalHopper-pybullet-v0"
 MJX_ENV_ID = "cpg_actor/AnymalHopper-mjx-v0"  # batched only: gymnasium.make_vec
+ANYMAL_ENV_ID = "cpg_actor/AnymalB-v0"  # the quadruped, batched only: gymnasium.make_vec
 EPISODE_STEPS = 500  # HopperConfig.episode_steps (a test checks they agree)
 
 
@@ -26,4 +27,10 @@ def register() -> None:
             # makes spec.max_episode_steps say so. A longer episode needs both:
             # gym.make(ENV_ID, episode_steps=1000, max_episode_steps=1000)
             max_episode_steps=EPISODE_STEPS,
+        )
+    if ANYMAL_ENV_ID not in gymnasium.registry:
+        gymnasium.register(
+            id=ANYMAL_ENV_ID,
+            entry_point=None,  # no single-robot env: gymnasium.make_vec(ANYMAL_ENV_ID, N)
+            vector_entry_point="cpg_actor.envs.quadruped.vector:AnymalVectorEnv",
         )

@@ -48,7 +48,10 @@ class AgentConfig:
     # kappa_scale); the policy gradient then reaches the MLP through the feedback's own
     # likelihood instead of the one-step lever dx/dxi. 0 (the paper): deterministic feedback.
     feedback_noise: float = 0.0
-    cpg_initial: dict = field(default_factory=dict)  # overrides of cpg.HOPPER_INITIAL
+    cpg_initial: dict = field(default_factory=dict)  # overrides of the robot's CPG preset
+    # the quadruped's gait (cpg_actor.cpg.gaits.GAITS: trot, pace, bound, pronk, walk); empty:
+    # the preset's (trot). The hopper has none.
+    cpg_gait: str = ""
 
     def validate(self) -> None:
         if self.activation not in ACTIVATIONS:
@@ -63,6 +66,13 @@ class AgentConfig:
         for name in ("init_std", "output_gain", "xi_scale", "kappa_scale"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"agent_config.{name} must be > 0, got {getattr(self, name)!r}")
+        from cpg_actor.cpg.gaits import GAITS
+
+        if self.cpg_gait and self.cpg_gait not in GAITS:
+            raise ValueError(
+                f"agent_config.cpg_gait must be one of {', '.join(GAITS)} (or empty), "
+                f"got {self.cpg_gait!r}"
+            )
         if not self.feedback_noise >= 0:
             raise ValueError(
                 f"agent_config.feedback_noise must be >= 0, got {self.feedback_noise!r}"

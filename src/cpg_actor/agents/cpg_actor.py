@@ -23,11 +23,17 @@ from cpg_actor.agents.base import (
     mlp,
 )
 from cpg_actor.cpg import CPGNetwork, CPGState, JointMap, hopper_cpg
+from cpg_actor.cpg.gaits import OSCILLATOR_JOINTS, quadruped_cpg
 from cpg_actor.robot import RobotSpec
 
-# robot name -> the CPG of that robot, ``preset(dt, initial=..., check_inputs=...)``; one
-# oscillator per joint, in the robot's joint order
-CPG_PRESETS = {"anymal-hopper": hopper_cpg}
+# robot name -> the CPG of that robot, ``preset(dt, initial=..., check_inputs=..., gait=...)``,
+# and the joint (index in the robot's joint order) each oscillator drives (None: one
+# oscillator per joint, in the joint order); the joints no oscillator drives are held at the
+# nominal pose
+CPG_PRESETS = {
+    "anymal-hopper": (hopper_cpg, None),
+    "anymal-b": (quadruped_cpg, OSCILLATOR_JOINTS),
+}
 
 
 class CPGActorAgent(Agent):
@@ -61,17 +67,27 @@ class CPGActorAgent(Agent):
                 f"no CPG preset for robot '{robot.name}'; add one to "
                 f"cpg_actor.agents.cpg_actor.CPG_PRESETS (known: {', '.join(CPG_PRESETS)})"
             )
-        preset = CPG_PRESETS[robot.name]
-        cpg = preset(robot.control_dt, initial=config.cpg_initial or None, check_inputs=False)
+        preset, joints = CPG_PRESETS[robot.name]
+        options = {"gait": config.cpg_gait} if config.cpg_gait else {}
+        if options and preset is hopper_cpg:
+            raise ValueError("agent_config.cpg_gait is for the quadruped; the hopper has one CPG")
+        cpg = preset(
+            robot.control_dt, initial=config.cpg_initial or None, check_inputs=False, **options
+        )
         n = cpg.num_oscillators
-        if n != len(action_scale) or n != robot.num_joints:
+        driven = n if joints is None else len(joints)
+        if (
+            driven != n
+            or len(action_scale) != robot.num_joints
+            or (joints is None and n != robot.num_joints)
+        ):
             raise ValueError(
-                f"the CPG has {n} oscillators but the robot has {robot.num_joints} joints and "
-                f"the action {len(action_scale)} entries"
+                f"the CPG has {n} oscillators driving {driven} joints, but the robot has "
+                f"{robot.num_joints} joints and the action {len(action_scale)} entries"
             )
         super().__init__(obs_dim, action_scale, config, critic_state_features=3 * n)
         self.cpg: CPGNetwork = cpg
-        self.joint_map = JointMap(robot.nominal_pose)  # the robot's standing pose
+        self.joint_map = JointMap(robot.nominal_pose, joints=joints)  # the standing pose
         self.state_shape = (5, n)
         self.xi_scale = config.xi_scale
         self.kappa_scale = config.kappa_scale

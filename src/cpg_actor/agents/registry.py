@@ -26,12 +26,12 @@ from cpg_actor.agents.cpg_actor import CPGActorAgent
 from cpg_actor.agents.mlp import MLPAgent
 
 
-def make_hopper_env(num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
-    """The plain hopper vector env on ``env_config.sim``: actions are desired joint positions
-    [HFE, KFE]."""
-    from cpg_actor.envs import make_vector_env
+def make_robot_env(num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
+    """The robot's plain vector env (the hopper, or the quadruped for a ``QuadrupedConfig``):
+    actions are desired joint positions."""
+    from cpg_actor.envs.robots import make_robot_env as make
 
-    return make_vector_env(num_envs, config=env_config, num_threads=num_threads)
+    return make(num_envs, env_config, num_threads)
 
 
 def env_shapes(env: Any) -> tuple[int, np.ndarray]:
@@ -54,7 +54,7 @@ class AgentSpec:
     name: str
     description: str
     build: Callable[[AgentConfig, Any], Agent]
-    env_factory: Callable[..., Any] = make_hopper_env
+    env_factory: Callable[..., Any] = make_robot_env
     wrapper: Callable[[Any], Any] | None = None
     # ``warm_start(agent, normalizer, env, WarmStartConfig, seed) -> losses``, run once before
     # the first PPO iteration of a new run (not on resume)

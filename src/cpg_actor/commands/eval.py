@@ -195,17 +195,28 @@ def plot_traces(traces: dict[str, np.ndarray], path: Path) -> list[Path]:
     ]
     if "theta_dot" in traces:
         panels += [("theta_dot (rad/s)", "theta_dot", None), ("r_ddot (rad/s^2)", "r_ddot", None)]
-    fig, axes = plt.subplots(len(panels) + 1, 1, figsize=(9, 2.2 * (len(panels) + 1)), sharex=True)
+    joints = [str(j) for j in traces.get("joint_names", ("HFE", "KFE"))][:3]  # the first leg's
+    heights = "hip_height" in traces
+    rows = len(panels) + int(heights)
+    fig, axes = plt.subplots(rows, 1, figsize=(9, 2.2 * rows), sharex=True)
     for ax, (label, key, measured) in zip(axes, panels, strict=False):
-        for j, joint in enumerate(("HFE", "KFE")):
+        if key not in traces:
+            continue
+        for j, joint in enumerate(joints):
             ax.plot(
                 t, traces[key][:, 0, j], label=joint if measured is None else f"{joint} desired"
             )
-            if measured is not None:
+            if measured is not None and measured in traces:
                 ax.plot(t, traces[measured][:, 0, j], "--", label=f"{joint} measured")
         ax.set_ylabel(label)
         ax.legend(fontsize=7, loc="upper right")
         ax.grid(alpha=0.3)
+    if not heights:  # a robot without a hip height (the quadruped)
+        axes[-1].set_xlabel("time (s)")
+        fig.tight_layout()
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        return [path]
     axes[-1].plot(t, traces["hip_height"][:, 0], label="hip")
     axes[-1].plot(t, traces["foot_height"][:, 0], ":", label="foot")
     axes[-1].set_ylabel("height (m)")

@@ -31,6 +31,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--agent", default=None, help=f"one of {', '.join(sorted(AGENTS))} (default cpg-actor)"
     )
     parser.add_argument(
+        "--robot",
+        default=None,
+        choices=("hopper", "anymal"),
+        help="hopper (the paper's leg on a rail, default) or anymal (ANYmal B walking, MuJoCo "
+        "only; docs/quadruped.md)",
+    )
+    parser.add_argument(
         "--sim",
         default=None,
         choices=SIMULATORS,
@@ -86,6 +93,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def simulator(config: TrainConfig) -> str:
+    """The run's simulator, with the robot when it is not the hopper ("anymal-mujoco")."""
+    sim = getattr(config.env, "sim", "mujoco")
+    return sim if config.robot == "hopper" else f"{config.robot}-{sim}"
+
+
 def build_config(args: argparse.Namespace) -> TrainConfig:
     """The flags as config values, composed by :func:`cpg_actor.config.compose_config`
     (defaults, preset, --config, the flags, each --set)."""
@@ -98,8 +111,13 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
         flags["total_steps"] = parse_steps(args.total_steps)
     if args.num_envs is not None:
         flags["num_envs"] = args.num_envs
+    if getattr(args, "robot", None) is not None:
+        flags["robot"] = args.robot
     if args.sim is not None:
-        flags["env"] = {"sim": args.sim}
+        if flags.get("robot", "hopper") != "hopper" and args.sim != "mujoco":
+            raise ValueError(f"--sim {args.sim}: the {flags['robot']} runs on MuJoCo only")
+        if flags.get("robot", "hopper") == "hopper":
+            flags["env"] = {"sim": args.sim}
     if getattr(args, "device", None) is not None:
         flags["device"] = args.device
     config = compose_config(getattr(args, "preset", None), args.config, flags, args.overrides)
@@ -225,7 +243,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         config = build_config(args)
         run_dir = Path(
             args.run_dir
-            or DEFAULT_RUN_DIR.format(agent=config.agent, sim=config.env.sim, seed=config.seed)
+            or DEFAULT_RUN_DIR.format(agent=config.agent, sim=simulator(config), seed=config.seed)
         )
         if _has_content(run_dir) and not args.overwrite:
             prepare_run_dir(run_dir, overwrite=False)  # raises before anything is built
@@ -244,7 +262,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
                 f"{config.steps_per_iteration:,}; training {planned:,}"
             )
         print(
-            f"training {config.agent} ({config.preset} preset) on {config.env.sim} for "
+            f"training {config.agent} ({config.preset} preset) on {simulator(config)} for "
             f"{config.total_steps:,} steps "
             f"({config.num_iterations} iterations of {config.steps_per_iteration} steps), "
             f"run directory {run_dir}"

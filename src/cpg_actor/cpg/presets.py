@@ -54,7 +54,9 @@ def hopper_cpg(
 
 
 class JointMap(nn.Module):
-    """Desired joint positions from CPG outputs: ``p_d = offset + x``.
+    """Desired joint positions from CPG outputs: ``p_d = offset + x`` (one oscillator per joint),
+    or ``p_d[joints[k]] = offset + x_k`` with ``joints`` naming the joint each oscillator
+    drives, the other joints held at their offset (the quadruped's HAA joints).
 
     The offset is the nominal pose, fixed by default: the CPG then oscillates around a known
     standing posture and every trainable degree of freedom stays in the CPG (and its feedback).
@@ -62,7 +64,10 @@ class JointMap(nn.Module):
     """
 
     def __init__(
-        self, offset: Sequence[float] = HOPPER_NOMINAL_POSE, learnable_offset: bool = False
+        self,
+        offset: Sequence[float] = HOPPER_NOMINAL_POSE,
+        learnable_offset: bool = False,
+        joints: Sequence[int] | None = None,
     ) -> None:
         super().__init__()
         offset_tensor = torch.as_tensor(offset, dtype=torch.get_default_dtype())
@@ -70,11 +75,24 @@ class JointMap(nn.Module):
             self.offset = nn.Parameter(offset_tensor)
         else:
             self.register_buffer("offset", offset_tensor)
+        num_joints = offset_tensor.shape[0]
+        joints = list(range(num_joints)) if joints is None else [int(j) for j in joints]
+        if not all(0 <= j < num_joints for j in joints) or len(set(joints)) != len(joints):
+            raise ValueError(
+                f"joints must be distinct indices in 0..{num_joints - 1}, got {joints}"
+            )
+        self.identity = joints == list(range(num_joints))
+        selection = torch.zeros(len(joints), num_joints, dtype=offset_tensor.dtype)
+        selection[range(len(joints)), joints] = 1.0
+        # (oscillators, joints), one 1 per row; rebuilt from the arguments, not checkpointed
+        self.register_buffer("selection", selection, persistent=False)
 
     def forward(self, x: Tensor) -> Tensor:
-        if x.shape[-1] != self.offset.shape[0]:
+        if x.shape[-1] != self.selection.shape[0]:
             raise ValueError(
                 f"CPG output has {x.shape[-1]} oscillators, the joint map expects "
-                f"{self.offset.shape[0]}"
+                f"{self.selection.shape[0]}"
             )
-        return x + self.offset
+        if self.identity:
+            return x + self.offset
+        return x @ self.selection.to(x.dtype) + self.offset

@@ -1,6 +1,7 @@
 """The hopper's robot description: one Python data module, written out as MJCF and URDF.
 
 ``python -m cpg_actor.envs.robot`` regenerates ``cpg_actor/envs/assets/anymal_hopper.{xml,urdf}``
+and the quadruped's ``anymal_b.xml``
 (``--check`` only verifies they are up to date).
 """
 
@@ -18,8 +19,16 @@ URDF_PATH = ASSETS_DIR / f"{description.ROBOT_NAME}.urdf"
 
 
 def generated_assets() -> dict[Path, str]:
-    """Each shipped robot file and the text the description generates for it."""
-    return {MJCF_PATH: mjcf_text(), URDF_PATH: urdf_text()}
+    """Each shipped robot file and the text its description generates: the hopper's MJCF and
+    URDF, and the quadruped's MJCF (:mod:`cpg_actor.envs.quadruped`)."""
+    from cpg_actor.envs.quadruped import MJCF_PATH as QUADRUPED_MJCF_PATH
+    from cpg_actor.envs.quadruped import mjcf_text as quadruped_mjcf_text
+
+    return {
+        MJCF_PATH: mjcf_text(),
+        URDF_PATH: urdf_text(),
+        QUADRUPED_MJCF_PATH: quadruped_mjcf_text(),
+    }
 
 
 def stale_assets() -> list[Path]:

@@ -1,0 +1,104 @@
+"""The quadruped env's speed on the CPU next to its raw physics ceiling, measured in one run.
+
+    python benchmarks/quadruped_throughput.py [--envs 16 64 256] [--seconds 5]
+        [--output benchmarks/results/quadruped_throughput.md]
+
+* ceiling: ``mujoco.rollout`` of the env's own MJCF (ANYmal B, ``decimation`` substeps of
+  ``physics_dt`` per control step, its dcmotor actuators holding the nominal pose), the robots
+  split over the same threads as the env, nothing else;
+* env: ``AnymalVectorEnv.step`` (the same rollout plus the task in numpy: observation,
+  reward terms, falls, autoreset) driven by the open-loop trot of the CPG preset, the CPG
+  stepped in torch as a policy would;
+
+control steps per second summed over the robots, after a warm-up.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+import torch
+
+from bench_report import measured, write
+from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
+from cpg_actor.envs.backends.mujoco_backend import CONTROL_SPEC, mj_rollout, mujoco
+from cpg_actor.envs.quadruped import description as robot
+from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+from cpg_actor.machine import cpu_model, load_average, usable_cores
+
+
+def rates(num_envs: int, seconds: float) -> dict[str, float]:
+    env = AnymalVectorEnv(num_envs)
+    env.reset(seed=0)
+    cpg = quadruped_cpg(env.config.control_dt, "trot")
+    joint_map = quadruped_joint_map(robot.NOMINAL_POSE)
+    state = cpg.initial_state(num_envs)
+
+    def env_step() -> None:
+        nonlocal state
+        with torch.no_grad():
+            output, state = cpg(state)
+            env.step(joint_map(output.position).numpy())
+
+    model, threads = env.model, env.num_threads
+    start_state = env.get_state()["anymal"]["physics"].numpy().copy()
+    control = np.tile(np.asarray(robot.NOMINAL_POSE), (num_envs, env.config.decimation, 1))
+    out = np.zeros((num_envs, env.config.decimation, start_state.shape[1]))
+    rollout = mj_rollout.Rollout(nthread=threads if threads > 1 else 0)
+    datas = [mujoco.MjData(model) for _ in range(threads)]
+    chunk = max(1, -(-num_envs // (4 * threads)))
+
+    def physics() -> None:
+        rollout.rollout([model] * num_envs, datas, start_state, control,
+                        control_spec=CONTROL_SPEC, skip_checks=True, nstep=control.shape[1],
+                        initial_warmstart=None, state=out, chunk_size=chunk)  # fmt: skip
+        np.copyto(start_state, out[:, -1])
+
+    result = {"threads": threads}
+    for name, step in (("ceiling", physics), ("env", env_step)):
+        for _ in range(20):
+            step()
+        count, begin = 0, time.perf_counter()
+        while time.perf_counter() - begin < seconds:
+            step()
+            count += 1
+        result[name] = num_envs * count / (time.perf_counter() - begin)
+    rollout.close()
+    env.close()
+    return result
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--envs", type=int, nargs="+", default=[16, 64, 256])
+    parser.add_argument("--seconds", type=float, default=5.0, help="timed seconds per row")
+    parser.add_argument("--output", default="benchmarks/results/quadruped_throughput.md")
+    args = parser.parse_args()
+    rows = []
+    for n in args.envs:
+        rows.append((n, rates(n, args.seconds)))
+        print(n, rows[-1][1], flush=True)
+    command = "python benchmarks/quadruped_throughput.py --envs " + " ".join(map(str, args.envs))
+    lines = [
+        "# Quadruped (ANYmal B) env throughput on the CPU",
+        "",
+        measured(command) + f", on {cpu_model()}, {usable_cores()} usable cores "
+        f"(load {load_average()}), torch {torch.__version__}, mujoco {mujoco.__version__}.",
+        "",
+        "Control steps per second (one control step = 10 substeps of 2 ms), summed over robots.",
+        "",
+        "| robots | threads | ceiling (`mujoco.rollout`) | env with the trot CPG | of ceiling |",
+        "| ---: | ---: | ---: | ---: | ---: |",
+    ]
+    lines += [
+        f"| {n} | {r['threads']} | {r['ceiling']:,.0f} | {r['env']:,.0f} | "
+        f"{r['env'] / r['ceiling']:.0%} |"
+        for n, r in rows
+    ]
+    write(args.output, lines + [""])
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,136 @@
+"""`cpg-actor gaits`: the quadruped's CPG gait presets, open loop, on the ANYmal B.
+
+Each gait preset (``cpg_actor.cpg.gaits.GAITS``) drives ``--robots`` robots for ``--seconds``
+with no learning and no feedback (the untrained ``cpg-actor-open-loop``'s mean action). It
+writes a gait diagram (which foot is on the ground, per leg, over the last seconds of robot 0,
+one panel per gait, with the measured forward speed) as a PNG, and a JSON summary per gait:
+falls, mean forward speed, the duty factor of each leg (share of time on the ground) and each
+leg's touchdown phase relative to LF (fraction of a cycle: the gait's table, if the robot
+keeps it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+HELP = "run the quadruped's CPG gait presets open loop; write a gait diagram and a summary"
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from cpg_actor.cpg.gaits import GAITS
+
+    parser.add_argument("--gaits", nargs="+", default=list(GAITS), choices=list(GAITS))
+    parser.add_argument("--seconds", type=float, default=20.0, help="per run (default 20)")
+    parser.add_argument("--robots", type=int, default=4, help="robots per gait (default 4)")
+    parser.add_argument("--command", type=float, default=0.5, help="forward command, m/s")
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--out", default="gaits", help="folder for gaits.png and gaits.json")
+    parser.add_argument("--overwrite", action="store_true", help="replace existing files")
+
+
+def touchdown_phases(contact, dt: float, frequency: float) -> list[float]:
+    """Each leg's mean touchdown time after LF's, as a fraction of the CPG's cycle, from a
+    ``(T, 4)`` contact trace (NaN for a leg that never lands twice)."""
+    import numpy as np
+
+    period = 1.0 / frequency
+    touch = [np.flatnonzero(contact[1:, leg] & ~contact[:-1, leg]) * dt for leg in range(4)]
+    phases = []
+    for leg in range(4):
+        if len(touch[0]) < 2 or len(touch[leg]) < 2:
+            phases.append(float("nan"))
+            continue
+        lags = [(t - touch[0][touch[0] <= t].max()) / period for t in touch[leg]
+                if (touch[0] <= t).any()]  # fmt: skip
+        angles = 2 * np.pi * np.asarray(lags)
+        mean = math.atan2(np.sin(angles).mean(), np.cos(angles).mean()) / (2 * math.pi)
+        phases.append(round(mean % 1.0, 3))
+    return phases
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+    import torch
+    from matplotlib.figure import Figure
+
+    from cpg_actor.checkpoint import atomic_write_text
+    from cpg_actor.cpg.gaits import QUADRUPED_INITIAL, quadruped_cpg, quadruped_joint_map
+    from cpg_actor.envs.quadruped import description as robot
+    from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+
+    if not (math.isfinite(args.seconds) and args.seconds > 0):
+        raise ValueError(f"--seconds must be a positive number, got {args.seconds}")
+    if args.robots < 1:
+        raise ValueError(f"--robots must be >= 1, got {args.robots}")
+    out = Path(args.out)
+    paths = (out / "gaits.png", out / "gaits.json")
+    for path in paths:
+        if path.exists() and not args.overwrite:
+            raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
+    config = {"command_range": (args.command, args.command), "episode_seconds": args.seconds}
+    summary, traces = {}, {}
+    for gait in args.gaits:
+        env = AnymalVectorEnv(args.robots, config)
+        env.reset(seed=args.seed)
+        dt = env.config.control_dt
+        cpg = quadruped_cpg(dt, gait).double()
+        joint_map = quadruped_joint_map(robot.NOMINAL_POSE).double()
+        state = cpg.initial_state(args.robots)
+        contact, speed, fell = [], [], np.zeros(args.robots, dtype=bool)
+        alive = np.ones(args.robots, dtype=bool)
+        with torch.no_grad():
+            for _ in range(env.config.episode_steps):
+                output, state = cpg(state)
+                _, _, terminated, _, info = env.step(joint_map(output.position).numpy())
+                fell |= terminated & alive
+                alive &= ~terminated
+                contact.append(info["contact"][0].copy())
+                speed.append(np.where(alive, info["forward_speed"], np.nan))
+        env.close()
+        contact, speed = np.array(contact), np.array(speed)
+        traces[gait] = (contact, dt)
+        summary[gait] = {
+            "fell": int(fell.sum()),
+            "robots": args.robots,
+            "forward_speed": round(float(np.nanmean(speed)), 3),
+            "duty_factor": dict(zip(robot.LEGS, contact.mean(0).round(2).tolist(), strict=True)),
+            "touchdown_phase": dict(
+                zip(
+                    robot.LEGS,
+                    touchdown_phases(contact, dt, QUADRUPED_INITIAL["frequency"]),
+                    strict=True,
+                )
+            ),  # fmt: skip
+        }
+        print(f"{gait}: {summary[gait]}")
+
+    window = 2.0  # seconds shown
+    fig = Figure(figsize=(9.0, 1.6 * len(traces) + 0.6), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(len(traces), 1))
+    for axis, (gait, (contact, dt)) in zip(axes, traces.items(), strict=True):
+        shown = contact[-round(window / dt) :]
+        start = (len(contact) - len(shown)) * dt
+        for leg in range(4):
+            on = np.flatnonzero(shown[:, leg])
+            axis.broken_barh([(start + k * dt, dt) for k in on], (3 - leg - 0.4, 0.8),
+                             color="tab:blue")  # fmt: skip
+        axis.set_yticks(range(4), robot.LEGS[::-1])
+        axis.set_xlim(start, start + window)
+        s = summary[gait]
+        axis.set_title(f"{gait}: {s['fell']} of {s['robots']} fell, forward speed "
+                       f"{s['forward_speed']:.2f} m/s (command {args.command} m/s)",
+                       fontsize="medium", loc="left")  # fmt: skip
+    axes[-1].set_xlabel("time (s); bars: foot on the ground (robot 0)")
+    fig.suptitle(f"Open-loop CPG gaits on ANYmal B ({args.seconds:g} s, seed {args.seed})")
+    out.mkdir(parents=True, exist_ok=True)
+    tmp = out / ".gaits.png.tmp.png"
+    fig.savefig(tmp, dpi=110)
+    tmp.replace(paths[0])
+    atomic_write_text(json.dumps({"command": args.command, "seconds": args.seconds,
+                                  "seed": args.seed, "gaits": summary}, indent=2) + "\n",
+                      paths[1])  # fmt: skip
+    print(f"wrote {paths[0]} and {paths[1]}")
+    return 0

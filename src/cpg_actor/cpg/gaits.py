@@ -1,0 +1,119 @@
+"""CPG presets for the ANYmal B quadruped: one oscillator per HFE and KFE joint, the classic gaits
+as phase biases (paper eq. 1: the coupling term pulls theta_j - theta_i towards phi_ij).
+
+Eight oscillators, per leg (LF, RF, LH, RH) one for HFE and one for KFE; the HAA joints are not
+driven (held at the nominal pose by :class:`~cpg_actor.cpg.JointMap`). Coupling (Lambda):
+
+* the four HFE oscillators all to all, with the gait's phase lags between the legs;
+* each leg's KFE oscillator with its own HFE oscillator only.
+
+Each oscillator has a target phase psi; every coupled pair gets ``phi_ij = psi_j - psi_i``, so
+the network's phase-locked state is the gait, and the network starts in it. The leg phases
+(fractions of a cycle, as in Ijspeert 2008 and the legged-robot CPG literature):
+
+========  ====  ====  ====  ====
+gait       LF    RF    LH    RH
+========  ====  ====  ====  ====
+trot       0    1/2   1/2    0     diagonal pairs in phase
+pace       0    1/2    0    1/2    lateral pairs in phase
+bound      0     0    1/2   1/2    front pair, then hind pair
+pronk      0     0     0     0     all four together
+walk       0    1/2   3/4   1/4    lateral-sequence walk: LF, RH, RF, LH
+========  ====  ====  ====  ====
+
+Within a leg the knee leads or lags the hip by a quarter cycle so that the foot lifts while
+the hip swings forward (HFE decreasing, ``theta`` in (0, pi) for ``x = r cos theta``): the
+front knees (nominal -0.8 rad) flex towards negative angles, so their ``x`` is lowest at
+``theta_hip = pi/2``: ``psi_KFE = psi_HFE + pi/2``; the hind knees (nominal +0.8 rad) flex
+towards positive angles: ``psi_KFE = psi_HFE - pi/2``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+import torch
+from torch import Tensor
+
+from cpg_actor.cpg.network import CPGNetwork
+from cpg_actor.cpg.presets import JointMap
+from cpg_actor.cpg.topology import Topology
+
+LEGS = ("LF", "RF", "LH", "RH")
+OSCILLATORS = tuple(f"{leg}_{joint}" for leg in LEGS for joint in ("HFE", "KFE"))
+# the joint (index in the quadruped's action order: per leg HAA, HFE, KFE) of each oscillator
+OSCILLATOR_JOINTS = tuple(3 * leg + joint for leg in range(4) for joint in (1, 2))
+
+GAITS: dict[str, tuple[float, float, float, float]] = {  # leg phase, fraction of a cycle
+    "trot": (0.0, 0.5, 0.5, 0.0),
+    "pace": (0.0, 0.5, 0.0, 0.5),
+    "bound": (0.0, 0.0, 0.5, 0.5),
+    "pronk": (0.0, 0.0, 0.0, 0.0),
+    "walk": (0.0, 0.5, 0.75, 0.25),
+}
+
+# Initial parameters: a 2 Hz step, hips +-0.1 rad, knees +-0.25 rad (a foot lift of about 5 cm);
+# convergence and coupling as the hopper's. Training reshapes all of it.
+QUADRUPED_INITIAL = {
+    "frequency": 2.0,  # Hz
+    "amplitude": (0.1, 0.25) * 4,  # rad, HFE and KFE of each leg
+    "convergence": 20.0,  # 1/s
+    "coupling_weight": 10.0,
+}
+
+
+def gait_phases(gait: str) -> tuple[float, ...]:
+    """The target phase psi (rad) of each of the 8 oscillators for ``gait``."""
+    if gait not in GAITS:
+        raise ValueError(f"unknown gait {gait!r}; available: {', '.join(GAITS)}")
+    phases = []
+    for leg, fraction in zip(LEGS, GAITS[gait], strict=True):
+        hip = 2.0 * math.pi * fraction
+        knee_lead = math.pi / 2 if leg.endswith("F") else -math.pi / 2
+        phases += [hip, hip + knee_lead]
+    return tuple(phases)
+
+
+def quadruped_topology() -> Topology:
+    """Hips all to all, each knee with its own hip (both directions)."""
+    hips = [2 * leg for leg in range(4)]
+    edges = [(i, j) for i in hips for j in hips if i != j]
+    edges += [(h, h + 1) for h in hips] + [(h + 1, h) for h in hips]
+    return Topology(8, tuple(edges), OSCILLATORS)
+
+
+def quadruped_cpg(
+    dt: float,
+    gait: str = "trot",
+    initial: Mapping[str, float | Sequence | Tensor] | None = None,
+    frozen: Mapping[str, bool | Sequence | Tensor] | None = None,
+    check_inputs: bool = True,
+    dtype: torch.dtype | None = None,
+) -> CPGNetwork:
+    """The quadruped's CPG in ``gait`` (module docstring), started in that gait's phases.
+
+    ``initial`` entries override :data:`QUADRUPED_INITIAL` and the gait's phase biases.
+    Trainable as the hopper's: frequency, amplitude and convergence per oscillator, and per
+    coupled pair one coupling weight and one phase bias (symmetric ties).
+    """
+    topology = quadruped_topology()
+    psi = gait_phases(gait)
+    phase_bias = torch.zeros(8, 8, dtype=torch.float64)
+    for i, j in topology.edges:
+        phase_bias[i, j] = psi[j] - psi[i]
+    return CPGNetwork(
+        topology,
+        dt=dt,
+        initial={**QUADRUPED_INITIAL, "phase_bias": phase_bias, **(initial or {})},
+        frozen=frozen,
+        symmetric_coupling=True,
+        initial_phase=psi,
+        check_inputs=check_inputs,
+        dtype=dtype,
+    )
+
+
+def quadruped_joint_map(nominal_pose: Sequence[float]) -> JointMap:
+    """HFE and KFE of every leg driven by their oscillators, HAA held at the nominal pose."""
+    return JointMap(nominal_pose, joints=OSCILLATOR_JOINTS)

@@ -1,0 +1,71 @@
+"""The quadruped's locomotion task as pure functions of batched numpy arrays (N robots).
+
+Observation (:data:`OBS_NAMES`, 45 numbers, legged_gym's without the base linear velocity,
+which a real robot does not measure): base angular velocity in the base frame (rad/s), gravity
+projected into the base frame (unit vector), the command (forward, lateral m/s, yaw rad/s),
+joint positions minus the nominal pose (rad), joint velocities (rad/s), the last action minus
+the nominal pose (rad).
+
+Reward: each term of :func:`reward_terms` times its scale (``QuadrupedConfig.reward_scales``)
+times the control step, summed (legged_gym's convention: the scales are per second).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from cpg_actor.envs.quadruped import description as robot
+
+OBS_NAMES = (
+    *(f"base_ang_vel_{a}" for a in "xyz"),
+    *(f"projected_gravity_{a}" for a in "xyz"),
+    "command_vx", "command_vy", "command_yaw",
+    *(f"{j}_pos" for j in robot.JOINT_NAMES),
+    *(f"{j}_vel" for j in robot.JOINT_NAMES),
+    *(f"{j}_last_action" for j in robot.JOINT_NAMES),
+)  # fmt: skip
+NOMINAL = np.asarray(robot.NOMINAL_POSE)
+
+
+def projected_gravity(quat: np.ndarray) -> np.ndarray:
+    """(N, 3): the world's unit gravity (0, 0, -1) in the base frame, from the base quaternion
+    (w, x, y, z): minus the third row of the rotation matrix. (0, 0, -1) when level."""
+    w, x, y, z = quat.T
+    return -np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=1)
+
+
+def observation(ang_vel, gravity, command, joint_pos, joint_vel, last_action) -> np.ndarray:
+    """(N, 45) float32 in the order of :data:`OBS_NAMES`."""
+    return np.concatenate(
+        [ang_vel, gravity, command, joint_pos - NOMINAL, joint_vel, last_action - NOMINAL], axis=1
+    ).astype(np.float32)
+
+
+def reward_terms(
+    lin_vel, ang_vel, gravity, base_height, command, torque, joint_acc, action, last_action,
+    air_time_paid, sigma: float, base_height_target: float,
+) -> dict[str, np.ndarray]:  # fmt: skip
+    """Each reward term, (N,) per robot, unscaled (``QuadrupedConfig`` holds the scales).
+
+    ``lin_vel`` and ``ang_vel`` in the base frame (m/s, rad/s); ``air_time_paid``: per robot,
+    the sum over the feet that touched down this step of (their air time - 0.5 s), 0 when the
+    command is (nearly) zero, as legged_gym pays it.
+    """
+    return {
+        "tracking_lin_vel": np.exp(-np.sum((command[:, :2] - lin_vel[:, :2]) ** 2, 1) / sigma),
+        "tracking_ang_vel": np.exp(-((command[:, 2] - ang_vel[:, 2]) ** 2) / sigma),
+        "lin_vel_z": lin_vel[:, 2] ** 2,
+        "ang_vel_xy": np.sum(ang_vel[:, :2] ** 2, 1),
+        "orientation": np.sum(gravity[:, :2] ** 2, 1),
+        "base_height": (base_height - base_height_target) ** 2,
+        "torques": np.sum(torque**2, 1),
+        "joint_acc": np.sum(joint_acc**2, 1),
+        "action_rate": np.sum((action - last_action) ** 2, 1),
+        "feet_air_time": air_time_paid,
+    }
+
+
+def fallen(base_height, gravity, fall_height: float, fall_tilt: float) -> np.ndarray:
+    """(N,) bool: the base is below ``fall_height`` or tilted more than ``fall_tilt`` rad."""
+    tilt = np.arccos(np.clip(-gravity[:, 2], -1.0, 1.0))
+    return (base_height < fall_height) | (tilt > fall_tilt)

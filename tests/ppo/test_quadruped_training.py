@@ -1,0 +1,81 @@
+"""Training on the ANYmal B quadruped (`--robot anymal`): the CPG-Actor (8 oscillators driving
+12 joints), its open-loop variant and the MLP train through the same runner as the hopper; the
+run's config names the robot and resumes; the hopper-only agents say so."""
+
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from cpg_actor.cli import main
+from cpg_actor.config import TrainConfig, apply_dict, parse_override
+from cpg_actor.envs.quadruped import QuadrupedConfig
+from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+from cpg_actor.runner import Runner
+from tiny import tiny_config
+
+
+def anymal_config(agent: str, eval_interval: int = 0, **fields) -> TrainConfig:
+    config = tiny_config(agent, **fields)
+    config.eval_interval = eval_interval
+    apply_dict(config, {"robot": "anymal", "env": {"episode_seconds": 0.2}}, "")
+    return config
+
+
+@pytest.mark.parametrize("agent", ["cpg-actor", "cpg-actor-open-loop", "mlp"])
+def test_every_agent_trains_on_the_quadruped(agent):
+    runner = Runner(anymal_config(agent, eval_interval=2, eval_episodes=2), tensorboard=False)
+    try:
+        assert isinstance(runner.env.unwrapped, AnymalVectorEnv)
+        before = {k: v.clone() for k, v in runner.agent.state_dict().items()}
+        runner.learn()
+        after = runner.agent.state_dict()
+        assert all(torch.isfinite(v).all() for v in after.values())
+        assert any(not torch.equal(before[k], after[k]) for k in before)
+        evaluation = runner.run_evaluation()
+        assert np.isfinite(evaluation["eval/return"])
+        assert 0.0 <= evaluation["eval/fell"] <= 1.0
+        if agent.startswith("cpg-actor"):
+            assert runner.agent.cpg.num_oscillators == 8
+            assert runner.agent.joint_map(torch.zeros(1, 8)).shape == (1, 12)
+    finally:
+        runner.close()
+
+
+def test_robot_selects_the_env_config_and_bad_combinations_are_refused():
+    config = TrainConfig()
+    apply_dict(config, parse_override("robot=anymal"), "")
+    assert isinstance(config.env, QuadrupedConfig)
+    apply_dict(config, parse_override("env.command_range=[0.5, 0.5]"), "")
+    assert tuple(config.env.command_range) == (0.5, 0.5)
+    config.validate()
+    again = TrainConfig.from_dict(config.to_dict())
+    assert again.robot == "anymal" and again.env == config.env
+    with pytest.raises(ValueError, match="built for the hopper"):
+        TrainConfig.from_dict({**config.to_dict(), "agent": "cho2019"}).validate()
+    with pytest.raises(ValueError, match="unknown robot"):
+        apply_dict(TrainConfig(), parse_override("robot=biped"), "")
+    with pytest.raises(ValueError, match="cpg_gait must be one of"):
+        apply_dict(config, parse_override("agent_config.cpg_gait=gallop"), "")
+        config.validate()
+
+
+def test_cli_trains_a_pace_resumes_and_logs_the_robots_metrics(tmp_path, capsys):
+    run = tmp_path / "run"
+    args = ["train", "--robot", "anymal", "--num-envs", "2", "--total-steps", "32",
+            "--set", "ppo.num_steps=8", "--set", "ppo.num_minibatches=2",
+            "--set", "ppo.num_epochs=1", "--set", "eval_interval=0",
+            "--set", "env.episode_seconds=0.1", "--set", "agent_config.cpg_gait=pace",
+            "--set", "checkpoint_interval=1", "--run-dir", str(run), "--no-progress"]  # fmt: skip
+    assert main(args) == 0
+    rows = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines()]
+    assert any(row.get("charts/fell") is not None for row in rows)
+    assert any(row.get("charts/speed_error") is not None for row in rows)
+    assert main(["train", "--run-dir", str(run), "--resume", "--total-steps", "48",
+                 "--no-progress"]) == 0  # fmt: skip
+    assert "anymal-mujoco" in capsys.readouterr().out
+    assert main(["train", "--robot", "anymal", "--sim", "pybullet", "--run-dir",
+                 str(tmp_path / "other")]) == 2  # fmt: skip
+    assert "runs on MuJoCo only" in capsys.readouterr().err
+    assert not (tmp_path / "other").exists()
