@@ -15,6 +15,14 @@ import numpy as np
 import torch
 
 
+def finite_mean(values) -> float:
+    """The mean of the finite values; NaN (and no warning) when there is none, as for a
+    metric no episode defined (the quadruped's cost of transport of robots that did not walk)."""
+    values = np.asarray(values, dtype=np.float64)
+    finite = values[np.isfinite(values)]
+    return float(finite.mean()) if finite.size else float("nan")
+
+
 def observation_columns(robot) -> dict[str, list[int]]:
     """Where the traces' quantities are in the observation, by the names the env's
     :class:`cpg_actor.robot.RobotSpec` gives its columns: measured joint positions

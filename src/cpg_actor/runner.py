@@ -48,7 +48,7 @@ from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
 from cpg_actor.envs.torch_env import TorchVectorEnv
 from cpg_actor.episodes import EpisodeLog, EpisodeStats
-from cpg_actor.evaluation import evaluate
+from cpg_actor.evaluation import evaluate, finite_mean
 from cpg_actor.machine import usable_cores
 from cpg_actor.policy import Policy
 from cpg_actor.ppo import (
@@ -366,7 +366,7 @@ class Runner:
             "eval/length": float(result["length"].mean()),
         }
         for name in result["metric_names"]:  # the env's own (the hopper's hop height)
-            row[f"eval/{name}"] = float(np.nanmean(result[str(name)]))
+            row[f"eval/{name}"] = finite_mean(result[str(name)])
         row["time/eval"] = time.perf_counter() - start
         return row
 

@@ -43,6 +43,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import TrainConfig
+    from cpg_actor.evaluation import finite_mean
     from cpg_actor.policy import load_policy
 
     run_dir = Path(args.run_dir)
@@ -94,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
             f"episode {i}: return {traces['episode_return'][i]:.3f}, "
             f"{metrics + ', ' if metrics else ''}{traces['length'][i]} steps"
         )
-    means = metrics_text({f"mean {name}": float(np.nanmean(traces[name])) for name in names})
+    means = metrics_text({f"mean {name}": finite_mean(traces[name]) for name in names})
     print(
         f"mean return {traces['episode_return'].mean():.3f}{', ' + means if means else ''} "
         f"over {args.episodes} episodes; traces in {output}"

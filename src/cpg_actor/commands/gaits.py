@@ -60,6 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from cpg_actor.cpg.gaits import QUADRUPED_INITIAL, quadruped_cpg, quadruped_joint_map
     from cpg_actor.envs.quadruped import description as robot
     from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+    from cpg_actor.evaluation import finite_mean
 
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         raise ValueError(f"--seconds must be a positive number, got {args.seconds}")
@@ -95,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
         summary[gait] = {
             "fell": int(fell.sum()),
             "robots": args.robots,
-            "forward_speed": round(float(np.nanmean(speed)), 3),
+            "forward_speed": round(finite_mean(speed), 3),
             "duty_factor": dict(zip(robot.LEGS, contact.mean(0).round(2).tolist(), strict=True)),
             "touchdown_phase": dict(
                 zip(
