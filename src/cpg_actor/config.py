@@ -120,10 +120,17 @@ class TrainConfig:
             holds = self.robot
         if holds != self.robot:
             raise ValueError(f"env holds the config of robot {holds!r}, not of {self.robot!r}")
-        if self.robot != "hopper" and self.agent.startswith("cho2019"):
+        from cpg_actor.agents import AGENTS
+
+        spec = AGENTS[self.agent]
+        if spec.robots is not None and self.robot not in spec.robots:
+            usable = sorted(
+                name for name, other in AGENTS.items()
+                if other.robots is None or self.robot in other.robots
+            )  # fmt: skip
             raise ValueError(
-                f"agent {self.agent!r} is built for the hopper (its CPG sits in the hopper's "
-                f"env); on robot {self.robot!r} use cpg-actor, cpg-actor-open-loop or mlp"
+                f"agent {self.agent!r} is built for {', '.join(spec.robots)} only; on robot "
+                f"{self.robot!r} use one of {', '.join(usable)}"
             )
         check_device_name(self.device)
         self.agent_config.validate()
@@ -279,11 +286,11 @@ def apply_dict(obj: Any, data: dict[str, Any], prefix: str) -> None:
     A ``robot`` key of a ``TrainConfig`` comes first: it swaps ``env`` for that robot's
     default config when ``env`` holds another robot's."""
     if prefix == "" and isinstance(obj, TrainConfig) and "robot" in data:
-        from cpg_actor.envs.robots import robot_env, robot_name
+        from cpg_actor.envs.robots import robot_env
 
         config_class = robot_env(str(data["robot"])).config_class
         obj.robot = str(data["robot"])
-        if not isinstance(obj.env, config_class) and robot_name(obj.env) != obj.robot:
+        if not isinstance(obj.env, config_class):
             obj.env = config_class()
         data = {key: value for key, value in data.items() if key != "robot"}
     names = {f.name: f for f in dataclasses.fields(obj)}

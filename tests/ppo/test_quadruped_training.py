@@ -52,7 +52,7 @@ def test_robot_selects_the_env_config_and_bad_combinations_are_refused():
     config.validate()
     again = TrainConfig.from_dict(config.to_dict())
     assert again.robot == "anymal" and again.env == config.env
-    with pytest.raises(ValueError, match="built for the hopper"):
+    with pytest.raises(ValueError, match="for hopper only; on robot .anymal. use one of cpg"):
         TrainConfig.from_dict({**config.to_dict(), "agent": "cho2019"}).validate()
     with pytest.raises(ValueError, match="unknown robot"):
         apply_dict(TrainConfig(), parse_override("robot=biped"), "")
@@ -79,3 +79,21 @@ def test_cli_trains_a_pace_resumes_and_logs_the_robots_metrics(tmp_path, capsys)
                  str(tmp_path / "other")]) == 2  # fmt: skip
     assert "runs on MuJoCo only" in capsys.readouterr().err
     assert not (tmp_path / "other").exists()
+
+
+def test_bad_quadruped_config_values_say_what_is_accepted():
+    for override, message in (
+        ("env.command_range=0.5", "command_range must be \\[low, high\\]"),
+        ("env.command_range=[1.0, 0.0]", "low <= high"),
+        ("env.reward_scales=3", "reward_scales must be a mapping"),
+        ("env.reward_scales.torques=abc", "reward_scales.torques must be a finite number"),
+    ):
+        config = TrainConfig()
+        apply_dict(config, parse_override("robot=anymal"), "")
+        with pytest.raises(ValueError, match=message):
+            apply_dict(config, parse_override(override), "")
+    config = TrainConfig()
+    apply_dict(config, parse_override("robot=hopper"), "")
+    with pytest.raises(ValueError, match="has no gaits"):
+        apply_dict(config, parse_override("agent_config.cpg_gait=trot"), "")
+        Runner(config, tensorboard=False)

@@ -8,6 +8,7 @@ parameters V and the feedback MLP together with no backpropagation through time.
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Sequence
 
 import torch
@@ -69,8 +70,11 @@ class CPGActorAgent(Agent):
             )
         preset, joints = CPG_PRESETS[robot.name]
         options = {"gait": config.cpg_gait} if config.cpg_gait else {}
-        if options and preset is hopper_cpg:
-            raise ValueError("agent_config.cpg_gait is for the quadruped; the hopper has one CPG")
+        if options and "gait" not in inspect.signature(preset).parameters:
+            raise ValueError(
+                f"agent_config.cpg_gait: the CPG preset of robot '{robot.name}' has no gaits; "
+                "leave it empty"
+            )
         cpg = preset(
             robot.control_dt, initial=config.cpg_initial or None, check_inputs=False, **options
         )

@@ -56,6 +56,9 @@ class AgentSpec:
     build: Callable[[AgentConfig, Any], Agent]
     env_factory: Callable[..., Any] = make_robot_env
     wrapper: Callable[[Any], Any] | None = None
+    # the robots (``TrainConfig.robot``) it is built for; None: any robot whose env follows the
+    # contract (cho2019: its CPG sits in the hopper's env)
+    robots: tuple[str, ...] | None = None
     # ``warm_start(agent, normalizer, env, WarmStartConfig, seed) -> losses``, run once before
     # the first PPO iteration of a new run (not on resume)
     warm_start: Callable[..., list[float]] | None = None
@@ -115,6 +118,7 @@ register_agent(
         "Cho et al. 2019: MLP actor outputs CPG parameters; the CPG is inside the environment",
         build_cho2019,
         wrapper=cpg_parameter_wrapper,
+        robots=("hopper",),
     )
 )
 register_agent(
@@ -124,6 +128,7 @@ register_agent(
         build_cho2019,
         wrapper=cpg_parameter_wrapper,
         warm_start=warm_start_cho2019,
+        robots=("hopper",),
     )
 )
 register_agent(
@@ -134,5 +139,6 @@ register_agent(
         build_cho2019,
         wrapper=paper_cpg_parameter_wrapper,
         warm_start=warm_start_cho2019_paper,
+        robots=("hopper",),
     )
 )

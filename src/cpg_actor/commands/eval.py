@@ -196,7 +196,8 @@ def plot_traces(traces: dict[str, np.ndarray], path: Path) -> list[Path]:
     ]
     if "theta_dot" in traces:
         panels += [("theta_dot (rad/s)", "theta_dot", None), ("r_ddot (rad/s^2)", "r_ddot", None)]
-    joints = [str(j) for j in traces.get("joint_names", ("HFE", "KFE"))][:3]  # the first leg's
+    # the robot's first joints (traces saved before joint names were: the hopper's two)
+    joints = [str(j) for j in traces.get("joint_names", ("HFE", "KFE"))][:3]
     heights = "hip_height" in traces
     rows = len(panels) + int(heights)
     fig, axes = plt.subplots(rows, 1, figsize=(9, 2.2 * rows), sharex=True)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import shutil
 import sys
 from pathlib import Path
@@ -14,6 +15,7 @@ from cpg_actor.config import (
     parse_steps,
 )
 from cpg_actor.envs.config import SIMULATORS
+from cpg_actor.envs.robots import ROBOTS, robot_env
 from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.presets import PRESETS
 from cpg_actor.progress import evaluation_text, metrics_text
@@ -33,7 +35,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--robot",
         default=None,
-        choices=("hopper", "anymal"),
+        choices=sorted(ROBOTS),
         help="hopper (the paper's leg on a rail, default) or anymal (ANYmal B walking, MuJoCo "
         "only; docs/quadruped.md)",
     )
@@ -94,9 +96,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def simulator(config: TrainConfig) -> str:
-    """The run's simulator, with the robot when it is not the hopper ("anymal-mujoco")."""
+    """The run's simulator, prefixed by the robot when it is not the default robot
+    ("anymal-mujoco"; the default's runs keep their names, "mujoco")."""
     sim = getattr(config.env, "sim", "mujoco")
-    return sim if config.robot == "hopper" else f"{config.robot}-{sim}"
+    return sim if config.robot == TrainConfig.robot else f"{config.robot}-{sim}"
 
 
 def build_config(args: argparse.Namespace) -> TrainConfig:
@@ -114,10 +117,12 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
     if getattr(args, "robot", None) is not None:
         flags["robot"] = args.robot
     if args.sim is not None:
-        if flags.get("robot", "hopper") != "hopper" and args.sim != "mujoco":
-            raise ValueError(f"--sim {args.sim}: the {flags['robot']} runs on MuJoCo only")
-        if flags.get("robot", "hopper") == "hopper":
+        robot = flags.get("robot", TrainConfig.robot)
+        fields = {f.name for f in dataclasses.fields(robot_env(robot).config_class)}
+        if "sim" in fields:
             flags["env"] = {"sim": args.sim}
+        elif args.sim != "mujoco":  # a robot with one simulator: MuJoCo
+            raise ValueError(f"--sim {args.sim}: the {robot} runs on MuJoCo only")
     if getattr(args, "device", None) is not None:
         flags["device"] = args.device
     config = compose_config(getattr(args, "preset", None), args.config, flags, args.overrides)

@@ -74,15 +74,27 @@ class QuadrupedConfig:
             raise ValueError(f"decimation must be an integer >= 1, got {self.decimation!r}")
         if self.physics_dt > 0.005:
             raise ValueError(f"physics_dt must be <= 0.005 s, got {self.physics_dt}")
-        low, high = self.command_range
-        if not (math.isfinite(low) and math.isfinite(high) and low <= high):
-            raise ValueError(f"command_range must be (low, high) with low <= high, got "
-                             f"{self.command_range!r}")  # fmt: skip
+        bounds = self.command_range
+        if not (
+            isinstance(bounds, list | tuple)
+            and len(bounds) == 2
+            and all(isinstance(b, int | float) and math.isfinite(b) for b in bounds)
+            and bounds[0] <= bounds[1]
+        ):
+            raise ValueError(f"command_range must be [low, high] in m/s with low <= high, got "
+                             f"{bounds!r}")  # fmt: skip
+        if not isinstance(self.reward_scales, dict):
+            raise ValueError(f"reward_scales must be a mapping of term to scale, got "
+                             f"{self.reward_scales!r}")  # fmt: skip
         unknown = set(self.reward_scales) - set(_default_scales())
         if unknown:
             raise ValueError(
                 f"unknown reward terms {sorted(unknown)}; accepted: {sorted(_default_scales())}"
             )
+        for term, scale in self.reward_scales.items():
+            if isinstance(scale, bool) or not (isinstance(scale, int | float)
+                                               and math.isfinite(scale)):  # fmt: skip
+                raise ValueError(f"reward_scales.{term} must be a finite number, got {scale!r}")
         if self.actuator_law not in ("dc-motor", "coast"):
             raise ValueError(f"actuator_law must be 'dc-motor' or 'coast', got "
                              f"{self.actuator_law!r}")  # fmt: skip
@@ -96,5 +108,8 @@ class QuadrupedConfig:
             raise ValueError(
                 f"unknown QuadrupedConfig fields {sorted(unknown)}; accepted: {sorted(names)}"
             )
-        scales = {**_default_scales(), **values.get("reward_scales", {})}
+        given = values.get("reward_scales", {})
+        if not isinstance(given, dict):
+            raise ValueError(f"reward_scales must be a mapping of term to scale, got {given!r}")
+        scales = {**_default_scales(), **given}
         return cls(**{**values, "reward_scales": scales}).validate()
