@@ -82,3 +82,33 @@ def test_export_command_writes_the_file_and_says_what_it_takes(tmp_path, capsys)
     assert main(["export", str(run_dir), "--format", "torchscript"]) == 2
     assert "exists; pass --overwrite" in capsys.readouterr().err
     assert main(["export", str(tmp_path / "missing")]) == 2
+
+
+def test_exported_quadruped_policy_reads_its_drive_from_the_raw_command(tmp_path):
+    """On the quadruped the exported step sets the CPG's drive from the raw observation (the
+    forward-speed command) as the policy does: same actions and states, drive row included."""
+    from cpg_actor.config import apply_dict
+    from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+
+    config = tiny_config("cpg-actor")
+    apply_dict(config, {"robot": "anymal", "env": {"episode_seconds": 0.2}}, "")
+    runner = Runner(config, run_dir=tmp_path / "run", tensorboard=False)
+    runner.learn()
+    runner.close()
+    policy = load_policy(tmp_path / "run")
+    path = export_policy(policy, tmp_path / "policy.pt", "torchscript")
+    step = exported_step(path, "torchscript")
+    state = np.load(path.with_name(path.name + ".initial_state.npy"))
+    env = AnymalVectorEnv(1, {"command_range": (0.8, 0.8)})
+    obs, _ = env.reset(seed=1)
+    policy.reset(1)
+    try:
+        for _ in range(20):
+            expected = policy.act(obs).action
+            action, state = step(np.asarray(obs, dtype=np.float32), state)
+            assert np.allclose(action, expected, atol=1e-5)
+            assert np.allclose(state, policy.state.numpy(), atol=1e-5)
+            obs = env.step(expected)[0]
+        assert np.allclose(state[0, 5], 0.8)  # the drive row: d = the command
+    finally:
+        env.close()

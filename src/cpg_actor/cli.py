@@ -11,6 +11,7 @@ import importlib
 import sys
 
 from cpg_actor.envs.mjx.runtime import MjxUnavailable
+from cpg_actor.envs.video import RenderingUnavailable
 
 # command name -> module in cpg_actor.commands
 COMMANDS: dict[str, str] = {
@@ -54,7 +55,8 @@ def main(argv: list[str] | None = None) -> int:
     ) as error:  # fmt: skip
         print(f"cpg-actor {args.command}: error: {error}", file=sys.stderr)
         return 2
-    except OSError as error:  # unwritable or full disk, read-only file system, ...: one line
+    # unwritable or full disk, read-only file system, no OpenGL to render with...: one line
+    except (OSError, RenderingUnavailable) as error:
         print(f"cpg-actor {args.command}: error: {error}", file=sys.stderr)
         return 1
 

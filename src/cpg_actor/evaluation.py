@@ -39,6 +39,12 @@ def observation_columns(robot) -> dict[str, list[int]]:
     return columns
 
 
+# the step info an env may report -> its trace: feet on the ground (E, feet) as 1 or 0, the
+# base's forward speed (m/s) and the velocity command (E, 3: forward, lateral, yaw)
+TRACED_INFO = {"contact": "foot_contact", "forward_speed": "base_forward_speed",
+               "command": "command"}  # fmt: skip
+
+
 @torch.no_grad()
 def evaluate(
     policy,
@@ -55,7 +61,9 @@ def evaluate(
     ``episode_return`` and ``length`` per env, the env's episode metrics (its
     ``info["episode_metrics"]``: ``hop_height`` for the hopper) per env, their names in
     ``metric_names`` and, with ``traces``, per-step traces ``(T, E, ...)`` (rows after an env's
-    episode ended are NaN).
+    episode ended are NaN), with ``foot_contact``, ``base_forward_speed`` and ``command`` where
+    the env's step info has them (``TRACED_INFO``; the columns of ``foot_contact`` are named
+    in ``foot_names``).
     """
     num_envs = env.num_envs
     columns = observation_columns(env.robot)
@@ -107,6 +115,11 @@ def evaluate(
     result.update(metrics)
     result["metric_names"] = np.array(sorted(metrics), dtype=str)
     result["joint_names"] = np.array(env.robot.joint_names, dtype=str)
+    if "foot_contact" in result:  # the columns of foot_contact
+        feet = getattr(getattr(env, "unwrapped", env), "foot_names", None)
+        if feet is None:
+            feet = [f"foot {i}" for i in range(result["foot_contact"].shape[-1])]
+        result["foot_names"] = np.array(feet, dtype=str)
     result["standing_hip_height"] = np.array(standing)
     result["control_dt"] = np.array(control_dt)
     return result
@@ -137,4 +150,9 @@ def _trace_row(
             row[key] = extras[key].cpu().numpy()
         elif key in info:
             row[key] = np.asarray(info[key])
+    # a legged robot's gait and speed tracking (the quadruped's info); renamed where the name
+    # is also an episode metric's (the mean forward speed)
+    for key, trace in TRACED_INFO.items():
+        if key in info:
+            row[trace] = np.asarray(info[key])
     return row

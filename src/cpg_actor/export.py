@@ -10,9 +10,10 @@ The exported function is the deterministic control step of :class:`cpg_actor.pol
   the observation normaliser is inside.
 * ``state``: ``(B, *state_shape)`` float32, the agent's recurrent state: for the CPG-Actor the
   CPG state ``(B, 5, N)`` (rows: phase theta, theta_dot, amplitude r, r_dot, r_ddot; columns:
-  oscillators), for the MLP an empty ``(B, 0)``. Start from :func:`initial_state` (saved next to
-  the policy as ``*.initial_state.npy``) and feed ``next_state`` back at the next step; restart
-  it when an episode restarts.
+  oscillators; on a robot with a drive, the quadruped, a sixth row: the drive d, set from the
+  observation inside the step), for the MLP an empty ``(B, 0)``. Start from
+  :func:`initial_state` (saved next to the policy as ``*.initial_state.npy``) and feed
+  ``next_state`` back at the next step; restart it when an episode restarts.
 * ``action``: ``(B, A)`` float32, desired joint positions (rad), the mean of the Gaussian,
   clipped to the joint limits.
 
@@ -56,6 +57,7 @@ class ControlStep(nn.Module):
         self.register_buffer("high", torch.as_tensor(policy.action_high, dtype=torch.float32))
 
     def forward(self, observation: Tensor, state: Tensor) -> tuple[Tensor, Tensor]:
+        state = self.agent.observe(observation, state)  # e.g. the CPG's drive (raw obs)
         if self.normalize:
             observation = ((observation - self.mean) / self.std).clamp(-self.clip, self.clip)
         out = self.agent.actor(observation, state)

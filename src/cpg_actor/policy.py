@@ -128,8 +128,8 @@ class Policy:
             raise ValueError(
                 f"obs must have shape ({self.num_envs}, obs_dim), got {tuple(obs_t.shape)}"
             )
+        state = self.agent.observe(obs_t, self.state)  # e.g. the CPG's drive, from raw obs
         normalized = self.normalize(obs_t, update=update_normalizer)
-        state = self.state
         step = self.agent.act(normalized, state, deterministic=deterministic)
         # the env's action is the sample's first entries (the agent may draw more: feedback)
         sampled = step.action[:, : self.action_low.shape[0]]

@@ -24,6 +24,10 @@ class RobotSpec:
     action_high: tuple[float, ...]
     control_dt: float  # s, one control step (one env step)
     observation_names: tuple[str, ...]
+    # the observation (one of observation_names) that sets the CPG's drive d (paper eq. 3:
+    # nu(d), rho(d)), as it comes from the env, before normalisation: the quadruped's
+    # forward-speed command. None: no drive (the hopper: d = 0)
+    drive_observation: str | None = None
 
     def __post_init__(self) -> None:
         n = len(self.joint_names)
@@ -38,7 +42,21 @@ class RobotSpec:
             )
         if not self.control_dt > 0:
             raise ValueError(f"RobotSpec.control_dt must be > 0, got {self.control_dt!r}")
+        if self.drive_observation is not None and (
+            self.drive_observation not in self.observation_names
+        ):
+            raise ValueError(
+                f"RobotSpec.drive_observation {self.drive_observation!r} is not one of the "
+                f"observation names {self.observation_names}"
+            )
 
     @property
     def num_joints(self) -> int:
         return len(self.joint_names)
+
+    @property
+    def drive_index(self) -> int | None:
+        """The drive observation's index in the observation vector (None: no drive)."""
+        if self.drive_observation is None:
+            return None
+        return self.observation_names.index(self.drive_observation)

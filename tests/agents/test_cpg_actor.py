@@ -215,3 +215,6 @@ def test_agents_are_built_from_the_env_robot():
         build_cpg_actor(AgentConfig(), env)
     with pytest.raises(ValueError, match="nominal_pose needs 2 entries"):
         RobotSpec("x", ("HFE", "KFE"), (0.4,), (-1, -2), (1, 0), 0.01, ())
+    with pytest.raises(ValueError, match="drive_observation 'speed' is not one of"):
+        RobotSpec("x", ("HFE", "KFE"), (0.4, -0.8), (-1, -2), (1, 0), 0.01, ("q",), "speed")
+    assert agent.state_shape == (5, 2)  # the hopper has no drive: the paper's CPG state

@@ -31,9 +31,10 @@ def test_each_gait_is_the_phase_locked_state_reached_from_elsewhere(gait):
     start = cpg.initial_state(1, amplitude=0.1)
     pushed = torch.as_tensor(psi + np.random.default_rng(0).uniform(-1.0, 1.0, 8))[None]
     state = CPGState(pushed, *start[1:])
+    drive = torch.full((1, 8), 0.5, dtype=torch.float64)  # a 0.5 m/s command
     with torch.no_grad():
         for _ in range(1500):  # 15 s
-            _, state = cpg(state)
+            _, state = cpg(state, drive)
     theta = state.phase[0].numpy()
     for i in range(8):
         for j in range(8):

@@ -35,6 +35,46 @@ def test_adaptive_schedule_moves_the_learning_rate_against_the_kl():
     assert high.ppo.optimizer.param_groups[0]["lr"] == high.ppo.learning_rate
 
 
+def test_the_cpg_learning_rate_stays_fixed_while_the_schedule_moves_the_others():
+    """ppo.cpg_learning_rate: the CPG vector V and the feedback MLP in their own Adam group at
+    a fixed rate, out of the adaptive (and linear) schedule; the others follow the schedule."""
+    config = TrainConfig(
+        agent="cpg-actor",
+        num_envs=4,
+        total_steps=4 * 16 * 10,
+        ppo=PPOConfig(
+            num_steps=16,
+            num_epochs=3,
+            num_minibatches=2,
+            lr_schedule="adaptive",
+            desired_kl=10.0,
+            cpg_learning_rate=1e-4,
+        ),  # fmt: skip
+        env=FakeConfig(),
+        eval_interval=0,
+    )
+    runner = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
+    runner.start_episodes()
+    runner.collect()
+    ppo, vector = runner.ppo, runner.agent.cpg.parametrisation.vector
+    others, cpg = ppo.optimizer.param_groups
+    feedback = list(runner.agent.feedback.parameters())
+    assert cpg["params"] == [vector, *feedback]
+    assert not {id(p) for p in others["params"]} & {id(p) for p in cpg["params"]}
+    assert len(others["params"]) + len(cpg["params"]) == len(list(runner.agent.parameters()))
+    before = vector.detach().clone()
+    ppo.update(runner.storage)
+    assert ppo.learning_rate > 3e-4 and others["lr"] == ppo.learning_rate  # KL far below
+    assert cpg["lr"] == 1e-4
+    # Adam moves each entry by about the learning rate per step at most: 6 steps
+    assert 0 < (vector - before).abs().max() <= 6 * 1e-4 * 1.01
+    ppo.schedule(5, 10)
+    assert cpg["lr"] == 1e-4
+    runner.close()
+    with pytest.raises(ValueError, match="cpg_learning_rate must be a number in"):
+        PPOConfig(cpg_learning_rate=0.0).validate()
+
+
 def test_linear_schedule_decays_to_zero_and_fixed_stays():
     ppo = PPO(torch.nn.Linear(2, 2), PPOConfig(lr_schedule="linear", learning_rate=1e-3))
     ppo.schedule(5, 10)

@@ -97,3 +97,52 @@ def test_bad_quadruped_config_values_say_what_is_accepted():
     with pytest.raises(ValueError, match="has no gaits"):
         apply_dict(config, parse_override("agent_config.cpg_gait=trot"), "")
         Runner(config, tensorboard=False)
+
+
+def test_the_command_drives_the_cpg_and_training_replays_it():
+    """Eq. 3 on the quadruped: the CPG-Actor's drive d is the raw forward-speed command (a
+    sixth row of its state), so a larger command gives larger CPG amplitudes; the rollout
+    storage keeps the drive with the state and the PPO update replays the same log-probs;
+    the gradient reaches the drive gains c_nu1 and c_R1. cpg_drive=False: no drive row."""
+    from cpg_actor.cpg import CPGState
+
+    runner = Runner(anymal_config("cpg-actor"), tensorboard=False)
+    try:
+        agent, policy = runner.agent, runner.policy
+        assert agent.state_shape == (6, 8)
+        obs = np.zeros((2, agent.obs_dim), dtype=np.float32)
+        obs[:, agent.drive_index] = [1.0, -0.5]  # a negative command is clipped: d = 0
+        policy.reset(2)
+        for _ in range(30):  # the amplitudes converge towards rho(d)
+            step = policy.act(obs)
+        assert step.state[:, 5].tolist() == [[1.0] * 8, [0.0] * 8]
+        amplitude = CPGState.from_tensor(policy.state[:, :5]).amplitude
+        rho = agent.cpg.oscillator_parameters(step.state[:, 5]).amplitude
+        assert torch.allclose(amplitude, rho, rtol=0.05)
+        assert (amplitude[0] > amplitude[1] + 0.05).all()
+
+        runner.start_episodes()
+        runner.collect()
+        storage = runner.storage
+        assert (storage.states[:, :, 5] >= 0).all() and storage.states[:, :, 5].max() > 0
+        log_prob = agent.evaluate(storage.observations[0], storage.states[0],
+                                  storage.actions[0])[0]  # fmt: skip
+        assert torch.allclose(log_prob, storage.log_probs[0], atol=1e-5)
+        loss = -agent.evaluate(storage.observations[0], storage.states[0],
+                               storage.actions[0])[0].mean()  # fmt: skip
+        agent.zero_grad()
+        loss.backward()
+        parametrisation = agent.cpg.parametrisation
+        grad = parametrisation.vector.grad
+        for field in ("frequency_gain", "amplitude_gain"):
+            entries = parametrisation.indices(field)
+            assert (entries >= 0).all() and grad[entries].abs().sum() > 0, field
+    finally:
+        runner.close()
+    config = anymal_config("cpg-actor")
+    config.agent_config.cpg_drive = False
+    runner = Runner(config, tensorboard=False)
+    try:
+        assert runner.agent.state_shape == (5, 8)
+    finally:
+        runner.close()

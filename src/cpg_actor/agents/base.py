@@ -52,6 +52,9 @@ class AgentConfig:
     # the quadruped's gait (cpg_actor.cpg.gaits.GAITS: trot, pace, bound, pronk, walk); empty:
     # the preset's (trot). The hopper has none.
     cpg_gait: str = ""
+    # the CPG's drive d (eq. 3) follows the robot's drive observation (the quadruped's
+    # forward-speed command; RobotSpec.drive_observation). False, or a robot without one: d = 0
+    cpg_drive: bool = True
 
     def validate(self) -> None:
         if self.activation not in ACTIVATIONS:
@@ -162,6 +165,18 @@ class Agent(nn.Module):
 
     def actor(self, obs: Tensor, state: Tensor) -> ActorOutput:
         raise NotImplementedError
+
+    def cpg_parameters(self) -> list[nn.Parameter]:
+        """The parameters that act through a CPG (``ppo.cpg_learning_rate`` applies to them);
+        none here."""
+        return []
+
+    def observe(self, obs: Tensor, state: Tensor) -> Tensor:
+        """The state to act from, given the *raw* (unnormalised) observation ``obs``: called
+        before each step (by :class:`cpg_actor.policy.Policy` and the exported control step),
+        so that the rollout storage keeps it. Default: the state as it is. The CPG-Actor
+        writes its drive d here."""
+        return state
 
     def state_features(self, state: Tensor) -> Tensor:
         """What the critic sees of the recurrent state, ``(B, critic_state_features)``."""

@@ -53,6 +53,13 @@ class CPGActorAgent(Agent):
     The critic sees the observation and the CPG state as ``cos(phase), sin(phase), amplitude``.
     The CPG state is reset to :meth:`CPGNetwork.initial_state` (rest, amplitude 0, the preset
     phases) at each episode start.
+
+    **Drive** (paper eq. 3, ``nu(d) = c_nu1 d + c_nu0``, ``rho(d) = c_R1 d + c_R0``): when the
+    robot names a drive observation (:attr:`RobotSpec.drive_observation`, the quadruped's
+    forward-speed command) and ``agent_config.cpg_drive`` is on, d is that observation as the
+    env gives it (before normalisation), clipped at 0. It is part of the recurrent state, a
+    sixth row ``(B, 6, N)`` written by :meth:`observe` before each step, so the rollout storage
+    keeps it and the PPO update replays the step with the drive it was taken with.
     """
 
     def __init__(
@@ -92,7 +99,9 @@ class CPGActorAgent(Agent):
         super().__init__(obs_dim, action_scale, config, critic_state_features=3 * n)
         self.cpg: CPGNetwork = cpg
         self.joint_map = JointMap(robot.nominal_pose, joints=joints)  # the standing pose
-        self.state_shape = (5, n)
+        # the observation that sets the drive d (None: d = 0)
+        self.drive_index = robot.drive_index if config.cpg_drive else None
+        self.state_shape = (5, n) if self.drive_index is None else (6, n)
         self.xi_scale = config.xi_scale
         self.kappa_scale = config.kappa_scale
         self.feedback_tanh = config.feedback_tanh
@@ -113,10 +122,32 @@ class CPGActorAgent(Agent):
             self.sample_dim = self.action_dim + 2 * n
 
     def initial_state(self, batch_size: int) -> Tensor:
-        return self.cpg.initial_state(batch_size).as_tensor()
+        state = self.cpg.initial_state(batch_size).as_tensor()
+        if self.drive_index is None:
+            return state
+        return torch.cat([state, torch.zeros_like(state[:, :1])], dim=1)  # drive 0 until observed
+
+    def cpg_parameters(self) -> list[torch.nn.Parameter]:
+        """The CPG vector V (eq. 1-3's parameters) and the feedback MLP: what acts on the
+        action through the CPG state, so that one step shows little of its change."""
+        feedback = [] if self.feedback is None else list(self.feedback.parameters())
+        return list(self.cpg.parameters()) + feedback
+
+    def observe(self, obs: Tensor, state: Tensor) -> Tensor:
+        """The state with the drive row set from the raw observation (class docstring)."""
+        if self.drive_index is None:
+            return state
+        drive = obs[:, self.drive_index].clamp(min=0.0).to(state.dtype)
+        return torch.cat([state[:, :5], drive[:, None, None].expand_as(state[:, 5:])], dim=1)
+
+    def _split(self, state: Tensor) -> tuple[CPGState, Tensor | float]:
+        """The CPG state and the drive ``(B, N)`` (0.0 without one) of a packed state."""
+        if self.drive_index is None:
+            return CPGState.from_tensor(state), 0.0
+        return CPGState.from_tensor(state[:, :5]), state[:, 5]
 
     def state_features(self, state: Tensor) -> Tensor:
-        cpg_state = CPGState.from_tensor(state)
+        cpg_state = self._split(state)[0]
         phase = cpg_state.phase
         return torch.cat([torch.cos(phase), torch.sin(phase), cpg_state.amplitude], dim=-1)
 
@@ -132,7 +163,10 @@ class CPGActorAgent(Agent):
                 row[f"feedback/kappa_std_{name}"] = stds[len(names) + i]
         values = {k: v.detach() for k, v in self.cpg.parametrisation.values().items()}
         values["convergence"] = values["convergence"].clamp(max=self.cpg.max_convergence)
-        for field, short in (("frequency", "nu"), ("amplitude", "rho"), ("convergence", "a")):
+        fields = [("frequency", "nu"), ("amplitude", "rho"), ("convergence", "a")]
+        if self.drive_index is not None:  # eq. 3's gains: c_nu1 (Hz per unit d), c_R1
+            fields += [("frequency_gain", "nu_gain"), ("amplitude_gain", "rho_gain")]
+        for field, short in fields:
             for i, name in enumerate(names):
                 row[f"cpg/{short}_{name}"] = float(values[field][i])
         for i, j in self.cpg.topology.edges:
@@ -171,17 +205,21 @@ class CPGActorAgent(Agent):
         if feedback is None:
             feedback = self.feedback_mean(obs)
         xi, kappa = feedback[:, :n], feedback[:, n:]
-        output, next_state = self.cpg(CPGState.from_tensor(state), 0.0, xi, kappa)
+        cpg_state, drive = self._split(state)
+        output, next_cpg_state = self.cpg(cpg_state, drive, xi, kappa)
+        next_state = next_cpg_state.as_tensor()
+        if self.drive_index is not None:  # the drive is held until the next observation
+            next_state = torch.cat([next_state, state[:, 5:]], dim=1)
         mean = self.joint_map(output.position)
         extras = {
             "xi": xi,
             "kappa": kappa,
-            "theta_dot": next_state.phase_velocity,
-            "r_ddot": next_state.amplitude_acceleration,
+            "theta_dot": next_cpg_state.phase_velocity,
+            "r_ddot": next_cpg_state.amplitude_acceleration,
             "desired_velocity": output.velocity,
             "cpg_position": output.position,
         }
-        return ActorOutput(mean, self.std(obs.shape[0]), next_state.as_tensor(), extras)
+        return ActorOutput(mean, self.std(obs.shape[0]), next_state, extras)
 
     # -- sampled feedback (feedback_noise > 0) -----------------------------------------------
     def act(self, obs: Tensor, state: Tensor, deterministic: bool = False) -> ActStep:

@@ -1,4 +1,12 @@
-"""`cpg-actor eval`: deterministic evaluation of a trained run; traces (and a video) on disk."""
+"""`cpg-actor eval`: deterministic evaluation of a trained run; traces, figures (and a video) on
+disk.
+
+Next to the traces: ``training_curves.png`` and ``traces.png`` for every run, and the figures of
+what the env reports (its step ``info``): with foot contacts, a gait diagram
+(``gait_diagram.png``); with a forward-speed command, commanded vs measured forward speed
+(``forward_speed.png``). The video shows one episode of the agent's own env, drawn by the env's
+``render_frame``.
+"""
 
 from __future__ import annotations
 
@@ -9,9 +17,15 @@ from pathlib import Path
 import numpy as np
 
 from cpg_actor.envs.config import SIMULATORS
+from cpg_actor.plots import draw_gait_diagram, save_figure
 from cpg_actor.progress import metrics_text
 
-HELP = "evaluate a trained run deterministically; save per-step traces (and a video)"
+HELP = "evaluate a trained run deterministically; save per-step traces, figures (and a video)"
+# the figures drawn where the traces have what they need (the quadruped's), next to the traces
+GAIT_FIGURE = "gait_diagram.png"
+SPEED_FIGURE = "forward_speed.png"
+FIGURES = (GAIT_FIGURE, SPEED_FIGURE)  # kept unless --overwrite, as the traces
+SPEED_SMOOTHING = 0.5  # s: the running mean drawn over the measured forward speed
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -33,7 +47,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--output", default=None, help="traces file (default RUN_DIR/eval/traces.npz)"
     )
-    parser.add_argument("--overwrite", action="store_true", help="replace existing traces / video")
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace existing traces / figures / video"
+    )
     parser.add_argument(
         "--video-only",
         action="store_true",
@@ -62,8 +78,9 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--video-only needs --video PATH")
     if not checkpoint.is_file():
         raise FileNotFoundError(f"checkpoint {checkpoint} does not exist")
-    for path in (None if args.video_only else output, Path(args.video) if args.video else None):
-        if path is not None and path.exists() and not args.overwrite:
+    kept = [] if args.video_only else [output, *(output.parent / name for name in FIGURES)]
+    for path in [*kept, *([Path(args.video)] if args.video else [])]:
+        if path.exists() and not args.overwrite:
             raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
 
     config = TrainConfig.load(config_path)
@@ -100,8 +117,12 @@ def run(args: argparse.Namespace) -> int:
         f"mean return {traces['episode_return'].mean():.3f}{', ' + means if means else ''} "
         f"over {args.episodes} episodes; traces in {output}"
     )
-    figures = plot_training_curves(run_dir / "metrics.jsonl", output.parent / "training_curves.png")
+    figures = plot_training_curves(
+        run_dir / "metrics.jsonl", output.parent / "training_curves.png", traces["metric_names"]
+    )
     figures += plot_traces(traces, output.parent / "traces.png")
+    figures += plot_gait(traces, output.parent / GAIT_FIGURE)  # [] where the env has no feet
+    figures += plot_speed(traces, output.parent / SPEED_FIGURE)
     for figure in figures:
         print(f"figure {figure}")
     if args.video:
@@ -133,27 +154,33 @@ def evaluate(policy, config, episodes: int, seed: int) -> dict[str, np.ndarray]:
 
 
 def record_video(policy, config, path: Path, seed: int, overwrite: bool) -> None:
-    """One deterministic episode in the agent's own environment (one env), rendered offscreen."""
+    """One deterministic episode in the agent's own environment (one env), rendered offscreen
+    by its ``render_frame`` (the hopper's or the quadruped's scene) and encoded as it runs."""
     from cpg_actor.agents import get_agent_spec
     from cpg_actor.envs import write_video
 
     env = get_agent_spec(config.agent).make_env(1, config.env, 1)
-    try:
+
+    def frames():
         obs, _ = env.reset(seed=seed)
         policy.reset(1)
-        frames = [env.render_frame(0)]
+        yield env.render_frame(0)
         for _ in range(int(config.env.episode_steps)):
             obs, _, terminated, truncated, _ = env.step(policy.act(obs).action)
             if terminated[0] or truncated[0]:
                 break  # the env has already reset: the frame would show the next episode
-            frames.append(env.render_frame(0))
+            yield env.render_frame(0)
+
+    try:
+        write_video(frames(), path, fps=round(1.0 / config.env.control_dt), overwrite=overwrite)
     finally:
         env.close()
-    write_video(frames, path, fps=round(1.0 / config.env.control_dt), overwrite=overwrite)
 
 
-def plot_training_curves(metrics: Path, path: Path) -> list[Path]:
-    """Episode return and hop height against training steps, from ``metrics.jsonl``."""
+def plot_training_curves(metrics: Path, path: Path, metric_names=()) -> list[Path]:
+    """Episode return and an episode metric against training steps, from ``metrics.jsonl``:
+    the hop height, the quadruped's speed error, else the first of the env's ``metric_names``
+    that was logged."""
     import json
 
     if not metrics.is_file():
@@ -165,10 +192,14 @@ def plot_training_curves(metrics: Path, path: Path) -> list[Path]:
 
     rows = [json.loads(line) for line in metrics.read_text().splitlines() if line.strip()]
     steps = np.array([r["global_step"] for r in rows], dtype=float)
+    labels = {"hop_height": "mean hop height (m)", "speed_error": "mean speed error (m/s)"}
+    logged = [name for name in (*labels, *map(str, metric_names))
+              if any(r.get(f"charts/{name}") is not None for r in rows)]  # fmt: skip
+    metric = logged[0] if logged else "hop_height"
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
     for ax, key, label in (
         (axes[0], "charts/episode_return", "mean episode return"),
-        (axes[1], "charts/hop_height", "mean hop height (m)"),
+        (axes[1], f"charts/{metric}", labels.get(metric, f"mean {metric}")),
     ):
         values = np.array([np.nan if r.get(key) is None else r[key] for r in rows], dtype=float)
         ax.plot(steps, values)
@@ -177,7 +208,7 @@ def plot_training_curves(metrics: Path, path: Path) -> list[Path]:
         ax.grid(alpha=0.3)
     fig.suptitle(str(metrics.parent.name))
     fig.tight_layout()
-    fig.savefig(path, dpi=120)
+    save_figure(fig, path, dpi=120)
     plt.close(fig)
     return [path]
 
@@ -216,7 +247,7 @@ def plot_traces(traces: dict[str, np.ndarray], path: Path) -> list[Path]:
     if not heights:  # a robot without a hip height (the quadruped)
         axes[-1].set_xlabel("time (s)")
         fig.tight_layout()
-        fig.savefig(path, dpi=110)
+        save_figure(fig, path)
         plt.close(fig)
         return [path]
     axes[-1].plot(t, traces["hip_height"][:, 0], label="hip")
@@ -226,6 +257,71 @@ def plot_traces(traces: dict[str, np.ndarray], path: Path) -> list[Path]:
     axes[-1].legend(fontsize=7, loc="upper right")
     axes[-1].grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
+    return [path]
+
+
+def _episode(traces: dict[str, np.ndarray], key: str, episode: int = 0) -> np.ndarray:
+    """The rows of ``key`` while ``episode`` ran (its NaN tail cut); ``time`` is shared."""
+    rows = traces[key][: int(traces["length"][episode])]
+    return rows if key == "time" else rows[:, episode]
+
+
+def plot_gait(traces: dict[str, np.ndarray], path: Path) -> list[Path]:
+    """Episode 0's foot contacts over its last seconds, one row per foot (as ``cpg-actor
+    gaits`` draws them), with each foot's duty factor; nothing where the env reports no
+    contacts."""
+    if "foot_contact" not in traces:
+        return []
+    from matplotlib.figure import Figure
+
+    contact = _episode(traces, "foot_contact") > 0.5
+    feet = [str(name) for name in traces["foot_names"]]
+    dt, time = float(traces["control_dt"]), _episode(traces, "time")
+    fig = Figure(figsize=(9.0, 0.35 * len(feet) + 1.4), layout="constrained")
+    axis = fig.subplots()
+    draw_gait_diagram(axis, contact, dt, feet, first_time=float(time[0]))
+    duty = ", ".join(f"{foot} {share:.2f}" for foot, share in zip(feet, contact.mean(0),
+                                                                   strict=True))  # fmt: skip
+    axis.set_title(f"episode 0 ({len(contact) * dt:g} s): duty factor {duty}",
+                   fontsize="medium", loc="left")  # fmt: skip
+    axis.set_xlabel("time (s); bars: foot on the ground")
+    save_figure(fig, path)
+    return [path]
+
+
+def plot_speed(traces: dict[str, np.ndarray], path: Path) -> list[Path]:
+    """Commanded vs measured forward speed of every episode over time (the measured one as a
+    running mean over ``SPEED_SMOOTHING`` s, episode 0's also raw); nothing where the env
+    reports no forward-speed command."""
+    if "base_forward_speed" not in traces or "command" not in traces:
+        return []
+    from matplotlib.figure import Figure
+
+    dt = float(traces["control_dt"])
+    fig = Figure(figsize=(9.0, 3.6), layout="constrained")
+    axis = fig.subplots()
+    for episode in range(len(traces["length"])):
+        time = _episode(traces, "time", episode)
+        measured = _episode(traces, "base_forward_speed", episode)
+        # centred, over fewer rows at the ends (numpy's "same" needs it no longer than the data)
+        kernel = np.ones(max(1, min(round(SPEED_SMOOTHING / dt), len(measured))))
+        mean = np.convolve(measured, kernel, "same") / np.convolve(
+            np.ones_like(measured), kernel, "same"
+        )
+        command = _episode(traces, "command", episode)[:, 0]
+        color = f"C{episode % 10}"
+        if episode == 0:
+            axis.plot(time, measured, color=color, alpha=0.3, lw=0.8)
+        axis.plot(time, mean, color=color,
+                  label=f"episode {episode}: measured ({SPEED_SMOOTHING:g} s mean)")  # fmt: skip
+        axis.plot(time, command, "--", color=color, label=f"episode {episode}: commanded")
+    axis.set_xlabel("time (s)")
+    axis.set_ylabel("forward speed (m/s)")
+    axis.grid(alpha=0.3)
+    axis.legend(fontsize=7, loc="upper left", ncols=2)
+    axis.set_title("commanded vs measured forward speed (episode 0 raw, faint)",
+                   fontsize="medium", loc="left")  # fmt: skip
+    save_figure(fig, path)
     return [path]

@@ -1,7 +1,8 @@
 """`cpg-actor gaits`: the quadruped's CPG gait presets, open loop, on the ANYmal B.
 
 Each gait preset (``cpg_actor.cpg.gaits.GAITS``) drives ``--robots`` robots for ``--seconds``
-with no learning and no feedback (the untrained ``cpg-actor-open-loop``'s mean action). It
+with no learning and no feedback (the untrained ``cpg-actor-open-loop``'s mean action), its
+drive d (eq. 3) set by the forward command ``--command``. It
 writes a gait diagram (which foot is on the ground, per leg, over the last seconds of robot 0,
 one panel per gait, with the measured forward speed) as a PNG, and a JSON summary per gait:
 falls, mean forward speed, the duty factor of each leg (share of time on the ground) and each
@@ -57,10 +58,11 @@ def run(args: argparse.Namespace) -> int:
     from matplotlib.figure import Figure
 
     from cpg_actor.checkpoint import atomic_write_text
-    from cpg_actor.cpg.gaits import QUADRUPED_INITIAL, quadruped_cpg, quadruped_joint_map
+    from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
     from cpg_actor.envs.quadruped import description as robot
     from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
     from cpg_actor.evaluation import finite_mean
+    from cpg_actor.plots import draw_gait_diagram, save_figure
 
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         raise ValueError(f"--seconds must be a positive number, got {args.seconds}")
@@ -80,11 +82,12 @@ def run(args: argparse.Namespace) -> int:
         cpg = quadruped_cpg(dt, gait).double()
         joint_map = quadruped_joint_map(robot.NOMINAL_POSE).double()
         state = cpg.initial_state(args.robots)
+        drive = torch.full((args.robots, 8), max(args.command, 0.0), dtype=torch.float64)
         contact, speed, fell = [], [], np.zeros(args.robots, dtype=bool)
         alive = np.ones(args.robots, dtype=bool)
         with torch.no_grad():
             for _ in range(env.config.episode_steps):
-                output, state = cpg(state)
+                output, state = cpg(state, drive)
                 _, _, terminated, _, info = env.step(joint_map(output.position).numpy())
                 fell |= terminated & alive
                 alive &= ~terminated
@@ -101,35 +104,26 @@ def run(args: argparse.Namespace) -> int:
             "touchdown_phase": dict(
                 zip(
                     robot.LEGS,
-                    touchdown_phases(contact, dt, QUADRUPED_INITIAL["frequency"]),
+                    touchdown_phases(
+                        contact, dt, float(cpg.oscillator_parameters(drive[0]).frequency[0])
+                    ),
                     strict=True,
                 )
             ),  # fmt: skip
         }
         print(f"{gait}: {summary[gait]}")
 
-    window = 2.0  # seconds shown
     fig = Figure(figsize=(9.0, 1.6 * len(traces) + 0.6), layout="constrained")
     axes = np.atleast_1d(fig.subplots(len(traces), 1))
     for axis, (gait, (contact, dt)) in zip(axes, traces.items(), strict=True):
-        shown = contact[-round(window / dt) :]
-        start = (len(contact) - len(shown)) * dt
-        for leg in range(4):
-            on = np.flatnonzero(shown[:, leg])
-            axis.broken_barh([(start + k * dt, dt) for k in on], (3 - leg - 0.4, 0.8),
-                             color="tab:blue")  # fmt: skip
-        axis.set_yticks(range(4), robot.LEGS[::-1])
-        axis.set_xlim(start, start + window)
+        draw_gait_diagram(axis, contact, dt, robot.LEGS)
         s = summary[gait]
         axis.set_title(f"{gait}: {s['fell']} of {s['robots']} fell, forward speed "
                        f"{s['forward_speed']:.2f} m/s (command {args.command} m/s)",
                        fontsize="medium", loc="left")  # fmt: skip
     axes[-1].set_xlabel("time (s); bars: foot on the ground (robot 0)")
     fig.suptitle(f"Open-loop CPG gaits on ANYmal B ({args.seconds:g} s, seed {args.seed})")
-    out.mkdir(parents=True, exist_ok=True)
-    tmp = out / ".gaits.png.tmp.png"
-    fig.savefig(tmp, dpi=110)
-    tmp.replace(paths[0])
+    save_figure(fig, paths[0])
     atomic_write_text(json.dumps({"command": args.command, "seconds": args.seconds,
                                   "seed": args.seed, "gaits": summary}, indent=2) + "\n",
                       paths[1])  # fmt: skip

@@ -26,6 +26,10 @@ the hip swings forward (HFE decreasing, ``theta`` in (0, pi) for ``x = r cos the
 front knees (nominal -0.8 rad) flex towards negative angles, so their ``x`` is lowest at
 ``theta_hip = pi/2``: ``psi_KFE = psi_HFE + pi/2``; the hind knees (nominal +0.8 rad) flex
 towards positive angles: ``psi_KFE = psi_HFE - pi/2``.
+
+The drive d of eq. 3 is the commanded forward speed (m/s): ``nu(d) = c_nu1 d + c_nu0`` and
+``rho(d) = c_R1 d + c_R0``, so the step's frequency and length follow the command (the
+CPG-Actor reads d from the observation, ``RobotSpec.drive_observation``).
 """
 
 from __future__ import annotations
@@ -53,11 +57,16 @@ GAITS: dict[str, tuple[float, float, float, float]] = {  # leg phase, fraction o
     "walk": (0.0, 0.5, 0.75, 0.25),
 }
 
-# Initial parameters: a 2 Hz step, hips +-0.1 rad, knees +-0.25 rad (a foot lift of about 5 cm);
-# convergence and coupling as the hopper's. Training reshapes all of it.
+# Initial parameters (eq. 3 with the drive d = the commanded forward speed, m/s): a 3 Hz step,
+# hips +-(0.05 + 0.2 d) rad, knees +-(0.3 + 0.1 d) rad; convergence and coupling as the
+# hopper's. Chosen on the open-loop trot (docs/quadruped.md, "The drive"): its forward speed
+# grows with d (-0.08 m/s at d = 0 to 0.32 m/s at d = 1) and no robot falls. The gains are
+# trained with the rest; with no drive (d = 0) the robot steps nearly in place.
 QUADRUPED_INITIAL = {
-    "frequency": 2.0,  # Hz
-    "amplitude": (0.1, 0.25) * 4,  # rad, HFE and KFE of each leg
+    "frequency": 3.0,  # Hz, c_nu0
+    "frequency_gain": 0.1,  # Hz per (m/s), c_nu1 (> 0 to be trainable)
+    "amplitude": (0.05, 0.3) * 4,  # rad, c_R0 of HFE and KFE of each leg
+    "amplitude_gain": (0.2, 0.1) * 4,  # rad per (m/s), c_R1
     "convergence": 20.0,  # 1/s
     "coupling_weight": 10.0,
 }
@@ -94,8 +103,10 @@ def quadruped_cpg(
     """The quadruped's CPG in ``gait`` (module docstring), started in that gait's phases.
 
     ``initial`` entries override :data:`QUADRUPED_INITIAL` and the gait's phase biases.
-    Trainable as the hopper's: frequency, amplitude and convergence per oscillator, and per
-    coupled pair one coupling weight and one phase bias (symmetric ties).
+    Trainable: as the hopper's, frequency, amplitude and convergence per oscillator, and per
+    coupled pair one coupling weight and one phase bias (symmetric ties); and, unlike the
+    hopper's, the drive gains c_nu1 and c_R1 of eq. 3 per oscillator. Step it with the drive
+    ``d >= 0`` (the commanded forward speed in m/s) as ``cpg(state, d)``.
     """
     topology = quadruped_topology()
     psi = gait_phases(gait)
@@ -106,7 +117,7 @@ def quadruped_cpg(
         topology,
         dt=dt,
         initial={**QUADRUPED_INITIAL, "phase_bias": phase_bias, **(initial or {})},
-        frozen=frozen,
+        frozen={"frequency_gain": False, "amplitude_gain": False, **(frozen or {})},
         symmetric_coupling=True,
         initial_phase=psi,
         check_inputs=check_inputs,

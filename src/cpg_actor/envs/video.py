@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import os
 import uuid
 from collections.abc import Iterable
@@ -12,6 +13,10 @@ import numpy as np
 VIDEO_SUFFIXES = (".mp4", ".gif")
 
 
+class RenderingUnavailable(RuntimeError):
+    """No OpenGL context can be made for MuJoCo's offscreen renderer (no EGL or OSMesa)."""
+
+
 def write_video(
     frames: Iterable[np.ndarray], path: str | os.PathLike, fps: float, overwrite: bool = False
 ) -> Path:
@@ -19,7 +24,8 @@ def write_video(
 
     The file appears atomically (written next to it under a temporary name, then renamed).
     An existing file is an error unless ``overwrite=True``. MP4 frames are padded to even
-    width and height (H.264 needs it).
+    width and height (H.264 needs it) and encoded as they come: ``frames`` may be a generator
+    (an episode rendered while it runs is never held in memory whole).
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -29,11 +35,18 @@ def write_video(
         raise ValueError(f"fps must be a number in (0, 1000), got {fps!r}")
     if path.exists() and not overwrite:
         raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
-    frames = [_check_frame(frame, i) for i, frame in enumerate(frames)]
-    if not frames:
+    checked = (_check_frame(frame, i) for i, frame in enumerate(frames))
+    first = next(checked, None)
+    if first is None:
         raise ValueError("no frames to write")
-    if any(frame.shape != frames[0].shape for frame in frames):
-        raise ValueError("all frames must have the same shape")
+
+    def same_shape(frame: np.ndarray) -> np.ndarray:
+        if frame.shape != first.shape:
+            raise ValueError("all frames must have the same shape")
+        return frame
+
+    if suffix == ".gif":  # not streamed: checked whole before anything is written
+        gif_frames = [first, *(same_shape(frame) for frame in checked)]
     path.parent.mkdir(parents=True, exist_ok=True)
     import imageio.v2 as imageio
 
@@ -41,18 +54,18 @@ def write_video(
     tmp = path.with_name(f".{path.stem}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp{suffix}")
     try:
         if suffix == ".mp4":
-            height, width = frames[0].shape[:2]
+            height, width = first.shape[:2]
             pad = ((0, height % 2), (0, width % 2), (0, 0))
             with imageio.get_writer(
                 tmp, format="FFMPEG", mode="I", fps=fps, codec="libx264", quality=7,
                 macro_block_size=1, output_params=["-pix_fmt", "yuv420p"],
             ) as writer:  # fmt: skip
-                for frame in frames:
+                for frame in itertools.chain([first], map(same_shape, checked)):
                     writer.append_data(
                         np.pad(frame, pad, mode="edge") if any(pad[0] + pad[1]) else frame
                     )
         else:
-            imageio.mimsave(tmp, frames, format="GIF", duration=1000.0 / fps, loop=0)
+            imageio.mimsave(tmp, gif_frames, format="GIF", duration=1000.0 / fps, loop=0)
         tmp.replace(path)
     except BaseException:
         tmp.unlink(missing_ok=True)

@@ -105,8 +105,16 @@ class PPO:
         self.config = config
         self.learning_rate = config.learning_rate
         # fused: one kernel per step for all parameters instead of a Python loop over them
+        groups: list[dict] = [{"params": list(agent.parameters())}]
+        cpg = agent.cpg_parameters() if config.cpg_learning_rate is not None else []
+        if cpg:  # the CPG's own group, at its fixed rate (set_learning_rate leaves it)
+            ids = {id(p) for p in cpg}
+            groups = [
+                {"params": [p for p in agent.parameters() if id(p) not in ids]},
+                {"params": cpg, "lr": config.cpg_learning_rate, "fixed_lr": True},
+            ]
         self.optimizer = torch.optim.Adam(
-            agent.parameters(), lr=config.learning_rate, eps=config.adam_eps, fused=True
+            groups, lr=config.learning_rate, eps=config.adam_eps, fused=True
         )
         # torch.compile fuses the loss's small operators (forward and backward) into a few
         # kernels: about 2x faster updates at 64-sample minibatches, after a one-off compile
@@ -134,7 +142,8 @@ class PPO:
     def set_learning_rate(self, lr: float) -> None:
         self.learning_rate = lr
         for group in self.optimizer.param_groups:
-            group["lr"] = lr
+            if not group.get("fixed_lr", False):
+                group["lr"] = lr
 
     def schedule(self, iteration: int, num_iterations: int) -> None:
         """Linear decay to 0 over the run; the adaptive rule acts inside :meth:`update`."""

@@ -44,6 +44,13 @@ class PPOConfig:
     min_learning_rate: float = 1e-5
     max_learning_rate: float = 1e-2
     target_kl: float | None = None  # stop the epochs of an iteration once approx_kl exceeds it
+    # the learning rate of what acts through the CPG (the CPG-Actor's vector V and feedback
+    # MLP), fixed, outside the schedule. None (the paper): the schedule's, as every other
+    # parameter. The adaptive schedule needs it: V and the feedback change the action only by
+    # their one-step effect, so the KL hardly sees them, the rate climbs to its cap and they
+    # drift (on the quadruped the hip and knee frequencies split within 10 iterations and the
+    # robots fall; docs/quadruped.md, "Training"). Agents without a CPG ignore it.
+    cpg_learning_rate: float | None = None
     adam_eps: float = 1e-5
     normalize_observations: bool = True
     # VecNormalize's reward scaling: rewards divided by the running std of each env's
@@ -91,6 +98,13 @@ class PPOConfig:
             )
         if self.target_kl is not None and not self.target_kl > 0:
             raise ValueError(f"ppo.target_kl must be > 0 or null, got {self.target_kl!r}")
+        rate = self.cpg_learning_rate
+        if rate is not None and (
+            isinstance(rate, bool) or not isinstance(rate, (int, float)) or not 0 < rate < 1
+        ):
+            raise ValueError(
+                f"ppo.cpg_learning_rate must be a number in (0, 1) or null, got {rate!r}"
+            )
         if self.bptt_steps > self.num_steps:
             raise ValueError(
                 f"ppo.bptt_steps ({self.bptt_steps}) must be <= ppo.num_steps "

@@ -47,12 +47,29 @@ from mujoco import rollout as mj_rollout  # noqa: E402
 from cpg_actor.envs.actuator import Actuator  # noqa: E402
 from cpg_actor.envs.backends.base import Backend  # noqa: E402
 from cpg_actor.envs.robot import MJCF_PATH, mjcf_text  # noqa: E402
+from cpg_actor.envs.video import RenderingUnavailable  # noqa: E402
 from cpg_actor.machine import usable_cores  # noqa: E402
 
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS.value  # [time, qpos, qvel, (act, ...)]
 CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL.value  # desired joint positions
 TORQUE_SPEC = mujoco.mjtState.mjSTATE_QFRC_APPLIED.value  # joint torques (actuator_law "coast")
 CLOCK_START = 1000.0  # s, simulation time of every robot after a reset (see reset_robots)
+
+
+def offscreen_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
+    """A ``mujoco.Renderer`` of ``width`` x ``height`` (the model's offscreen buffer grown to
+    fit); :class:`~cpg_actor.envs.video.RenderingUnavailable` where no OpenGL context can be
+    made (``MUJOCO_GL`` is ``disable``, or its library does not load)."""
+    model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
+    model.vis.global_.offheight = max(model.vis.global_.offheight, height)
+    try:
+        return mujoco.Renderer(model, height=height, width=width)
+    except Exception as error:  # whatever the GL layer raises (FatalError, AttributeError, ...)
+        raise RenderingUnavailable(
+            f"MuJoCo cannot render here (MUJOCO_GL={os.environ.get('MUJOCO_GL', 'unset')}: "
+            f"{type(error).__name__}: {error}); rendering needs libEGL (MUJOCO_GL=egl) or "
+            "OSMesa (MUJOCO_GL=osmesa)"
+        ) from error
 
 
 def load_model(
@@ -223,9 +240,8 @@ class MujocoBackend(Backend):
         ):
             if self._renderer is not None:
                 self._renderer.close()
-            self.model.vis.global_.offwidth = max(self.model.vis.global_.offwidth, width)
-            self.model.vis.global_.offheight = max(self.model.vis.global_.offheight, height)
-            self._renderer = mujoco.Renderer(self.model, height=height, width=width)
+                self._renderer = None
+            self._renderer = offscreen_renderer(self.model, width, height)
             camera = mujoco.MjvCamera()
             camera.type = mujoco.mjtCamera.mjCAMERA_FREE
             camera.lookat[:] = (0.12, 0.0, 0.38)

@@ -15,12 +15,22 @@ m/s), ``fell`` (1 or 0), ``episode_seconds``, ``cost_of_transport`` (the joints'
 work, sum of |torque x joint speed| dt, over m g times the distance walked forward; NaN under
 0.1 m).
 
+``info`` of a step also has, per env: ``command`` (the one the step ran under, also on the step
+that ends an episode), ``contact`` (4 bool, the feet LF RF LH RH (``foot_names``) within 5 mm
+of the ground), ``forward_speed`` (the base's, m/s), ``base_height``, ``desired_position`` and
+``measured_position``.
+
 Seeding: ``reset(seed=s)`` seeds env i with ``s + i``; every random draw (noise, commands)
 comes from env i's own generator.
+
+Rendering: :meth:`AnymalVectorEnv.render_frame` draws one robot with MuJoCo's offscreen
+renderer (needs an OpenGL backend, as the hopper's), a camera following the base over the
+checkered ground.
 """
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import gymnasium as gym
@@ -36,6 +46,7 @@ from cpg_actor.envs.backends.mujoco_backend import (
     default_threads,
     mj_rollout,
     mujoco,
+    offscreen_renderer,
 )
 from cpg_actor.envs.hopper import env_seeds
 from cpg_actor.envs.quadruped import description as robot
@@ -48,6 +59,9 @@ LOW = np.array([robot.JOINT_LIMITS[j][0] for j in robot.JOINT_NAMES])
 HIGH = np.array([robot.JOINT_LIMITS[j][1] for j in robot.JOINT_NAMES])
 EPISODE_METRICS = ("speed_error", "forward_speed", "fell", "episode_seconds", "cost_of_transport")
 MIN_DISTANCE = 0.1  # m: below this the cost of transport is not defined (NaN)
+RENDER_SIZE = (640, 480)  # width, height of render_frame's images (unless the config has its own)
+# render_frame's camera: it follows the base's subtree centre of mass, from the left front
+CAMERA = {"distance": 2.5, "azimuth": 120.0, "elevation": -20.0}
 
 
 def load_model(config: QuadrupedConfig) -> mujoco.MjModel:
@@ -68,6 +82,7 @@ def robot_spec(config: QuadrupedConfig) -> RobotSpec:
         action_high=tuple(HIGH),
         control_dt=config.control_dt,
         observation_names=task.OBS_NAMES,
+        drive_observation="command_vx",  # the commanded forward speed (m/s) drives the CPG
     )
 
 
@@ -81,6 +96,7 @@ class AnymalVectorEnv(VectorEnv):
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+    foot_names = robot.LEGS  # the columns of info["contact"]
 
     def __init__(
         self,
@@ -130,6 +146,10 @@ class AnymalVectorEnv(VectorEnv):
         self._offsets = offsets
         self._rngs: list[np.random.Generator] | None = None
         self._needs_reset = True
+        self._renderer: mujoco.Renderer | None = None
+        self._camera: mujoco.MjvCamera | None = None
+        self._render_model: mujoco.MjModel | None = None
+        self._render_data: mujoco.MjData | None = None
 
     # -- episodes ------------------------------------------------------------------------------
     def _start(self, index: np.ndarray) -> None:
@@ -258,6 +278,7 @@ class AnymalVectorEnv(VectorEnv):
         obs = self._observe()
         obs[unstable] = 0.0
         done = terminated | truncated
+        command = self.command.copy()  # this step's (an ended episode's next one is drawn below)
         final_obs = obs.copy()
         metrics = {name: np.full(self.num_envs, np.nan) for name in EPISODE_METRICS}
         if done.any():
@@ -280,7 +301,7 @@ class AnymalVectorEnv(VectorEnv):
             "final_obs": final_obs,
             "_final_obs": done,
             "episode_metrics": metrics,
-            "command": self.command.copy(),
+            "command": command,
             "contact": contact,
             "base_height": height,
             "forward_speed": lin_vel[:, 0].copy(),
@@ -328,11 +349,48 @@ class AnymalVectorEnv(VectorEnv):
             self._rngs.append(rng)
         self._needs_reset = False
 
+    # -- rendering -----------------------------------------------------------------------------
+    def render_frame(self, index: int = 0) -> np.ndarray:
+        """An RGB frame ``(H, W, 3)`` uint8 of env ``index`` in its current state: MuJoCo's
+        offscreen renderer, a camera tracking the base from the left front (``CAMERA``), the
+        checkered ground showing the forward motion. ``RENDER_SIZE`` (or the config's
+        ``render_width`` and ``render_height`` where it has them). Raises
+        :class:`~cpg_actor.envs.video.RenderingUnavailable` without an OpenGL backend."""
+        self._check_open("render_frame")
+        if self._needs_reset:
+            raise RuntimeError("call reset() before render_frame()")
+        if not 0 <= index < self.num_envs:
+            raise ValueError(f"index must be in 0..{self.num_envs - 1}, got {index}")
+        if self._renderer is None:
+            # the renderer's own copy of the model, its light following the robot (the world's
+            # centre of mass: the robot's) as the camera does: a robot walking 10 m away from
+            # the light would be in the dark
+            model = copy.copy(self.model)
+            model.light_mode[:] = mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM
+            width = int(getattr(self.config, "render_width", RENDER_SIZE[0]))
+            height = int(getattr(self.config, "render_height", RENDER_SIZE[1]))
+            self._renderer = offscreen_renderer(model, width, height)
+            camera = mujoco.MjvCamera()
+            camera.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+            camera.trackbodyid = model.body("base").id
+            for name, value in CAMERA.items():
+                setattr(camera, name, value)
+            self._camera = camera
+            self._render_model, self._render_data = model, mujoco.MjData(model)
+        model, data = self._render_model, self._render_data
+        mujoco.mj_setState(model, data, self._state[index], STATE_SPEC)
+        mujoco.mj_forward(model, data)
+        self._renderer.update_scene(data, camera=self._camera)
+        return self._renderer.render().copy()
+
     def _check_open(self, what: str) -> None:
         if getattr(self, "_rollout", None) is None:
             raise gym.error.ClosedEnvironmentError(f"{what}() on a closed environment")
 
     def close(self, **kwargs: Any) -> None:
+        if getattr(self, "_renderer", None) is not None:
+            self._renderer.close()
+            self._renderer = None
         if getattr(self, "_rollout", None) is not None:
             self._rollout.close()
             self._rollout = None
