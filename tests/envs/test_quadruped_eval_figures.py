@@ -165,3 +165,20 @@ def test_eval_video_of_the_quadruped_has_one_frame_per_step(anymal_run, tmp_path
     assert len(frames) == length
     assert frames[0].shape == (RENDER_SIZE[1], RENDER_SIZE[0], 3)
     assert main(["eval", str(anymal_run), "--video", str(video), "--video-only"]) == 2  # exists
+
+
+def test_eval_set_overrides_the_env_for_the_evaluation_only(anymal_run, tmp_path, capsys):
+    """`--set env.command_range=[0.5,0.5]`: every evaluation episode runs at 0.5 m/s (the issue's
+    target is measured so); the run's config is untouched; other keys are refused."""
+    config_before = (anymal_run / "config.yaml").read_text()
+    output = tmp_path / "fixed.npz"
+    args = ["eval", str(anymal_run), "--episodes", "2", "--output", str(output)]
+    assert main([*args, "--set", "env.command_range=[0.5, 0.5]"]) == 0
+    commands = np.load(output)["command"][:, :, 0]
+    assert np.all(commands[np.isfinite(commands)] == 0.5)
+    assert (anymal_run / "config.yaml").read_text() == config_before
+    bad = ["eval", str(anymal_run), "--output", str(tmp_path / "bad" / "x.npz")]
+    assert main([*bad, "--set", "ppo.learning_rate=1"]) == 2
+    assert "eval overrides env fields only" in capsys.readouterr().err
+    assert main([*bad, "--set", "env.command_range=[1, 0]"]) == 2
+    assert "command_range" in capsys.readouterr().err

@@ -43,6 +43,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="physics backend (default: the run's)",
     )
     parser.add_argument("--seed", type=int, default=1000, help="environment seed (default 1000)")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="env.KEY=VALUE",
+        help="override a field of the run's env config for this evaluation (value read as "
+        "YAML, repeatable), e.g. --set env.command_range=[0.5,0.5]",
+    )
     parser.add_argument("--video", default=None, help="write an mp4 of the first episode here")
     parser.add_argument(
         "--output", default=None, help="traces file (default RUN_DIR/eval/traces.npz)"
@@ -58,7 +66,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cpg_actor.config import TrainConfig
+    from cpg_actor.config import TrainConfig, apply_dict, parse_override
     from cpg_actor.evaluation import finite_mean
     from cpg_actor.policy import load_policy
 
@@ -78,14 +86,20 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError("--video-only needs --video PATH")
     if not checkpoint.is_file():
         raise FileNotFoundError(f"checkpoint {checkpoint} does not exist")
+    config = TrainConfig.load(config_path)
+    if args.sim is not None:
+        config.env.sim = args.sim
+    for text in args.set:
+        override = parse_override(text)
+        if set(override) != {"env"}:
+            raise ValueError(f"--set {text!r}: eval overrides env fields only (env.KEY=VALUE)")
+        apply_dict(config, override, "")
+    config.validate()
     kept = [] if args.video_only else [output, *(output.parent / name for name in FIGURES)]
     for path in [*kept, *([Path(args.video)] if args.video else [])]:
         if path.exists() and not args.overwrite:
             raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
 
-    config = TrainConfig.load(config_path)
-    if args.sim is not None:
-        config.env.sim = args.sim
     policy = load_policy(checkpoint, env_config=config.env)
     if policy.config.agent != config.agent:
         raise ValueError(
