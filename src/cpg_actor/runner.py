@@ -400,6 +400,8 @@ class Runner:
         row = self.episodes.scalars()  # return, length, the env's metrics, reward terms
         row["charts/SPS"] = timing["SPS"]
         row["charts/learning_rate"] = stats["learning_rate"]
+        if "cpg_learning_rate" in stats:  # ppo.cpg_learning_rate's group
+            row["charts/cpg_learning_rate"] = stats["cpg_learning_rate"]
         for key in (
             "policy_loss",
             "value_loss",

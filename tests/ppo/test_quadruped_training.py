@@ -12,6 +12,7 @@ from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig, apply_dict, parse_override
 from cpg_actor.envs.quadruped import QuadrupedConfig
 from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+from cpg_actor.ppo import PPOConfig
 from cpg_actor.runner import Runner
 from tiny import tiny_config
 
@@ -144,5 +145,30 @@ def test_the_command_drives_the_cpg_and_training_replays_it():
     runner = Runner(config, tensorboard=False)
     try:
         assert runner.agent.state_shape == (5, 8)
+    finally:
+        runner.close()
+
+
+def test_a_replay_over_several_steps_uses_each_steps_own_drive():
+    """ppo.bptt_steps > 1: the replayed state takes the drive of the stored state at each step
+    (what observe wrote there), not the window's first one; here the command changes inside
+    the window, and the replayed drive rows equal the stored ones."""
+    from cpg_actor.ppo.algorithm import replay_states
+
+    config = anymal_config("cpg-actor")
+    config.ppo = PPOConfig(num_steps=8, num_epochs=1, num_minibatches=1, bptt_steps=4)
+    runner = Runner(config, tensorboard=False)
+    try:
+        runner.start_episodes()
+        runner.collect()
+        storage = runner.storage
+        storage.states[:, :, 5] = torch.arange(8.0)[:, None, None] / 8  # a new drive each step
+        batch = {**{k: v.flatten(0, 1) for k, v in storage.windows(4).items()},
+                 "states": storage.states.flatten(0, 1)}  # fmt: skip
+        replayed = replay_states(runner.agent, batch)
+        assert torch.equal(replayed[:, 5], storage.states.flatten(0, 1)[:, 5])
+        # the CPG rows still come from the replay (they differ from the stored state where a
+        # drive changed the steps before)
+        assert not torch.equal(replayed[:, :5], storage.states.flatten(0, 1)[:, :5])
     finally:
         runner.close()

@@ -171,6 +171,13 @@ class Agent(nn.Module):
         none here."""
         return []
 
+    def keep_observed(self, stepped: Tensor, stored: Tensor) -> Tensor:
+        """A replayed state (``stepped``, from the previous step) with what :meth:`observe`
+        wrote into the ``stored`` state of the same step put back: replays over several
+        steps (``ppo.bptt_steps``) then act from each step's own observation. Default:
+        ``stepped``."""
+        return stepped
+
     def observe(self, obs: Tensor, state: Tensor) -> Tensor:
         """The state to act from, given the *raw* (unnormalised) observation ``obs``: called
         before each step (by :class:`cpg_actor.policy.Policy` and the exported control step),

@@ -140,6 +140,12 @@ class CPGActorAgent(Agent):
         drive = obs[:, self.drive_index].clamp(min=0.0).to(state.dtype)
         return torch.cat([state[:, :5], drive[:, None, None].expand_as(state[:, 5:])], dim=1)
 
+    def keep_observed(self, stepped: Tensor, stored: Tensor) -> Tensor:
+        """The replayed CPG state with the stored step's drive."""
+        if self.drive_index is None:
+            return stepped
+        return torch.cat([stepped[:, :5], stored[:, 5:]], dim=1)
+
     def _split(self, state: Tensor) -> tuple[CPGState, Tensor | float]:
         """The CPG state and the drive ``(B, N)`` (0.0 without one) of a packed state."""
         if self.drive_index is None:

@@ -94,7 +94,8 @@ def run(args: argparse.Namespace) -> int:
         if set(override) != {"env"}:
             raise ValueError(f"--set {text!r}: eval overrides env fields only (env.KEY=VALUE)")
         apply_dict(config, override, "")
-    config.validate()
+    if args.set:
+        config.validate()
     kept = [] if args.video_only else [output, *(output.parent / name for name in FIGURES)]
     for path in [*kept, *([Path(args.video)] if args.video else [])]:
         if path.exists() and not args.overwrite:

@@ -105,7 +105,9 @@ def run(args: argparse.Namespace) -> int:
                 zip(
                     robot.LEGS,
                     touchdown_phases(
-                        contact, dt, float(cpg.oscillator_parameters(drive[0]).frequency[0])
+                        contact,
+                        dt,
+                        float(cpg.oscillator_parameters(drive[0]).frequency[0].detach()),
                     ),
                     strict=True,
                 )

@@ -96,6 +96,7 @@ def full_replay(agent: CPGActorAgent, storage: RolloutStorage) -> Tensor:
     states = [state]
     for t in range(1, storage.num_steps):
         stepped = agent.replay_state(storage.observations[t - 1], state, storage.actions[t - 1])
+        stepped = agent.keep_observed(stepped, storage.states[t])
         mask = done[t - 1].reshape(-1, *([1] * (state.dim() - 1)))
         state = torch.where(mask, storage.states[t], stepped)
         states.append(state)

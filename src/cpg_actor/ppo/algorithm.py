@@ -45,11 +45,13 @@ def replay_states(agent: Agent, batch: dict[str, Tensor]) -> Tensor:
     state = batch["window_states"]
     restart = batch["window_restart"] > 0
     for j in range(restart.shape[1]):
+        stored = batch["window_restart_states"][:, j]
         stepped = agent.replay_state(
             batch["window_observations"][:, j], state, batch["window_actions"][:, j]
         )
+        stepped = agent.keep_observed(stepped, stored)  # e.g. this step's drive
         mask = restart[:, j].reshape(-1, *([1] * (state.dim() - 1)))
-        state = torch.where(mask, batch["window_restart_states"][:, j], stepped)
+        state = torch.where(mask, stored, stepped)
     return state
 
 
@@ -229,4 +231,7 @@ class PPO:
             early_stop=float(early_stop),
             num_minibatch_updates=float(len(history)),
         )
+        for group in self.optimizer.param_groups:
+            if group.get("fixed_lr", False):  # ppo.cpg_learning_rate's group
+                result["cpg_learning_rate"] = group["lr"]
         return result
