@@ -27,7 +27,8 @@ print(jax.devices(), jax.__version__, torch.__version__, torch.cuda.get_device_n
 EOF
 } 2>&1 | tee "$OUT/cuda_tests.txt" || exit 2
 timeout "${TESTS_S:-120}" python3 -m pytest -q -p no:cacheprovider tests/test_device.py \
-    tests/ppo/test_mjx_training.py tests/envs/test_mjx.py 2>&1 | tee -a "$OUT/cuda_tests.txt"
+    tests/ppo/test_mjx_training.py tests/envs/test_mjx.py tests/envs/test_quadruped_mjx.py \
+    2>&1 | tee -a "$OUT/cuda_tests.txt"
 timeout "${BENCH_S:-170}" python3 benchmarks/gpu_throughput.py \
     --envs ${ENVS:-1024 4096 32768 131072} --agents ${AGENTS:-cpg-actor mlp} --iterations 2 \
     --output "$OUT/gpu_throughput.md" 2>&1 | tee "$OUT/benchmark.log"

@@ -9,6 +9,7 @@ ENV_ID = "cpg_actor/AnymalHopper-v0"
 PYBULLET_ENV_ID = "cpg_actor/AnymalHopper-pybullet-v0"
 MJX_ENV_ID = "cpg_actor/AnymalHopper-mjx-v0"  # batched only: gymnasium.make_vec
 ANYMAL_ENV_ID = "cpg_actor/AnymalB-v0"  # the quadruped, batched only: gymnasium.make_vec
+ANYMAL_MJX_ENV_ID = "cpg_actor/AnymalB-mjx-v0"  # the quadruped on MJX, batched only
 EPISODE_STEPS = 500  # HopperConfig.episode_steps (a test checks they agree)
 
 
@@ -28,9 +29,14 @@ def register() -> None:
             # gym.make(ENV_ID, episode_steps=1000, max_episode_steps=1000)
             max_episode_steps=EPISODE_STEPS,
         )
-    if ANYMAL_ENV_ID not in gymnasium.registry:
+    for env_id, vector in ((ANYMAL_ENV_ID, "vector:AnymalVectorEnv"),
+                           (ANYMAL_MJX_ENV_ID, "mjx:MjxAnymalVectorEnv")):  # fmt: skip
+        if env_id in gymnasium.registry:
+            continue
         gymnasium.register(
-            id=ANYMAL_ENV_ID,
-            entry_point=None,  # no single-robot env: gymnasium.make_vec(ANYMAL_ENV_ID, N)
-            vector_entry_point="cpg_actor.envs.quadruped.vector:AnymalVectorEnv",
+            id=env_id,
+            entry_point=None,  # no single-robot env: gymnasium.make_vec(env_id, N)
+            vector_entry_point=f"cpg_actor.envs.quadruped.{vector}",
+            # the MJX env's config names its simulator
+            kwargs={"config": {"sim": "mjx"}} if vector.startswith("mjx") else {},
         )

@@ -33,6 +33,10 @@ def _anymal() -> RobotEnv:
     from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
 
     def make(num_envs: int, config: Any, num_threads: int | None = None) -> Any:
+        if config.sim == "mjx":  # imported only when asked for (JAX, MJX)
+            from cpg_actor.envs.quadruped.mjx import MjxAnymalVectorEnv
+
+            return MjxAnymalVectorEnv(num_envs, config, num_threads)
         return AnymalVectorEnv(num_envs, config, num_threads)
 
     return RobotEnv(QuadrupedConfig, make)

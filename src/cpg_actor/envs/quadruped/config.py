@@ -25,10 +25,19 @@ def _default_scales() -> dict[str, float]:
     }
 
 
+SIMULATORS = ("mujoco", "mjx")  # the quadruped's backends
+
+
 @dataclass
 class QuadrupedConfig:
     """The ANYmal B locomotion task (``docs/quadruped.md``)."""
 
+    # "mujoco" (MuJoCo on the CPU, the default) or "mjx" (MuJoCo XLA: JAX on a GPU where it
+    # has one; docs/quadruped.md, "Backends")
+    sim: str = "mujoco"
+    # sim="mjx" only: the Newton solver's iteration caps (the MJX hopper's; HopperConfig)
+    mjx_iterations: int = 15
+    mjx_ls_iterations: int = 15
     physics_dt: float = 0.002  # s: 500 Hz, stable for this robot's contacts (legged_gym: 5 ms)
     decimation: int = 10  # substeps per control step: control at 50 Hz (legged_gym's)
     episode_seconds: float = 20.0  # s (the issue's episode)
@@ -70,6 +79,13 @@ class QuadrupedConfig:
             value = getattr(self, name)
             if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
                 raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        if self.sim not in SIMULATORS:
+            raise ValueError(f"sim must be one of {', '.join(SIMULATORS)} for the quadruped, "
+                             f"got {self.sim!r}")  # fmt: skip
+        for name in ("decimation", "mjx_iterations", "mjx_ls_iterations"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not (isinstance(value, int) and value >= 1):
+                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
         if not (isinstance(self.decimation, int) and self.decimation >= 1):
             raise ValueError(f"decimation must be an integer >= 1, got {self.decimation!r}")
         if self.physics_dt > 0.005:
@@ -99,6 +115,10 @@ class QuadrupedConfig:
             raise ValueError(f"actuator_law must be 'dc-motor' or 'coast', got "
                              f"{self.actuator_law!r}")  # fmt: skip
         return self
+
+    def replace(self, **changes) -> QuadrupedConfig:
+        """A validated copy with ``changes`` (as the hopper's ``HopperConfig.replace``)."""
+        return dataclasses.replace(self, **changes).validate()
 
     @classmethod
     def from_dict(cls, values: dict) -> QuadrupedConfig:

@@ -1,4 +1,5 @@
-"""The quadruped's locomotion task as pure functions of batched numpy arrays (N robots).
+"""The quadruped's locomotion task as pure functions of batched arrays (N robots): numpy in the
+MuJoCo env, ``jax.numpy`` inside the MJX env's jitted step (the module of the inputs is used).
 
 Observation (:data:`OBS_NAMES`, 45 numbers, legged_gym's without the base linear velocity,
 which a real robot does not measure): base angular velocity in the base frame (rad/s), gravity
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from cpg_actor.envs.array_namespace import namespace
 from cpg_actor.envs.quadruped import description as robot
 
 OBS_NAMES = (
@@ -30,15 +32,17 @@ NOMINAL = np.asarray(robot.NOMINAL_POSE)
 def projected_gravity(quat: np.ndarray) -> np.ndarray:
     """(N, 3): the world's unit gravity (0, 0, -1) in the base frame, from the base quaternion
     (w, x, y, z): minus the third row of the rotation matrix. (0, 0, -1) when level."""
-    w, x, y, z = quat.T
-    return -np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=1)
+    xp = namespace(quat)
+    w, x, y, z = (quat[:, i] for i in range(4))
+    return -xp.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=1)
 
 
 def observation(ang_vel, gravity, command, joint_pos, joint_vel, last_action) -> np.ndarray:
     """(N, 45) float32 in the order of :data:`OBS_NAMES`."""
-    return np.concatenate(
+    xp = namespace(ang_vel, joint_pos)
+    return xp.concatenate(
         [ang_vel, gravity, command, joint_pos - NOMINAL, joint_vel, last_action - NOMINAL], axis=1
-    ).astype(np.float32)
+    ).astype(xp.float32)
 
 
 def reward_terms(
@@ -51,21 +55,23 @@ def reward_terms(
     the sum over the feet that touched down this step of (their air time - 0.5 s), 0 when the
     command is (nearly) zero, as legged_gym pays it.
     """
+    xp = namespace(lin_vel)
     return {
-        "tracking_lin_vel": np.exp(-np.sum((command[:, :2] - lin_vel[:, :2]) ** 2, 1) / sigma),
-        "tracking_ang_vel": np.exp(-((command[:, 2] - ang_vel[:, 2]) ** 2) / sigma),
+        "tracking_lin_vel": xp.exp(-xp.sum((command[:, :2] - lin_vel[:, :2]) ** 2, 1) / sigma),
+        "tracking_ang_vel": xp.exp(-((command[:, 2] - ang_vel[:, 2]) ** 2) / sigma),
         "lin_vel_z": lin_vel[:, 2] ** 2,
-        "ang_vel_xy": np.sum(ang_vel[:, :2] ** 2, 1),
-        "orientation": np.sum(gravity[:, :2] ** 2, 1),
+        "ang_vel_xy": xp.sum(ang_vel[:, :2] ** 2, 1),
+        "orientation": xp.sum(gravity[:, :2] ** 2, 1),
         "base_height": (base_height - base_height_target) ** 2,
-        "torques": np.sum(torque**2, 1),
-        "joint_acc": np.sum(joint_acc**2, 1),
-        "action_rate": np.sum((action - last_action) ** 2, 1),
+        "torques": xp.sum(torque**2, 1),
+        "joint_acc": xp.sum(joint_acc**2, 1),
+        "action_rate": xp.sum((action - last_action) ** 2, 1),
         "feet_air_time": air_time_paid,
     }
 
 
 def fallen(base_height, gravity, fall_height: float, fall_tilt: float) -> np.ndarray:
     """(N,) bool: the base is below ``fall_height`` or tilted more than ``fall_tilt`` rad."""
-    tilt = np.arccos(np.clip(-gravity[:, 2], -1.0, 1.0))
+    xp = namespace(gravity)
+    tilt = xp.arccos(xp.clip(-gravity[:, 2], -1.0, 1.0))
     return (base_height < fall_height) | (tilt > fall_tilt)

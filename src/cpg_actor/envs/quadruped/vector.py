@@ -73,6 +73,27 @@ def load_model(config: QuadrupedConfig) -> mujoco.MjModel:
     return model
 
 
+def init_spaces(env: VectorEnv, num_envs: int, config: QuadrupedConfig | dict | None) -> None:
+    """``env.config`` (validated), ``num_envs`` and the observation and action spaces of a
+    quadruped vector env (MuJoCo's and MJX's alike)."""
+    if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+        raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+    if config is None:
+        config = QuadrupedConfig()
+    elif isinstance(config, dict):
+        config = QuadrupedConfig.from_dict(config)
+    env.config = config.validate()
+    env.num_envs = num_envs
+    n_obs, n_act = len(task.OBS_NAMES), len(robot.JOINT_NAMES)
+    env.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (n_obs,), np.float32)
+    if config.normalized_actions:
+        env.single_action_space = gym.spaces.Box(-1.0, 1.0, (n_act,), np.float32)
+    else:
+        env.single_action_space = gym.spaces.Box(LOW.astype(np.float32), HIGH.astype(np.float32))
+    env.observation_space = gym.vector.utils.batch_space(env.single_observation_space, num_envs)
+    env.action_space = gym.vector.utils.batch_space(env.single_action_space, num_envs)
+
+
 def robot_spec(config: QuadrupedConfig) -> RobotSpec:
     return RobotSpec(
         name="anymal-b",
@@ -104,26 +125,14 @@ class AnymalVectorEnv(VectorEnv):
         config: QuadrupedConfig | dict | None = None,
         num_threads: int | None = None,
     ) -> None:
-        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
-            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
-        if config is None:
-            config = QuadrupedConfig()
-        elif isinstance(config, dict):
-            config = QuadrupedConfig.from_dict(config)
-        self.config = config.validate()
-        self.num_envs = num_envs
+        init_spaces(self, num_envs, config)
+        config = self.config
+        if config.sim != "mujoco":
+            raise ValueError(
+                f"AnymalVectorEnv simulates with MuJoCo, got sim={config.sim!r} (sim='mjx': "
+                "cpg_actor.envs.quadruped.mjx.MjxAnymalVectorEnv)"
+            )
         self.robot = robot_spec(config)
-        n_obs, n_act = len(task.OBS_NAMES), robot.JOINT_NAMES.__len__()
-        self.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (n_obs,), np.float32)
-        if config.normalized_actions:
-            self.single_action_space = gym.spaces.Box(-1.0, 1.0, (n_act,), np.float32)
-        else:
-            self.single_action_space = gym.spaces.Box(LOW.astype(np.float32),
-                                                      HIGH.astype(np.float32))  # fmt: skip
-        self.observation_space = gym.vector.utils.batch_space(self.single_observation_space,
-                                                              num_envs)  # fmt: skip
-        self.action_space = gym.vector.utils.batch_space(self.single_action_space, num_envs)
-
         self.model = load_model(config)
         threads = default_threads(num_envs) if num_threads is None else int(num_threads)
         self.num_threads = max(1, min(threads, num_envs))
@@ -243,7 +252,8 @@ class AnymalVectorEnv(VectorEnv):
         np.copyto(self._state, self._next[:, -1])
         self.elapsed += 1
 
-        lin_vel, ang_vel = self._sensor("velocimeter"), self._sensor("gyro")
+        # copies: the autoreset below rewrites the sensors of the robots it resets
+        lin_vel, ang_vel = self._sensor("velocimeter").copy(), self._sensor("gyro").copy()
         gravity = task.projected_gravity(self.qpos[:, 3:7])
         height = self.qpos[:, 2].copy()
         joint_vel = self.qvel[:, 6:]
@@ -361,6 +371,15 @@ class AnymalVectorEnv(VectorEnv):
             raise RuntimeError("call reset() before render_frame()")
         if not 0 <= index < self.num_envs:
             raise ValueError(f"index must be in 0..{self.num_envs - 1}, got {index}")
+        return self.render_pose(self.qpos[index])
+
+    def render_pose(self, qpos: np.ndarray) -> np.ndarray:
+        """:meth:`render_frame` of a robot at the configuration ``qpos`` (``nq`` numbers: base
+        position, quaternion, 12 joints), e.g. one the MJX env simulated."""
+        self._check_open("render_pose")
+        qpos = np.asarray(qpos, dtype=np.float64)
+        if qpos.shape != (self.model.nq,):
+            raise ValueError(f"qpos must have {self.model.nq} entries, got {qpos.shape}")
         if self._renderer is None:
             # the renderer's own copy of the model, its light following the robot (the world's
             # centre of mass: the robot's) as the camera does: a robot walking 10 m away from
@@ -378,8 +397,8 @@ class AnymalVectorEnv(VectorEnv):
             self._camera = camera
             self._render_model, self._render_data = model, mujoco.MjData(model)
         model, data = self._render_model, self._render_data
-        mujoco.mj_setState(model, data, self._state[index], STATE_SPEC)
-        mujoco.mj_forward(model, data)
+        data.qpos[:] = qpos
+        mujoco.mj_forward(model, data)  # the camera tracks the subtree's centre of mass
         self._renderer.update_scene(data, camera=self._camera)
         return self._renderer.render().copy()
 
