@@ -24,6 +24,7 @@ COMMANDS: dict[str, str] = {
     "reproduce": "reproduce",
     "sweep": "sweep",
     "figures": "figures",
+    "curves": "curves",
     "gradient": "gradient",
     "transfer": "transfer",
 }
