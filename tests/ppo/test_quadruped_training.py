@@ -172,3 +172,31 @@ def test_a_replay_over_several_steps_uses_each_steps_own_drive():
         assert not torch.equal(replayed[:, :5], storage.states.flatten(0, 1)[:, :5])
     finally:
         runner.close()
+
+
+def test_the_leg_layout_trains_four_foot_space_oscillators():
+    """agent_config.cpg_layout=leg: one oscillator per leg through the foot-space pattern; the
+    untrained mean action at phase 0 and no amplitude is the nominal pose; the update moves V;
+    the hopper has no such layout (the error lists its layouts)."""
+    config = anymal_config("cpg-actor")
+    config.agent_config.cpg_layout = "leg"
+    runner = Runner(config, tensorboard=False)
+    try:
+        agent = runner.agent
+        assert agent.cpg.num_oscillators == 4 and agent.state_shape == (6, 4)
+        assert agent.joint_map is None and agent.pattern is not None
+        before = agent.cpg.parametrisation.vector.detach().clone()
+        runner.learn()
+        assert not torch.equal(before, agent.cpg.parametrisation.vector.detach())
+        scalars = agent.log_scalars()
+        assert {"cpg/nu_LF", "cpg/rho_gain_RH", "cpg/phi_LF_RF"} <= set(scalars)
+    finally:
+        runner.close()
+    hopper = tiny_config("cpg-actor")
+    hopper.agent_config.cpg_layout = "leg"
+    with pytest.raises(ValueError, match="robot 'anymal-hopper' has the CPG layouts joint"):
+        Runner(hopper, tensorboard=False)
+    bad = TrainConfig()
+    apply_dict(bad, parse_override("agent_config.cpg_layout=foot"), "")
+    with pytest.raises(ValueError, match="cpg_layout must be 'joint', 'leg'"):
+        bad.validate()

@@ -52,6 +52,10 @@ class AgentConfig:
     # the quadruped's gait (cpg_actor.cpg.gaits.GAITS: trot, pace, bound, pronk, walk); empty:
     # the preset's (trot). The hopper has none.
     cpg_gait: str = ""
+    # how the quadruped's CPG drives its joints: "joint" (one oscillator per HFE and KFE joint,
+    # the default) or "leg" (one oscillator per leg, a foot-space pattern); empty: the robot's
+    # first (cpg_actor.agents.cpg_actor.CPG_PRESETS). The hopper has "joint" only.
+    cpg_layout: str = ""
     # the CPG's drive d (eq. 3) follows the robot's drive observation (the quadruped's
     # forward-speed command; RobotSpec.drive_observation). False, or a robot without one: d = 0
     cpg_drive: bool = True
@@ -75,6 +79,11 @@ class AgentConfig:
             raise ValueError(
                 f"agent_config.cpg_gait must be one of {', '.join(GAITS)} (or empty), "
                 f"got {self.cpg_gait!r}"
+            )
+        if self.cpg_layout not in ("", "joint", "leg"):
+            raise ValueError(
+                f"agent_config.cpg_layout must be 'joint', 'leg' (the quadruped) or empty, "
+                f"got {self.cpg_layout!r}"
             )
         if not self.feedback_noise >= 0:
             raise ValueError(

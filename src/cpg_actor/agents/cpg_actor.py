@@ -24,21 +24,28 @@ from cpg_actor.agents.base import (
     mlp,
 )
 from cpg_actor.cpg import CPGNetwork, CPGState, JointMap, hopper_cpg
-from cpg_actor.cpg.gaits import OSCILLATOR_JOINTS, quadruped_cpg
+from cpg_actor.cpg.foot_space import FootSpaceMap
+from cpg_actor.cpg.gaits import OSCILLATOR_JOINTS, quadruped_cpg, quadruped_leg_cpg
 from cpg_actor.robot import RobotSpec
 
-# robot name -> the CPG of that robot, ``preset(dt, initial=..., check_inputs=..., gait=...)``,
-# and the joint (index in the robot's joint order) each oscillator drives (None: one
-# oscillator per joint, in the joint order); the joints no oscillator drives are held at the
-# nominal pose
+# robot name -> its CPG layouts (``agent_config.cpg_layout``; the first is the default), each
+# the CPG, ``preset(dt, initial=..., check_inputs=..., gait=...)``, and how it drives the
+# joints: a tuple of the joint (index in the robot's joint order) each oscillator drives
+# (None: one oscillator per joint, in the joint order; the joints no oscillator drives are held
+# at the nominal pose), or a pattern module built from the nominal pose that maps the
+# oscillators' phase and amplitude to all joints (the quadruped's foot-space legs)
 CPG_PRESETS = {
-    "anymal-hopper": (hopper_cpg, None),
-    "anymal-b": (quadruped_cpg, OSCILLATOR_JOINTS),
+    "anymal-hopper": {"joint": (hopper_cpg, None)},
+    "anymal-b": {
+        "joint": (quadruped_cpg, OSCILLATOR_JOINTS),
+        "leg": (quadruped_leg_cpg, FootSpaceMap),
+    },
 }
 
 
 class CPGActorAgent(Agent):
-    """Gaussian policy whose mean is ``JointMap(x)``, x the CPG output of eq. 1.
+    """Gaussian policy whose mean is ``JointMap(x)``, x the CPG output of eq. 1 (or, in the
+    quadruped's ``leg`` layout, ``FootSpaceMap(theta, r)`` of the CPG's next state).
 
     * ``feedback=True`` (``cpg-actor``): ``[xi, kappa] = scale * MLP(obs)`` per oscillator, or
       ``scale * tanh(MLP(obs))`` with ``feedback_tanh`` (bounded feedback).
@@ -75,7 +82,17 @@ class CPGActorAgent(Agent):
                 f"no CPG preset for robot '{robot.name}'; add one to "
                 f"cpg_actor.agents.cpg_actor.CPG_PRESETS (known: {', '.join(CPG_PRESETS)})"
             )
-        preset, joints = CPG_PRESETS[robot.name]
+        layouts = CPG_PRESETS[robot.name]
+        layout = config.cpg_layout or next(iter(layouts))
+        if layout not in layouts:
+            raise ValueError(
+                f"agent_config.cpg_layout {layout!r}: robot '{robot.name}' has the CPG "
+                f"layouts {', '.join(layouts)}"
+            )
+        preset, joints = layouts[layout]
+        pattern = None if joints is None or isinstance(joints, tuple) else joints
+        if pattern is not None:
+            joints = None
         options = {"gait": config.cpg_gait} if config.cpg_gait else {}
         if options and "gait" not in inspect.signature(preset).parameters:
             raise ValueError(
@@ -90,7 +107,7 @@ class CPGActorAgent(Agent):
         if (
             driven != n
             or len(action_scale) != robot.num_joints
-            or (joints is None and n != robot.num_joints)
+            or (joints is None and pattern is None and n != robot.num_joints)
         ):
             raise ValueError(
                 f"the CPG has {n} oscillators driving {driven} joints, but the robot has "
@@ -98,7 +115,11 @@ class CPGActorAgent(Agent):
             )
         super().__init__(obs_dim, action_scale, config, critic_state_features=3 * n)
         self.cpg: CPGNetwork = cpg
-        self.joint_map = JointMap(robot.nominal_pose, joints=joints)  # the standing pose
+        self.layout = layout
+        # the joints from the oscillators: x through the joint map (around the standing pose),
+        # or phase and amplitude through the layout's pattern (FootSpaceMap)
+        self.joint_map = JointMap(robot.nominal_pose, joints=joints) if pattern is None else None
+        self.pattern = None if pattern is None else pattern(robot.nominal_pose)
         # the observation that sets the drive d (None: d = 0)
         self.drive_index = robot.drive_index if config.cpg_drive else None
         self.state_shape = (5, n) if self.drive_index is None else (6, n)
@@ -216,7 +237,10 @@ class CPGActorAgent(Agent):
         next_state = next_cpg_state.as_tensor()
         if self.drive_index is not None:  # the drive is held until the next observation
             next_state = torch.cat([next_state, state[:, 5:]], dim=1)
-        mean = self.joint_map(output.position)
+        if self.pattern is not None:
+            mean = self.pattern(next_cpg_state.phase, next_cpg_state.amplitude)
+        else:
+            mean = self.joint_map(output.position)
         extras = {
             "xi": xi,
             "kappa": kappa,

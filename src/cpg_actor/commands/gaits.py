@@ -27,6 +27,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--seconds", type=float, default=20.0, help="per run (default 20)")
     parser.add_argument("--robots", type=int, default=4, help="robots per gait (default 4)")
     parser.add_argument("--command", type=float, default=0.5, help="forward command, m/s")
+    parser.add_argument(
+        "--layout",
+        default="joint",
+        choices=["joint", "leg"],
+        help="joint: one oscillator per HFE and KFE joint (default); leg: one per leg, a "
+        "foot-space pattern",
+    )
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default="gaits", help="folder for gaits.png and gaits.json")
     parser.add_argument("--overwrite", action="store_true", help="replace existing files")
@@ -58,7 +65,8 @@ def run(args: argparse.Namespace) -> int:
     from matplotlib.figure import Figure
 
     from cpg_actor.checkpoint import atomic_write_text
-    from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
+    from cpg_actor.cpg.foot_space import FootSpaceMap
+    from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map, quadruped_leg_cpg
     from cpg_actor.envs.quadruped import description as robot
     from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
     from cpg_actor.evaluation import finite_mean
@@ -79,16 +87,23 @@ def run(args: argparse.Namespace) -> int:
         env = AnymalVectorEnv(args.robots, config)
         env.reset(seed=args.seed)
         dt = env.config.control_dt
-        cpg = quadruped_cpg(dt, gait).double()
-        joint_map = quadruped_joint_map(robot.NOMINAL_POSE).double()
+        if args.layout == "leg":
+            cpg = quadruped_leg_cpg(dt, gait).double()
+            pattern = FootSpaceMap(robot.NOMINAL_POSE).double()
+            joints = lambda output, state, p=pattern: p(state.phase, state.amplitude)  # noqa: E731
+        else:
+            cpg = quadruped_cpg(dt, gait).double()
+            joint_map = quadruped_joint_map(robot.NOMINAL_POSE).double()
+            joints = lambda output, state, m=joint_map: m(output.position)  # noqa: E731
         state = cpg.initial_state(args.robots)
-        drive = torch.full((args.robots, 8), max(args.command, 0.0), dtype=torch.float64)
+        n = cpg.num_oscillators
+        drive = torch.full((args.robots, n), max(args.command, 0.0), dtype=torch.float64)
         contact, speed, fell = [], [], np.zeros(args.robots, dtype=bool)
         alive = np.ones(args.robots, dtype=bool)
         with torch.no_grad():
             for _ in range(env.config.episode_steps):
                 output, state = cpg(state, drive)
-                _, _, terminated, _, info = env.step(joint_map(output.position).numpy())
+                _, _, terminated, _, info = env.step(joints(output, state).numpy())
                 fell |= terminated & alive
                 alive &= ~terminated
                 contact.append(info["contact"][0].copy())
@@ -124,9 +139,11 @@ def run(args: argparse.Namespace) -> int:
                        f"{s['forward_speed']:.2f} m/s (command {args.command} m/s)",
                        fontsize="medium", loc="left")  # fmt: skip
     axes[-1].set_xlabel("time (s); bars: foot on the ground (robot 0)")
-    fig.suptitle(f"Open-loop CPG gaits on ANYmal B ({args.seconds:g} s, seed {args.seed})")
+    fig.suptitle(f"Open-loop CPG gaits on ANYmal B ({args.layout} layout, {args.seconds:g} s, "
+                 f"seed {args.seed})")  # fmt: skip
     save_figure(fig, paths[0])
-    atomic_write_text(json.dumps({"command": args.command, "seconds": args.seconds,
+    atomic_write_text(json.dumps({"command": args.command, "layout": args.layout,
+                                  "seconds": args.seconds,
                                   "seed": args.seed, "gaits": summary}, indent=2) + "\n",
                       paths[1])  # fmt: skip
     print(f"wrote {paths[0]} and {paths[1]}")

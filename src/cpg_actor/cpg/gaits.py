@@ -125,6 +125,50 @@ def quadruped_cpg(
     )
 
 
+# The ``leg`` layout (one oscillator per leg, a foot-space pattern: cpg_actor.cpg.foot_space):
+# 3 Hz as the joint layout; r is half the foot's step, m: 1 + 8 d cm (at 3 Hz and duty 1/2 a
+# step of 2 r moves the body about 4 r f: 0.5 m/s at d = 0.5 with no slip).
+LEG_INITIAL = {
+    "frequency": 3.0,  # Hz, c_nu0
+    "frequency_gain": 0.1,  # Hz per (m/s), c_nu1
+    "amplitude": 0.01,  # m, c_R0
+    "amplitude_gain": 0.08,  # m per (m/s), c_R1
+    "convergence": 20.0,  # 1/s
+    "coupling_weight": 10.0,
+}
+
+
+def quadruped_leg_cpg(
+    dt: float,
+    gait: str = "trot",
+    initial: Mapping[str, float | Sequence | Tensor] | None = None,
+    frozen: Mapping[str, bool | Sequence | Tensor] | None = None,
+    check_inputs: bool = True,
+    dtype: torch.dtype | None = None,
+) -> CPGNetwork:
+    """One oscillator per leg (LF, RF, LH, RH), coupled all to all with ``gait``'s phase lags
+    and started in them; its amplitude is half the foot's step in metres
+    (:class:`~cpg_actor.cpg.foot_space.FootSpaceMap` turns phase and amplitude into joints).
+    Trainable as :func:`quadruped_cpg`, the drive gains included."""
+    if gait not in GAITS:
+        raise ValueError(f"unknown gait {gait!r}; available: {', '.join(GAITS)}")
+    psi = [2.0 * math.pi * fraction for fraction in GAITS[gait]]
+    topology = Topology.all_to_all(4, names=LEGS)
+    phase_bias = torch.zeros(4, 4, dtype=torch.float64)
+    for i, j in topology.edges:
+        phase_bias[i, j] = psi[j] - psi[i]
+    return CPGNetwork(
+        topology,
+        dt=dt,
+        initial={**LEG_INITIAL, "phase_bias": phase_bias, **(initial or {})},
+        frozen={"frequency_gain": False, "amplitude_gain": False, **(frozen or {})},
+        symmetric_coupling=True,
+        initial_phase=psi,
+        check_inputs=check_inputs,
+        dtype=dtype,
+    )
+
+
 def quadruped_joint_map(nominal_pose: Sequence[float]) -> JointMap:
     """HFE and KFE of every leg driven by their oscillators, HAA held at the nominal pose."""
     return JointMap(nominal_pose, joints=OSCILLATOR_JOINTS)
