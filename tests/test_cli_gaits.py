@@ -57,6 +57,8 @@ def test_the_leg_layout_trots_forward_faster_with_the_drive(tmp_path):
         speeds[command] = trot["forward_speed"]
         if command == 0.0:  # at 1 m/s the longer steps let the pairs drift (RF 0.34 there)
             phases = [trot["touchdown_phase"][leg] for leg in ("RF", "LH", "RH")]
-            distance = [min(abs(p - t), 1 - abs(p - t)) for p, t in zip(phases, (0.5, 0.5, 0.0))]
+            trot_table = (0.5, 0.5, 0.0)
+            distance = [min(abs(p - t), 1 - abs(p - t))
+                        for p, t in zip(phases, trot_table, strict=True)]  # fmt: skip
             assert max(distance) < 0.15, phases
     assert speeds[1.0] > 0.4 and speeds[1.0] > speeds[0.0] + 0.3
