@@ -275,6 +275,14 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
     gpu = build_config(parser.parse_args(["--preset", "gpu"]))
     assert (gpu.env.sim, gpu.device, gpu.num_envs * gpu.ppo.num_steps) == ("mjx", "auto", 98_304)
     assert (fast.ppo.lr_schedule, fast.ppo.learning_rate) == ("adaptive", 1e-3)
+    # the quadruped's: the throughput recipe plus the CPG-Actor settings of its results
+    anymal = build_config(parser.parse_args(["--preset", "anymal"]))
+    spelled = build_config(parser.parse_args(
+        ["--preset", "throughput", "--robot", "anymal", "--set", "agent_config.cpg_layout=leg",
+         "--set", "agent_config.init_std=0.1", "--set", "agent_config.feedback_noise=0.2",
+         "--set", "ppo.cpg_learning_rate=3e-4"]))  # fmt: skip
+    assert anymal.robot == "anymal" and type(anymal.env).__name__ == "QuadrupedConfig"
+    assert {**anymal.to_dict(), "preset": "throughput"} == spelled.to_dict()
     fast.save(tmp_path / "fast.yaml")
     # the flags and --set win over the preset; a config file brings its preset along
     mixed = build_config(
@@ -299,7 +307,7 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
     assert main(["train", "--run-dir", str(run_dir), "--resume", "--preset", "paper"]) == 2
     with pytest.raises(SystemExit):
         parser.parse_args(["--preset", "fastest"])
-    with pytest.raises(ValueError, match="unknown preset 'fastest'; available: gpu, paper, th"):
+    with pytest.raises(ValueError, match="unknown preset 'fastest'; available: anymal, gpu, paper, th"):
         TrainConfig(preset="fastest").validate()
 
 

@@ -18,6 +18,12 @@ saved in the run's ``config.yaml`` (``preset``).
   steps = 98,304 samples per iteration (legged_gym's rollout length for 4,096 envs), 5 epochs
   of 4 minibatches of 24,576, learning rate 1e-3 adapted to KL 0.01, ``device`` auto (CUDA if
   torch sees it). It runs on a CPU too (JAX's CPU backend), slowly.
+* ``anymal``: the ANYmal B quadruped (``robot: anymal``) with the ``throughput`` recipe and the
+  CPG-Actor settings its results were trained with (``docs/quadruped.md``, "Training"): one
+  oscillator per leg (``cpg_layout: leg``), action noise 0.1 of the joint ranges, feedback
+  noise 0.2, and the CPG and its feedback at a fixed learning rate of 3e-4 outside the
+  adaptive schedule. The ``mlp`` results add ``--set agent_config.init_std=0.3``; the open-loop
+  CPG-Actor needs ``--set agent_config.feedback_noise=0`` (it has no feedback).
 """
 
 from __future__ import annotations
@@ -49,6 +55,21 @@ PRESETS: dict[str, dict[str, Any]] = {
             "num_minibatches": 4,
             "lr_schedule": "adaptive",
             "learning_rate": 1e-3,
+            "compile": True,
+        },
+    },
+    "anymal": {
+        "robot": "anymal",
+        "num_envs": 256,
+        "eval_interval": 10,
+        "agent_config": {"cpg_layout": "leg", "init_std": 0.1, "feedback_noise": 0.2},
+        "ppo": {
+            "num_steps": 32,
+            "num_epochs": 5,
+            "num_minibatches": 4,
+            "lr_schedule": "adaptive",
+            "learning_rate": 1e-3,
+            "cpg_learning_rate": 3e-4,
             "compile": True,
         },
     },
