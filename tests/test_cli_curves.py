@@ -34,6 +34,10 @@ def test_curves_groups_runs_by_agent_and_summarises_the_last_values(tmp_path, ca
     assert main(args) == 2  # kept
     assert "curves.png exists; pass --overwrite" in capsys.readouterr().err
     assert main([*args, "--overwrite"]) == 0
+    # one budget for runs of different lengths: the rows up to 2k steps
+    assert main([*args, "--overwrite", "--max-steps", "2k"]) == 0
+    summary = json.loads(out.with_suffix(".json").read_text())
+    assert summary["runs"][runs[0]]["eval/speed_error"] == {"step": 2000, "value": 0.2}
 
 
 def test_curves_says_what_is_wrong(tmp_path, capsys):

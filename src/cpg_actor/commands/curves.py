@@ -7,7 +7,7 @@ same steps. The last logged value of every metric, per run and per group (mean a
 deviation), is printed and written as a JSON file next to the figure.
 
     cpg-actor curves runs/mlp_s0 runs/mlp_s1 runs/cpg_s0 runs/cpg_s1 \\
-        --metric eval/speed_error --metric eval/return --out curves.png
+        --metric eval/speed_error --metric eval/return --max-steps 5M --out curves.png
 """
 
 from __future__ import annotations
@@ -29,6 +29,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="a key of metrics.jsonl, repeatable (default: eval/return)",
     )
     parser.add_argument("--out", default="curves.png", help="the figure (.png); JSON beside it")
+    parser.add_argument(
+        "--max-steps",
+        default=None,
+        help="only rows up to this many training steps (runs of different lengths compared at "
+        "one budget)",
+    )
     parser.add_argument("--title", default=None, help="the figure's title")
     parser.add_argument("--overwrite", action="store_true", help="replace existing files")
 
@@ -57,6 +63,7 @@ def run(args: argparse.Namespace) -> int:
     from matplotlib.figure import Figure
 
     from cpg_actor.checkpoint import atomic_write_text
+    from cpg_actor.config import parse_steps
     from cpg_actor.plots import save_figure
 
     metrics = args.metric or ["eval/return"]
@@ -68,6 +75,10 @@ def run(args: argparse.Namespace) -> int:
         if path.exists() and not args.overwrite:
             raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
     runs = {str(Path(r)): load_run(Path(r)) for r in args.runs}
+    if args.max_steps is not None:
+        limit = parse_steps(args.max_steps)
+        runs = {name: (agent, [r for r in rows if r["global_step"] <= limit])
+                for name, (agent, rows) in runs.items()}  # fmt: skip
     for metric in metrics:
         if not any(series(rows, metric)[0] for _, rows in runs.values()):
             raise ValueError(f"no run logged {metric!r} (a key of metrics.jsonl, e.g. "
