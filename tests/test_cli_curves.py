@@ -34,6 +34,8 @@ def test_curves_groups_runs_by_agent_and_summarises_the_last_values(tmp_path, ca
     assert main(args) == 2  # kept
     assert "curves.png exists; pass --overwrite" in capsys.readouterr().err
     assert main([*args, "--overwrite"]) == 0
+    assert main([*args, "--overwrite", "--group-by", "run"]) == 0
+    assert set(json.loads(out.with_suffix(".json").read_text())["agents"]) == {"m0", "m1", "c0"}
     # one budget for runs of different lengths: the rows up to 2k steps
     assert main([*args, "--overwrite", "--max-steps", "2k"]) == 0
     summary = json.loads(out.with_suffix(".json").read_text())

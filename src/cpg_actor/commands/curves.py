@@ -1,7 +1,8 @@
 """`cpg-actor curves`: the learning curves of several training runs in one figure.
 
 Each run directory's ``metrics.jsonl`` gives one line per ``--metric`` against the training
-steps (a thin line per run); runs are grouped by their agent (from their ``config.yaml``),
+steps (a thin line per run); runs are grouped by their agent (from their ``config.yaml``; or
+each on its own, ``--group-by run``),
 and each group's mean over its runs is drawn thick where all of them logged the metric at the
 same steps. The last logged value of every metric, per run and per group (mean and standard
 deviation), is printed and written as a JSON file next to the figure.
@@ -34,6 +35,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="only rows up to this many training steps (runs of different lengths compared at "
         "one budget)",
+    )
+    parser.add_argument(
+        "--group-by",
+        choices=["agent", "run"],
+        default="agent",
+        help="agent: one colour and a mean per agent (default); run: one per run directory",
     )
     parser.add_argument("--title", default=None, help="the figure's title")
     parser.add_argument("--overwrite", action="store_true", help="replace existing files")
@@ -85,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
                              "eval/return, charts/episode_return)")  # fmt: skip
     groups: dict[str, list[str]] = {}
     for name, (agent, _) in runs.items():
-        groups.setdefault(agent, []).append(name)
+        groups.setdefault(agent if args.group_by == "agent" else Path(name).name, []).append(name)
 
     fig = Figure(figsize=(5.0 * len(metrics), 3.8), layout="constrained")
     axes = np.atleast_1d(fig.subplots(1, len(metrics)))
