@@ -30,20 +30,22 @@ from __future__ import annotations
 
 from typing import Any
 
+THROUGHPUT: dict[str, Any] = {
+    "num_envs": 256,
+    "eval_interval": 10,
+    "ppo": {
+        "num_steps": 32,
+        "num_epochs": 5,
+        "num_minibatches": 4,
+        "lr_schedule": "adaptive",
+        "learning_rate": 1e-3,
+        "compile": True,
+    },
+}
+
 PRESETS: dict[str, dict[str, Any]] = {
     "paper": {"ppo": {"compile": True}},
-    "throughput": {
-        "num_envs": 256,
-        "eval_interval": 10,
-        "ppo": {
-            "num_steps": 32,
-            "num_epochs": 5,
-            "num_minibatches": 4,
-            "lr_schedule": "adaptive",
-            "learning_rate": 1e-3,
-            "compile": True,
-        },
-    },
+    "throughput": THROUGHPUT,
     "gpu": {
         "num_envs": 4096,
         "device": "auto",
@@ -59,19 +61,10 @@ PRESETS: dict[str, dict[str, Any]] = {
         },
     },
     "anymal": {
+        **THROUGHPUT,
         "robot": "anymal",
-        "num_envs": 256,
-        "eval_interval": 10,
         "agent_config": {"cpg_layout": "leg", "init_std": 0.1, "feedback_noise": 0.2},
-        "ppo": {
-            "num_steps": 32,
-            "num_epochs": 5,
-            "num_minibatches": 4,
-            "lr_schedule": "adaptive",
-            "learning_rate": 1e-3,
-            "cpg_learning_rate": 3e-4,
-            "compile": True,
-        },
+        "ppo": {**THROUGHPUT["ppo"], "cpg_learning_rate": 3e-4},
     },
 }
 

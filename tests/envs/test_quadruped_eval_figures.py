@@ -21,17 +21,9 @@ TINY = ["--num-envs", "2", "--set", "ppo.num_steps=8", "--set", "ppo.num_minibat
 FIGURES = ("gait_diagram.png", "forward_speed.png")
 
 
-def mujoco_gl_error() -> str | None:
-    """Why no MuJoCo GL context can be made here, or None if one can."""
-    try:
-        renderer = mujoco.Renderer(mujoco.MjModel.from_xml_string("<mujoco/>"), 8, 8)
-    except Exception as error:  # whatever the GL layer raises
-        return f"{type(error).__name__}: {error}"
-    renderer.close()
-    return None
-
-
 def skip_without_gl() -> None:
+    from .test_render_video import mujoco_gl_error
+
     reason = mujoco_gl_error()
     if reason is not None:
         pytest.skip(f"no MuJoCo GL context here: {reason}")

@@ -108,21 +108,8 @@ def quadruped_cpg(
     hopper's, the drive gains c_nu1 and c_R1 of eq. 3 per oscillator. Step it with the drive
     ``d >= 0`` (the commanded forward speed in m/s) as ``cpg(state, d)``.
     """
-    topology = quadruped_topology()
-    psi = gait_phases(gait)
-    phase_bias = torch.zeros(8, 8, dtype=torch.float64)
-    for i, j in topology.edges:
-        phase_bias[i, j] = psi[j] - psi[i]
-    return CPGNetwork(
-        topology,
-        dt=dt,
-        initial={**QUADRUPED_INITIAL, "phase_bias": phase_bias, **(initial or {})},
-        frozen={"frequency_gain": False, "amplitude_gain": False, **(frozen or {})},
-        symmetric_coupling=True,
-        initial_phase=psi,
-        check_inputs=check_inputs,
-        dtype=dtype,
-    )
+    return _gait_network(quadruped_topology(), gait_phases(gait), QUADRUPED_INITIAL, dt,
+                         initial, frozen, check_inputs, dtype)  # fmt: skip
 
 
 # The ``leg`` layout (one oscillator per leg, a foot-space pattern: cpg_actor.cpg.foot_space):
@@ -153,14 +140,21 @@ def quadruped_leg_cpg(
     if gait not in GAITS:
         raise ValueError(f"unknown gait {gait!r}; available: {', '.join(GAITS)}")
     psi = [2.0 * math.pi * fraction for fraction in GAITS[gait]]
-    topology = Topology.all_to_all(4, names=LEGS)
-    phase_bias = torch.zeros(4, 4, dtype=torch.float64)
+    return _gait_network(Topology.all_to_all(4, names=LEGS), psi, LEG_INITIAL, dt, initial,
+                         frozen, check_inputs, dtype)  # fmt: skip
+
+
+def _gait_network(topology, psi, defaults, dt, initial, frozen, check_inputs, dtype) -> CPGNetwork:
+    """A CPG started in the phases ``psi`` whose coupled pairs pull towards them
+    (``phi_ij = psi_j - psi_i``), with the drive gains trainable."""
+    n = topology.num_oscillators
+    phase_bias = torch.zeros(n, n, dtype=torch.float64)
     for i, j in topology.edges:
         phase_bias[i, j] = psi[j] - psi[i]
     return CPGNetwork(
         topology,
         dt=dt,
-        initial={**LEG_INITIAL, "phase_bias": phase_bias, **(initial or {})},
+        initial={**defaults, "phase_bias": phase_bias, **(initial or {})},
         frozen={"frequency_gain": False, "amplitude_gain": False, **(frozen or {})},
         symmetric_coupling=True,
         initial_phase=psi,

@@ -255,6 +255,21 @@ def dynamics_for(config: HopperConfig) -> HopperDynamics:
     return _DYNAMICS[key]
 
 
+def reset_keys(seed: int | list[int] | None, num_envs: int, device) -> Any:
+    """The JAX keys ``(N, 2)`` on ``device`` of a vector env's ``reset(seed=...)``: an int s
+    gives env i the seed s + i, a list one per env, None fresh entropy; ValueError for a
+    negative seed."""
+    from cpg_actor.envs.hopper import env_seeds
+
+    if seed is None:
+        seeds = [int(s) for s in np.random.SeedSequence().generate_state(num_envs)]
+    else:
+        seeds = env_seeds(seed, num_envs)
+    if any(s < 0 for s in seeds):
+        raise ValueError(f"seeds must be >= 0, got {seed!r}")
+    return jax.device_put(seed_keys(seeds), device)
+
+
 def seed_keys(seeds: list[int]) -> np.ndarray:
     """One JAX random key (raw threefry ``uint32[2]``) per env from integer seeds of any size,
     through numpy's ``SeedSequence``: ``(N, 2)`` uint32."""

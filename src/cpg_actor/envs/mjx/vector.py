@@ -22,8 +22,8 @@ import torch
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 from cpg_actor.envs.config import HopperConfig
-from cpg_actor.envs.hopper import check_actions, env_seeds, init_vector_env
-from cpg_actor.envs.mjx.dynamics import STATE_FIELDS, EnvState, dynamics_for, jax, seed_keys
+from cpg_actor.envs.hopper import check_actions, init_vector_env
+from cpg_actor.envs.mjx.dynamics import STATE_FIELDS, EnvState, dynamics_for, jax, reset_keys
 from cpg_actor.envs.torch_env import EnvStep
 
 
@@ -83,13 +83,7 @@ class MjxHopperVectorEnv(VectorEnv):
     def reset_tensors(self, seed: int | list[int] | None = None) -> tuple[torch.Tensor, dict]:
         """Reset every env (seeds as :meth:`reset`): the first observations, on ``device``."""
         self._check_open("reset")
-        if seed is None:
-            seeds = [int(s) for s in np.random.SeedSequence().generate_state(self.num_envs)]
-        else:
-            seeds = env_seeds(seed, self.num_envs)
-        if any(s < 0 for s in seeds):
-            raise ValueError(f"seeds must be >= 0, got {seed!r}")
-        keys = jax.device_put(seed_keys(seeds), self.jax_device)
+        keys = reset_keys(seed, self.num_envs, self.jax_device)
         self._state, obs = self.dynamics.reset(keys)
         data = self._state.data
         info = {

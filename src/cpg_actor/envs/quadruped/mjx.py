@@ -34,8 +34,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 
 from cpg_actor.envs.actuator import Actuator
 from cpg_actor.envs.backends.mujoco_backend import mujoco
-from cpg_actor.envs.hopper import env_seeds
-from cpg_actor.envs.mjx.dynamics import seed_keys
+from cpg_actor.envs.mjx.dynamics import reset_keys
 from cpg_actor.envs.mjx.runtime import load
 from cpg_actor.envs.mjx.vector import _numpy, torch_device
 from cpg_actor.envs.quadruped import description as robot
@@ -322,13 +321,7 @@ class MjxAnymalVectorEnv(VectorEnv):
     # -- the tensor face ----------------------------------------------------------------------
     def reset_tensors(self, seed: int | list[int] | None = None) -> tuple[torch.Tensor, dict]:
         self._check_started("reset")
-        if seed is None:
-            seeds = [int(s) for s in np.random.SeedSequence().generate_state(self.num_envs)]
-        else:
-            seeds = env_seeds(seed, self.num_envs)
-        if any(s < 0 for s in seeds):
-            raise ValueError(f"seeds must be >= 0, got {seed!r}")
-        keys = jax.device_put(seed_keys(seeds), self.jax_device)
+        keys = reset_keys(seed, self.num_envs, self.jax_device)
         self._state, obs = self.dynamics.reset(keys)
         return torch.from_dlpack(obs), {"command": torch.from_dlpack(self._state.command)}
 
