@@ -137,6 +137,43 @@ def test_episodes_end_by_falling_or_by_time_with_their_metrics():
     assert info["episode_metrics"]["fell"][0] == 0.0
 
 
+def test_planted_slip_is_the_horizontal_speed_of_feet_on_the_ground_at_both_ends():
+    before = np.zeros((1, 4, 2))
+    now = np.array([[[0.003, 0.004], [0.01, 0.0], [0.01, 0.0], [0.0, 0.0]]])
+    contact = np.array([[True, True, False, True]])
+    in_contact = np.array([[True, False, True, True]])
+    slip, planted = task.planted_slip(now, before, contact, in_contact, 0.02)
+    assert planted.tolist() == [[True, False, False, True]]  # lifting or landing: not planted
+    assert np.allclose(slip, [[0.25, 0.0, 0.0, 0.0]])  # 5 mm in 20 ms
+
+
+def test_a_robot_pushed_along_its_planted_feet_is_charged_for_the_slip():
+    """Standing still, once settled (0.4 s), the planted feet barely move (under 5 mm/s).
+    Moving the whole robot 1 cm forward between two steps drags its four planted feet 1 cm in
+    one 20 ms step: 0.5 m/s each, so the feet_slip term is 4 x 0.5^2 = 1 (times its scale and
+    dt), and the episode's foot_slip metric (the mean over its 30 steps x 4 feet) gains
+    0.5 / 30 m/s."""
+    env = AnymalVectorEnv(1, {"episode_seconds": 0.6, "reset_noise": 0.0,
+                              "reward_scales": {"feet_slip": -1.0}})  # fmt: skip
+    env.reset(seed=0)
+    hold, dt = NOMINAL[None, :], env.config.control_dt
+    speeds = []
+    for step in range(30):
+        if step == 20:
+            env.qpos[0, 0] += 0.01
+        _, _, _, truncated, info = env.step(hold)
+        assert info["contact"].all()
+        # the root mean square over the feet (they slide alike: equal when pushed)
+        speeds.append(np.sqrt(info["reward_terms"]["feet_slip"][0] / -dt / 4))
+    assert max([speeds[19], *speeds[21:]]) < 0.005  # settled
+    assert speeds[20] == pytest.approx(0.5, rel=0.02)  # pushed
+    assert truncated[0]
+    assert info["episode_metrics"]["foot_slip"][0] <= np.mean(speeds)  # mean <= RMS
+    # the settling steps add about 5 mm/s to the mean
+    assert 0.5 / 30 < info["episode_metrics"]["foot_slip"][0] < 0.5 / 30 + 0.01
+    env.close()
+
+
 def _open_loop_trot(command: float, n: int = 4) -> dict:
     """The trot preset, no learning, ``n`` robots with reset noise, its drive d set by the
     forward ``command``: the metrics of one 20 s episode (asserting it never falls)."""

@@ -73,7 +73,7 @@ def test_an_open_loop_trot_agrees_with_the_mujoco_env(envs):
     assert np.mean(same_feet) > 0.98
     metrics_cpu, metrics_mjx = a[4]["episode_metrics"], b[4]["episode_metrics"]
     assert np.all(metrics_mjx["episode_seconds"] == 2.0) and np.all(metrics_mjx["fell"] == 0)
-    for name in ("speed_error", "forward_speed", "cost_of_transport"):
+    for name in ("speed_error", "forward_speed", "cost_of_transport", "foot_slip"):
         assert np.allclose(metrics_mjx[name], metrics_cpu[name], rtol=0.05, atol=0.01), name
     # the autoreset's first observation: the fresh robot at the nominal pose, at rest
     assert np.abs(a[0] - b[0]).max() < 1e-5

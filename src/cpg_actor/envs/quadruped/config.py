@@ -22,6 +22,9 @@ def _default_scales() -> dict[str, float]:
         "joint_acc": -2.5e-7,  # |q_ddot|^2
         "action_rate": -0.01,  # |a_t - a_t-1|^2
         "feet_air_time": 1.0,  # sum over touchdowns of (air time - 0.5 s): longer steps
+        # sum over planted feet of their sliding speed^2 (m/s)^2. Off (0) by default, as in
+        # legged_gym; the trained MLP drags its hind feet without it (docs/quadruped.md)
+        "feet_slip": 0.0,
     }
 
 

@@ -54,10 +54,11 @@ jax, mjx = load()
 jnp = jax.numpy
 
 STATE_FIELDS = ("qpos", "qvel", "qacc_warmstart")  # what a step starts from (mjx.Data)
-# the episode bookkeeping of the MuJoCo env (AnymalVectorEnv._EPISODE_FIELDS) and the key
+# the episode bookkeeping of the MuJoCo env (AnymalVectorEnv._EPISODE_FIELDS; it reads the
+# feet's last positions from its sensors, this env keeps them in feet_xy) and the key
 EPISODE_FIELDS = ("command", "last_action", "joint_vel_before", "elapsed", "air_time",
                   "in_contact", "speed_error_sum", "speed_sum", "work", "start_x",
-                  "key")  # fmt: skip
+                  "slip_sum", "planted_steps", "feet_xy", "key")  # fmt: skip
 TRACE_INFO = ("reward_terms", "command", "contact", "base_height", "forward_speed",
               "desired_position", "measured_position")  # fmt: skip
 # the base box's corners in the base frame (8, 3): the base touches the ground when one does
@@ -80,6 +81,9 @@ class EnvState(NamedTuple):
     speed_sum: Any  # (N,) sum of the forward speed
     work: Any  # (N,) J, the joints' mechanical work (|torque x speed| dt)
     start_x: Any  # (N,) the base's x at the episode's start, m
+    slip_sum: Any  # (N,) sum of the planted feet's sliding speeds, m/s
+    planted_steps: Any  # (N,) int32 count of planted feet over the episode's steps
+    feet_xy: Any  # (N, 4, 2) the feet's horizontal positions where the last step read them, m
     key: Any  # (N, 2) uint32 random key of each env
 
 
@@ -116,8 +120,8 @@ class AnymalDynamics:
 
     # -- one robot ------------------------------------------------------------------------------
     def _fresh(self, key):
-        """A new episode's pose (nominal plus noise, feet on the ground, at rest) and command
-        for one robot, and its key advanced."""
+        """A new episode's pose (nominal plus noise, feet on the ground, at rest), command and
+        feet positions (4, 2) for one robot, and its key advanced."""
         key, noise_key, command_key = jax.random.split(key, 3)
         cfg = self.config
         noise = jax.random.uniform(noise_key, (12,), minval=-cfg.reset_noise,
@@ -130,7 +134,8 @@ class AnymalDynamics:
         lowest = placed.site_xpos[self._feet, 2].min()
         qpos = qpos.at[2].add(robot.FOOT_RADIUS - lowest)  # feet on the ground
         command = jnp.stack([speed, 0.0, 0.0]).astype(jnp.float32)
-        return self._empty.replace(qpos=qpos), command, joints, key
+        feet_xy = placed.site_xpos[self._feet, :2]  # the lift above moves no foot sideways
+        return self._empty.replace(qpos=qpos), command, joints, feet_xy, key
 
     def _control(self, data, desired):
         """``decimation`` substeps of one robot: the actuator law, then ``mjx.step``. Returns
@@ -163,7 +168,7 @@ class AnymalDynamics:
 
     def _reset(self, keys):
         """New episodes for all N robots (``keys``: (N, 2) uint32): ``(state, obs)``."""
-        data, command, joints, keys = jax.vmap(self._fresh)(keys)
+        data, command, joints, feet_xy, keys = jax.vmap(self._fresh)(keys)
         n = keys.shape[0]
         zeros = jnp.zeros(n, dtype=jnp.float32)
         state = EnvState(
@@ -171,7 +176,8 @@ class AnymalDynamics:
             joint_vel_before=jnp.zeros((n, 12), jnp.float32),
             elapsed=jnp.zeros(n, jnp.int32), air_time=jnp.zeros((n, 4), jnp.float32),
             in_contact=jnp.ones((n, 4), bool), speed_error_sum=zeros, speed_sum=zeros,
-            work=zeros, start_x=data.qpos[:, 0], key=keys,
+            work=zeros, start_x=data.qpos[:, 0], slip_sum=zeros,
+            planted_steps=jnp.zeros(n, jnp.int32), feet_xy=feet_xy, key=keys,
         )  # fmt: skip
         return state, self._observe(data, data.qvel[:, 3:6], command, joints)
 
@@ -192,7 +198,7 @@ class AnymalDynamics:
         rotation = before.xmat[:, self._base]  # (N, 3, 3) base to world
         lin_vel = jnp.einsum("nji,nj->ni", rotation, before.qvel[:, 0:3])
         ang_vel = before.qvel[:, 3:6]
-        feet_z = before.site_xpos[:, self._feet, 2]
+        feet = before.site_xpos[:, self._feet]
         corners = before.xpos[:, self._base, None, :] + jnp.einsum(
             "nij,kj->nki", rotation, self._corners
         )
@@ -202,7 +208,11 @@ class AnymalDynamics:
         height = qpos[:, 2]
         joint_vel = qvel[:, 6:]
         joint_acc = (joint_vel - state.joint_vel_before) / dt
-        contact = feet_z < robot.FOOT_RADIUS + 0.005
+        contact = feet[:, :, 2] < robot.FOOT_RADIUS + 0.005
+        slip, planted = task.planted_slip(feet[:, :, :2], state.feet_xy, contact,
+                                          state.in_contact, dt)  # fmt: skip
+        slip_sum = state.slip_sum + slip.sum(axis=1)
+        planted_steps = state.planted_steps + planted.sum(axis=1)
         touchdown = contact & ~state.in_contact
         air_time = state.air_time + dt
         moving = jnp.linalg.norm(state.command[:, :2], axis=1) > 0.1
@@ -210,7 +220,7 @@ class AnymalDynamics:
         air_time = jnp.where(contact, 0.0, air_time)
         terms = task.reward_terms(
             lin_vel, ang_vel, gravity, height, state.command, torque, joint_acc, desired,
-            state.last_action, air_paid, cfg.tracking_sigma, cfg.base_height_target,
+            state.last_action, air_paid, slip, cfg.tracking_sigma, cfg.base_height_target,
         )  # fmt: skip
         scaled = {name: value * cfg.reward_scales[name] * dt for name, value in terms.items()}
         unstable = ~(jnp.isfinite(qpos).all(axis=1) & jnp.isfinite(qvel).all(axis=1))
@@ -238,11 +248,14 @@ class AnymalDynamics:
             "cost_of_transport": jnp.where(
                 distance >= MIN_DISTANCE, work / (weight * distance), nan
             ),  # fmt: skip
+            "foot_slip": jnp.where(
+                planted_steps > 0, slip_sum / jnp.maximum(planted_steps, 1), nan
+            ),
         }
         metrics = {name: jnp.where(done, value, nan) for name, value in metrics.items()}
 
         # autoreset (SAME_STEP): the envs that ended start their next episode now
-        fresh, command, joints, keys = jax.vmap(self._fresh)(state.key)
+        fresh, command, joints, fresh_feet_xy, keys = jax.vmap(self._fresh)(state.key)
 
         def pick(new, old):
             return jnp.where(done.reshape((-1,) + (1,) * (old.ndim - 1)), new, old)
@@ -258,7 +271,9 @@ class AnymalDynamics:
             in_contact=pick(jnp.ones_like(contact), contact),
             speed_error_sum=pick(zero, speed_error_sum), speed_sum=pick(zero, speed_sum),
             work=pick(zero, work), start_x=pick(fresh.qpos[:, 0], state.start_x),
-            key=pick(keys, state.key),
+            slip_sum=pick(zero, slip_sum),
+            planted_steps=pick(jnp.zeros_like(planted_steps), planted_steps),
+            feet_xy=pick(fresh_feet_xy, feet[:, :, :2]), key=pick(keys, state.key),
         )  # fmt: skip
         # a fresh robot is at rest: its gyro reads 0
         gyro = pick(jnp.zeros_like(ang_vel), ang_vel)

@@ -45,15 +45,29 @@ def observation(ang_vel, gravity, command, joint_pos, joint_vel, last_action) ->
     ).astype(xp.float32)
 
 
+def planted_slip(feet_xy, feet_xy_before, contact, in_contact, dt: float):
+    """How fast each planted foot slides: ``(slip, planted)``, both (N, 4).
+
+    A foot is planted when it touches the ground at both ends of the control step (``contact``
+    now, ``in_contact`` before); its slip is then its horizontal speed over the step,
+    ``|xy - xy_before| / dt`` (m/s), and 0 elsewhere. A foot that rolls or stands has
+    (nearly) none; one dragged along the ground has the body's speed."""
+    xp = namespace(feet_xy)
+    planted = contact & in_contact
+    speed = xp.sqrt(xp.sum((feet_xy - feet_xy_before) ** 2, axis=-1)) / dt
+    return xp.where(planted, speed, 0.0), planted
+
+
 def reward_terms(
     lin_vel, ang_vel, gravity, base_height, command, torque, joint_acc, action, last_action,
-    air_time_paid, sigma: float, base_height_target: float,
+    air_time_paid, slip, sigma: float, base_height_target: float,
 ) -> dict[str, np.ndarray]:  # fmt: skip
     """Each reward term, (N,) per robot, unscaled (``QuadrupedConfig`` holds the scales).
 
     ``lin_vel`` and ``ang_vel`` in the base frame (m/s, rad/s); ``air_time_paid``: per robot,
     the sum over the feet that touched down this step of (their air time - 0.5 s), 0 when the
-    command is (nearly) zero, as legged_gym pays it.
+    command is (nearly) zero, as legged_gym pays it; ``slip``: (N, 4) the planted feet's
+    sliding speed (:func:`planted_slip`).
     """
     xp = namespace(lin_vel)
     return {
@@ -67,6 +81,7 @@ def reward_terms(
         "joint_acc": xp.sum(joint_acc**2, 1),
         "action_rate": xp.sum((action - last_action) ** 2, 1),
         "feet_air_time": air_time_paid,
+        "feet_slip": xp.sum(slip**2, 1),
     }
 
 

@@ -13,7 +13,8 @@ when the base falls (``task.fallen``) or touches the ground (terminated), or aft
 ``speed_error`` (mean |forward speed - command| over the episode, m/s), ``forward_speed`` (mean,
 m/s), ``fell`` (1 or 0), ``episode_seconds``, ``cost_of_transport`` (the joints' mechanical
 work, sum of |torque x joint speed| dt, over m g times the distance walked forward; NaN under
-0.1 m).
+0.1 m), ``foot_slip`` (the planted feet's mean sliding speed, m/s: ``task.planted_slip``
+over every foot and step it applies to; NaN if no foot was planted).
 
 ``info`` of a step also has, per env: ``command`` (the one the step ran under, also on the step
 that ends an episode), ``contact`` (4 bool, the feet LF RF LH RH (``foot_names``) within 5 mm
@@ -57,7 +58,8 @@ from cpg_actor.robot import RobotSpec
 
 LOW = np.array([robot.JOINT_LIMITS[j][0] for j in robot.JOINT_NAMES])
 HIGH = np.array([robot.JOINT_LIMITS[j][1] for j in robot.JOINT_NAMES])
-EPISODE_METRICS = ("speed_error", "forward_speed", "fell", "episode_seconds", "cost_of_transport")
+EPISODE_METRICS = ("speed_error", "forward_speed", "fell", "episode_seconds", "cost_of_transport",
+                   "foot_slip")  # fmt: skip
 MIN_DISTANCE = 0.1  # m: below this the cost of transport is not defined (NaN)
 RENDER_SIZE = (640, 480)  # width, height of render_frame's images (unless the config has its own)
 # render_frame's camera: it follows the base's subtree centre of mass, from the left front
@@ -184,6 +186,8 @@ class AnymalVectorEnv(VectorEnv):
         self.speed_sum[index] = 0.0
         self.work[index] = 0.0
         self.start_x[index] = self.qpos[index, 0]
+        self.slip_sum[index] = 0.0
+        self.planted_steps[index] = 0
 
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
@@ -204,6 +208,8 @@ class AnymalVectorEnv(VectorEnv):
         self.speed_sum = np.zeros(n)
         self.work = np.zeros(n)
         self.start_x = np.zeros(n)
+        self.slip_sum = np.zeros(n)
+        self.planted_steps = np.zeros(n, dtype=np.int64)
         self._start(np.arange(n))
         self._sensors[:] = 0.0
         self._refresh_sensors(np.arange(n))
@@ -220,6 +226,10 @@ class AnymalVectorEnv(VectorEnv):
 
     def _sensor(self, name: str) -> np.ndarray:
         return self._sensors[:, -1, self._offsets[name]]
+
+    def _feet(self) -> np.ndarray:
+        """(N, 4, 3) the feet's positions (world, m), LF RF LH RH."""
+        return self._sensor("feet").reshape(-1, 4, 3)
 
     def _observe(self) -> np.ndarray:
         gravity = task.projected_gravity(self.qpos[:, 3:7])
@@ -243,6 +253,7 @@ class AnymalVectorEnv(VectorEnv):
         desired = np.clip(actions, LOW, HIGH)
         cfg, dt = self.config, self.config.control_dt
         self._control[:] = desired[:, None, :]
+        feet_xy_before = self._feet()[:, :, :2].copy()  # the rollout overwrites the sensors
         self._rollout.rollout(
             self._models, self._datas, self._state, self._control,
             control_spec=CONTROL_SPEC, skip_checks=True, nstep=cfg.decimation,
@@ -258,8 +269,12 @@ class AnymalVectorEnv(VectorEnv):
         height = self.qpos[:, 2].copy()
         joint_vel = self.qvel[:, 6:]
         joint_acc = (joint_vel - self.joint_vel_before) / dt
-        feet_z = self._sensor("feet").reshape(-1, 4, 3)[:, :, 2]
-        contact = feet_z < robot.FOOT_RADIUS + 0.005  # sphere within 5 mm of the ground
+        feet = self._feet()
+        contact = feet[:, :, 2] < robot.FOOT_RADIUS + 0.005  # sphere within 5 mm of the ground
+        slip, planted = task.planted_slip(feet[:, :, :2], feet_xy_before, contact,
+                                          self.in_contact, dt)  # fmt: skip
+        self.slip_sum += slip.sum(axis=1)
+        self.planted_steps += planted.sum(axis=1)
         touchdown = contact & ~self.in_contact
         self.air_time += dt
         moving = np.linalg.norm(self.command[:, :2], axis=1) > 0.1
@@ -269,7 +284,7 @@ class AnymalVectorEnv(VectorEnv):
         terms = task.reward_terms(
             lin_vel, ang_vel, gravity, height, self.command,
             self._sensors[:, -1, : self.model.nu], joint_acc, desired, self.last_action,
-            air_paid, cfg.tracking_sigma, cfg.base_height_target,
+            air_paid, slip, cfg.tracking_sigma, cfg.base_height_target,
         )  # fmt: skip
         scaled = {name: value * cfg.reward_scales[name] * dt for name, value in terms.items()}
         reward = np.sum(list(scaled.values()), axis=0)
@@ -303,6 +318,10 @@ class AnymalVectorEnv(VectorEnv):
             metrics["cost_of_transport"][ended] = np.where(
                 distance >= MIN_DISTANCE, self.work[ended] / (weight * distance), np.nan
             )
+            planted = self.planted_steps[ended]
+            metrics["foot_slip"][ended] = np.where(
+                planted > 0, self.slip_sum[ended] / np.maximum(planted, 1), np.nan
+            )
             self._start(ended)
             self._refresh_sensors(ended)
             obs[ended] = self._observe()[ended]
@@ -322,8 +341,9 @@ class AnymalVectorEnv(VectorEnv):
 
     # -- state ---------------------------------------------------------------------------------
     _EPISODE_FIELDS = ("command", "last_action", "joint_vel_before", "elapsed", "air_time",
-                       "in_contact", "speed_error_sum", "speed_sum", "work",
-                       "start_x")  # fmt: skip
+                       "in_contact", "speed_error_sum", "speed_sum", "work", "start_x",
+                       "slip_sum", "planted_steps")  # fmt: skip
+    _ADDED_FIELDS = ("slip_sum", "planted_steps")  # zero in states saved before they existed
 
     def get_state(self) -> dict[str, Any]:
         """Everything the next step depends on: the physics state, the episode fields, each
@@ -351,6 +371,10 @@ class AnymalVectorEnv(VectorEnv):
         np.copyto(self._state, np.asarray(state["physics"]))
         self._sensors[:, -1] = np.asarray(state["sensors"])
         for name in self._EPISODE_FIELDS:
+            if name not in state and name in self._ADDED_FIELDS:
+                dtype = np.int64 if name == "planted_steps" else np.float64
+                setattr(self, name, np.zeros(self.num_envs, dtype=dtype))
+                continue
             setattr(self, name, np.array(state[name]))
         self._rngs = []
         for saved in state["rngs"]:
