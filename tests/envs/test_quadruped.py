@@ -101,6 +101,28 @@ def test_env_api_spaces_seeds_and_errors():
     assert isinstance(vec, AnymalVectorEnv) and vec.reset(seed=0)[0].shape == (2, 45)
 
 
+def test_lateral_and_yaw_commands_are_drawn_in_their_ranges_and_tracked():
+    """0 by default; with ranges, each env draws its own, the forward commands and the reset
+    noise unchanged, and the tracking terms compare the base's velocities with them."""
+    plain, _ = AnymalVectorEnv(4).reset(seed=5)
+    env = AnymalVectorEnv(4, {"lateral_range": [-0.3, 0.3], "yaw_range": [-1.0, 1.0]})
+    obs, info = env.reset(seed=5)
+    assert np.array_equal(plain[:, :3], obs[:, :3]) and np.array_equal(plain[:, 6], obs[:, 6])
+    assert np.array_equal(plain[:, 9:21], obs[:, 9:21])  # the same reset noise
+    assert np.all(plain[:, 7:9] == 0.0)
+    lateral, yaw = info["command"][:, 1], info["command"][:, 2]
+    assert np.allclose(obs[:, 7], lateral) and np.allclose(obs[:, 8], yaw)  # float32
+    assert np.all(np.abs(lateral) <= 0.3) and np.all(np.abs(yaw) <= 1.0)
+    assert len(set(lateral.tolist())) == 4 and len(set(yaw.tolist())) == 4
+    _, _, _, _, step = env.step(np.tile(NOMINAL, (4, 1)))
+    # standing still: the yaw kernel exp(-(0 - yaw)^2 / sigma), to the gyro's few mrad/s
+    expected = np.exp(-(yaw**2) / env.config.tracking_sigma) * 0.5 * env.config.control_dt
+    assert np.allclose(step["reward_terms"]["tracking_ang_vel"], expected, atol=1e-3)
+    with pytest.raises(ValueError, match="yaw_range must be"):
+        AnymalVectorEnv(1, {"yaw_range": [1.0, -1.0]})
+    env.close()
+
+
 def test_saved_state_continues_exactly():
     rng = np.random.default_rng(0)
     actions = [NOMINAL + 0.2 * rng.standard_normal((2, 12)) for _ in range(30)]

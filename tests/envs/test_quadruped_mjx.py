@@ -90,7 +90,18 @@ def test_reset_draws_commands_and_noise_per_env_and_seed():
     assert np.array_equal(info["command"][:, 0], command)
     noise = obs[:, 9:21]  # joint positions minus the nominal pose
     assert np.all(np.abs(noise) <= 0.1 + 1e-6) and np.abs(noise).max() > 0.01
+    assert np.all(obs[:, 7:9] == 0.0)  # lateral and yaw: 0 by default
     env.close()
+    # with ranges: each env its own lateral and yaw command, the forward ones and noise kept
+    turning = MjxAnymalVectorEnv(N, {"sim": "mjx", "episode_seconds": 2.0,
+                                     "lateral_range": [-0.3, 0.3], "yaw_range": [-1.0, 1.0]})
+    obs_turning, info = turning.reset(seed=3)
+    assert np.array_equal(obs_turning[:, 6], command)
+    assert np.array_equal(obs_turning[:, 9:21], noise)
+    lateral, yaw = info["command"][:, 1], info["command"][:, 2]
+    assert np.all(np.abs(lateral) <= 0.3) and len(set(lateral.tolist())) == N
+    assert np.all(np.abs(yaw) <= 1.0) and len(set(yaw.tolist())) == N
+    turning.close()
 
 
 def test_tensor_face_and_exact_resume(envs):

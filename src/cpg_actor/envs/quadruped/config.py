@@ -52,8 +52,12 @@ class QuadrupedConfig:
     velocity_limit: float = 15.0  # rad/s
     saturation_torque: float = 80.0  # N m
     actuator_law: str = "dc-motor"
-    # commands: forward speed uniform in this range per episode; lateral and yaw commands 0
+    # commands, each uniform in its range per episode: forward and lateral speed (base frame)
+    # and yaw rate. Lateral and yaw are 0 by default (the forward task); the CPG's drive follows
+    # the forward command only, turning and side-stepping are left to the feedback
     command_range: tuple[float, float] = (0.0, 1.0)  # m/s
+    lateral_range: tuple[float, float] = (0.0, 0.0)  # m/s, positive to the left
+    yaw_range: tuple[float, float] = (0.0, 0.0)  # rad/s, positive counter-clockwise
     tracking_sigma: float = 0.25  # (m/s)^2 and (rad/s)^2 of the tracking kernels (legged_gym)
     base_height_target: float = 0.48  # m: where the nominal pose stands under its weight
     reward_scales: dict[str, float] = field(default_factory=_default_scales)
@@ -93,15 +97,17 @@ class QuadrupedConfig:
             raise ValueError(f"decimation must be an integer >= 1, got {self.decimation!r}")
         if self.physics_dt > 0.005:
             raise ValueError(f"physics_dt must be <= 0.005 s, got {self.physics_dt}")
-        bounds = self.command_range
-        if not (
-            isinstance(bounds, list | tuple)
-            and len(bounds) == 2
-            and all(isinstance(b, int | float) and math.isfinite(b) for b in bounds)
-            and bounds[0] <= bounds[1]
-        ):
-            raise ValueError(f"command_range must be [low, high] in m/s with low <= high, got "
-                             f"{bounds!r}")  # fmt: skip
+        for name, unit in (("command_range", "m/s"), ("lateral_range", "m/s"),
+                           ("yaw_range", "rad/s")):  # fmt: skip
+            bounds = getattr(self, name)
+            if not (
+                isinstance(bounds, list | tuple)
+                and len(bounds) == 2
+                and all(isinstance(b, int | float) and math.isfinite(b) for b in bounds)
+                and bounds[0] <= bounds[1]
+            ):
+                raise ValueError(f"{name} must be [low, high] in {unit} with low <= high, got "
+                                 f"{bounds!r}")  # fmt: skip
         if not isinstance(self.reward_scales, dict):
             raise ValueError(f"reward_scales must be a mapping of term to scale, got "
                              f"{self.reward_scales!r}")  # fmt: skip

@@ -129,11 +129,18 @@ class AnymalDynamics:
         joints = jnp.clip(self._nominal + noise, self._low, self._high)
         low, high = cfg.command_range
         speed = jax.random.uniform(command_key, (), minval=low, maxval=high)
+        # the lateral and yaw commands from keys folded out of the forward one's (the forward
+        # task's draws unchanged)
+        lateral, yaw = (
+            jax.random.uniform(jax.random.fold_in(command_key, column), (),
+                               minval=getattr(cfg, name)[0], maxval=getattr(cfg, name)[1])
+            for column, name in ((1, "lateral_range"), (2, "yaw_range"))
+        )  # fmt: skip
         qpos = self._empty.qpos.at[7:].set(joints)
         placed = mjx.kinematics(self.model, self._empty.replace(qpos=qpos))
         lowest = placed.site_xpos[self._feet, 2].min()
         qpos = qpos.at[2].add(robot.FOOT_RADIUS - lowest)  # feet on the ground
-        command = jnp.stack([speed, 0.0, 0.0]).astype(jnp.float32)
+        command = jnp.stack([speed, lateral, yaw]).astype(jnp.float32)
         feet_xy = placed.site_xpos[self._feet, :2]  # the lift above moves no foot sideways
         return self._empty.replace(qpos=qpos), command, joints, feet_xy, key
 

@@ -6,7 +6,8 @@ As the hopper's MuJoCo env: the robots are rows of one state array and a control
 actuators running the actuator law inside MuJoCo). Actions are desired joint positions (12,
 rad; in [-1, 1] with ``normalized_actions``), clipped to the joint ranges.
 
-Per episode: a forward-speed command uniform in ``command_range`` (lateral and yaw 0), a start
+Per episode: a forward-speed command uniform in ``command_range`` (lateral and yaw speed
+commands uniform in ``lateral_range`` and ``yaw_range``, 0 by default), a start
 in the nominal pose with uniform joint noise, the feet on the ground, at rest. An episode ends
 when the base falls (``task.fallen``) or touches the ground (terminated), or after
 ``episode_seconds`` (truncated). ``info["episode_metrics"]`` (NaN for envs still running):
@@ -170,6 +171,10 @@ class AnymalVectorEnv(VectorEnv):
             noise = rng.uniform(-self.config.reset_noise, self.config.reset_noise, 12)
             joints = np.clip(task.NOMINAL + noise, LOW, HIGH)
             self.command[i] = (rng.uniform(*self.config.command_range), 0.0, 0.0)
+            # drawn only where the range is not a point: the forward task's streams unchanged
+            for column, name in ((1, "lateral_range"), (2, "yaw_range")):
+                low, high = getattr(self.config, name)
+                self.command[i, column] = rng.uniform(low, high) if high > low else low
             data = self._datas[0]
             mujoco.mj_resetData(self.model, data)
             data.qpos[7:] = joints
