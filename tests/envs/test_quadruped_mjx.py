@@ -93,8 +93,15 @@ def test_reset_draws_commands_and_noise_per_env_and_seed():
     assert np.all(obs[:, 7:9] == 0.0)  # lateral and yaw: 0 by default
     env.close()
     # with ranges: each env its own lateral and yaw command, the forward ones and noise kept
-    turning = MjxAnymalVectorEnv(N, {"sim": "mjx", "episode_seconds": 2.0,
-                                     "lateral_range": [-0.3, 0.3], "yaw_range": [-1.0, 1.0]})
+    turning = MjxAnymalVectorEnv(
+        N,
+        {
+            "sim": "mjx",
+            "episode_seconds": 2.0,
+            "lateral_range": [-0.3, 0.3],
+            "yaw_range": [-1.0, 1.0],
+        },
+    )
     obs_turning, info = turning.reset(seed=3)
     assert np.array_equal(obs_turning[:, 6], command)
     assert np.array_equal(obs_turning[:, 9:21], noise)
