@@ -114,10 +114,12 @@ def test_lateral_and_yaw_commands_are_drawn_in_their_ranges_and_tracked():
     assert np.allclose(obs[:, 7], lateral) and np.allclose(obs[:, 8], yaw)  # float32
     assert np.all(np.abs(lateral) <= 0.3) and np.all(np.abs(yaw) <= 1.0)
     assert len(set(lateral.tolist())) == 4 and len(set(yaw.tolist())) == 4
-    _, _, _, _, step = env.step(np.tile(NOMINAL, (4, 1)))
-    # standing still: the yaw kernel exp(-(0 - yaw)^2 / sigma), to the gyro's few mrad/s
-    expected = np.exp(-(yaw**2) / env.config.tracking_sigma) * 0.5 * env.config.control_dt
-    assert np.allclose(step["reward_terms"]["tracking_ang_vel"], expected, atol=1e-3)
+    obs, _, _, _, step = env.step(np.tile(NOMINAL, (4, 1)))
+    # the yaw kernel exp(-(w_z - yaw command)^2 / sigma), w_z the gyro's (observation 2)
+    yaw_rate = obs[:, 2].astype(np.float64)
+    kernel = np.exp(-((yaw_rate - yaw) ** 2) / env.config.tracking_sigma)
+    expected = kernel * env.config.reward_scales["tracking_ang_vel"] * env.config.control_dt
+    assert np.allclose(step["reward_terms"]["tracking_ang_vel"], expected, rtol=1e-5)
     with pytest.raises(ValueError, match="yaw_range must be"):
         AnymalVectorEnv(1, {"yaw_range": [1.0, -1.0]})
     env.close()

@@ -21,8 +21,12 @@ if not runtime.available():
 from cpg_actor.envs.quadruped.mjx import MjxAnymalVectorEnv  # noqa: E402
 
 N = 4
-# no reset noise: both envs start from the same pose; the drive of a 1 m/s command
-CONFIG = {"command_range": (1.0, 1.0), "reset_noise": 0.0, "episode_seconds": 2.0}
+# no reset noise: both envs start from the same pose; the drive of a 1 m/s command. The
+# reward's tolerance below was set with legged_gym's tracking kernel (0.25): the trot walks
+# well under the command, where the default's narrower kernel (0.1) turns the allowed 0.03 m/s
+# of speed difference into a larger share of a smaller reward
+CONFIG = {"command_range": (1.0, 1.0), "reset_noise": 0.0, "episode_seconds": 2.0,
+          "tracking_sigma": 0.25}  # fmt: skip
 
 
 @pytest.fixture(scope="module")
