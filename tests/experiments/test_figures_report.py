@@ -238,3 +238,30 @@ def test_open_loop_floor_is_the_best_grid_return_and_the_report_places_variants_
     text = (out / "report.md").read_text()
     assert "returns **400**" in text
     assert "above it `cpg-actor` (+201); below it `mlp` (-299)" in text
+
+
+def test_the_report_shows_a_run_that_stopped_learning(tmp_path):
+    """A run that peaks mid-way and falls back, its std collapsed, against one still improving:
+    the report's "Learning over the run" gives each its peak, where, the drop and the std."""
+    out = tmp_path / "results"
+    falling = [100.0] * 5 + [500.0] * 10 + [300.0] * 10
+    _curve_run(out, "cpg-actor", 0, falling, [0.3] * 25)
+    _curve_run(out, "mlp", 0, list(np.linspace(100.0, 800.0, 25)), [0.3] * 25)
+    for variant, log_std in (("cpg-actor", -9.0), ("mlp", np.log(0.5))):
+        path = out / "runs" / variant / "seed0" / "metrics.jsonl"
+        rows = [json.loads(line) for line in path.read_text().splitlines()]
+        rows[-1]["policy/log_std_0"] = rows[-1]["policy/log_std_1"] = float(log_std)
+        path.write_text("".join(json.dumps(r) + "\n" for r in rows))
+    _claims(out)
+    variants = json.loads((out / "summary.json").read_text())["variants"]
+    cpg, mlp = variants["cpg-actor"], variants["mlp"]
+    assert cpg["peak_return"][0] == pytest.approx(500.0)
+    assert cpg["peak_step"][0] == pytest.approx(2_000_000 * 15 / 25)  # the 15th evaluation
+    assert cpg["final_return"][0] == pytest.approx(300.0)
+    assert cpg["final_std"][0] == pytest.approx(np.exp(-9.0))
+    assert mlp["peak_return"][0] == pytest.approx(mlp["final_return"][0])
+    assert mlp["peak_step"][0] == pytest.approx(2_000_000)
+    assert mlp["final_std"][0] == pytest.approx(0.5)
+    report = (out / "report.md").read_text()
+    section = report.split("## Learning over the run")[1].split("## ")[0]
+    assert "| CPG-Actor | 500 +- 0 | 1,200,000 | 300 +- 0 | -200 +- 0 | 0.000123 +- 0 |" in section

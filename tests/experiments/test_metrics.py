@@ -58,6 +58,23 @@ def test_final_return_uses_the_last_rows_before_the_step():
     assert math.isnan(m.final_return(steps, [None] * 5))
 
 
+def test_peak_return_is_the_best_moving_mean_and_where_it_ends():
+    steps = [10, 20, 30, 40, 50, 60]
+    returns = [1.0, 5.0, None, 9.0, 2.0, 1.0]  # None: a row without an evaluation
+    peak, at = m.peak_return(steps, returns, rows=2)
+    assert peak == pytest.approx(7.0) and at == 40  # mean of 5 and 9 (the None skipped)
+    # a run still at its best at the end: the peak is the final return
+    assert m.peak_return([1, 2, 3], [1.0, 2.0, 3.0], rows=2) == (2.5, 3.0)
+    assert m.peak_return([1], [4.0], rows=10) == (4.0, 1.0)  # fewer rows than the window
+    assert all(math.isnan(v) for v in m.peak_return([1, 2], [None, float("nan")]))
+
+
+def test_exploration_std_is_the_mean_std_of_the_logged_log_stds():
+    row = {"policy/log_std_0": math.log(0.1), "policy/log_std_1": math.log(0.3), "x": 5.0}
+    assert m.exploration_std(row) == pytest.approx(0.2)
+    assert math.isnan(m.exploration_std({"charts/SPS": 1.0}))
+
+
 def test_bootstrap_ratio_and_difference():
     exact = m.bootstrap_ratio([6.0, 6.0, 6.0], [1.0, 1.0, 1.0])
     assert (exact.estimate, exact.low, exact.high) == pytest.approx((6.0, 6.0, 6.0))

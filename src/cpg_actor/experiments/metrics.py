@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -297,3 +298,30 @@ def curve_mean(values: Sequence[float | None]) -> float:
     a = np.array([np.nan if v is None else v for v in values], dtype=float)
     a = a[np.isfinite(a)]
     return float(a.mean()) if a.size else float("nan")
+
+
+def peak_return(
+    steps: Sequence[float], returns: Sequence[float | None], rows: int = FINAL_ROWS
+) -> tuple[float, float]:
+    """The best moving mean of ``rows`` consecutive finite returns of a logged curve, and the
+    step of the last return in that window: ``(peak, step)``, NaNs if the curve has none.
+    Next to :func:`final_return` (the same mean over the last ``rows``), it shows whether a
+    run was still improving at the end or had stopped (or fallen back) earlier."""
+    steps_a = np.asarray(steps, dtype=float)
+    values = np.array([np.nan if v is None else v for v in returns], dtype=float)
+    keep = np.isfinite(values)
+    steps_a, values = steps_a[keep], values[keep]
+    if not values.size:
+        return float("nan"), float("nan")
+    window = min(rows, values.size)
+    means = np.convolve(values, np.ones(window) / window, mode="valid")
+    best = int(np.argmax(means))
+    return float(means[best]), float(steps_a[best + window - 1])
+
+
+def exploration_std(row: dict[str, Any]) -> float:
+    """The policy's Gaussian std at a logged row: the mean over the action's entries of
+    ``exp(policy/log_std_i)`` (in the action's units: rad for joint targets), NaN if the row
+    has none."""
+    logs = [v for k, v in row.items() if k.startswith("policy/log_std_") and v is not None]
+    return float(np.mean(np.exp(logs))) if logs else float("nan")

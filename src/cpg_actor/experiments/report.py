@@ -42,6 +42,9 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
             "hop_height_at_1M",
             "final_hop_height_logged",
             "mean_eval_return",
+            "peak_return",
+            "peak_step",
+            "final_std",
             "training_return",
             "theta_dot_variability",
             "r_ddot_variability",
@@ -60,6 +63,11 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
         )
         out["final_hop_height_logged"].append(m.final_return(hop_steps, hops, rows=EARLY_ROWS))
         out["mean_eval_return"].append(m.curve_mean(run.curve("eval/return")[1]))
+        peak, peak_step = m.peak_return(steps, returns)
+        out["peak_return"].append(peak)
+        out["peak_step"].append(peak_step)
+        logged = [row for row in run.metrics if "policy/log_std_0" in row]
+        out["final_std"].append(m.exploration_std(logged[-1]) if logged else float("nan"))
         # the return of the last training episodes, split into the reward terms r1..r5
         out["training_return"].append(m.final_return(*run.curve("charts/episode_return")))
         for name in REWARD_TERMS:
@@ -406,6 +414,43 @@ def _floor_lines(
     ]
 
 
+def _learning_lines(summary: dict[str, Any]) -> list[str]:
+    """Was each variant still learning at the end: its best moving mean of logged
+    evaluations against its final one, and its exploration std at the end."""
+    rows = [
+        (variant, row)
+        for variant, row in summary["variants"].items()
+        if np.isfinite(row["peak_return"][0])
+    ]
+    if not rows:
+        return []
+    lines = [
+        "## Learning over the run",
+        "",
+        f"*Peak*: the best mean of {m.FINAL_ROWS} consecutive logged evaluations (the final "
+        "return is the last such mean) and the step where that window ends, mean over seeds; "
+        "*final - peak*: per seed, 0 for a run still at its best at the end. *Std at the end*: "
+        "the policy's Gaussian std at the last logged iteration, the mean over the action's "
+        "entries of exp(log_std) in the action's units (rad for joint targets; Cho et al.'s "
+        "actions are CPG parameters). A run whose std has collapsed explores no more and stops "
+        "learning.",
+        "",
+        "| variant | peak return | peak at (steps) | final return | final - peak | "
+        "std at the end |",
+        "| --- | --- | --- | --- | --- | --- |",
+    ]
+    for variant, row in rows:
+        seeds = row["per_seed"]
+        drop = np.asarray(seeds["final_return"], float) - np.asarray(seeds["peak_return"], float)
+        drop_text = _pm(m.mean_std(list(drop)))
+        lines.append(
+            f"| {label(variant)} | {_pm(row['peak_return'])} | "
+            f"{row['peak_step'][0]:,.0f} | {_pm(row['final_return'])} | {drop_text} | "
+            f"{_pm(row['final_std'])} |"
+        )
+    return lines + [""]
+
+
 def _comparison_lines(comparisons: list[dict[str, Any]]) -> list[str]:
     if not comparisons:
         return []
@@ -630,8 +675,8 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
             + " | ".join(_pm(row[f"term_{name}"]) for name in REWARD_TERMS)
             + f" | {'-' if not np.isfinite(share) else f'{100 * share:.0f}%'} |"
         )
+    lines += [""] + _learning_lines(summary)
     lines += [
-        "",
         "## Stages of training",
         "",
         "Deterministic evaluation at the checkpoints nearest to 1/60, 1/3 and 1 of the budget "
