@@ -66,6 +66,9 @@ def test_peak_return_is_the_best_moving_mean_and_where_it_ends():
     # a run still at its best at the end: the peak is the final return
     assert m.peak_return([1, 2, 3], [1.0, 2.0, 3.0], rows=2) == (2.5, 3.0)
     assert m.peak_return([1], [4.0], rows=10) == (4.0, 1.0)  # fewer rows than the window
+    noisy = list(np.random.default_rng(0).normal(size=30))
+    rising = [v + i for i, v in enumerate(noisy)]  # best at the end: exactly the final return
+    assert m.peak_return(range(30), rising)[0] == m.final_return(range(30), rising)
     assert all(math.isnan(v) for v in m.peak_return([1, 2], [None, float("nan")]))
 
 

@@ -314,7 +314,8 @@ def peak_return(
     if not values.size:
         return float("nan"), float("nan")
     window = min(rows, values.size)
-    means = np.convolve(values, np.ones(window) / window, mode="valid")
+    # each window's mean as final_return takes it: the last window equals it exactly
+    means = np.array([values[i : i + window].mean() for i in range(values.size - window + 1)])
     best = int(np.argmax(means))
     return float(means[best]), float(steps_a[best + window - 1])
 
