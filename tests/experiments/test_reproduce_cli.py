@@ -120,3 +120,15 @@ def test_a_preset_reaches_every_run_and_the_settings_file(tmp_path):
     # directories made without a preset keep their identity
     plain = plan.ReproduceSettings(variants=["mlp"], seeds=1, total_steps=10)
     assert "preset" not in plain.identity()
+
+
+def test_runs_start_seed_by_seed_so_a_stopped_reproduction_has_whole_pairs(tmp_path):
+    from cpg_actor.experiments import plan
+
+    settings = plan.ReproduceSettings(
+        variants=["cpg-actor", "cho2019-warm"], seeds=2, total_steps=1000, num_envs=8
+    )
+    tasks = plan.build_tasks(settings, tmp_path, workers=2)
+    assert [t.name for t in tasks] == [
+        "cpg-actor/seed0", "cho2019-warm/seed0", "cpg-actor/seed1", "cho2019-warm/seed1",
+    ]  # fmt: skip

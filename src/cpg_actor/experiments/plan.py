@@ -182,7 +182,9 @@ def validate(settings: ReproduceSettings) -> None:
 
 
 def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[RunTask]:
-    """One :class:`RunTask` per (variant, seed); raises ValueError on an invalid config."""
+    """One :class:`RunTask` per (variant, seed), seed by seed (every variant's seed 0, then
+    every variant's seed 1, ...): the order runs start in, so that a reproduction stopped part
+    way has whole seeds of every variant to compare. Raises ValueError on an invalid config."""
     validate(settings)
     keys = _override_keys(settings.overrides)
     tasks = []
@@ -229,7 +231,8 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
                     eval_episodes=settings.eval_episodes,
                 )
             )
-    return tasks
+    order = {variant: i for i, variant in enumerate(settings.variants)}
+    return sorted(tasks, key=lambda task: (task.seed, order[task.variant]))
 
 
 def stage_warnings(tasks: list[RunTask]) -> list[str]:
