@@ -195,9 +195,19 @@ def test_out_dir_with_other_settings_is_refused(tmp_path):
     assert prepare_out_dir(out, settings, overwrite=False) == "new"
     write_settings_file(out, settings, "cpg-actor reproduce", {"workers": 1})
     assert prepare_out_dir(out, settings, overwrite=False) == "resume"
-    other = ReproduceSettings(variants=["mlp"], seeds=3, total_steps=1000)
-    with pytest.raises(FileExistsError, match="seeds: 2 -> 3"):
+    other = ReproduceSettings(variants=["mlp"], seeds=2, total_steps=2000)
+    with pytest.raises(FileExistsError, match="total_steps: 1000 -> 2000"):
         prepare_out_dir(out, other, overwrite=False)
+    # more variants and seeds, all else equal: the finished runs stay valid
+    more = ReproduceSettings(variants=["mlp", "cpg-actor"], seeds=4, total_steps=1000)
+    assert prepare_out_dir(out, more, overwrite=False) == "extend"
+    for fewer in (
+        ReproduceSettings(variants=["cpg-actor"], seeds=2, total_steps=1000),
+        ReproduceSettings(variants=["mlp"], seeds=1, total_steps=1000),
+        ReproduceSettings(variants=["mlp", "cpg-actor"], seeds=4, total_steps=2000),
+    ):
+        with pytest.raises(FileExistsError, match="other settings"):
+            prepare_out_dir(out, fewer, overwrite=False)
     (out / "keep").write_text("x")
     assert prepare_out_dir(out, other, overwrite=True) == "overwrite"
     assert not (out / "keep").exists()

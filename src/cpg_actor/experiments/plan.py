@@ -2,7 +2,8 @@
 
 Every (variant, seed) is an independent ``cpg-actor train`` run in ``OUT/runs/VARIANT/seedS``.
 The settings that decide the results (``IDENTITY_KEYS``) are saved in ``OUT/reproduce.yaml``;
-re-running with the same ones resumes, with different ones is refused unless ``--overwrite``.
+re-running with the same ones resumes, with more variants or seeds extends the reproduction
+(its finished runs are kept), with other changes is refused unless ``--overwrite``.
 How the runs are executed (workers, Ray address) may change between invocations.
 """
 
@@ -273,9 +274,24 @@ def settings_from_file(out: Path) -> ReproduceSettings:
     return ReproduceSettings(**{key: saved[key] for key in IDENTITY_KEYS}, **optional)
 
 
+def _extends(saved: dict[str, Any], new: dict[str, Any]) -> bool:
+    """True when ``new`` only adds variants and/or seeds to ``saved``: every saved run is
+    also a run of ``new``, with the same settings, so its results stay valid."""
+    keys = (set(saved) | set(new)) - {"variants", "seeds"}
+    same = all(saved.get(key) == new.get(key) for key in keys)
+    saved_variants = saved.get("variants") or []
+    return (
+        same
+        and set(saved_variants) <= set(new["variants"])
+        and isinstance(saved.get("seeds"), int)
+        and saved["seeds"] <= new["seeds"]
+    )
+
+
 def prepare_out_dir(out: Path, settings: ReproduceSettings, overwrite: bool) -> str:
-    """Create ``out`` or check that it holds the same reproduction; returns "new", "resume"
-    or "overwrite". Refuses an existing directory made with other settings (or not made by
+    """Create ``out`` or check that it holds the same reproduction; returns "new", "resume",
+    "extend" (the same reproduction with more variants or seeds: finished runs are kept) or
+    "overwrite". Refuses an existing directory made with other settings (or not made by
     ``cpg-actor reproduce``) unless ``overwrite`` (which deletes it, only if it is ours)."""
     saved = load_settings_file(out)
     if out.exists() and any(out.iterdir()):
@@ -290,6 +306,8 @@ def prepare_out_dir(out: Path, settings: ReproduceSettings, overwrite: bool) -> 
                 out.mkdir(parents=True)
                 return "overwrite"
             return "resume"
+        if not overwrite and _extends(saved.get("settings", {}), settings.identity()):
+            return "extend"
         if not overwrite:
             differences = [
                 f"{key}: {saved.get('settings', {}).get(key)!r} -> {value!r}"
