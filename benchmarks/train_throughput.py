@@ -7,8 +7,8 @@ ceiling (``mujoco.rollout`` on the project's MJCF, same number of robots, same r
 
 ``--reference-src DIR`` measures the same settings, in the same run, with the ``cpg_actor``
 package found in DIR (e.g. a ``git worktree`` of an older commit), in a subprocess, and reports
-the ratio: how much faster (or slower) the code under test is than that reference. Only the
-``paper`` preset is compared: the other presets' values may differ between the two trees.
+the ratios: how much faster (or slower) the code under test is than that reference, row by
+row (same preset, agent and compile setting; the reference tree must know the presets).
 """
 
 from __future__ import annotations
@@ -104,11 +104,13 @@ def ceiling(num_envs: int) -> float:
     return bench_size("mujoco", num_envs, repeats=2, budget=50_000)["rollout"]
 
 
-def reference(src: str, presets: list[str], agents: list[str], iterations: int) -> dict:
+def reference(
+    src: str, presets: list[str], agents: list[str], iterations: int, compile: bool
+) -> dict:
     """The same measurements with the package in ``src``, in a subprocess."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([src, os.environ.get("PYTHONPATH", "")]))
     command = [sys.executable, __file__, "--json", "--iterations", str(iterations)]
-    command += ["--presets", *presets, "--agents", *agents]
+    command += ["--presets", *presets, "--agents", *agents] + (["--compile"] if compile else [])
     out = subprocess.run(command, env=env, capture_output=True, text=True, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
@@ -153,10 +155,9 @@ def main() -> None:
     if args.json:
         print(json.dumps(results))
         return
-    compared = [p for p in args.presets if p == "paper"]
     ref = (
-        reference(args.reference_src, compared, args.agents, args.iterations)
-        if args.reference_src and compared
+        reference(args.reference_src, args.presets, args.agents, args.iterations, args.compile)
+        if args.reference_src
         else {}
     )
     ceilings = {n: ceiling(n) for n in sorted({r["num_envs"] for r in results.values()})}
@@ -190,9 +191,9 @@ def main() -> None:
         "",
         "| preset | agent | envs | training SPS | of ceiling | collection us/step | "
         "of which simulation | update us/sample |"
-        + (" reference SPS | update speed-up |" if ref else ""),
+        + (" reference SPS | speed-up | update speed-up |" if ref else ""),
         "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"
-        + (" ---: | ---: |" if ref else ""),
+        + (" ---: | ---: | ---: |" if ref else ""),
     ]
     for key, r in results.items():
         preset, agent = key.split("/")
@@ -202,11 +203,12 @@ def main() -> None:
             f"{r['simulation_us']:.1f} | {r['update_us']:.1f} |"
         )
         if ref:
-            old = ref.get(key.replace(" + compile", ""))
+            old = ref.get(key)
             row += (
-                f" {old['SPS']:,.0f} | {old['update_us'] / r['update_us']:.2f}x |"
+                f" {old['SPS']:,.0f} | {r['SPS'] / old['SPS']:.2f}x | "
+                f"{old['update_us'] / r['update_us']:.2f}x |"
                 if old
-                else " - | - |"
+                else " - | - | - |"
             )
         lines.append(row)
         print(row)
@@ -223,8 +225,8 @@ def main() -> None:
         "Collection is everything in a rollout step (agent, normaliser, simulation, storage,",
         "episode bookkeeping, GAE), per control step of one env; the update is the PPO epochs",
         "over the rollout, per sample. `+ compile`: `ppo.compile=true` (the minibatch loss",
-        "compiled by `torch.compile`). Reference: the same script and settings (eager) with",
-        "the package of another source tree (`REF`, named below), measured in the same run.",
+        "compiled by `torch.compile`). Reference: the same script and settings with the",
+        "package of another source tree (`REF`, named below), measured in the same run.",
         "",
     ]
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)

@@ -91,7 +91,22 @@ class AgentConfig:
             )
 
 
-ACTIVATIONS = {"tanh": nn.Tanh, "elu": nn.ELU}
+def tanh(x: Tensor) -> Tensor:
+    """tanh(x), computed as ``2 sigmoid(2x) - 1`` (the same function; within 2e-7 of
+    ``torch.tanh`` in float32). On x86 CPUs torch's float32 ``tanh`` is about 10x slower than
+    its ``sigmoid`` (torch 2.13, AVX512): this form makes the PPO update about 20 % faster
+    (``benchmarks/activation.py``)."""
+    return torch.sigmoid(2.0 * x) * 2.0 - 1.0
+
+
+class Tanh(nn.Module):
+    """``nn.Tanh`` through :func:`tanh`; it has no parameters, so checkpoints are unchanged."""
+
+    def forward(self, x: Tensor) -> Tensor:
+        return tanh(x)
+
+
+ACTIVATIONS = {"tanh": Tanh, "elu": nn.ELU}
 
 
 def mlp(sizes: list[int], activation: str, output_gain: float) -> nn.Sequential:

@@ -22,6 +22,7 @@ from cpg_actor.agents.base import (
     gaussian_entropy,
     gaussian_log_prob,
     mlp,
+    tanh,
 )
 from cpg_actor.cpg import CPGNetwork, CPGState, JointMap, hopper_cpg
 from cpg_actor.cpg.foot_space import FootSpaceMap
@@ -222,7 +223,7 @@ class CPGActorAgent(Agent):
             return torch.zeros(obs.shape[0], 2 * n, dtype=obs.dtype, device=obs.device)
         out = self.feedback(obs)
         if self.feedback_tanh:
-            out = torch.tanh(out)
+            out = tanh(out)
         return torch.cat([self.xi_scale * out[:, :n], self.kappa_scale * out[:, n:]], dim=-1)
 
     def actor(self, obs: Tensor, state: Tensor, feedback: Tensor | None = None) -> ActorOutput:
