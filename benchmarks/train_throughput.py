@@ -17,6 +17,7 @@ import argparse
 import datetime
 import json
 import os
+import statistics
 import subprocess
 import sys
 import time
@@ -115,6 +116,35 @@ def reference(
     return json.loads(out.strip().splitlines()[-1])
 
 
+def measure_all(args: argparse.Namespace) -> dict[str, dict[str, float]]:
+    """Every row of the table once: presets x agents (eager, compiled, update on 1 thread)."""
+    extra = {"device": args.device, "num_envs": args.num_envs}
+    variants = [("", {})]
+    if args.compile:
+        variants.append((" + compile", {"compile": True}))
+    if args.update_threads_ab:
+        variants.append((" + compile, update on 1 thread", {"compile": True, "update_threads": 1}))
+    return {
+        f"{preset}{suffix}/{agent}": measure(agent, preset, args.iterations, **options, **extra)
+        for suffix, options in variants
+        for preset in args.presets
+        for agent in args.agents
+    }
+
+
+def median_of(runs: list[dict[str, dict[str, float]]]) -> dict[str, dict[str, float]]:
+    """The median of each figure of each row over repeated measurements."""
+    return {
+        key: {
+            field: statistics.median(run[key][field] for run in runs)
+            if field != "num_envs"
+            else runs[0][key][field]
+            for field in runs[0][key]
+        }
+        for key in runs[0]
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--presets", nargs="+", default=["paper", "throughput"])
@@ -129,38 +159,38 @@ def main() -> None:
         action="store_true",
         help="also the compiled rows with the PPO update on 1 thread (update_threads=1)",
     )
+    parser.add_argument(
+        "--repeats",
+        type=int,
+        default=1,
+        help="measure every row (and the reference and ceiling) N times, interleaved; medians",
+    )
     parser.add_argument("--json", action="store_true", help="print one JSON line, write nothing")
     parser.add_argument("--output", default="benchmarks/results/train_throughput.md")
     args = parser.parse_args()
     torch.set_num_threads(1)
 
-    extra = {"device": args.device, "num_envs": args.num_envs}
-    results = {
-        f"{preset}/{agent}": measure(agent, preset, args.iterations, **extra)
-        for preset in args.presets
-        for agent in args.agents
-    }
-    if args.compile:
-        for preset in args.presets:
-            for agent in args.agents:
-                results[f"{preset} + compile/{agent}"] = measure(
-                    agent, preset, args.iterations, compile=True, **extra
+    if args.repeats < 1:
+        parser.error(f"--repeats must be >= 1, got {args.repeats}")
+    runs, ref_runs, ceiling_runs = [], [], []
+    for _ in range(args.repeats):  # interleaved: a busy neighbour affects all alike
+        runs.append(measure_all(args))
+        if args.json:
+            continue
+        if args.reference_src:
+            ref_runs.append(
+                reference(
+                    args.reference_src, args.presets, args.agents, args.iterations, args.compile
                 )
-    if args.update_threads_ab:
-        for preset in args.presets:
-            for agent in args.agents:
-                results[f"{preset} + compile, update on 1 thread/{agent}"] = measure(
-                    agent, preset, args.iterations, compile=True, update_threads=1, **extra
-                )
+            )
+        sizes = sorted({r["num_envs"] for r in runs[-1].values()})
+        ceiling_runs.append({n: ceiling(n) for n in sizes})
+    results = median_of(runs)
     if args.json:
         print(json.dumps(results))
         return
-    ref = (
-        reference(args.reference_src, args.presets, args.agents, args.iterations, args.compile)
-        if args.reference_src
-        else {}
-    )
-    ceilings = {n: ceiling(n) for n in sorted({r["num_envs"] for r in results.values()})}
+    ref = median_of(ref_runs) if ref_runs else {}
+    ceilings = {n: statistics.median(c[n] for c in ceiling_runs) for n in ceiling_runs[0]}
     commit = subprocess.run(
         ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=False
     ).stdout.strip()
@@ -175,6 +205,7 @@ def main() -> None:
         + (f" --device {args.device}" if args.device != "cpu" else "")
         + (f" --num-envs {args.num_envs}" if args.num_envs else "")
         + (" --update-threads-ab" if args.update_threads_ab else "")
+        + (f" --repeats {args.repeats}" if args.repeats > 1 else "")
         + (" --reference-src REF/src`" if args.reference_src else "`")
         + ".",
         "",
@@ -227,6 +258,8 @@ def main() -> None:
         "over the rollout, per sample. `+ compile`: `ppo.compile=true` (the minibatch loss",
         "compiled by `torch.compile`). Reference: the same script and settings with the",
         "package of another source tree (`REF`, named below), measured in the same run.",
+        "With `--repeats N`: each figure is the median of N measurements, the rows, the",
+        "reference and the ceiling taken in turn.",
         "",
     ]
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)

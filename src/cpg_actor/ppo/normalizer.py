@@ -31,17 +31,16 @@ class RunningNormalizer(nn.Module):
         batch_count = x.shape[0]
         if batch_count == 0:
             return
-        batch_mean = x.mean(dim=0)
-        batch_var = x.var(dim=0, unbiased=False)
-        total = self.count + batch_count
+        batch_var, batch_mean = torch.var_mean(x, dim=0, correction=0)
+        count = self.count
+        total = count + batch_count
+        weight = batch_count / total  # the batch's share of all samples
         delta = batch_mean - self.mean
-        m2 = (
-            self.var * self.count
-            + batch_var * batch_count
-            + delta**2 * self.count * batch_count / total
+        # M2 / total = var (1 - w) + batch_var w + delta^2 w (1 - w), w = the batch's share
+        self.var.mul_(1.0 - weight).add_(
+            batch_var * weight + delta.square() * (weight * (1.0 - weight))
         )
-        self.mean += delta * batch_count / total
-        self.var.copy_(m2 / total)
+        self.mean.add_(delta * weight)
         self.count.copy_(total)
 
     def forward(self, x: Tensor) -> Tensor:
@@ -85,5 +84,5 @@ class RewardNormalizer(nn.Module):
         self.returns_rms.update(self.discounted.unsqueeze(-1))
         std = torch.sqrt(self.returns_rms.var[0] + self.epsilon)
         scaled = (reward.to(torch.float64) / std).clamp(-self.clip, self.clip)
-        self.discounted[done.to(torch.bool)] = 0.0
+        self.discounted.masked_fill_(done.to(torch.bool), 0.0)
         return scaled.to(reward.dtype)
