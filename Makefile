@@ -6,6 +6,10 @@ TORCH_SPEC ?= torch==2.13.0
 # optional extras installed with the package; CI adds ray to test the Ray path of `reproduce`
 EXTRAS ?= test
 BIN := $(VENV)/bin
+comma := ,
+# one stamp per set of extras: `make test EXTRAS=test,ray,mjx` after `make quickstart` installs
+# the extras the first venv lacks
+EXTRAS_STAMP := $(VENV)/.extras-$(subst $(comma),-,$(EXTRAS))
 
 .PHONY: setup quickstart test lint bench clean
 
@@ -16,7 +20,11 @@ $(BIN)/cpg-actor: pyproject.toml
 	$(BIN)/pip install --quiet -e ".[$(EXTRAS)]"
 	touch $@
 
-setup: $(BIN)/cpg-actor
+$(EXTRAS_STAMP): $(BIN)/cpg-actor
+	$(BIN)/pip install --quiet -e ".[$(EXTRAS)]"
+	touch $@
+
+setup: $(BIN)/cpg-actor $(EXTRAS_STAMP)
 
 # A new run directory each time: nothing earlier is overwritten. The paper preset (the default):
 # 500k steps in about 100 s of training on 2 cores, eval return about 480, hop height 0.28 m
