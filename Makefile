@@ -13,18 +13,17 @@ EXTRAS_STAMP := $(VENV)/.extras-$(subst $(comma),-,$(EXTRAS))
 
 .PHONY: setup quickstart test lint bench clean
 
-$(BIN)/cpg-actor: pyproject.toml
+$(VENV)/.torch:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet "$(TORCH_SPEC)"
+	touch $@
+
+$(EXTRAS_STAMP): pyproject.toml $(VENV)/.torch
 	$(BIN)/pip install --quiet -e ".[$(EXTRAS)]"
 	touch $@
 
-$(EXTRAS_STAMP): $(BIN)/cpg-actor
-	$(BIN)/pip install --quiet -e ".[$(EXTRAS)]"
-	touch $@
-
-setup: $(BIN)/cpg-actor $(EXTRAS_STAMP)
+setup: $(EXTRAS_STAMP)
 
 # A new run directory each time: nothing earlier is overwritten. The paper preset (the default):
 # 500k steps in about 100 s of training on 2 cores, eval return about 480, hop height 0.28 m

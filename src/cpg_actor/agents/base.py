@@ -93,9 +93,9 @@ class AgentConfig:
 
 def tanh(x: Tensor) -> Tensor:
     """tanh(x), computed as ``2 sigmoid(2x) - 1`` (the same function; within 2e-7 of
-    ``torch.tanh`` in float32). On x86 CPUs torch's float32 ``tanh`` is about 10x slower than
-    its ``sigmoid`` (torch 2.13, AVX512): this form makes the PPO update about 20 % faster
-    (``benchmarks/activation.py``)."""
+    ``torch.tanh`` in float32). On the project's CPU (torch 2.13, AVX512) float32 ``tanh`` is
+    8-10x slower than ``sigmoid``; this form makes two tanh layers' forward and backward
+    1.2-1.3x faster (``benchmarks/activation.py``; end to end within the machine's noise)."""
     return torch.sigmoid(2.0 * x) * 2.0 - 1.0
 
 

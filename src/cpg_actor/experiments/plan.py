@@ -316,7 +316,8 @@ def prepare_out_dir(out: Path, settings: ReproduceSettings, overwrite: bool) -> 
             ]
             raise FileExistsError(
                 f"{out} holds a reproduction with other settings ({'; '.join(differences)}); "
-                "pass --overwrite to replace it or choose another --out"
+                "only more variants or seeds may be added to it; pass --overwrite to replace "
+                "it or choose another --out"
             )
         shutil.rmtree(out)
         out.mkdir(parents=True)
