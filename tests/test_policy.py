@@ -65,3 +65,38 @@ def test_policy_errors_say_what_is_wrong(trained, tmp_path):
     (tmp_path / "bad.pt").write_bytes(b"garbage")
     with pytest.raises(ValueError, match="corrupt or not a cpg-actor checkpoint"):
         load_policy(tmp_path / "bad.pt")
+
+
+def test_compiled_training_step_acts_as_the_eager_one(trained):
+    """Policy.compile (ppo.compile): the same sampled actions from the same RNG stream, the
+    same CPG states and normaliser statistics (to float rounding), over steps with episode
+    ends; the normaliser's sample count included (an in-place write to a 0-dim buffer is
+    dropped by torch.compile 2.13, which left the count at 0)."""
+    policies = [load_policy(trained[1]), load_policy(trained[1])]
+    policies[1].compile()
+    env = HopperVectorEnv(4)
+    obs, _ = env.reset(seed=5)
+    for policy in policies:
+        policy.reset(4)
+    try:
+        for t in range(12):
+            steps = []
+            for policy in policies:
+                torch.manual_seed(t)
+                steps.append(policy.act(obs, deterministic=False, update_normalizer=True))
+            eager, compiled = steps
+            np.testing.assert_allclose(compiled.action, eager.action, atol=1e-5)
+            torch.testing.assert_close(compiled.agent.log_prob, eager.agent.log_prob)
+            torch.testing.assert_close(compiled.agent.value, eager.agent.value)
+            torch.testing.assert_close(policies[1].state, policies[0].state)
+            obs, _, terminated, truncated, _ = env.step(eager.action)
+            done = terminated | truncated
+            done[t % 4] |= t % 5 == 4  # some episodes end
+            for policy in policies:
+                policy.end_episodes(done)
+    finally:
+        env.close()
+    a, b = (policy.normalizer for policy in policies)
+    assert a.count.item() == b.count.item() > 0
+    torch.testing.assert_close(b.mean, a.mean)
+    torch.testing.assert_close(b.var, a.var)

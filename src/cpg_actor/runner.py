@@ -57,6 +57,7 @@ from cpg_actor.ppo import (
     RewardNormalizer,
     RolloutStorage,
     RunningNormalizer,
+    compile_reproducibly,
 )
 from cpg_actor.progress import evaluation_text, make_progress, metrics_text
 from cpg_actor.run_log import RunLog
@@ -143,6 +144,9 @@ class Runner:
         )
         self.reward_normalizer = RewardNormalizer(config.num_envs, config.ppo.gamma)
         self.reward_normalizer.to(self.device)
+        if config.ppo.compile:  # the rollout's policy step and reward scaling, not only the loss
+            self.policy.compile()
+            self.reward_normalizer.forward = compile_reproducibly(self.reward_normalizer.forward)
         self.eval_env = eval_env  # None: built at the first evaluation
         self.ppo = PPO(self.agent, config.ppo)
         self.storage = RolloutStorage(

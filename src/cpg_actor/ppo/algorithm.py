@@ -101,6 +101,15 @@ def cpp_compiler() -> str | None:
     return None
 
 
+def compile_reproducibly(fn, **options):
+    """``torch.compile(fn)`` as this project compiles (the loss, the policy step, the reward
+    normaliser): kernels specialised per shape (``dynamic=False``: the same whatever shapes
+    came before, so a resumed run computes what an uninterrupted one does), and no masked
+    vector loads in loop tails: they let stray lanes into reductions, and results varied in
+    the last bits from run to run (torch 2.13, measured). ``options``: more inductor options."""
+    return torch.compile(fn, dynamic=False, options={"cpp.enable_loop_tail_vec": False, **options})
+
+
 class PPO:
     def __init__(self, agent: Agent, config: PPOConfig) -> None:
         self.agent = agent
@@ -126,20 +135,12 @@ class PPO:
                 "was found (g++, c++, clang++); install one (e.g. apt install g++) or pass "
                 "--set ppo.compile=false"
             )
-        # dynamic=False: kernels specialised per minibatch shape, the same whatever shapes came
-        # before, so that a resumed run computes exactly what an uninterrupted one does
         self.loss = ppo_loss
         if config.compile:
             # a fresh compile for every run: dynamo caches per function, and a process that
             # builds many runs (tests, sweeps) would otherwise pile up recompilations
             torch.compiler.reset()
-            # masked vector loads in the loop tails let stray lanes into the backward's
-            # reductions: gradients varied in the last bits from run to run (torch 2.13,
-            # measured). Without them a run is reproducible, and as fast.
-            import torch._inductor.config as inductor_config
-
-            inductor_config.cpp.enable_loop_tail_vec = False
-            self.loss = torch.compile(ppo_loss, dynamic=False)
+            self.loss = compile_reproducibly(ppo_loss)
 
     def set_learning_rate(self, lr: float) -> None:
         self.learning_rate = lr

@@ -41,7 +41,9 @@ class RunningNormalizer(nn.Module):
             batch_var * weight + delta.square() * (weight * (1.0 - weight))
         )
         self.mean.add_(delta * weight)
-        self.count.copy_(total)
+        # not count.copy_(total): under torch.compile (2.13, CPU) an in-place op on a 0-dim
+        # buffer is dropped, and the count would stay 0; an indexed write is kept
+        self.count[...] = total
 
     def forward(self, x: Tensor) -> Tensor:
         """Normalise ``x`` (any leading shape); does not update the statistics."""
