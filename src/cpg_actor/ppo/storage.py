@@ -199,6 +199,7 @@ class RolloutStorage:
             flat.update({k: v.flatten(0, 1) for k, v in self.windows(bptt_steps).items()})
         order = torch.randperm(batch_size).to(self.device)  # the CPU generator on any device
         # each field gathered on its own: contiguous tensors (torch.compile's CPU kernels for
-        # strided views of one shared table gave gradients that varied from run to run)
+        # strided views of one shared table gave gradients that varied from run to run);
+        # index_select: the same rows as value[indices], 2-3x faster on the CPU
         for indices in order.chunk(num_minibatches):
-            yield {name: value[indices] for name, value in flat.items()}
+            yield {name: value.index_select(0, indices) for name, value in flat.items()}
