@@ -93,6 +93,8 @@ def measure(
         "SPS": samples / (collect + update),
         "collect_us": 1e6 * collect / samples,
         "simulation_us": 1e6 * simulation / samples,
+        # the rollout outside env.step: policy, normalisers, storage, episode bookkeeping, GAE
+        "outside_us": 1e6 * (collect - simulation) / samples,
         "update_us": 1e6 * update / samples,
     }
 
@@ -221,25 +223,29 @@ def main() -> None:
         + ".",
         "",
         "| preset | agent | envs | training SPS | of ceiling | collection us/step | "
-        "of which simulation | update us/sample |"
-        + (" reference SPS | speed-up | update speed-up |" if ref else ""),
-        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |"
-        + (" ---: | ---: | ---: |" if ref else ""),
+        "of which simulation | outside the simulation | update us/sample |"
+        + (
+            " reference SPS | speed-up | reference outside the simulation | update speed-up |"
+            if ref
+            else ""
+        ),
+        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        + (" ---: | ---: | ---: | ---: |" if ref else ""),
     ]
     for key, r in results.items():
         preset, agent = key.split("/")
         row = (
             f"| {preset} | {agent} | {r['num_envs']} | {r['SPS']:,.0f} | "
             f"{r['SPS'] / ceilings[r['num_envs']]:.0%} | {r['collect_us']:.1f} | "
-            f"{r['simulation_us']:.1f} | {r['update_us']:.1f} |"
+            f"{r['simulation_us']:.1f} | {r['outside_us']:.1f} | {r['update_us']:.1f} |"
         )
         if ref:
             old = ref.get(key)
             row += (
-                f" {old['SPS']:,.0f} | {r['SPS'] / old['SPS']:.2f}x | "
+                f" {old['SPS']:,.0f} | {r['SPS'] / old['SPS']:.2f}x | {old['outside_us']:.1f} | "
                 f"{old['update_us'] / r['update_us']:.2f}x |"
                 if old
-                else " - | - | - |"
+                else " - | - | - | - |"
             )
         lines.append(row)
         print(row)
@@ -254,7 +260,8 @@ def main() -> None:
     lines += [
         "",
         "Collection is everything in a rollout step (agent, normaliser, simulation, storage,",
-        "episode bookkeeping, GAE), per control step of one env; the update is the PPO epochs",
+        "episode bookkeeping, GAE), per control step of one env; outside the simulation: all",
+        "of that but `env.step`; the update is the PPO epochs",
         "over the rollout, per sample. `+ compile`: `ppo.compile=true` (`torch.compile` of",
         "the minibatch loss and, since 27 Nov 2026, of the rollout's policy step and reward",
         "scaling; a reference tree compiles what it compiled). Reference: the same script",

@@ -6,8 +6,9 @@ saved in the run's ``config.yaml`` (``preset``).
 
 * ``paper``: OpenAI Baselines' ppo2 settings for MuJoCo tasks, the framework the paper used
   (every number and its source: :class:`cpg_actor.ppo.PPOConfig`). These are the dataclass
-  defaults; the preset only adds ``ppo.compile`` (the same algorithm, its minibatch loss
-  compiled by ``torch.compile``: 2 to 2.8x faster updates, ``benchmarks/train_throughput.py``).
+  defaults; the preset only adds ``ppo.compile`` (the same algorithm, its minibatch loss,
+  the rollout's policy step and reward scaling compiled by ``torch.compile``: 2 to 2.8x
+  faster updates, faster rollouts, ``benchmarks/train_throughput.py``).
 * ``throughput``: the massively parallel recipe of legged_gym / rsl_rl (Rudin et al. 2021):
   many envs, short rollouts, few large minibatches, a learning rate adapted to a target KL.
   256 envs x 32 steps = 8,192 samples per iteration, 5 epochs of 4 minibatches (20 gradient
