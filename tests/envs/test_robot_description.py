@@ -12,7 +12,7 @@ from cpg_actor.envs.backends.mujoco_backend import load_model
 from cpg_actor.envs.backends.pybullet_backend import FOOT_LINK
 from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.robot import description as robot
-from cpg_actor.envs.robot import kinematics, stale_assets
+from cpg_actor.envs.robot import kinematics, mjcf_text, stale_assets
 
 LINKS = ("hip", "thigh", "shank", "adapter")  # PyBullet link index = position here
 POSES = [(0.4, -0.8), (0.0, 0.0), (1.2, -1.6), (-0.4, 0.05)]
@@ -77,14 +77,62 @@ def test_foot_contact_geometry_agrees(mj, pb):
     client, body = pb
     foot = mj.geom("foot")
     assert foot.size[0] == pytest.approx(0.031)
-    assert foot.friction[0] == pytest.approx(0.8)
     np.testing.assert_allclose(foot.pos, robot.FOOT_CENTER)
+    # one explicit foot-ground pair, and no geom that collides on its own
+    assert mj.npair == 1
+    assert {mj.pair_geom1[0], mj.pair_geom2[0]} == {foot.id, mj.geom("ground").id}
+    np.testing.assert_allclose(mj.pair_friction[0, :2], 0.8)
+    assert not mj.geom_contype.any() and not mj.geom_conaffinity.any()
     shapes = client.getCollisionShapeData(body, FOOT_LINK)
     assert len(shapes) == 1
     assert shapes[0][3][0] == pytest.approx(0.031)  # sphere radius
     assert client.getDynamicsInfo(body, FOOT_LINK)[1] == pytest.approx(0.8)  # lateral friction
     for link in range(FOOT_LINK):  # only the foot collides
         assert client.getCollisionShapeData(body, link) == ()
+
+
+def _collision_detected_hopper(friction: float) -> mujoco.MjModel:
+    """The hopper as it was before the explicit pair: the foot (its class: contype 1, solref
+    0.005) and the ground collide by collision detection, the contact mixing their parameters."""
+    text = mjcf_text(Actuator.from_config(HopperConfig()))
+    start, end = text.index("  <contact>"), text.index("</contact>") + len("</contact>\n")
+    text = text[:start] + text[end:]
+    text = text.replace(' contype="0" conaffinity="0"/>', "/>")
+    text = text.replace(
+        'material="grid"/>', 'material="grid" contype="1" conaffinity="1" condim="3"/>'
+    )
+    model = mujoco.MjModel.from_xml_string(text)
+    model.opt.timestep = 0.001
+    model.geom_friction[[model.geom("foot").id, model.geom("ground").id], 0] = friction
+    return model
+
+
+@pytest.mark.parametrize("friction", [0.8, 0.3])
+def test_the_explicit_pair_is_the_contact_collision_detection_makes(friction):
+    """Same states, bit for bit, through drops, landings and slips with and without the pair
+    (the pair only spares MuJoCo its broad phase)."""
+    config = HopperConfig(foot_friction=friction)
+    models = {
+        "pair": load_model(config.physics_dt, friction, Actuator.from_config(config)),
+        "detected": _collision_detected_hopper(friction),
+    }
+    rng = np.random.default_rng(0)
+    nominal = np.array(robot.NOMINAL_POSE)
+    desired = rng.uniform(nominal - 0.6, nominal + 0.3, (40, 2))
+    trajectories = {}
+    for name, model in models.items():
+        data = mujoco.MjData(model)
+        data.qpos[:] = [0.5, *robot.NOMINAL_POSE]  # dropped from 0.5 m
+        states, contacts = [], 0
+        for target in desired:
+            data.ctrl[:] = target
+            for _ in range(20):
+                mujoco.mj_step(model, data)
+                contacts += data.ncon
+            states.append(np.concatenate([data.qpos, data.qvel, data.sensordata]))
+        assert contacts > 100  # the foot did land
+        trajectories[name] = np.array(states)
+    np.testing.assert_array_equal(trajectories["pair"], trajectories["detected"])
 
 
 @pytest.mark.parametrize("pose", POSES)

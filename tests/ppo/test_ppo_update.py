@@ -178,3 +178,40 @@ def test_compiled_loss_equals_the_eager_loss_and_its_gradients():
     assert torch.allclose(stats0, stats1, rtol=1e-4, atol=1e-6)
     for g0, g1 in zip(grads0, grads1, strict=True):
         assert torch.allclose(g0, g1, rtol=1e-4, atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    "compile",
+    [
+        False,
+        pytest.param(
+            True,
+            marks=pytest.mark.skipif(
+                __import__("cpg_actor.ppo.algorithm").ppo.algorithm.cpp_compiler() is None,
+                reason="torch.compile's CPU backend needs a C++ compiler",
+            ),
+        ),
+    ],
+)
+def test_the_output_check_after_an_update_finds_a_single_bad_row(compile):
+    """``ppo.compile`` compiles the check too: it still sees one non-finite row among many."""
+    config = TrainConfig(
+        agent="cpg-actor",
+        num_envs=4,
+        total_steps=4 * 16 * 10,
+        ppo=PPOConfig(num_steps=16, num_epochs=1, num_minibatches=2, compile=compile),
+        env=FakeConfig(),
+        eval_interval=0,
+    )
+    runner = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
+    runner.start_episodes()
+    runner.collect()
+    storage, ppo = runner.storage, runner.ppo
+    assert ppo._outputs_are_finite(storage)
+    for field in ("observations", "states"):
+        stored = getattr(storage, field)
+        good = stored[7, 2].clone()
+        stored[7, 2] = float("nan")
+        assert not ppo._outputs_are_finite(storage), field
+        stored[7, 2] = good
+        assert ppo._outputs_are_finite(storage)

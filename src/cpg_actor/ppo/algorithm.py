@@ -93,6 +93,15 @@ def ppo_loss(agent: Agent, batch: dict[str, Tensor], config: PPOConfig) -> tuple
 STATS = ("policy_loss", "value_loss", "entropy", "approx_kl", "clipfrac", "kl")
 
 
+@torch.no_grad()
+def outputs_are_finite(agent: Agent, observations: Tensor, states: Tensor) -> Tensor:
+    """A 0-dim bool tensor: the agent's action mean, std and value are finite on every
+    ``(observation, state)`` row. Pure, so it can be compiled (``ppo.compile``)."""
+    out = agent.actor(observations, states)
+    value = agent.value(observations, states)
+    return torch.stack([torch.isfinite(t).all() for t in (value, out.mean, out.std)]).all()
+
+
 def cpp_compiler() -> str | None:
     """The C++ compiler torch.compile would use on the CPU, or None."""
     for name in (os.environ.get("CXX"), "g++", "c++", "clang++"):
@@ -136,11 +145,15 @@ class PPO:
                 "--set ppo.compile=false"
             )
         self.loss = ppo_loss
+        self.outputs_are_finite = outputs_are_finite
         if config.compile:
             # a fresh compile for every run: dynamo caches per function, and a process that
             # builds many runs (tests, sweeps) would otherwise pile up recompilations
             torch.compiler.reset()
             self.loss = compile_reproducibly(ppo_loss)
+            # the check after every update: one fused pass instead of the eager actor and
+            # critic over the whole rollout (about 6 % of a throughput-preset update)
+            self.outputs_are_finite = compile_reproducibly(outputs_are_finite)
 
     def set_learning_rate(self, lr: float) -> None:
         self.learning_rate = lr
@@ -165,14 +178,11 @@ class PPO:
             f"{reason} (learning rate {self.learning_rate:g}); the update was undone"
         )
 
-    @torch.no_grad()
     def _outputs_are_finite(self, storage: RolloutStorage) -> bool:
         """The updated policy's mean, std and value on every stored (observation, state)."""
         # flattened in order: no random permutation, so training's RNG stream is untouched
         obs, states = (getattr(storage, name).flatten(0, 1) for name in ("observations", "states"))
-        out = self.agent.actor(obs, states)
-        value, mean, std = self.agent.value(obs, states), out.mean, out.std
-        return all(bool(torch.isfinite(t).all()) for t in (value, mean, std))
+        return bool(self.outputs_are_finite(self.agent, obs, states))
 
     def update(self, storage: RolloutStorage) -> dict[str, float]:
         cfg = self.config

@@ -47,6 +47,7 @@ from mujoco import rollout as mj_rollout  # noqa: E402
 from cpg_actor.envs.actuator import Actuator  # noqa: E402
 from cpg_actor.envs.backends.base import Backend  # noqa: E402
 from cpg_actor.envs.robot import MJCF_PATH, mjcf_text  # noqa: E402
+from cpg_actor.envs.robot.mjcf import set_foot_friction  # noqa: E402
 from cpg_actor.envs.video import RenderingUnavailable  # noqa: E402
 from cpg_actor.machine import usable_cores  # noqa: E402
 
@@ -82,8 +83,7 @@ def load_model(
     else:
         model = mujoco.MjModel.from_xml_string(mjcf_text(actuator))
     model.opt.timestep = physics_dt
-    for name in ("foot", "ground"):
-        model.geom_friction[model.geom(name).id, 0] = foot_friction
+    set_foot_friction(model, foot_friction)
     return model
 
 

@@ -41,6 +41,7 @@ from cpg_actor.envs.mjx.runtime import load
 from cpg_actor.envs.reward import apex_reward, reward_terms, total_reward
 from cpg_actor.envs.robot import description as robot
 from cpg_actor.envs.robot import kinematics, mjcf_text
+from cpg_actor.envs.robot.mjcf import set_foot_friction
 from cpg_actor.envs.simulation import ACTION_HIGH, ACTION_LOW, NOMINAL_POSE, OBS_BOUND
 
 jax, mjx = load()
@@ -69,8 +70,7 @@ def load_model(config: HopperConfig) -> mujoco.MjModel:
     model.opt.timestep = config.physics_dt
     model.opt.iterations = config.mjx_iterations
     model.opt.ls_iterations = config.mjx_ls_iterations
-    for name in ("foot", "ground"):
-        model.geom_friction[model.geom(name).id, 0] = config.foot_friction
+    set_foot_friction(model, config.foot_friction)
     return model
 
 
