@@ -225,12 +225,13 @@ def main() -> None:
         "| preset | agent | envs | training SPS | of ceiling | collection us/step | "
         "of which simulation | outside the simulation | update us/sample |"
         + (
-            " reference SPS | speed-up | reference outside the simulation | update speed-up |"
+            " reference SPS | speed-up | reference simulation | reference outside the "
+            "simulation | update speed-up |"
             if ref
             else ""
         ),
         "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
-        + (" ---: | ---: | ---: | ---: |" if ref else ""),
+        + (" ---: | ---: | ---: | ---: | ---: |" if ref else ""),
     ]
     for key, r in results.items():
         preset, agent = key.split("/")
@@ -242,10 +243,10 @@ def main() -> None:
         if ref:
             old = ref.get(key)
             row += (
-                f" {old['SPS']:,.0f} | {r['SPS'] / old['SPS']:.2f}x | {old['outside_us']:.1f} | "
-                f"{old['update_us'] / r['update_us']:.2f}x |"
+                f" {old['SPS']:,.0f} | {r['SPS'] / old['SPS']:.2f}x | {old['simulation_us']:.1f} | "
+                f"{old['outside_us']:.1f} | {old['update_us'] / r['update_us']:.2f}x |"
                 if old
-                else " - | - | - | - |"
+                else " - | - | - | - | - |"
             )
         lines.append(row)
         print(row)
