@@ -100,16 +100,16 @@ def preamble(model: str, timestep: float, texrepeat: int) -> list[str]:
 FOOT_SOLREF = (0.0125, 1.0)
 
 
-def contact_xml(foot_geoms: tuple[str, ...] = ("foot",), indent: str = "  ") -> list[str]:
-    """The ``<contact>`` element: one ``<pair>`` of each foot geom with the ground, condim 3
-    (sliding friction ``FOOT_FRICTION`` in both tangent directions), solref ``FOOT_SOLREF``."""
+def contact_xml() -> list[str]:
+    """The ``<contact>`` element: the foot-ground ``<pair>``, condim 3 (sliding friction
+    ``FOOT_FRICTION`` in both tangent directions), solref ``FOOT_SOLREF``."""
     mu = f"{robot.FOOT_FRICTION:.6g}"
-    pairs = [
-        f'{indent}  <pair name="{geom}_ground" geom1="{geom}" geom2="ground" condim="3" '
-        f'friction="{mu} {mu}" solref="{_v(FOOT_SOLREF)}"/>'
-        for geom in foot_geoms
+    return [
+        "  <contact>",
+        f'    <pair name="foot_ground" geom1="foot" geom2="ground" condim="3" '
+        f'friction="{mu} {mu}" solref="{_v(FOOT_SOLREF)}"/>',
+        "  </contact>",
     ]
-    return [f"{indent}<contact>", *pairs, f"{indent}</contact>"]
 
 
 def set_foot_friction(model, friction: float) -> None:
