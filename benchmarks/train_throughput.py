@@ -147,6 +147,20 @@ def median_of(runs: list[dict[str, dict[str, float]]]) -> dict[str, dict[str, fl
     }
 
 
+def paired_speedups(runs: list[dict], ref_runs: list[dict], key: str, field: str) -> list[float]:
+    """The speed-up of ``field`` (SPS: code over reference; a cost: reference over code) in
+    each repeat, the two measured back to back: a slow spell of a shared machine hits both."""
+    pairs = [(run[key][field], ref[key][field]) for run, ref in zip(runs, ref_runs, strict=True)]
+    return [new / old if field == "SPS" else old / new for new, old in pairs]
+
+
+def fmt_speedup(ratios: list[float]) -> str:
+    """The median speed-up and, over several repeats, the range of the paired ones."""
+    if len(ratios) < 2:
+        return f"{ratios[0]:.2f}x"
+    return f"{statistics.median(ratios):.2f}x ({min(ratios):.2f}-{max(ratios):.2f})"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--presets", nargs="+", default=["paper", "throughput"])
@@ -240,14 +254,18 @@ def main() -> None:
             f"{r['SPS'] / ceilings[r['num_envs']]:.0%} | {r['collect_us']:.1f} | "
             f"{r['simulation_us']:.1f} | {r['outside_us']:.1f} | {r['update_us']:.1f} |"
         )
-        if ref:
-            old = ref.get(key)
-            row += (
-                f" {old['SPS']:,.0f} | {r['SPS'] / old['SPS']:.2f}x | {old['simulation_us']:.1f} | "
-                f"{old['outside_us']:.1f} | {old['update_us'] / r['update_us']:.2f}x |"
-                if old
-                else " - | - | - | - | - |"
+        old = ref.get(key)
+        if old:
+            sps, update = (
+                fmt_speedup(paired_speedups(runs, ref_runs, key, field))
+                for field in ("SPS", "update_us")
             )
+            row += (
+                f" {old['SPS']:,.0f} | {sps} | {old['simulation_us']:.1f} | "
+                f"{old['outside_us']:.1f} | {update} |"
+            )
+        elif ref:
+            row += " - | - | - | - | - |"
         lines.append(row)
         print(row)
     if args.reference_src:
@@ -269,7 +287,9 @@ def main() -> None:
         "and settings with the",
         "package of another source tree (`REF`, named below), measured in the same run.",
         "With `--repeats N`: each figure is the median of N measurements, the rows, the",
-        "reference and the ceiling taken in turn.",
+        "reference and the ceiling taken in turn; a speed-up is the median of the N paired",
+        "ones (each repeat's code against the reference measured right after it), their",
+        "range in brackets.",
         "",
     ]
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)
