@@ -5,6 +5,7 @@ import torch
 
 from cpg_actor.config import TrainConfig
 from cpg_actor.ppo import PPO, PPOConfig, gaussian_kl
+from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.runner import Runner
 
 from .fake_env import FakeConfig, FakeHopperVectorEnv
@@ -187,7 +188,7 @@ def test_compiled_loss_equals_the_eager_loss_and_its_gradients():
         pytest.param(
             True,
             marks=pytest.mark.skipif(
-                __import__("cpg_actor.ppo.algorithm").ppo.algorithm.cpp_compiler() is None,
+                cpp_compiler() is None,
                 reason="torch.compile's CPU backend needs a C++ compiler",
             ),
         ),
