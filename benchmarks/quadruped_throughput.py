@@ -23,7 +23,7 @@ import torch
 
 from bench_report import measured, write
 from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
-from cpg_actor.envs.backends.mujoco_backend import CONTROL_SPEC, mj_rollout, mujoco
+from cpg_actor.envs.backends.mujoco_backend import CONTROL_SPEC, mujoco
 from cpg_actor.envs.quadruped import description as robot
 from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
 from cpg_actor.machine import cpu_model, load_average, usable_cores
@@ -46,7 +46,9 @@ def rates(num_envs: int, seconds: float) -> dict[str, float]:
     start_state = env.get_state()["anymal"]["physics"].numpy().copy()
     control = np.tile(np.asarray(robot.NOMINAL_POSE), (num_envs, env.config.decimation, 1))
     out = np.zeros((num_envs, env.config.decimation, start_state.shape[1]))
-    rollout = mj_rollout.Rollout(nthread=threads if threads > 1 else 0)
+    rollout = mujoco.rollout.Rollout(  # loaded by the backend, after MUJOCO_GL is set
+        nthread=threads if threads > 1 else 0
+    )
     datas = [mujoco.MjData(model) for _ in range(threads)]
     chunk = max(1, -(-num_envs // (4 * threads)))
 

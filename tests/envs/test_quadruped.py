@@ -51,7 +51,7 @@ def test_standing_statics_carry_the_weight_level_and_symmetric():
     env.reset(seed=0)
     for _ in range(100):
         obs, *_ = env.step(NOMINAL[None])
-    model, data = env.model, env._datas[0]
+    model, data = env.model, env._data
     mujoco.mj_setState(model, data, env._state[0], mujoco.mjtState.mjSTATE_FULLPHYSICS.value)
     data.ctrl[:] = NOMINAL
     mujoco.mj_forward(model, data)

@@ -3,9 +3,10 @@
 One ``MjModel`` whose joints carry ``dcmotor`` actuators that are the actuator law of
 :mod:`cpg_actor.envs.actuator` (PD, torque-speed line, torque limit; see
 :func:`cpg_actor.envs.robot.mjcf.actuator_xml`), their control being the desired joint
-positions. A control step is one call of ``mujoco.rollout`` with ``nstep`` = the substeps: the
-C++ side loops over the K robots on its own thread pool (GIL released), doing per robot
-``mj_setState`` -> desired positions into ``ctrl`` -> ``nstep`` x ``mj_step`` ->
+positions. A control step is ``mujoco.rollout`` with ``nstep`` = the substeps over chunks of
+the K robots, on the calling thread and one helper thread per further core
+(:class:`~cpg_actor.envs.backends.threaded_rollout.ThreadedRollout`, GIL released), doing per
+robot ``mj_setState`` -> desired positions into ``ctrl`` -> ``nstep`` x ``mj_step`` ->
 ``mj_getState``, with no Python between substeps. The state of all robots lives in one
 contiguous numpy array. A single environment is the same code with K = 1 on the calling
 thread, so the vector env and N single envs compute bit-identical trajectories.
@@ -42,10 +43,10 @@ if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
 
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
-from mujoco import rollout as mj_rollout  # noqa: E402
 
 from cpg_actor.envs.actuator import Actuator  # noqa: E402
 from cpg_actor.envs.backends.base import Backend  # noqa: E402
+from cpg_actor.envs.backends.threaded_rollout import ThreadedRollout  # noqa: E402
 from cpg_actor.envs.robot import MJCF_PATH, mjcf_text  # noqa: E402
 from cpg_actor.envs.robot.mjcf import set_foot_friction  # noqa: E402
 from cpg_actor.envs.video import RenderingUnavailable  # noqa: E402
@@ -117,13 +118,9 @@ class MujocoBackend(Backend):
         if self.num_threads < 1:
             raise ValueError(f"num_threads must be >= 1, got {num_threads}")
         self.num_threads = min(self.num_threads, self.num_robots)
-        # rollout's pool: 0 threads means "run on the calling thread"
-        pool = self.num_threads if self.num_threads > 1 else 0
-        self._rollout = mj_rollout.Rollout(nthread=pool)
-        self._datas = [mujoco.MjData(self.model) for _ in range(max(1, self.num_threads))]
-        self._models = [self.model] * self.num_robots
-        # 4 jobs per thread: a thread slowed by a busy neighbour process hands work to the others
-        self._chunk = max(1, -(-self.num_robots // (4 * self.num_threads)))
+        # 4 chunks per thread: a thread slowed by a busy neighbour process hands work to others
+        self._rollout = ThreadedRollout(self.model, self.num_robots, self.num_threads)
+        self._data = mujoco.MjData(self.model)  # for the queries between control steps
         nq, nv = self.model.nq, self.model.nv
         self.nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
         self._state = np.zeros((self.num_robots, self.nstate))
@@ -156,10 +153,8 @@ class MujocoBackend(Backend):
             self._substeps = substeps
         self._control[:] = desired[:, None, :]
         self._rollout.rollout(
-            self._models, self._datas, self._state, self._control,
-            control_spec=CONTROL_SPEC, skip_checks=True, nstep=substeps, initial_warmstart=None,
-            state=self._next, sensordata=self._torque, chunk_size=self._chunk,
-        )  # fmt: skip
+            self._state, self._control, self._next, self._torque, CONTROL_SPEC, substeps
+        )
         np.copyto(self._state, self._next[:, -1])
         return self._torque.sum(axis=1) / substeps
 
@@ -174,10 +169,8 @@ class MujocoBackend(Backend):
             torque = self.actuator(desired, self.joint_pos, self.joint_vel)
             self._torque_control[:, 0, 1:3] = torque
             self._rollout.rollout(
-                self._models, self._datas, self._state, self._torque_control,
-                control_spec=TORQUE_SPEC, skip_checks=True, nstep=1, initial_warmstart=None,
-                state=self._one_step, sensordata=None, chunk_size=self._chunk,
-            )  # fmt: skip
+                self._state, self._torque_control, self._one_step, None, TORQUE_SPEC, 1
+            )
             np.copyto(self._state, self._one_step[:, 0])
             torque_sum += torque
         return torque_sum / substeps
@@ -201,7 +194,7 @@ class MujocoBackend(Backend):
         return self._time < CLOCK_START
 
     def _load(self, index: int) -> mujoco.MjData:
-        data = self._datas[0]
+        data = self._data
         mujoco.mj_setState(self.model, data, self._state[index], STATE_SPEC)
         data.qfrc_applied[:] = 0.0
         mujoco.mj_forward(self.model, data)

@@ -46,10 +46,10 @@ from cpg_actor.envs.backends.mujoco_backend import (
     CONTROL_SPEC,
     STATE_SPEC,
     default_threads,
-    mj_rollout,
     mujoco,
     offscreen_renderer,
 )
+from cpg_actor.envs.backends.threaded_rollout import ThreadedRollout
 from cpg_actor.envs.hopper import env_seeds
 from cpg_actor.envs.quadruped import description as robot
 from cpg_actor.envs.quadruped import task
@@ -139,10 +139,8 @@ class AnymalVectorEnv(VectorEnv):
         self.model = load_model(config)
         threads = default_threads(num_envs) if num_threads is None else int(num_threads)
         self.num_threads = max(1, min(threads, num_envs))
-        self._rollout = mj_rollout.Rollout(nthread=self.num_threads if self.num_threads > 1 else 0)
-        self._datas = [mujoco.MjData(self.model) for _ in range(self.num_threads)]
-        self._models = [self.model] * num_envs
-        self._chunk = max(1, -(-num_envs // (4 * self.num_threads)))
+        self._rollout = ThreadedRollout(self.model, num_envs, self.num_threads)
+        self._data = mujoco.MjData(self.model)  # for resets and queries between control steps
         nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
         self._state = np.zeros((num_envs, nstate))
         self._next = np.zeros((num_envs, config.decimation, nstate))
@@ -175,7 +173,7 @@ class AnymalVectorEnv(VectorEnv):
             for column, name in ((1, "lateral_range"), (2, "yaw_range")):
                 low, high = getattr(self.config, name)
                 self.command[i, column] = rng.uniform(low, high) if high > low else low
-            data = self._datas[0]
+            data = self._data
             mujoco.mj_resetData(self.model, data)
             data.qpos[7:] = joints
             mujoco.mj_kinematics(self.model, data)
@@ -223,7 +221,7 @@ class AnymalVectorEnv(VectorEnv):
 
     def _refresh_sensors(self, index: np.ndarray) -> None:
         """Sensor values of freshly reset robots (no step has written them yet)."""
-        data = self._datas[0]
+        data = self._data
         for i in index:
             mujoco.mj_setState(self.model, data, self._state[i], STATE_SPEC)
             mujoco.mj_forward(self.model, data)
@@ -260,11 +258,8 @@ class AnymalVectorEnv(VectorEnv):
         self._control[:] = desired[:, None, :]
         feet_xy_before = self._feet()[:, :, :2].copy()  # the rollout overwrites the sensors
         self._rollout.rollout(
-            self._models, self._datas, self._state, self._control,
-            control_spec=CONTROL_SPEC, skip_checks=True, nstep=cfg.decimation,
-            initial_warmstart=None, state=self._next, sensordata=self._sensors,
-            chunk_size=self._chunk,
-        )  # fmt: skip
+            self._state, self._control, self._next, self._sensors, CONTROL_SPEC, cfg.decimation
+        )
         np.copyto(self._state, self._next[:, -1])
         self.elapsed += 1
 
