@@ -9,8 +9,11 @@ For each backend and number of environments N the script measures, in the same r
   environment:
   ``mj_step loop``: a bare Python loop of ``mujoco.mj_step`` over N ``MjData`` split across
   the same number of threads (``concurrent.futures``; mj_step releases the GIL), and
-  ``rollout``: ``mujoco.rollout`` doing ``decimation`` steps per robot in C++ on its pool.
-  Both hold the torques constant, so they do strictly less work than the env.
+  ``rollout``: ``mujoco.rollout`` doing ``decimation`` steps per robot in C++, the faster of
+  MuJoCo's own thread pool (``Rollout(nthread=threads)``) and the env's
+  :class:`~cpg_actor.envs.backends.threaded_rollout.ThreadedRollout` (the calling thread and
+  helpers), both timed. Both hold the torques constant, so they do strictly less work than
+  the env.
 * PyBullet ceiling: ``stepSimulation`` in a bare loop on the same worlds of N robots.
 
 Throughput is env steps (robot x control step) per second; a ceiling's is its substeps per
@@ -99,6 +102,7 @@ def bench_size(sim: str, num_envs: int, repeats: int, budget: int) -> dict:
 
         from cpg_actor.envs.actuator import Actuator
         from cpg_actor.envs.backends.mujoco_backend import STATE_SPEC, load_model
+        from cpg_actor.envs.backends.threaded_rollout import ThreadedRollout
 
         # the project's MJCF with its actuators switched off: constant joint torques instead
         model = load_model(config.physics_dt, config.foot_friction)
@@ -143,14 +147,23 @@ def bench_size(sim: str, num_envs: int, repeats: int, budget: int) -> dict:
                     sensordata=None, chunk_size=max(1, num_envs // (4 * threads)),
                 )  # fmt: skip
 
+        # the env's own way of stepping: the calling thread and helper threads
+        threaded = ThreadedRollout(model, num_envs, threads)
+
+        def run_threaded() -> None:
+            for _ in range(steps):
+                threaded.rollout(states, control, out, None, torque_spec, decimation)
+
         env_rate = loop_rate = roll_rate = 0.0
-        for _ in range(repeats):  # interleaved: a busy neighbour affects all three alike
+        for _ in range(repeats):  # interleaved: a busy neighbour affects them all alike
             env_rate = max(env_rate, best_rate(run_env, steps * num_envs, 1))
             loop_rate = max(loop_rate, best_rate(run_loop, loop_steps * num_envs, 1))
             roll_rate = max(roll_rate, best_rate(run_rollout, steps * num_envs, 1))
+            roll_rate = max(roll_rate, best_rate(run_threaded, steps * num_envs, 1))
         if pool is not None:
             pool.shutdown()
         roller.close()
+        threaded.close()
         row.update(env=env_rate, loop=loop_rate, rollout=roll_rate)
     else:
         clients = [world.client for world in backend._worlds]
@@ -237,8 +250,9 @@ def main(argv: list[str] | None = None) -> int:
         "substep, observation, reward, autoreset). *bare step loop*: MuJoCo: a Python loop of "
         "`mujoco.mj_step` over N `MjData` on the same number of threads (`concurrent.futures`); "
         "PyBullet: `stepSimulation` on the same worlds of N robots (16 per world). "
-        "*mujoco.rollout*: the same substeps looped in C++ by `mujoco.rollout` on its thread "
-        "pool. Ceilings start from the env's robot states, switch the model's actuators off and "
+        "*mujoco.rollout*: the same substeps looped in C++ by `mujoco.rollout`, the faster of "
+        "MuJoCo's thread pool and the env's `ThreadedRollout` (calling thread and helpers). "
+        "Ceilings start from the env's robot states, switch the model's actuators off and "
         "hold the joint torques constant (no actuator law, no observation).",
         "",
         "*threads*: the env's MuJoCo stepping threads (`HopperVectorEnv` default: the usable "

@@ -232,7 +232,7 @@ def main() -> None:
         + ".",
         "",
         "Physics ceiling in the same run (`mujoco.rollout`, 10 substeps per control step, "
-        "constant torques): "
+        "constant torques, the faster of MuJoCo's thread pool and the env's `ThreadedRollout`): "
         + ", ".join(f"**{c:,.0f}** control steps/s at {n} robots" for n, c in ceilings.items())
         + ".",
         "",

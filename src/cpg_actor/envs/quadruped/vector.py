@@ -1,9 +1,10 @@
 """`AnymalVectorEnv`: N ANYmal B quadrupeds on MuJoCo, a Gymnasium ``VectorEnv`` (SAME_STEP
 autoreset), the locomotion task of :mod:`cpg_actor.envs.quadruped.task`.
 
-As the hopper's MuJoCo env: the robots are rows of one state array and a control step is one
-``mujoco.rollout`` call (``decimation`` substeps on a C++ thread pool, the ``dcmotor``
-actuators running the actuator law inside MuJoCo). Actions are desired joint positions (12,
+As the hopper's MuJoCo env: the robots are rows of one state array and a control step is
+``mujoco.rollout`` of ``decimation`` substeps over chunks of them, on the calling thread and
+a helper per further core (``ThreadedRollout``), the ``dcmotor`` actuators running the
+actuator law inside MuJoCo. Actions are desired joint positions (12,
 rad; in [-1, 1] with ``normalized_actions``), clipped to the joint ranges.
 
 Per episode: a forward-speed command uniform in ``command_range`` (lateral and yaw speed
