@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import gc
+import os
 import threading
 
 import numpy as np
@@ -109,3 +110,13 @@ def test_closed_or_collected_its_helper_threads_stop(setup):
 def test_threads_must_be_positive(setup):
     with pytest.raises(ValueError, match="num_threads must be >= 1"):
         ThreadedRollout(setup[0], K, 0)
+
+
+def test_a_forked_copy_refuses_to_step_instead_of_waiting_forever(setup, monkeypatch):
+    model, state, control, reference_state, _ = setup
+    stepper = ThreadedRollout(model, K, 2)
+    monkeypatch.setattr(os, "getpid", lambda: -1)  # as in a child made by fork
+    with pytest.raises(RuntimeError, match="another process"):
+        stepper.rollout(state, control, np.zeros_like(reference_state), None, CONTROL_SPEC, 1)
+    monkeypatch.undo()
+    stepper.close()

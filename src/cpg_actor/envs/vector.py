@@ -3,7 +3,8 @@
 * MuJoCo: the N robots are rows of one state array; every control step is
   ``mujoco.rollout`` over chunks of them through the physics substeps, on the calling thread
   and helper threads (``num_threads`` in all, default: the usable cores, at least 8 robots per
-  thread), the joint actuators running inside MuJoCo (see :mod:`cpg_actor.envs.backends.mujoco_backend`).
+  thread), the joint actuators running inside MuJoCo (see
+  :mod:`cpg_actor.envs.backends.mujoco_backend`).
 * PyBullet: the N robots share one world, collision-filtered so that they never touch each
   other; ``num_threads`` is ignored (PyBullet holds the GIL).
 

@@ -16,6 +16,7 @@ third faster at 16 (``docs/training.md``, "The calling thread steps robots too")
 
 from __future__ import annotations
 
+import os
 import queue
 import threading
 import weakref
@@ -53,6 +54,7 @@ class ThreadedRollout:
             else int(chunk_size)
         )
         self._models = [model] * self.num_robots
+        self._pid = os.getpid()  # a forked child has none of the helper threads
         self._steppers = [_ChunkStepper(model, self._models) for _ in range(self.num_threads)]
         self._jobs = [queue.SimpleQueue() for _ in range(self.num_threads - 1)]
         self._done: queue.SimpleQueue = queue.SimpleQueue()
@@ -85,6 +87,11 @@ class ThreadedRollout:
         None. The arrays must be C-contiguous float64 (they are not checked)."""
         if not self._stop.alive:
             raise RuntimeError("rollout() after close()")
+        if os.getpid() != self._pid:
+            raise RuntimeError(
+                "this simulator was made in another process and its stepping threads did not "
+                "survive the fork; make the environment in the process that steps it"
+            )
         chunks = iter(range(0, self.num_robots, self.chunk_size))  # shared: next() holds the GIL
         job = (chunks, self.chunk_size, state, control, next_state, sensordata, control_spec, nstep)
         for jobs in self._jobs:
