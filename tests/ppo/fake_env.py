@@ -120,3 +120,24 @@ class FakeHopperVectorEnv:
 
     def close(self) -> None:
         pass
+
+
+def fake_runner(agent: str = "mlp", **ppo):
+    """A started ``Runner`` of ``agent`` on 4 fake envs: rollouts of 16 steps, 3 epochs of 2
+    minibatches, unless ``ppo`` (any ``PPOConfig`` field) says otherwise."""
+    from cpg_actor.config import TrainConfig
+    from cpg_actor.ppo import PPOConfig
+    from cpg_actor.runner import Runner
+
+    settings = {"num_steps": 16, "num_epochs": 3, "num_minibatches": 2, **ppo}
+    config = TrainConfig(
+        agent=agent,
+        num_envs=4,
+        total_steps=4 * settings["num_steps"] * 10,
+        ppo=PPOConfig(**settings),
+        env=FakeConfig(),
+        eval_interval=0,
+    )
+    runner = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
+    runner.start_episodes()
+    return runner

@@ -6,12 +6,9 @@ import pytest
 import torch
 
 import cpg_actor.ppo.algorithm as algorithm
-from cpg_actor.config import TrainConfig
-from cpg_actor.ppo import PPOConfig
 from cpg_actor.ppo.optimizer import adam_step, clip_grad_norm_
-from cpg_actor.runner import Runner
 
-from .fake_env import FakeConfig, FakeHopperVectorEnv
+from .fake_env import fake_runner
 
 
 def network(seed: int = 0) -> torch.nn.Module:
@@ -83,23 +80,9 @@ def test_a_ppo_update_equals_one_with_torchs_clip_and_adam(monkeypatch):
     """The CPG-Actor with its CPG in an Adam group of its own (two groups)."""
 
     def runner():
-        config = TrainConfig(
-            agent="cpg-actor",
-            num_envs=4,
-            total_steps=4 * 16 * 10,
-            ppo=PPOConfig(
-                num_steps=16,
-                num_epochs=3,
-                num_minibatches=4,
-                lr_schedule="adaptive",
-                cpg_learning_rate=1e-4,
-            ),  # fmt: skip
-            env=FakeConfig(),
-            eval_interval=0,
+        return fake_runner(
+            "cpg-actor", num_minibatches=4, lr_schedule="adaptive", cpg_learning_rate=1e-4
         )
-        run = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
-        run.start_episodes()
-        return run
 
     ours = runner()  # one after the other: a runner seeds torch's global generator
     for _ in range(2):

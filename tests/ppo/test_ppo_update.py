@@ -3,25 +3,14 @@
 import pytest
 import torch
 
-from cpg_actor.config import TrainConfig
 from cpg_actor.ppo import PPO, PPOConfig, gaussian_kl
 from cpg_actor.ppo.algorithm import cpp_compiler
-from cpg_actor.runner import Runner
 
-from .fake_env import FakeConfig, FakeHopperVectorEnv
+from .fake_env import fake_runner
 
 
 def collected_runner(**ppo):
-    config = TrainConfig(
-        agent="mlp",
-        num_envs=4,
-        total_steps=4 * 16 * 10,
-        ppo=PPOConfig(num_steps=16, num_epochs=3, num_minibatches=2, **ppo),
-        env=FakeConfig(),
-        eval_interval=0,
-    )
-    runner = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
-    runner.start_episodes()
+    runner = fake_runner("mlp", **ppo)
     runner.collect()
     return runner
 
@@ -39,23 +28,9 @@ def test_adaptive_schedule_moves_the_learning_rate_against_the_kl():
 def test_the_cpg_learning_rate_stays_fixed_while_the_schedule_moves_the_others():
     """ppo.cpg_learning_rate: the CPG vector V and the feedback MLP in their own Adam group at
     a fixed rate, out of the adaptive (and linear) schedule; the others follow the schedule."""
-    config = TrainConfig(
-        agent="cpg-actor",
-        num_envs=4,
-        total_steps=4 * 16 * 10,
-        ppo=PPOConfig(
-            num_steps=16,
-            num_epochs=3,
-            num_minibatches=2,
-            lr_schedule="adaptive",
-            desired_kl=10.0,
-            cpg_learning_rate=1e-4,
-        ),  # fmt: skip
-        env=FakeConfig(),
-        eval_interval=0,
+    runner = fake_runner(
+        "cpg-actor", lr_schedule="adaptive", desired_kl=10.0, cpg_learning_rate=1e-4
     )
-    runner = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
-    runner.start_episodes()
     runner.collect()
     ppo, vector = runner.ppo, runner.agent.cpg.parametrisation.vector
     others, cpg = ppo.optimizer.param_groups
@@ -147,22 +122,14 @@ def test_gaussian_formulas_match_torch_distributions():
 
 
 @pytest.mark.skipif(
-    __import__("shutil").which("c++") is None and __import__("shutil").which("g++") is None,
+    cpp_compiler() is None,
     reason="torch.compile's CPU backend needs a C++ compiler",
 )
 def test_compiled_loss_equals_the_eager_loss_and_its_gradients():
     from cpg_actor.ppo.algorithm import ppo_loss
 
-    config = TrainConfig(
-        agent="cpg-actor",
-        num_envs=4,
-        total_steps=4 * 16 * 10,
-        ppo=PPOConfig(num_steps=16, num_epochs=1, num_minibatches=2),
-        env=FakeConfig(),
-        eval_interval=0,
-    )
-    runner = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
-    runner.start_episodes()
+    runner = fake_runner("cpg-actor", num_epochs=1)
+    config = runner.config
     runner.collect()
     batch = next(runner.storage.minibatches(2))
     compiled = torch.compile(ppo_loss)
@@ -196,16 +163,7 @@ def test_compiled_loss_equals_the_eager_loss_and_its_gradients():
 )
 def test_the_output_check_after_an_update_finds_a_single_bad_row(compile):
     """``ppo.compile`` compiles the check too: it still sees one non-finite row among many."""
-    config = TrainConfig(
-        agent="cpg-actor",
-        num_envs=4,
-        total_steps=4 * 16 * 10,
-        ppo=PPOConfig(num_steps=16, num_epochs=1, num_minibatches=2, compile=compile),
-        env=FakeConfig(),
-        eval_interval=0,
-    )
-    runner = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
-    runner.start_episodes()
+    runner = fake_runner("cpg-actor", num_epochs=1, compile=compile)
     runner.collect()
     storage, ppo = runner.storage, runner.ppo
     assert ppo._outputs_are_finite(storage)

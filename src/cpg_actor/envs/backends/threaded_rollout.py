@@ -21,6 +21,7 @@ import queue
 import threading
 import weakref
 from collections.abc import Iterator
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -93,12 +94,13 @@ class ThreadedRollout:
                 "survive the fork; make the environment in the process that steps it"
             )
         chunks = iter(range(0, self.num_robots, self.chunk_size))  # shared: next() holds the GIL
-        job = (chunks, self.chunk_size, state, control, next_state, sensordata, control_spec, nstep)
+        job = _Job(chunks, self.chunk_size, state, control, next_state, sensordata,
+                   control_spec, nstep)  # fmt: skip
         for jobs in self._jobs:
             jobs.put(job)
         error = None
         try:
-            self._steppers[0](*job)
+            self._steppers[0](job)
         except BaseException as raised:  # still wait for the helpers: they use the arrays
             error = raised
         for _ in self._jobs:
@@ -114,6 +116,19 @@ class ThreadedRollout:
             thread.join()
 
 
+class _Job(NamedTuple):
+    """One ``rollout`` call, shared by the threads: they take chunks from ``chunks``."""
+
+    chunks: Iterator[int]  # the first row of each chunk
+    size: int
+    state: np.ndarray
+    control: np.ndarray
+    next_state: np.ndarray
+    sensordata: np.ndarray | None
+    control_spec: int
+    nstep: int
+
+
 class _ChunkStepper:
     """One thread's ``Rollout(nthread=0)`` and ``MjData``, stepping chunks until none is left."""
 
@@ -122,24 +137,14 @@ class _ChunkStepper:
         self.datas = [mujoco.MjData(model)]
         self.models = models
 
-    def __call__(
-        self,
-        chunks: Iterator[int],
-        size: int,
-        state: np.ndarray,
-        control: np.ndarray,
-        next_state: np.ndarray,
-        sensordata: np.ndarray | None,
-        control_spec: int,
-        nstep: int,
-    ) -> None:
-        for start in chunks:
-            rows = slice(start, start + size)
+    def __call__(self, job: _Job) -> None:
+        for start in job.chunks:
+            rows = slice(start, start + job.size)
             self.roller.rollout(
-                self.models[rows], self.datas, state[rows], control[rows],
-                control_spec=control_spec, skip_checks=True, nstep=nstep,
-                initial_warmstart=None, state=next_state[rows],
-                sensordata=None if sensordata is None else sensordata[rows],
+                self.models[rows], self.datas, job.state[rows], job.control[rows],
+                control_spec=job.control_spec, skip_checks=True, nstep=job.nstep,
+                initial_warmstart=None, state=job.next_state[rows],
+                sensordata=None if job.sensordata is None else job.sensordata[rows],
             )  # fmt: skip
 
 
@@ -147,7 +152,7 @@ def _serve(jobs: queue.SimpleQueue, done: queue.SimpleQueue, stepper: _ChunkStep
     """A helper thread: step chunks of each job until told to stop (None)."""
     while (job := jobs.get()) is not None:
         try:
-            stepper(*job)
+            stepper(job)
             done.put(None)
         except BaseException as error:  # handed to the calling thread, which raises it
             done.put(error)
