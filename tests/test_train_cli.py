@@ -12,8 +12,11 @@ from cpg_actor.checkpoint import load_checkpoint
 from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig, apply_dict, compose_config, parse_override, parse_steps
 
-# tiny runs: 2 envs x 8 steps per iteration
+# tiny runs: 2 envs x 8 steps per iteration, eager (compiling costs seconds per run; the
+# compiled path: test_train_resume_equals_straight_run_and_eval_writes_traces)
 TINY = [
+    "--set",
+    "ppo.compile=false",
     "--num-envs",
     "2",
     "--set",
@@ -105,7 +108,7 @@ def test_train_resume_equals_straight_run_and_eval_writes_traces(tmp_path, capsy
     The paper preset compiles the loss (ppo.compile), so this checks that compiled updates
     are reproducible from one process to the next too."""
     straight, split = tmp_path / "straight", tmp_path / "split"
-    fixed = ["--set", "ppo.lr_schedule=fixed"]
+    fixed = ["--set", "ppo.lr_schedule=fixed", "--set", "ppo.compile=true"]
     assert main(["train", "--run-dir", str(straight), "--total-steps", "64", *TINY, *fixed]) == 0
     assert main(["train", "--run-dir", str(split), "--total-steps", "32", *TINY, *fixed]) == 0
     assert main(["train", "--run-dir", str(split), "--resume", "--seed", "3"]) == 2
@@ -114,6 +117,7 @@ def test_train_resume_equals_straight_run_and_eval_writes_traces(tmp_path, capsy
         main(["train", "--run-dir", str(split), "--resume", "--total-steps", "64", "--no-progress"])
         == 0
     )
+    assert TrainConfig.load(split / "config.yaml").ppo.compile  # the compiled path
     a = load_checkpoint(straight / "checkpoints" / "last.pt")
     b = load_checkpoint(split / "checkpoints" / "last.pt")
     assert a["iteration"] == b["iteration"] == 4

@@ -205,6 +205,22 @@ def test_resume_from_a_saved_state_is_exact():
         other.set_state({"simulation": {}})
 
 
+def test_episode_length_and_reset_numbers_share_one_compilation(env):
+    """Configs that differ only in episode length, reset noise and clearance share the jitted
+    functions (they are values, not compiled constants) and still act on their own numbers."""
+    short = make_vector_env(3, sim="mjx", episode_steps=2, reset_noise=0.0, reset_clearance=0.05)
+    assert short.dynamics is env.dynamics
+    obs, _ = short.reset(seed=7)
+    np.testing.assert_allclose(obs[:, :2], np.tile(HOLD, (3, 1)), atol=1e-6)  # no noise
+    hip = kinematics.standing_hip_height(HOLD) + 0.05
+    np.testing.assert_allclose(obs[:, 6], hip, atol=1e-6)
+    assert not short.step(np.tile(HOLD, (3, 1)))[3].any()
+    assert short.step(np.tile(HOLD, (3, 1)))[3].all()  # truncated after 2 steps, not 5
+    noisy = env.reset(seed=7)[0]
+    assert np.abs(noisy[:, :2] - HOLD).max() > 0.01 and np.ptp(noisy[:, 6]) > 0  # noise 0.1
+    short.close()
+
+
 def test_a_blown_up_robot_is_terminated_with_finite_numbers(env):
     env.reset(seed=0)
     state = env.get_state()

@@ -148,11 +148,13 @@ def test_bad_input_gets_a_clear_error(envs):
 
 def test_cpg_actor_trains_on_the_mjx_quadruped_from_the_cli(tmp_path, capsys):
     run = tmp_path / "run"
+    # CONFIG through the flags: the step JAX compiled for the other tests serves this one
     args = ["train", "--robot", "anymal", "--sim", "mjx", "--num-envs", str(N), "--total-steps",
             "64", "--set", "ppo.num_steps=8", "--set", "ppo.num_minibatches=2",
             "--set", "ppo.num_epochs=1", "--set", "eval_interval=0",
             "--set", "env.episode_seconds=2.0", "--set", "env.command_range=[1.0,1.0]",
-            "--set", "env.reset_noise=0.0", "--run-dir", str(run), "--no-progress"]  # fmt: skip
+            "--set", "env.reset_noise=0.0", "--set", "env.tracking_sigma=0.25",
+            "--run-dir", str(run), "--no-progress"]  # fmt: skip
     assert main(args) == 0
     assert "anymal-mjx" in capsys.readouterr().out
     assert (run / "checkpoints" / "last.pt").is_file()

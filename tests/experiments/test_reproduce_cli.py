@@ -15,6 +15,7 @@ TINY = [
     "--total-steps", "96", "--num-envs", "4",
     "--set", "ppo.num_steps=8", "--set", "ppo.num_minibatches=2", "--set", "ppo.num_epochs=1",
     "--set", "env.episode_steps=10", "--eval-episodes", "2", "--no-progress",
+    "--set", "ppo.compile=false",
 ]  # fmt: skip
 
 

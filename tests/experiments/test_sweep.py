@@ -33,6 +33,7 @@ def test_sweep_trains_each_setting_and_summarises_the_evaluations(tmp_path, caps
         "--vary", "agent_config.init_std=0.3", "--workers", "2", "--no-progress",
         "--set", "num_envs=2", "--set", "ppo.num_steps=16", "--set", "ppo.num_minibatches=2",
         "--set", "ppo.num_epochs=1", "--set", "env.episode_steps=10", "--set", "eval_interval=1",
+        "--set", "ppo.compile=false",
     ]  # fmt: skip
     assert main(argv) == 0
     summary = json.loads((out / "sensitivity.json").read_text())
@@ -57,6 +58,7 @@ def test_first_seed_tunes_on_seeds_that_are_never_reported(tmp_path):
         "--total-steps", "32", "--workers", "1", "--no-progress", "--set", "num_envs=2",
         "--set", "ppo.num_steps=16", "--set", "ppo.num_minibatches=2", "--set",
         "ppo.num_epochs=1", "--set", "env.episode_steps=10", "--set", "eval_interval=1",
+        "--set", "ppo.compile=false",
     ]  # fmt: skip
     assert main(argv) == 0
     assert sorted(p.name for p in (out / "default" / "runs" / "mlp").iterdir()) == ["seed100"]

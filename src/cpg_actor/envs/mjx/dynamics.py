@@ -53,6 +53,32 @@ jnp = jax.numpy
 STATE_FIELDS = ("qpos", "qvel", "qacc_warmstart")
 
 
+class Episode(NamedTuple):
+    """The config numbers that enter the jitted functions as values, not compiled constants
+    (0-dim arrays on the env's device): hoppers that differ only in them share one
+    compilation, e.g. an evaluation's episode length or a test's reset."""
+
+    steps: Any  # int32, control steps before truncation (HopperConfig.episode_steps)
+    reset_noise: Any  # float32, rad (HopperConfig.reset_noise)
+    reset_clearance: Any  # float32, m (HopperConfig.reset_clearance)
+
+    @classmethod
+    def of(cls, config: HopperConfig, device=None) -> Episode:
+        return jax.device_put(
+            cls(
+                jnp.int32(config.episode_steps),
+                jnp.float32(config.reset_noise),
+                jnp.float32(config.reset_clearance),
+            ),
+            device,
+        )
+
+
+# the config fields the jitted functions take as values (Episode) or never read: left out of
+# the key under which dynamics_for shares them
+SHARED_ACROSS = ("episode_steps", "reset_noise", "reset_clearance", "render_width", "render_height")
+
+
 class EnvState(NamedTuple):
     """Everything the next step depends on, N rows each (a JAX pytree)."""
 
@@ -75,7 +101,8 @@ def load_model(config: HopperConfig) -> mujoco.MjModel:
 
 
 class HopperDynamics:
-    """Jitted ``reset(keys)`` and ``step(state, actions)`` for one :class:`HopperConfig`."""
+    """Jitted ``reset(keys, episode)`` and ``step(state, actions, episode)`` for one
+    :class:`HopperConfig` (its :class:`Episode` numbers come in ``episode``)."""
 
     def __init__(self, config: HopperConfig) -> None:
         config.validate()
@@ -92,12 +119,12 @@ class HopperDynamics:
         self.step = jax.jit(self._step)
 
     # -- pieces, one robot or batched ---------------------------------------------------------
-    def _fresh(self, key):
+    def _fresh(self, key, episode: Episode):
         """A new episode's first state for one robot, and the key advanced past its noise."""
         key, noise_key = jax.random.split(key)
-        scale = self.config.reset_noise
+        scale = episode.reset_noise
         joint = self._nominal + jax.random.uniform(noise_key, (2,), minval=-scale, maxval=scale)
-        hip = kinematics.standing_hip_height(joint) + self.config.reset_clearance
+        hip = kinematics.standing_hip_height(joint) + episode.reset_clearance
         qpos = jnp.concatenate([hip[None], joint]).astype(self._empty.qpos.dtype)
         return self._empty.replace(qpos=qpos), key
 
@@ -149,9 +176,9 @@ class HopperDynamics:
         return bad
 
     # -- the env ------------------------------------------------------------------------------
-    def _reset(self, keys):
+    def _reset(self, keys, episode: Episode):
         """New episodes for all N robots (``keys``: (N, 2) uint32): ``(state, obs)``."""
-        data, keys = jax.vmap(self._fresh)(keys)
+        data, keys = jax.vmap(self._fresh, in_axes=(0, None))(keys, episode)
         num = keys.shape[0]
         desired = jnp.tile(self._nominal, (num, 1))
         state = EnvState(
@@ -164,7 +191,7 @@ class HopperDynamics:
         )
         return state, self.observation(data.qpos, data.qvel, desired)
 
-    def _step(self, state: EnvState, actions):
+    def _step(self, state: EnvState, actions, episode: Episode):
         """One control step of all N robots: ``(state, outputs)`` (module docstring)."""
         config = self.config
         desired = self.desired_positions(actions)
@@ -192,7 +219,7 @@ class HopperDynamics:
                 foot_height,
             )
         terminated = self.blown_up(qpos, qvel)
-        truncated = (elapsed >= config.episode_steps) & ~terminated
+        truncated = (elapsed >= episode.steps) & ~terminated
         # a blown-up robot: zero reward, finite numbers
         terms = {name: jnp.where(terminated, 0.0, value) for name, value in terms.items()}
 
@@ -208,7 +235,7 @@ class HopperDynamics:
         hop_height = jnp.where(done, jnp.maximum(0.0, max_hip - state.standing), jnp.nan)
 
         # autoreset (SAME_STEP): the envs that ended start their next episode now
-        fresh, fresh_keys = jax.vmap(self._fresh)(state.key)
+        fresh, fresh_keys = jax.vmap(self._fresh, in_axes=(0, None))(state.key, episode)
 
         def pick(new, old):
             return jnp.where(done.reshape((-1,) + (1,) * (old.ndim - 1)), new, old)
@@ -248,8 +275,9 @@ _DYNAMICS: dict[tuple, HopperDynamics] = {}
 def dynamics_for(config: HopperConfig) -> HopperDynamics:
     """The :class:`HopperDynamics` of ``config``, made once per process and config: envs of
     the same config (training, evaluation, a resumed run) share its jitted functions, so JAX
-    compiles them once per batch size instead of once per env."""
-    key = tuple(sorted(config.to_dict().items()))
+    compiles them once per batch size instead of once per env. Configs that differ only in
+    :data:`SHARED_ACROSS` (the :class:`Episode` numbers, rendering) share them too."""
+    key = tuple(sorted((k, v) for k, v in config.to_dict().items() if k not in SHARED_ACROSS))
     if key not in _DYNAMICS:
         _DYNAMICS[key] = HopperDynamics(config)
     return _DYNAMICS[key]

@@ -23,7 +23,14 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 
 from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.hopper import check_actions, init_vector_env
-from cpg_actor.envs.mjx.dynamics import STATE_FIELDS, EnvState, dynamics_for, jax, reset_keys
+from cpg_actor.envs.mjx.dynamics import (
+    STATE_FIELDS,
+    EnvState,
+    Episode,
+    dynamics_for,
+    jax,
+    reset_keys,
+)
 from cpg_actor.envs.torch_env import EnvStep
 
 
@@ -54,6 +61,7 @@ class MjxHopperVectorEnv(VectorEnv):
             raise ValueError(f"MjxHopperVectorEnv simulates with MJX, got sim={self.config.sim!r}")
         self.dynamics = dynamics_for(self.config)
         self.jax_device = jax.devices()[0]
+        self._episode = Episode.of(self.config, self.jax_device)
         self.device = torch_device(self.jax_device)
         self.num_threads = None
         self._state: EnvState | None = None
@@ -84,7 +92,7 @@ class MjxHopperVectorEnv(VectorEnv):
         """Reset every env (seeds as :meth:`reset`): the first observations, on ``device``."""
         self._check_open("reset")
         keys = reset_keys(seed, self.num_envs, self.jax_device)
-        self._state, obs = self.dynamics.reset(keys)
+        self._state, obs = self.dynamics.reset(keys, self._episode)
         data = self._state.data
         info = {
             "hip_height": self._to_torch(data.qpos[:, 0]),
@@ -107,7 +115,7 @@ class MjxHopperVectorEnv(VectorEnv):
         return self._advance(self._to_jax(actions))
 
     def _advance(self, actions) -> EnvStep:
-        self._state, out = self.dynamics.step(self._state, actions)
+        self._state, out = self.dynamics.step(self._state, actions, self._episode)
         tensors = jax.tree.map(self._to_torch, out)
         info = {
             key: tensors[key]

@@ -300,8 +300,9 @@ _DYNAMICS: dict[tuple, AnymalDynamics] = {}
 
 
 def dynamics_for(config: QuadrupedConfig) -> AnymalDynamics:
-    """One :class:`AnymalDynamics` per config and process (its jitted functions shared)."""
-    key = repr(sorted(vars(config).items()))
+    """One :class:`AnymalDynamics` per config and process (its jitted functions shared): a
+    range read from YAML or ``--set`` (a list) is the same config as the default's tuple."""
+    key = repr(sorted((k, tuple(v) if isinstance(v, list) else v) for k, v in vars(config).items()))
     if key not in _DYNAMICS:
         _DYNAMICS[key] = AnymalDynamics(config)
     return _DYNAMICS[key]
