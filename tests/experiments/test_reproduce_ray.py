@@ -16,6 +16,7 @@ def test_reproduce_on_a_local_ray_instance(tmp_path, capsys):
         "--total-steps", "64", "--num-envs", "4", "--set", "ppo.num_steps=8",
         "--set", "ppo.num_minibatches=2", "--set", "ppo.num_epochs=1",
         "--set", "env.episode_steps=10", "--eval-episodes", "1", "--no-progress",
+        "--set", "ppo.compile=false",
     ]  # fmt: skip
     assert main(argv) == 0
     assert "Ray at local" in capsys.readouterr().out
@@ -38,7 +39,7 @@ def test_each_run_asks_ray_for_its_share_of_a_gpu(tmp_path, capsys, monkeypatch)
         "0.5", "--variants", "mlp", "--seeds", "2", "--total-steps", "32", "--num-envs", "4",
         "--set", "ppo.num_steps=8", "--set", "ppo.num_minibatches=2", "--set",
         "ppo.num_epochs=1", "--set", "env.episode_steps=10", "--eval-episodes", "1",
-        "--no-progress",
+        "--no-progress", "--set", "ppo.compile=false",
     ]  # fmt: skip
     assert main(argv) == 0
     out = capsys.readouterr().out
