@@ -14,15 +14,20 @@ pytestmark = pytest.mark.skipif(
 )
 
 
-@pytest.mark.parametrize("agent", ["cpg-actor", "mlp"])
-def test_the_fused_step_updates_as_the_separate_calls(agent):
+@pytest.mark.parametrize(
+    "agent, schedule", [("cpg-actor", "linear"), ("cpg-actor", "adaptive"), ("mlp", "adaptive")]
+)
+def test_the_fused_step_updates_as_the_separate_calls(agent, schedule):
     """Two updates (12 steps; the CPG-Actor's CPG in an Adam group of its own, at its own
-    rate): parameters, Adam moments and statistics as with the compiled loss, autograd, the
-    clip and the fused Adam kernel, within float32 rounding of how far the update moved."""
+    rate): parameters, Adam moments, statistics and the adaptive learning rate as with the
+    compiled loss, autograd, the clip and the fused Adam kernel, within float32 rounding of
+    how far the update moved."""
     cpg_rate = {"cpg_learning_rate": 3e-3} if agent == "cpg-actor" else {}
 
     def run(fused: bool):
-        runner = fake_runner(agent, compile=True, learning_rate=1e-3, **cpg_rate)
+        runner = fake_runner(
+            agent, compile=True, learning_rate=1e-3, lr_schedule=schedule, **cpg_rate
+        )
         assert runner.ppo.fused_step is not None
         if not fused:
             runner.ppo.fused_step = None
@@ -42,6 +47,11 @@ def test_the_fused_step_updates_as_the_separate_calls(agent):
             assert (value - theirs[name]).abs().max() <= 1e-3 * moved + 1e-7, name
     for a, b in zip(fused_stats, separate_stats, strict=True):
         assert a["num_minibatch_updates"] == b["num_minibatch_updates"] == 6
+        assert a["learning_rate"] == pytest.approx(b["learning_rate"], rel=1e-12)
+        if schedule == "adaptive":  # the rule acted (KL below half the target: up by 1.5)
+            assert a["learning_rate"] != 1e-3
+        if "cpg_learning_rate" in b:
+            assert a["cpg_learning_rate"] == b["cpg_learning_rate"] == 3e-3
         for key in ("policy_loss", "value_loss", "entropy"):
             assert a[key] == pytest.approx(b[key], rel=1e-3, abs=1e-6), key
     ours, theirs = fused.ppo.optimizer.state_dict(), separate.ppo.optimizer.state_dict()
@@ -56,8 +66,6 @@ def test_the_fused_step_updates_as_the_separate_calls(agent):
 
 def test_the_fused_step_is_used_only_where_it_computes_the_same_algorithm():
     assert fake_runner("mlp", compile=False).ppo.fused_step is None
-    # the adaptive rule reads each minibatch's KL before its step: the separate calls
-    assert fake_runner("mlp", compile=True, lr_schedule="adaptive").ppo.fused_step is None
     runner = fake_runner("mlp", compile=True)
     assert train_step.usable(runner.ppo.optimizer, runner.config.ppo)
     decayed = torch.optim.Adam(runner.agent.parameters(), weight_decay=0.1)

@@ -207,6 +207,8 @@ class PPO:
             for batch in storage.minibatches(cfg.num_minibatches, cfg.bptt_steps):
                 if self.fused_step is not None:  # the step below, Adam included, in one call
                     loss, grad_norm, stats = self.fused_step(batch)
+                    if cfg.lr_schedule == "adaptive":
+                        self.learning_rate = self.fused_step.learning_rate
                 else:
                     loss, stats = self.loss(self.agent, batch, cfg)
                     if cfg.lr_schedule == "adaptive":

@@ -43,10 +43,8 @@ class _Loss(nn.Module):
 
 def usable(optimizer: torch.optim.Optimizer, config: PPOConfig) -> bool:
     """Whether :class:`FusedTrainStep` computes what the update's separate calls compute: a
-    plain Adam (no weight decay, amsgrad or maximize) over parameters on the CPU in float32,
-    and a learning rate set outside the step (not ``lr_schedule="adaptive"``, whose rule reads
-    each minibatch's KL before its step)."""
-    if not isinstance(optimizer, torch.optim.Adam) or config.lr_schedule == "adaptive":
+    plain Adam (no weight decay, amsgrad or maximize) over parameters on the CPU in float32."""
+    if not isinstance(optimizer, torch.optim.Adam):
         return False
     for group in optimizer.param_groups:
         if group["amsgrad"] or group["maximize"] or group["weight_decay"]:
@@ -78,7 +76,16 @@ class FusedTrainStep:
         self.betas = [tuple(group["betas"]) for group in optimizer.param_groups]
         self.eps = [float(group["eps"]) for group in optimizer.param_groups]
         self.max_norm = float(config.max_grad_norm)
-        self._lr = torch.zeros(len(optimizer.param_groups))
+        # the adaptive rule (rsl_rl) in the step: its KL sets the rate of the groups without
+        # a fixed one before their Adam step, as PPO.update does with the separate calls
+        self.adaptive = config.lr_schedule == "adaptive"
+        self.scheduled = [
+            g for g, group in enumerate(optimizer.param_groups) if not group.get("fixed_lr")
+        ]
+        self.desired_kl = float(config.desired_kl)
+        self.lr_bounds = (float(config.min_learning_rate), float(config.max_learning_rate))
+        self._lr = torch.zeros(len(optimizer.param_groups), dtype=torch.float64)
+        self.learning_rate = float(optimizer.param_groups[self.scheduled[0]]["lr"])
         self._compiled = compile_fn(self._step)
 
     def _state(self) -> list[dict[str, Tensor]]:
@@ -102,6 +109,21 @@ class FusedTrainStep:
             return loss, (loss, stats)
 
         grads, (loss, stats) = grad(loss_of, has_aux=True)(list(data))
+        if self.adaptive:  # PPO.update's rule, in float64 as there
+            kl = stats[5].to(torch.float64)
+            rate = lr[self.scheduled[0]]
+            low, high = self.lr_bounds
+            rate = torch.where(
+                kl > 2.0 * self.desired_kl,
+                torch.clamp(rate / 1.5, min=low),
+                torch.where(
+                    (kl > 0.0) & (kl < 0.5 * self.desired_kl),
+                    torch.clamp(rate * 1.5, max=high),
+                    rate,
+                ),
+            )
+            for group in self.scheduled:
+                lr[group].copy_(rate)
         norms = torch.stack([torch.linalg.vector_norm(g, 2.0) for g in grads])
         total_norm = torch.linalg.vector_norm(norms, 2.0)
         scale = torch.clamp(self.max_norm / (total_norm + 1e-6), max=1.0)
@@ -124,7 +146,7 @@ class FusedTrainStep:
         for g, group in enumerate(self.optimizer.param_groups):
             self._lr[g] = group["lr"]
         data = [p.detach() for p in self.params]
-        return self._compiled(
+        out = self._compiled(
             data,
             [s["exp_avg"] for s in states],
             [s["exp_avg_sq"] for s in states],
@@ -132,6 +154,12 @@ class FusedTrainStep:
             self._lr,
             batch,
         )
+        if self.adaptive:  # the rate the step chose, back into the optimizer's groups
+            rates = self._lr.tolist()
+            for g in self.scheduled:
+                self.optimizer.param_groups[g]["lr"] = rates[g]
+            self.learning_rate = rates[self.scheduled[0]]
+        return out
 
 
 def make(agent: nn.Module, optimizer: Any, config: PPOConfig, loss, compile_fn):
