@@ -3,11 +3,13 @@ redesign), same agents, seeds and preset, in the same run: does the change alter
 learned?
 
     python benchmarks/learning_curves.py --reference-src OLD/src [--agents mlp cpg-actor]
-        [--seeds 3] [--total-steps 500k] [--output benchmarks/results/learning_curves.md]
+        [--seeds 3] [--total-steps 500k] [--preset paper]
+        [--output benchmarks/results/learning_curves.md]
 
 Each run is ``cpg-actor train`` in a subprocess (``PYTHONPATH`` = the tree's ``src``), one at
-a time, with the tree's own ``paper`` preset; the curves are the deterministic evaluations
-the runs log (``eval/return``, ``eval/hop_height`` in ``metrics.jsonl``). Per agent the report
+a time, with the tree's own version of the preset (default ``paper``); the curves are the
+deterministic evaluations the runs log (``eval/return``, ``eval/hop_height`` in
+``metrics.jsonl``). Per agent the report
 gives each seed's final evaluation and the mean evaluation over the run (the area under the
 curve), and the difference of the two trees' means in units of its standard error (Welch):
 |t| < 2 is "within seed noise". The figure is written next to the report.
@@ -32,12 +34,14 @@ from cpg_actor.machine import git_commit
 HERE = Path(__file__).resolve().parent
 
 
-def train(src: Path, agent: str, seed: int, total_steps: str, run_dir: Path) -> list[dict]:
+def train(
+    src: Path, agent: str, seed: int, total_steps: str, run_dir: Path, preset: str = "paper"
+) -> list[dict]:
     """One training run with the package in ``src``; its evaluation records."""
     env = dict(os.environ, PYTHONPATH=str(src))
     command = [sys.executable, "-c", "import sys; from cpg_actor.cli import main; sys.exit(main())"]
     command += ["train", "--agent", agent, "--seed", str(seed), "--total-steps", total_steps]
-    command += ["--run-dir", str(run_dir), "--no-progress"]
+    command += ["--preset", preset, "--run-dir", str(run_dir), "--no-progress"]
     subprocess.run(command, env=env, check=True, capture_output=True, text=True)
     records = [json.loads(line) for line in (run_dir / "metrics.jsonl").read_text().splitlines()]
     return [r for r in records if "eval/return" in r]
@@ -91,6 +95,7 @@ def main() -> None:
     parser.add_argument("--agents", nargs="+", default=["mlp", "cpg-actor"])
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--total-steps", default="500k")
+    parser.add_argument("--preset", default="paper", help="the training preset of both trees")
     parser.add_argument("--output", default=str(HERE / "results" / "learning_curves.md"))
     args = parser.parse_args()
     trees = {"this tree": HERE.parent / "src", "reference": Path(args.reference_src).resolve()}
@@ -101,7 +106,9 @@ def main() -> None:
             for seed in range(args.seeds):
                 for tree, src in trees.items():
                     run_dir = Path(tmp) / f"{agent}-{tree.replace(' ', '_')}-{seed}"
-                    curves[agent, tree, seed] = train(src, agent, seed, args.total_steps, run_dir)
+                    curves[agent, tree, seed] = train(
+                        src, agent, seed, args.total_steps, run_dir, args.preset
+                    )
                     s = summary(curves[agent, tree, seed])
                     print(f"{agent} {tree} seed {seed}: {s}", flush=True)
     output = Path(args.output)
@@ -112,9 +119,10 @@ def main() -> None:
         "",
         f"Measured {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC with "
         f"`python benchmarks/learning_curves.py --reference-src REF/src --agents "
-        f"{' '.join(args.agents)} --seeds {args.seeds} --total-steps {args.total_steps}`: this "
+        f"{' '.join(args.agents)} --seeds {args.seeds} --total-steps {args.total_steps}"
+        f"{'' if args.preset == 'paper' else ' --preset ' + args.preset}`: this "
         f"tree at commit {commits['this tree']}, REF at commit "
-        f"{commits['reference']} (at the start); each tree's default (`paper`) preset, seeds "
+        f"{commits['reference']} (at the start); each tree's `{args.preset}` preset, seeds "
         f"0..{args.seeds - 1}. Figure: `{output.with_suffix('.png').name}`.",
         "",
         "| agent | tree | final eval return per seed | mean | final hop height (m) | "
