@@ -6,8 +6,8 @@ saved in the run's ``config.yaml`` (``preset``).
 
 * ``paper``: OpenAI Baselines' ppo2 settings for MuJoCo tasks, the framework the paper used
   (every number and its source: :class:`cpg_actor.ppo.PPOConfig`). These are the dataclass
-  defaults; the preset only adds ``ppo.compile`` (the same algorithm, its minibatch loss,
-  the rollout's policy step and reward scaling compiled by ``torch.compile``: 2 to 2.8x
+  defaults; the preset only adds ``ppo.compile`` (the same algorithm, its gradient step,
+  the rollout's policy step and reward scaling compiled by ``torch.compile``: several times
   faster updates, faster rollouts, ``benchmarks/train_throughput.py``).
 * ``throughput``: the massively parallel recipe of legged_gym / rsl_rl (Rudin et al. 2021):
   many envs, short rollouts, few large minibatches, a learning rate adapted to a target KL.

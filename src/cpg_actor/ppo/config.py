@@ -59,10 +59,10 @@ class PPOConfig:
     # torch.compile the minibatch loss (forward and backward) and the rollout's policy step
     # (Policy.compile: normaliser, agent, sampling): same algorithm, updates about twice as
     # fast at small minibatches and the rollout's own cost about 30 % lower, after compiles of
-    # a few seconds per run; needs a C++ compiler (inductor). On the CPU, unless lr_schedule
-    # is "adaptive", the whole gradient step (loss, gradient, clip, Adam) is one compiled
-    # function (ppo/train_step.py), faster again. Results differ from eager in the last bits,
-    # not run to run.
+    # a few seconds per run; needs a C++ compiler (inductor). On the CPU the whole gradient
+    # step (loss, gradient, clip, the adaptive rate, Adam) is one compiled function
+    # (ppo/train_step.py), faster again. Results differ from eager in the last bits, not run
+    # to run.
     compile: bool = False
     # the gradient through the CPG (beyond the paper): the PPO loss replays each step's CPG
     # state from the state stored k - 1 steps earlier, so the gradient reaches the CPG and

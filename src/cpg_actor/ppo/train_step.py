@@ -4,10 +4,13 @@ At the paper's settings the update makes 320 gradient steps of 64 samples per 2,
 and each step's cost is mostly overhead around small kernels: the autograd engine running the
 compiled backward, then the clip and the Adam step as separate calls. :class:`FusedTrainStep`
 compiles the whole step, ``torch.func.grad`` of the PPO loss (:func:`ppo_loss`) through
-``functional_call``, the global-norm clip and the Adam update, into one ``torch.compile``d
-function that writes the new parameters and the Adam moments in place: about 1.8x faster per
-step than the compiled loss with autograd, the lean clip and the fused Adam kernel (64-sample
-minibatches, 2-core CPU; ``docs/training.md``, "Throughput").
+``functional_call``, the global-norm clip, the adaptive learning-rate rule (``lr_schedule=
+"adaptive"``: the step's KL sets the rate before its Adam update, as ``PPO.update`` does) and
+the Adam update, into one ``torch.compile``d function that writes the new parameters, the Adam
+moments and the rate in place. On a 2-core CPU the paper preset's update (64-sample
+minibatches) is about 1.5x faster than with the compiled loss, autograd, the lean clip and the
+fused Adam kernel, the throughput preset's (2,048 samples) about 1.3x (``docs/training.md``,
+"Throughput").
 
 It computes the same algorithm with the same Adam state (``optimizer.state``: ``step``,
 ``exp_avg``, ``exp_avg_sq``, so checkpoints and resume are unchanged), but not the same bits
