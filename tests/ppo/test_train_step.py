@@ -14,9 +14,7 @@ pytestmark = pytest.mark.skipif(
 )
 
 
-@pytest.mark.parametrize(
-    "agent, schedule", [("cpg-actor", "linear"), ("cpg-actor", "adaptive"), ("mlp", "adaptive")]
-)
+@pytest.mark.parametrize("agent, schedule", [("cpg-actor", "adaptive"), ("mlp", "linear")])
 def test_the_fused_step_updates_as_the_separate_calls(agent, schedule):
     """Two updates (12 steps; the CPG-Actor's CPG in an Adam group of its own, at its own
     rate): parameters, Adam moments, statistics and the adaptive learning rate as with the
