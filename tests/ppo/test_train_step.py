@@ -65,9 +65,9 @@ def test_the_fused_step_updates_as_the_separate_calls(agent, schedule):
 def test_the_fused_step_is_used_only_where_it_computes_the_same_algorithm():
     assert fake_runner("mlp", compile=False).ppo.fused_step is None
     runner = fake_runner("mlp", compile=True)
-    assert train_step.usable(runner.ppo.optimizer, runner.config.ppo)
+    assert train_step.usable(runner.ppo.optimizer)
     decayed = torch.optim.Adam(runner.agent.parameters(), weight_decay=0.1)
-    assert not train_step.usable(decayed, runner.config.ppo)
+    assert not train_step.usable(decayed)
 
 
 def test_a_non_finite_fused_step_undoes_the_update():

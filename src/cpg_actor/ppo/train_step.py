@@ -44,7 +44,7 @@ class _Loss(nn.Module):
         return self.loss(self.agent, batch, self.config)
 
 
-def usable(optimizer: torch.optim.Optimizer, config: PPOConfig) -> bool:
+def usable(optimizer: torch.optim.Optimizer) -> bool:
     """Whether :class:`FusedTrainStep` computes what the update's separate calls compute: a
     plain Adam (no weight decay, amsgrad or maximize) over parameters on the CPU in float32."""
     if not isinstance(optimizer, torch.optim.Adam):
@@ -167,6 +167,6 @@ class FusedTrainStep:
 
 def make(agent: nn.Module, optimizer: Any, config: PPOConfig, loss, compile_fn):
     """A :class:`FusedTrainStep` where :func:`usable`, else None."""
-    if not usable(optimizer, config):
+    if not usable(optimizer):
         return None
     return FusedTrainStep(agent, optimizer, config, loss, compile_fn)
