@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from cpg_actor.machine import git_commit
+from cpg_actor.presets import PRESETS
 
 HERE = Path(__file__).resolve().parent
 
@@ -95,7 +96,9 @@ def main() -> None:
     parser.add_argument("--agents", nargs="+", default=["mlp", "cpg-actor"])
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--total-steps", default="500k")
-    parser.add_argument("--preset", default="paper", help="the training preset of both trees")
+    parser.add_argument(
+        "--preset", default="paper", choices=sorted(PRESETS), help="the preset of both trees"
+    )
     parser.add_argument("--output", default=str(HERE / "results" / "learning_curves.md"))
     args = parser.parse_args()
     trees = {"this tree": HERE.parent / "src", "reference": Path(args.reference_src).resolve()}

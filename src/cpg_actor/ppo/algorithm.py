@@ -17,7 +17,7 @@ from torch import Tensor
 from cpg_actor.agents.base import Agent
 from cpg_actor.ppo import train_step
 from cpg_actor.ppo.config import PPOConfig
-from cpg_actor.ppo.optimizer import adam_step, clip_grad_norm_
+from cpg_actor.ppo.optimizer import adam_step, adaptive_learning_rate, clip_grad_norm_
 from cpg_actor.ppo.storage import RolloutStorage
 
 
@@ -207,18 +207,14 @@ class PPO:
             for batch in storage.minibatches(cfg.num_minibatches, cfg.bptt_steps):
                 if self.fused_step is not None:  # the step below, Adam included, in one call
                     loss, grad_norm, stats = self.fused_step(batch)
-                    if cfg.lr_schedule == "adaptive":
-                        self.learning_rate = self.fused_step.learning_rate
+                    if cfg.lr_schedule == "adaptive":  # the rate the step chose and used
+                        self.set_learning_rate(self.fused_step.learning_rate)
                 else:
                     loss, stats = self.loss(self.agent, batch, cfg)
                     if cfg.lr_schedule == "adaptive":
-                        kl_value = stats[5].item()
-                        if kl_value > 2.0 * cfg.desired_kl:
-                            lr = max(cfg.min_learning_rate, self.learning_rate / 1.5)
-                            self.set_learning_rate(lr)
-                        elif 0.0 < kl_value < 0.5 * cfg.desired_kl:
-                            lr = min(cfg.max_learning_rate, self.learning_rate * 1.5)
-                            self.set_learning_rate(lr)
+                        rate = torch.tensor(self.learning_rate, dtype=torch.float64)
+                        kl = stats[5].detach().cpu()
+                        self.set_learning_rate(adaptive_learning_rate(kl, rate, cfg).item())
                     for p in self._clipped:  # optimizer.zero_grad(set_to_none=True), leaner
                         p.grad = None
                     loss.backward()

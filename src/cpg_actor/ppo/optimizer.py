@@ -17,6 +17,22 @@ import torch
 from torch import Tensor
 
 
+def adaptive_learning_rate(kl: Tensor, rate: Tensor, config) -> Tensor:
+    """The learning rate after a minibatch of KL ``kl`` (``lr_schedule="adaptive"``, rsl_rl):
+    ``rate / 1.5`` (at least ``min_learning_rate``) when KL > 2 ``desired_kl``, ``rate x 1.5``
+    (at most ``max_learning_rate``) when 0 < KL < ``desired_kl`` / 2, else ``rate``. In float64
+    (``rate`` a float64 tensor): the same numbers as Python floats. Pure tensor code, so the
+    fused step (``ppo/train_step.py``) computes it inside its compiled function."""
+    kl = kl.to(torch.float64)
+    low, high = float(config.min_learning_rate), float(config.max_learning_rate)
+    desired = float(config.desired_kl)
+    return torch.where(
+        kl > 2.0 * desired,
+        torch.clamp(rate / 1.5, min=low),
+        torch.where((kl > 0.0) & (kl < 0.5 * desired), torch.clamp(rate * 1.5, max=high), rate),
+    )
+
+
 def _uniform(tensors: list[Tensor]) -> bool:
     """One device and one dtype: torch's functions then make a single group, in this order."""
     first = tensors[0]

@@ -29,6 +29,7 @@ from torch import Tensor, nn
 from torch.func import functional_call, grad
 
 from cpg_actor.ppo.config import PPOConfig
+from cpg_actor.ppo.optimizer import adaptive_learning_rate
 
 
 class _Loss(nn.Module):
@@ -85,8 +86,7 @@ class FusedTrainStep:
         self.scheduled = [
             g for g, group in enumerate(optimizer.param_groups) if not group.get("fixed_lr")
         ]
-        self.desired_kl = float(config.desired_kl)
-        self.lr_bounds = (float(config.min_learning_rate), float(config.max_learning_rate))
+        self.config = config
         self._lr = torch.zeros(len(optimizer.param_groups), dtype=torch.float64)
         self.learning_rate = float(optimizer.param_groups[self.scheduled[0]]["lr"])
         self._compiled = compile_fn(self._step)
@@ -112,19 +112,8 @@ class FusedTrainStep:
             return loss, (loss, stats)
 
         grads, (loss, stats) = grad(loss_of, has_aux=True)(list(data))
-        if self.adaptive:  # PPO.update's rule, in float64 as there
-            kl = stats[5].to(torch.float64)
-            rate = lr[self.scheduled[0]]
-            low, high = self.lr_bounds
-            rate = torch.where(
-                kl > 2.0 * self.desired_kl,
-                torch.clamp(rate / 1.5, min=low),
-                torch.where(
-                    (kl > 0.0) & (kl < 0.5 * self.desired_kl),
-                    torch.clamp(rate * 1.5, max=high),
-                    rate,
-                ),
-            )
+        if self.adaptive:  # PPO.update's rule, the same function
+            rate = adaptive_learning_rate(stats[5], lr[self.scheduled[0]], self.config)
             for group in self.scheduled:
                 lr[group].copy_(rate)
         norms = torch.stack([torch.linalg.vector_norm(g, 2.0) for g in grads])
@@ -157,11 +146,8 @@ class FusedTrainStep:
             self._lr,
             batch,
         )
-        if self.adaptive:  # the rate the step chose, back into the optimizer's groups
-            rates = self._lr.tolist()
-            for g in self.scheduled:
-                self.optimizer.param_groups[g]["lr"] = rates[g]
-            self.learning_rate = rates[self.scheduled[0]]
+        if self.adaptive:  # the rate the step chose; PPO.set_learning_rate puts it in the groups
+            self.learning_rate = self._lr[self.scheduled[0]].item()
         return out
 
 
