@@ -5,15 +5,21 @@ For each backend and number of environments N the script measures, in the same r
 * ``env``: ``HopperVectorEnv(N).step`` with hopping actions (each env follows a 2 Hz
   squat-and-extend sinusoid with its own phase), everything included: actuator law every
   physics substep, observation, reward, autoreset. One env step = ``decimation`` substeps.
-* MuJoCo ceilings, the same model with its actuators disabled and the same robot states, no
-  environment:
-  ``mj_step loop``: a bare Python loop of ``mujoco.mj_step`` over N ``MjData`` split across
-  the same number of threads (``concurrent.futures``; mj_step releases the GIL), and
+* MuJoCo ceilings (:class:`ReplayCeiling`), no environment: the motion of the ``env`` row
+  recorded (each control step's starting states and the mean joint torques the env applied)
+  and replayed from those states with the model's actuators off and the torques held
+  constant, so the physics visits the same contacts and flight phases and does strictly less
+  work than the env:
+  ``mj_step loop``: a bare Python loop of ``mj_setState`` and ``mujoco.mj_step`` over the
+  robots split across the same number of threads (``concurrent.futures``; mj_step releases
+  the GIL), and
   ``rollout``: ``mujoco.rollout`` doing ``decimation`` steps per robot in C++, the faster of
   MuJoCo's own thread pool (``Rollout(nthread=threads)``) and the env's
   :class:`~cpg_actor.envs.backends.threaded_rollout.ThreadedRollout` (the calling thread and
-  helpers), both timed. Both hold the torques constant, so they do strictly less work than
-  the env.
+  helpers), both timed.
+  Until 27 Nov 2026 the ceilings stepped one snapshot of states (50 control steps in) over
+  and over; what a step costs depends on the phase of the hop (contacts), by up to 1.5x, so
+  that measured one phase, not the motion.
 * PyBullet ceiling: ``stepSimulation`` in a bare loop on the same worlds of N robots.
 
 Throughput is env steps (robot x control step) per second; a ceiling's is its substeps per
@@ -27,6 +33,7 @@ Run: ``python benchmarks/env_throughput.py`` (writes ``benchmarks/results/env_th
 from __future__ import annotations
 
 import argparse
+import copy
 import datetime
 import os
 import platform
@@ -80,99 +87,170 @@ def best_rate(fn, work: int, repeats: int) -> float:
     return best
 
 
-def bench_size(sim: str, num_envs: int, repeats: int, budget: int) -> dict:
-    config = HopperConfig(sim=sim)
-    env = HopperVectorEnv(num_envs, config)
-    steps = max(5, min(2000, budget // num_envs))
-    actions = hopping_actions(num_envs, 50 + steps, config.control_dt)
-    env.reset(seed=0)
-    for t in range(50):  # get the robots hopping before timing
-        env.step(actions[t])
+WARMUP_STEPS = 50  # control steps of hopping before anything is timed or recorded
 
-    def run_env() -> None:
-        for t in range(steps):
-            env.step(actions[50 + t])
 
-    backend = env.sim.backend
-    row = {"sim": sim, "N": num_envs, "threads": env.num_threads, "steps": steps}
-    decimation = config.decimation
-    if sim == "mujoco":
+class MotionRecorder:
+    """Records the control steps of a MuJoCo backend (:class:`~cpg_actor.envs.backends.
+    mujoco_backend.MujocoBackend`): the robots' full physics state before each and the mean
+    joint torques it applied (what ``track`` returns), the motion a :class:`ReplayCeiling`
+    replays. It wraps ``track`` on this one backend until :meth:`stop`; it copies a (K, 8)
+    state per control step and changes nothing that is simulated."""
+
+    def __init__(self, backend) -> None:
+        self.backend = backend
+        self.states: list[np.ndarray] = []
+        self.torques: list[np.ndarray] = []
+        self.substeps = 0  # per control step, as track() was called
+        self._track = backend.track
+        backend.track = self._record  # an instance attribute: shadows the method
+
+    def _record(self, desired: np.ndarray, substeps: int) -> np.ndarray:
+        self.states.append(self.backend.get_state())
+        self.substeps = substeps
+        torque = self._track(desired, substeps)
+        self.torques.append(np.array(torque, dtype=np.float64))
+        return torque
+
+    def stop(self) -> tuple[np.ndarray, np.ndarray]:
+        """Unwrap ``track``; the recorded states (T, K, nstate) and torques (T, K, 2)."""
+        del self.backend.track
+        return np.stack(self.states), np.stack(self.torques)
+
+
+class ReplayCeiling:
+    """The raw physics of a recorded motion, no environment: from each recorded state, the
+    control step's ``decimation`` substeps with the model's actuators off and the recorded
+    mean joint torques held constant (no actuator law, observation, reward or Python
+    between substeps). So it steps the states the env visited (its contacts, its flight
+    phases), doing strictly less work per substep than the env.
+
+    * :meth:`rollout_rate`: ``mujoco.rollout`` of all K robots per control step, the faster
+      of MuJoCo's thread pool (``Rollout(nthread=threads)``) and the env's own
+      :class:`~cpg_actor.envs.backends.threaded_rollout.ThreadedRollout`.
+    * :meth:`loop_rate`: a Python loop of ``mj_setState`` and ``mujoco.mj_step`` over the
+      robots, split across ``threads`` threads (``mj_step`` releases the GIL).
+    """
+
+    def __init__(self, model, states: np.ndarray, torques: np.ndarray, decimation: int,
+                 threads: int) -> None:  # fmt: skip
         import mujoco
         from mujoco import rollout
 
-        from cpg_actor.envs.actuator import Actuator
-        from cpg_actor.envs.backends.mujoco_backend import STATE_SPEC, load_model
         from cpg_actor.envs.backends.threaded_rollout import ThreadedRollout
 
-        # the project's MJCF with its actuators switched off: constant joint torques instead
-        model = load_model(config.physics_dt, config.foot_friction)
-        model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ACTUATION.value
-        torque_spec = mujoco.mjtState.mjSTATE_QFRC_APPLIED.value
-        states = backend._state.copy()
-        torque = Actuator.from_config(config)(env.sim.desired, backend.joint_pos, backend.joint_vel)
-        datas = []
-        for i in range(num_envs):
-            data = mujoco.MjData(model)
-            mujoco.mj_setState(model, data, states[i], STATE_SPEC)
-            data.qfrc_applied[1:3] = torque[i]
-            datas.append(data)
-        threads = env.num_threads
-        chunks = [datas[i::threads] for i in range(threads)]
-        pool = ThreadPoolExecutor(threads) if threads > 1 else None
+        self.mujoco = mujoco
+        self.model = copy.copy(model)
+        self.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ACTUATION.value
+        self.states = np.ascontiguousarray(states, dtype=np.float64)
+        self.torques = torques
+        self.decimation = decimation
+        self.threads = max(1, threads)
+        steps, robots = states.shape[:2]
+        self.control = np.zeros((steps, robots, decimation, self.model.nv))
+        self.control[..., 1:3] = torques[:, :, None, :]  # hip and knee (dof 0: the rail)
+        self.out = np.empty((robots, decimation, states.shape[-1]))
+        self.roller = rollout.Rollout(nthread=self.threads if self.threads > 1 else 0)
+        self.roll_datas = [mujoco.MjData(self.model) for _ in range(self.threads)]
+        self.threaded = ThreadedRollout(self.model, robots, self.threads)
+        self.pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
+        self.datas = [mujoco.MjData(self.model) for _ in range(robots)]
+        self.chunks = [list(range(robots))[i :: self.threads] for i in range(self.threads)]
 
-        loop_steps = max(1, steps // 4)  # the bare loop is timed on a quarter of the steps
+    def rollout_rate(self) -> float:
+        """Control steps per second of ``mujoco.rollout`` over the whole recorded motion."""
+        steps, robots = self.states.shape[:2]
+        spec = self.mujoco.mjtState.mjSTATE_QFRC_APPLIED.value
+        chunk = max(1, robots // (4 * self.threads))
 
-        def loop(chunk) -> None:
-            for _ in range(loop_steps * decimation):
-                for data in chunk:
-                    mujoco.mj_step(model, data)
-
-        def run_loop() -> None:
-            if pool is None:
-                loop(datas)
-            else:
-                list(pool.map(loop, chunks))
-
-        roller = rollout.Rollout(nthread=threads if threads > 1 else 0)
-        roll_datas = [mujoco.MjData(model) for _ in range(max(1, threads))]
-        control = np.zeros((num_envs, decimation, model.nv))
-        control[:, :, 1:3] = torque[:, None, :]
-        out = np.empty((num_envs, decimation, states.shape[1]))
-
-        def run_rollout() -> None:
-            for _ in range(steps):
-                roller.rollout(
-                    [model] * num_envs, roll_datas, states, control, control_spec=torque_spec,
-                    skip_checks=True, nstep=decimation, initial_warmstart=None, state=out,
-                    sensordata=None, chunk_size=max(1, num_envs // (4 * threads)),
+        def pool() -> None:
+            for t in range(steps):
+                self.roller.rollout(
+                    [self.model] * robots, self.roll_datas, self.states[t], self.control[t],
+                    control_spec=spec, skip_checks=True, nstep=self.decimation,
+                    initial_warmstart=None, state=self.out, sensordata=None, chunk_size=chunk,
                 )  # fmt: skip
 
-        # the env's own way of stepping: the calling thread and helper threads
-        threaded = ThreadedRollout(model, num_envs, threads)
+        def threaded() -> None:
+            for t in range(steps):
+                self.threaded.rollout(
+                    self.states[t], self.control[t], self.out, None, spec, self.decimation
+                )
 
-        def run_threaded() -> None:
-            for _ in range(steps):
-                threaded.rollout(states, control, out, None, torque_spec, decimation)
+        work = steps * robots
+        return max(best_rate(pool, work, 1), best_rate(threaded, work, 1))
 
+    def loop_rate(self) -> float:
+        """Control steps per second of a bare ``mj_step`` loop over a quarter of the motion."""
+        mujoco, model = self.mujoco, self.model
+        spec = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
+        steps = max(1, len(self.states) // 4)
+
+        def loop(rows: list[int]) -> None:
+            for t in range(steps):
+                for i in rows:
+                    data = self.datas[i]
+                    mujoco.mj_setState(model, data, self.states[t, i], spec)
+                    data.qfrc_applied[1:3] = self.torques[t, i]
+                    for _ in range(self.decimation):
+                        mujoco.mj_step(model, data)
+
+        def run() -> None:
+            if self.pool is None:
+                loop(self.chunks[0])
+            else:
+                list(self.pool.map(loop, self.chunks))
+
+        return best_rate(run, steps * self.states.shape[1], 1)
+
+    def close(self) -> None:
+        if self.pool is not None:
+            self.pool.shutdown()
+        self.roller.close()
+        self.threaded.close()
+
+
+def bench_size(sim: str, num_envs: int, repeats: int, budget: int) -> dict:
+    """One row: the env and, for MuJoCo, the ceilings replaying the env's own motion."""
+    config = HopperConfig(sim=sim)
+    env = HopperVectorEnv(num_envs, config)
+    steps = max(5, min(2000, budget // num_envs))
+    actions = hopping_actions(num_envs, WARMUP_STEPS + steps, config.control_dt)
+
+    def start() -> None:  # the same motion every time: reset, get the robots hopping
+        env.reset(seed=0)
+        for t in range(WARMUP_STEPS):
+            env.step(actions[t])
+
+    def run_env() -> None:
+        for t in range(steps):
+            env.step(actions[WARMUP_STEPS + t])
+
+    backend = env.sim.backend
+    row = {"sim": sim, "N": num_envs, "threads": env.num_threads, "steps": steps}
+    if sim == "mujoco":
+        start()
+        recorder = MotionRecorder(backend)
+        run_env()
+        ceiling = ReplayCeiling(backend.model, *recorder.stop(), config.decimation,
+                                env.num_threads)  # fmt: skip
         env_rate = loop_rate = roll_rate = 0.0
         for _ in range(repeats):  # interleaved: a busy neighbour affects them all alike
+            start()
             env_rate = max(env_rate, best_rate(run_env, steps * num_envs, 1))
-            loop_rate = max(loop_rate, best_rate(run_loop, loop_steps * num_envs, 1))
-            roll_rate = max(roll_rate, best_rate(run_rollout, steps * num_envs, 1))
-            roll_rate = max(roll_rate, best_rate(run_threaded, steps * num_envs, 1))
-        if pool is not None:
-            pool.shutdown()
-        roller.close()
-        threaded.close()
+            loop_rate = max(loop_rate, ceiling.loop_rate())
+            roll_rate = max(roll_rate, ceiling.rollout_rate())
+        ceiling.close()
         row.update(env=env_rate, loop=loop_rate, rollout=roll_rate)
     else:
         clients = [world.client for world in backend._worlds]
 
         def run_bare() -> None:
-            for _ in range(steps * decimation):
+            for _ in range(steps * config.decimation):
                 for client in clients:
                     client.stepSimulation()
 
+        start()
         env_rate = bare_rate = 0.0
         for _ in range(repeats):
             env_rate = max(env_rate, best_rate(run_env, steps * num_envs, 1))
@@ -252,8 +330,9 @@ def main(argv: list[str] | None = None) -> int:
         "PyBullet: `stepSimulation` on the same worlds of N robots (16 per world). "
         "*mujoco.rollout*: the same substeps looped in C++ by `mujoco.rollout`, the faster of "
         "MuJoCo's thread pool and the env's `ThreadedRollout` (calling thread and helpers). "
-        "Ceilings start from the env's robot states, switch the model's actuators off and "
-        "hold the joint torques constant (no actuator law, no observation).",
+        "MuJoCo's ceilings replay the env row's own motion: from each control step's recorded "
+        "states, with the model's actuators off and the mean joint torques the env applied held "
+        "constant (no actuator law, no observation).",
         "",
         "*threads*: the env's MuJoCo stepping threads (`HopperVectorEnv` default: the usable "
         "cores, at least 8 robots per thread); the bare loop and rollout use as many. When "

@@ -6,8 +6,9 @@
 For each core count C and number of envs N, a subprocess pinned to C cores
 (``os.sched_setaffinity``) trains the throughput preset with N envs: the simulator's threads
 follow the usable cores (at least 8 robots per thread) and PyTorch gets C threads. It
-reports the training SPS after a warm-up iteration, next to the physics ceiling
-(``mujoco.rollout`` of N robots on the same C cores), both measured in the same subprocess.
+reports the training SPS after a warm-up iteration, next to the physics ceiling of the same
+motion (``mujoco.rollout`` replaying the control steps the training visited, on the same C
+cores: ``train_throughput.py``), both measured in the same subprocess.
 Core counts above the machine's are skipped.
 """
 
@@ -30,15 +31,14 @@ def measure(agent: str, num_envs: int, iterations: int) -> dict:
 
     sys.path.insert(0, str(HERE))
     from cpg_actor.machine import usable_cores
-    from train_throughput import ceiling
     from train_throughput import measure as train_measure
 
     cores = usable_cores()
     torch.set_num_threads(cores)
     result = train_measure(
-        agent, "throughput", iterations, compile=True, num_envs=num_envs, torch_threads=cores
-    )
-    result["ceiling"] = ceiling(num_envs)
+        agent, "throughput", iterations, compile=True, num_envs=num_envs, torch_threads=cores,
+        ceiling=True,
+    )  # fmt: skip
     result["cores"] = cores
     return result
 

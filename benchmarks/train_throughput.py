@@ -1,6 +1,8 @@
 """End-to-end PPO training throughput per agent and preset: control steps per second, the
 collection cost per control step, the PPO update cost per sample, next to the raw physics
-ceiling (``mujoco.rollout`` on the project's MJCF, same number of robots, same run).
+ceiling of the same motion, in the same run: ``mujoco.rollout`` on the project's MJCF
+replaying the control steps the row's training visited (:class:`env_throughput.ReplayCeiling`:
+their recorded states, the torques the env applied held constant, the actuators off).
 
     python benchmarks/train_throughput.py [--presets paper throughput] [--agents mlp cpg-actor]
         [--iterations 4] [--reference-src OLD/src] [--output benchmarks/results/train_throughput.md]
@@ -64,15 +66,20 @@ def measure(
     num_envs: int | None = None,
     torch_threads: int = 1,
     update_threads: int | None = None,
+    ceiling: bool = False,
 ) -> dict[str, float]:
-    """One warm-up iteration (and the compile), then ``iterations`` timed ones."""
+    """One warm-up iteration (and the compile), then ``iterations`` timed ones; with
+    ``ceiling``, also the physics ceiling of the timed iterations' motion (``ceiling``)."""
     config = make_config(agent, preset, compile, device, num_envs, torch_threads, update_threads)
     config.total_steps = (iterations + 1) * config.steps_per_iteration
     runner = Runner(config, run_dir=None, tensorboard=False)
     collect = update = simulation = 0.0
+    recorder = None
     try:
         runner.start_episodes()
         for i in range(iterations + 1):
+            if i == 1 and ceiling:
+                recorder = record_motion(runner)
             start = time.perf_counter()
             info = runner.collect()
             collected = time.perf_counter()
@@ -85,10 +92,13 @@ def measure(
                 collect += collected - start
                 update += end - collected
                 simulation += info["simulation_time"]
+        motion = recorder.stop() if recorder is not None else None
     finally:
         runner.close()
     samples = iterations * config.steps_per_iteration
+    extra = {"ceiling": replay_ceiling(recorder, motion)} if motion is not None else {}
     return {
+        **extra,
         "num_envs": config.num_envs,
         "SPS": samples / (collect + update),
         "collect_us": 1e6 * collect / samples,
@@ -99,12 +109,40 @@ def measure(
     }
 
 
-def ceiling(num_envs: int) -> float:
-    """``mujoco.rollout`` control steps per second for ``num_envs`` robots (env_throughput)."""
+def _benchmarks():
     sys.path.insert(0, str(Path(__file__).parent))
-    from env_throughput import bench_size
+    import env_throughput
 
-    return bench_size("mujoco", num_envs, repeats=2, budget=50_000)["rollout"]
+    return env_throughput
+
+
+def mujoco_backend(runner: Runner):
+    """The run's MuJoCo backend (below any env wrapper, e.g. Cho et al.'s CPG), or None."""
+    env = runner.env.unwrapped
+    while not hasattr(env, "sim") and hasattr(env, "env"):
+        env = env.env
+    backend = getattr(getattr(env, "sim", None), "backend", None)
+    return backend if getattr(backend, "name", None) == "mujoco" else None
+
+
+def record_motion(runner: Runner):
+    """A :class:`env_throughput.MotionRecorder` on the run's MuJoCo backend (None if other)."""
+    backend = mujoco_backend(runner)
+    return None if backend is None else _benchmarks().MotionRecorder(backend)
+
+
+def replay_ceiling(recorder, motion: tuple, repeats: int = 2) -> float:
+    """Control steps per second of ``mujoco.rollout`` replaying the ``motion`` that
+    ``recorder`` recorded (:class:`env_throughput.ReplayCeiling`, on as many threads as the
+    backend), best of ``repeats``."""
+    backend = recorder.backend
+    ceiling = _benchmarks().ReplayCeiling(
+        backend.model, *motion, recorder.substeps, backend.num_threads
+    )
+    try:
+        return max(ceiling.rollout_rate() for _ in range(repeats))
+    finally:
+        ceiling.close()
 
 
 def reference(
@@ -120,7 +158,7 @@ def reference(
 
 def measure_all(args: argparse.Namespace) -> dict[str, dict[str, float]]:
     """Every row of the table once: presets x agents (eager, compiled, update on 1 thread)."""
-    extra = {"device": args.device, "num_envs": args.num_envs}
+    extra = {"device": args.device, "num_envs": args.num_envs, "ceiling": not args.json}
     variants = [("", {})]
     if args.compile:
         variants.append((" + compile", {"compile": True}))
@@ -152,6 +190,13 @@ def paired_speedups(runs: list[dict], ref_runs: list[dict], key: str, field: str
     each repeat, the two measured back to back: a slow spell of a shared machine hits both."""
     pairs = [(run[key][field], ref[key][field]) for run, ref in zip(runs, ref_runs, strict=True)]
     return [new / old if field == "SPS" else old / new for new, old in pairs]
+
+
+def fmt_ceiling(row: dict[str, float]) -> str:
+    """The row's ceiling and its share of it ("- | -" without a MuJoCo ceiling, e.g. MJX)."""
+    if "ceiling" not in row:
+        return "- | -"
+    return f"{row['ceiling']:,.0f} | {row['SPS'] / row['ceiling']:.0%}"
 
 
 def fmt_speedup(ratios: list[float]) -> str:
@@ -188,7 +233,7 @@ def main() -> None:
 
     if args.repeats < 1:
         parser.error(f"--repeats must be >= 1, got {args.repeats}")
-    runs, ref_runs, ceiling_runs = [], [], []
+    runs, ref_runs = [], []
     for _ in range(args.repeats):  # interleaved: a busy neighbour affects all alike
         runs.append(measure_all(args))
         if args.json:
@@ -199,14 +244,11 @@ def main() -> None:
                     args.reference_src, args.presets, args.agents, args.iterations, args.compile
                 )
             )
-        sizes = sorted({r["num_envs"] for r in runs[-1].values()})
-        ceiling_runs.append({n: ceiling(n) for n in sizes})
     results = median_of(runs)
     if args.json:
         print(json.dumps(results))
         return
     ref = median_of(ref_runs) if ref_runs else {}
-    ceilings = {n: statistics.median(c[n] for c in ceiling_runs) for n in ceiling_runs[0]}
     commit = subprocess.run(
         ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=False
     ).stdout.strip()
@@ -231,12 +273,13 @@ def main() -> None:
         + (f", networks and PPO on {torch.cuda.get_device_name()}" if args.device != "cpu" else "")
         + ".",
         "",
-        "Physics ceiling in the same run (`mujoco.rollout`, 10 substeps per control step, "
-        "constant torques, the faster of MuJoCo's thread pool and the env's `ThreadedRollout`): "
-        + ", ".join(f"**{c:,.0f}** control steps/s at {n} robots" for n, c in ceilings.items())
-        + ".",
+        "Ceiling: the raw physics of each row's own motion, measured right after it "
+        "(`mujoco.rollout` replaying the control steps its timed iterations visited: from "
+        "each recorded state, 10 substeps with the actuators off and the mean joint torques "
+        "the env applied held constant; the faster of MuJoCo's thread pool and the env's "
+        "`ThreadedRollout`; `benchmarks/env_throughput.py`, `ReplayCeiling`).",
         "",
-        "| preset | agent | envs | training SPS | of ceiling | collection us/step | "
+        "| preset | agent | envs | training SPS | ceiling | of ceiling | collection us/step | "
         "of which simulation | outside the simulation | update us/sample |"
         + (
             " reference SPS | speed-up | reference simulation | reference outside the "
@@ -244,14 +287,14 @@ def main() -> None:
             if ref
             else ""
         ),
-        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
         + (" ---: | ---: | ---: | ---: | ---: |" if ref else ""),
     ]
     for key, r in results.items():
         preset, agent = key.split("/")
         row = (
-            f"| {preset} | {agent} | {r['num_envs']} | {r['SPS']:,.0f} | "
-            f"{r['SPS'] / ceilings[r['num_envs']]:.0%} | {r['collect_us']:.1f} | "
+            f"| {preset} | {agent} | {r['num_envs']} | {r['SPS']:,.0f} | {fmt_ceiling(r)} | "
+            f"{r['collect_us']:.1f} | "
             f"{r['simulation_us']:.1f} | {r['outside_us']:.1f} | {r['update_us']:.1f} |"
         )
         old = ref.get(key)
@@ -287,7 +330,7 @@ def main() -> None:
         "and settings with the",
         "package of another source tree (`REF`, named below), measured in the same run.",
         "With `--repeats N`: each figure is the median of N measurements, the rows, the",
-        "reference and the ceiling taken in turn; a speed-up is the median of the N paired",
+        "reference taken in turn; a speed-up is the median of the N paired",
         "ones (each repeat's code against the reference measured right after it), their",
         "range in brackets.",
         "",
