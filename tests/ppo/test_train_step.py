@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from cpg_actor.ppo import train_step
-from cpg_actor.ppo.algorithm import NonFiniteLossError, cpp_compiler, python_headers
+from cpg_actor.ppo.algorithm import NonFiniteLossError, cpp_compiler
 
 from .fake_env import fake_runner
 
@@ -60,31 +60,6 @@ def test_the_fused_step_updates_as_the_separate_calls(agent, schedule):
             scale = state[key].abs().max().item()
             torch.testing.assert_close(ours["state"][index][key], state[key], rtol=1e-3,
                                        atol=1e-4 * scale)  # fmt: skip
-
-
-@pytest.mark.skipif(not python_headers(), reason="inductor's cpp_wrapper needs Python.h")
-def test_the_cpp_wrapper_changes_no_bit(monkeypatch):
-    """The fused step's kernels called from C++ (where Python's headers are installed) or
-    from Python (where they are not) update the agent and Adam identically: the same
-    kernels. The settings are the first test's, so its compiled step is reused."""
-
-    def run():
-        runner = fake_runner("mlp", compile=True, learning_rate=1e-3, lr_schedule="linear")
-        runner.collect()
-        runner.ppo.update(runner.storage)
-        return runner
-
-    with_cpp = run()
-    monkeypatch.setattr("cpg_actor.ppo.algorithm.python_headers", lambda: False)
-    without = run()
-    assert with_cpp.ppo.fused_step.cpp_wrapper and not without.ppo.fused_step.cpp_wrapper
-    theirs = without.agent.state_dict()
-    for name, value in with_cpp.agent.state_dict().items():
-        assert torch.equal(value, theirs[name]), name
-    ours, theirs = with_cpp.ppo.optimizer.state_dict(), without.ppo.optimizer.state_dict()
-    for index, state in theirs["state"].items():
-        for key in ("step", "exp_avg", "exp_avg_sq"):
-            assert torch.equal(ours["state"][index][key], state[key]), (index, key)
 
 
 def test_the_fused_step_is_used_only_where_it_computes_the_same_algorithm():

@@ -10,8 +10,6 @@ from __future__ import annotations
 import math
 import os
 import shutil
-import sysconfig
-from pathlib import Path
 
 import torch
 from torch import Tensor
@@ -114,13 +112,6 @@ def cpp_compiler() -> str | None:
     return None
 
 
-def python_headers() -> bool:
-    """Whether this Python's C headers (``Python.h``) are installed: inductor's
-    ``cpp_wrapper`` builds a Python extension (Debian: ``python3-dev``; pyenv, conda and the
-    python.org builds ship them)."""
-    return (Path(sysconfig.get_paths()["include"]) / "Python.h").is_file()
-
-
 def compile_reproducibly(fn, **options):
     """``torch.compile(fn)`` as this project compiles (the loss, the policy step, the reward
     normaliser): kernels specialised per shape (``dynamic=False``: the same whatever shapes
@@ -168,12 +159,9 @@ class PPO:
             self.outputs_are_finite = compile_reproducibly(outputs_are_finite)
         # the loss, its gradient, the clip and the Adam step as one compiled function, where it
         # computes what the separate calls compute (train_step.usable): ~1.8x faster steps at
-        # the paper's 64-sample minibatches; its kernels called from C++ where Python's
-        # headers allow (the same kernels and bits, ~1.17x faster steps again)
+        # the paper's 64-sample minibatches
         self.fused_step = (
-            train_step.make(
-                agent, self.optimizer, config, ppo_loss, compile_reproducibly, python_headers()
-            )
+            train_step.make(agent, self.optimizer, config, ppo_loss, compile_reproducibly)
             if config.compile
             else None
         )

@@ -12,14 +12,6 @@ minibatches) is about 1.5x faster than with the compiled loss, autograd, the lea
 fused Adam kernel, the throughput preset's (2,048 samples) about 1.3x (``docs/training.md``,
 "Throughput").
 
-Where Python's C headers are installed (:func:`cpg_actor.ppo.algorithm.python_headers`) the
-compiled step is built with inductor's ``cpp_wrapper``: the generated code that calls its
-kernels (about 450 us of Python per step at the paper's settings) is C++ instead of Python.
-The kernels are the same, and so are the results, bit for bit (checked on 3 updates of the
-paper preset's ``cpg-actor`` and the throughput preset's ``mlp``); the paper preset's update is
-about 1.17x faster, and the first compile of a run takes about 10 s longer (35 s against 25 s
-here, once per graph: torch caches it).
-
 It computes the same algorithm with the same Adam state (``optimizer.state``: ``step``,
 ``exp_avg``, ``exp_avg_sq``, so checkpoints and resume are unchanged), but not the same bits
 as the separate calls: the compiler fuses and orders the floating-point operations its own way.
@@ -73,7 +65,7 @@ class FusedTrainStep:
     the optimizer's state are updated in place; ``stats`` are :func:`ppo_loss`'s."""
 
     def __init__(self, agent: nn.Module, optimizer: torch.optim.Adam, config: PPOConfig, loss,
-                 compile_fn, cpp_wrapper: bool = False) -> None:  # fmt: skip
+                 compile_fn) -> None:  # fmt: skip
         self.optimizer = optimizer
         self.module = _Loss(agent, config, loss)
         by_id = {id(p): name for name, p in self.module.named_parameters()}
@@ -97,8 +89,7 @@ class FusedTrainStep:
         self.config = config
         self._lr = torch.zeros(len(optimizer.param_groups), dtype=torch.float64)
         self.learning_rate = float(optimizer.param_groups[self.scheduled[0]]["lr"])
-        self.cpp_wrapper = cpp_wrapper  # the kernels called from C++ (module docstring)
-        self._compiled = compile_fn(self._step, cpp_wrapper=cpp_wrapper)
+        self._compiled = compile_fn(self._step)
 
     def _state(self) -> list[dict[str, Tensor]]:
         """The optimizer's state of each parameter, made as torch's fused Adam makes it."""
@@ -160,9 +151,8 @@ class FusedTrainStep:
         return out
 
 
-def make(agent: nn.Module, optimizer: Any, config: PPOConfig, loss, compile_fn,
-         cpp_wrapper: bool = False):  # fmt: skip
+def make(agent: nn.Module, optimizer: Any, config: PPOConfig, loss, compile_fn):
     """A :class:`FusedTrainStep` where :func:`usable`, else None."""
     if not usable(optimizer):
         return None
-    return FusedTrainStep(agent, optimizer, config, loss, compile_fn, cpp_wrapper)
+    return FusedTrainStep(agent, optimizer, config, loss, compile_fn)
