@@ -153,9 +153,6 @@ class ReplayCeiling:
         self.roller = rollout.Rollout(nthread=self.threads if self.threads > 1 else 0)
         self.roll_datas = [mujoco.MjData(self.model) for _ in range(self.threads)]
         self.threaded = ThreadedRollout(self.model, robots, self.threads)
-        self.pool = ThreadPoolExecutor(self.threads) if self.threads > 1 else None
-        self.datas = [mujoco.MjData(self.model) for _ in range(robots)]
-        self.chunks = [list(range(robots))[i :: self.threads] for i in range(self.threads)]
 
     def rollout_rate(self) -> float:
         """Control steps per second of ``mujoco.rollout`` over the whole recorded motion."""
@@ -186,26 +183,24 @@ class ReplayCeiling:
         spec = mujoco.mjtState.mjSTATE_FULLPHYSICS.value
         steps = max(1, len(self.states) // 4)
 
-        def loop(rows: list[int]) -> None:
+        robots = self.states.shape[1]
+        chunks = [range(i, robots, self.threads) for i in range(self.threads)]
+
+        def loop(rows: range) -> None:
+            data = mujoco.MjData(model)  # one per thread: each robot's state is set first
             for t in range(steps):
                 for i in rows:
-                    data = self.datas[i]
                     mujoco.mj_setState(model, data, self.states[t, i], spec)
                     data.qfrc_applied[1:3] = self.torques[t, i]
                     for _ in range(self.decimation):
                         mujoco.mj_step(model, data)
 
-        def run() -> None:
-            if self.pool is None:
-                loop(self.chunks[0])
-            else:
-                list(self.pool.map(loop, self.chunks))
-
-        return best_rate(run, steps * self.states.shape[1], 1)
+        if self.threads == 1:
+            return best_rate(lambda: loop(chunks[0]), steps * robots, 1)
+        with ThreadPoolExecutor(self.threads) as pool:
+            return best_rate(lambda: list(pool.map(loop, chunks)), steps * robots, 1)
 
     def close(self) -> None:
-        if self.pool is not None:
-            self.pool.shutdown()
         self.roller.close()
         self.threaded.close()
 

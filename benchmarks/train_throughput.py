@@ -110,7 +110,9 @@ def measure(
 
 
 def _benchmarks():
-    sys.path.insert(0, str(Path(__file__).parent))
+    here = str(Path(__file__).parent)
+    if here not in sys.path:
+        sys.path.insert(0, here)
     import env_throughput
 
     return env_throughput
