@@ -7,6 +7,7 @@
 # The machine's image holds CUDA PyTorch and JAX; mujoco, mujoco-mjx, gymnasium and the
 # project's other missing packages travel as wheels in .whl/ (installed to /tmp/site).
 # Each part has a time limit (seconds) and writes as it goes: a part cut short keeps its output.
+# PARTS picks the parts to run (default: all four, in this order), e.g. PARTS="bench scaling".
 set -o pipefail
 OUT="${OUT:-gpu-check}"
 mkdir -p "$OUT"
@@ -26,16 +27,19 @@ obs, _ = env.reset_tensors(seed=0)
 print(jax.devices(), jax.__version__, torch.__version__, torch.cuda.get_device_name(), obs.device)
 EOF
 } 2>&1 | tee "$OUT/cuda_tests.txt" || exit 2
-timeout "${TESTS_S:-120}" python3 -m pytest -q -p no:cacheprovider tests/test_device.py \
+PARTS=" ${PARTS:-tests bench train scaling} "
+part() { [[ "$PARTS" == *" $1 "* ]]; }
+part tests && timeout "${TESTS_S:-120}" python3 -m pytest -q -p no:cacheprovider tests/test_device.py \
     tests/ppo/test_mjx_training.py tests/envs/test_mjx.py tests/envs/test_quadruped_mjx.py \
     2>&1 | tee -a "$OUT/cuda_tests.txt"
-timeout "${BENCH_S:-170}" python3 benchmarks/gpu_throughput.py \
+part bench && timeout "${BENCH_S:-170}" python3 benchmarks/gpu_throughput.py \
     --envs ${ENVS:-1024 4096 32768 131072} --agents ${AGENTS:-cpg-actor mlp} --iterations 2 \
     --output "$OUT/gpu_throughput.md" 2>&1 | tee "$OUT/benchmark.log"
 # learning at 4,096 envs: as far as the time allows (metrics.jsonl has the evaluation curve)
-timeout "${TRAIN_S:-140}" python3 -m cpg_actor.cli train --preset gpu --total-steps 20M \
+part train && timeout "${TRAIN_S:-140}" python3 -m cpg_actor.cli train --preset gpu --total-steps 20M \
     --run-dir /tmp/gpu-run --no-progress --progress-interval 10 2>&1 | tee "$OUT/train.log"
-cp /tmp/gpu-run/metrics.jsonl /tmp/gpu-run/config.yaml "$OUT/" 2>/dev/null
-timeout "${SCALING_S:-80}" python3 benchmarks/train_scaling.py --cores 2 8 all \
+part train && cp /tmp/gpu-run/metrics.jsonl /tmp/gpu-run/config.yaml "$OUT/" 2>/dev/null
+# about a minute per row (a subprocess that compiles): 6 rows need SCALING_S of 400 or so
+part scaling && timeout "${SCALING_S:-80}" python3 benchmarks/train_scaling.py --cores 2 8 all \
     --num-envs 64 1024 --output "$OUT/train_scaling.md" 2>&1 | tee "$OUT/scaling.log"
 exit 0

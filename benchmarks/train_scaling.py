@@ -4,12 +4,15 @@
         [--agent cpg-actor] [--output benchmarks/results/train_scaling.md]
 
 For each core count C and number of envs N, a subprocess pinned to C cores
-(``os.sched_setaffinity``) trains the throughput preset with N envs: the simulator's threads
-follow the usable cores (at least 8 robots per thread) and PyTorch gets C threads. It
-reports the training SPS after a warm-up iteration, next to the physics ceiling of the same
-motion (``mujoco.rollout`` replaying the control steps the training visited, on the same C
-cores: ``train_throughput.py``), both measured in the same subprocess.
-Core counts above the machine's are skipped.
+(``os.sched_setaffinity``) trains the throughput preset with N envs and the run's own thread
+settings, as a user gets them: the simulator's threads follow the usable cores (at least 8
+robots per thread), the rollout's policy runs on one torch thread (``torch_threads``) and the
+update on every pinned core for minibatches of at least 1,024 samples (``update_threads``).
+It reports the training SPS after a warm-up iteration, next to the physics ceiling of the
+same motion (``mujoco.rollout`` replaying the control steps the training visited, on the same
+C cores: ``train_throughput.py``), both measured in the same subprocess. The table is
+rewritten after each row, so a run cut short keeps the rows it measured. Core counts above
+the machine's are skipped.
 """
 
 from __future__ import annotations
@@ -27,20 +30,44 @@ HERE = Path(__file__).resolve().parent
 
 def measure(agent: str, num_envs: int, iterations: int) -> dict:
     """In this (pinned) process: training SPS and the physics ceiling for ``num_envs``."""
-    import torch
-
     sys.path.insert(0, str(HERE))
     from cpg_actor.machine import usable_cores
     from train_throughput import measure as train_measure
 
-    cores = usable_cores()
-    torch.set_num_threads(cores)
+    # the run's defaults: torch_threads 1 for the rollout, update_threads automatic
     result = train_measure(
-        agent, "throughput", iterations, compile=True, num_envs=num_envs, torch_threads=cores,
-        ceiling=True,
-    )  # fmt: skip
-    result["cores"] = cores
+        agent, "throughput", iterations, compile=True, num_envs=num_envs, ceiling=True
+    )
+    result["cores"] = usable_cores()
     return result
+
+
+def table(args: argparse.Namespace, rows: list[dict]) -> str:
+    """The Markdown table of the rows measured so far."""
+    from cpg_actor.machine import cpu_model, git_commit, load_average, usable_cores
+
+    lines = [
+        "# Training throughput against CPU cores",
+        "",
+        f"Measured {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC at commit "
+        f"{git_commit()} with "
+        f"`python benchmarks/train_scaling.py --cores {' '.join(args.cores)} --num-envs "
+        f"{' '.join(map(str, args.num_envs))} --agent {args.agent}` on {cpu_model()}, "
+        f"{usable_cores()} usable cores (load {load_average()}). Throughput preset "
+        "(compiled), the run's thread settings: the simulator on the pinned cores, the "
+        "rollout's policy on 1 torch thread, the update on every pinned core for minibatches "
+        "of at least 1,024 samples (256 envs and more), else on 1 thread.",
+        "",
+        "| cores | envs | training SPS | ceiling (`mujoco.rollout`) | of ceiling | "
+        "collection us/step | update us/sample |",
+        "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+    ]
+    for r in rows:
+        lines.append(
+            f"| {r['cores']} | {r['num_envs']} | {r['SPS']:,.0f} | {r['ceiling']:,.0f} | "
+            f"{r['SPS'] / r['ceiling']:.0%} | {r['collect_us']:.1f} | {r['update_us']:.1f} |"
+        )
+    return "\n".join(lines) + "\n"
 
 
 def main() -> None:
@@ -56,13 +83,13 @@ def main() -> None:
         print(json.dumps(measure(args.agent, args.child[1], args.iterations)))
         return
 
-    from cpg_actor.machine import cpu_model, load_average, usable_cores
-
     available = sorted(os.sched_getaffinity(0))
     if any(c != "all" and not (c.isdigit() and int(c) > 0) for c in args.cores):
         parser.error(f"--cores takes positive integers or 'all', got {' '.join(args.cores)}")
     counts = sorted({len(available) if c == "all" else int(c) for c in args.cores})
-    rows = []
+    output = Path(args.output)
+    output.parent.mkdir(parents=True, exist_ok=True)
+    rows: list[dict] = []
     for cores in counts:
         if cores > len(available):
             print(f"skipped: {cores} cores (this machine has {len(available)})")
@@ -80,32 +107,13 @@ def main() -> None:
             ).stdout
             result = json.loads(out.strip().splitlines()[-1])
             rows.append(result)
+            output.write_text(table(args, rows))  # a run cut short keeps its rows
             print(
                 f"{result['cores']} cores, {num_envs} envs: {result['SPS']:,.0f} SPS, "
                 f"ceiling {result['ceiling']:,.0f}",
                 flush=True,
             )
-    lines = [
-        "# Training throughput against CPU cores",
-        "",
-        f"Measured {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC with "
-        f"`python benchmarks/train_scaling.py --cores {' '.join(args.cores)} --num-envs "
-        f"{' '.join(map(str, args.num_envs))} --agent {args.agent}` on {cpu_model()}, "
-        f"{usable_cores()} usable cores (load {load_average()}). Throughput preset "
-        "(compiled updates), torch threads = simulator cores = the pinned cores.",
-        "",
-        "| cores | envs | training SPS | ceiling (`mujoco.rollout`) | of ceiling | "
-        "collection us/step | update us/sample |",
-        "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
-    ]
-    for r in rows:
-        lines.append(
-            f"| {r['cores']} | {r['num_envs']} | {r['SPS']:,.0f} | {r['ceiling']:,.0f} | "
-            f"{r['SPS'] / r['ceiling']:.0%} | {r['collect_us']:.1f} | {r['update_us']:.1f} |"
-        )
-    Path(args.output).parent.mkdir(parents=True, exist_ok=True)
-    Path(args.output).write_text("\n".join(lines) + "\n")
-    print("\n".join(lines))
+    print(table(args, rows), end="")
 
 
 if __name__ == "__main__":
