@@ -56,7 +56,7 @@ def table(args: argparse.Namespace, rows: list[dict]) -> str:
         f"{usable_cores()} usable cores (load {load_average()}). Throughput preset "
         "(compiled), the run's thread settings: the simulator on the pinned cores, the "
         "rollout's policy on 1 torch thread, the update on every pinned core for minibatches "
-        "of at least 1,024 samples (256 envs and more), else on 1 thread.",
+        "of at least 1,024 samples (128 envs and more), else on 1 thread.",
         "",
         "| cores | envs | training SPS | ceiling (`mujoco.rollout`) | of ceiling | "
         "collection us/step | update us/sample |",
