@@ -1,13 +1,16 @@
 #!/usr/bin/env bash
 # One call on a lent GPU machine (docs/gpu.md, "Measuring on a GPU"): the CUDA tests, the MJX
-# throughput table, a `--preset gpu` training run, and (the machine having 16 cores) the CPU
-# scaling table of benchmarks/train_scaling.py; at most 8 files, all under $OUT:
-#   cuda_tests.txt (device, then the tests), gpu_throughput.md + benchmark.log,
-#   train.log + metrics.jsonl + config.yaml, train_scaling.md + scaling.log.
+# throughput table, a `--preset gpu` training run, (the machine having 16 cores) the CPU
+# scaling table of benchmarks/train_scaling.py, and, when PARTS names it, the combined rate of
+# runs sharing the GPU (benchmarks/shared_device.py); at most 8 files, all under $OUT:
+#   cuda_tests.txt (device, then the tests), train.log + metrics.jsonl + config.yaml,
+#   gpu_throughput.md, train_scaling.md, shared_device.md, and bench.log (the three
+#   benchmarks' output).
 # The machine's image holds CUDA PyTorch and JAX; mujoco, mujoco-mjx, gymnasium and the
 # project's other missing packages travel as wheels in .whl/ (installed to /tmp/site).
 # Each part has a time limit (seconds) and writes as it goes: a part cut short keeps its output.
-# PARTS picks the parts to run (default: all four, in this order), e.g. PARTS="bench scaling".
+# PARTS picks the parts to run, in this order (default: tests bench train scaling; share is
+# only run when named), e.g. PARTS="share scaling".
 set -o pipefail
 OUT="${OUT:-gpu-check}"
 mkdir -p "$OUT"
@@ -34,12 +37,15 @@ part tests && timeout "${TESTS_S:-120}" python3 -m pytest -q -p no:cacheprovider
     2>&1 | tee -a "$OUT/cuda_tests.txt"
 part bench && timeout "${BENCH_S:-170}" python3 benchmarks/gpu_throughput.py \
     --envs ${ENVS:-1024 4096 32768 131072} --agents ${AGENTS:-cpg-actor mlp} --iterations 2 \
-    --output "$OUT/gpu_throughput.md" 2>&1 | tee "$OUT/benchmark.log"
+    --output "$OUT/gpu_throughput.md" 2>&1 | tee -a "$OUT/bench.log"
 # learning at 4,096 envs: as far as the time allows (metrics.jsonl has the evaluation curve)
 part train && timeout "${TRAIN_S:-140}" python3 -m cpg_actor.cli train --preset gpu --total-steps 20M \
     --run-dir /tmp/gpu-run --no-progress --progress-interval 10 2>&1 | tee "$OUT/train.log"
 part train && cp /tmp/gpu-run/metrics.jsonl /tmp/gpu-run/config.yaml "$OUT/" 2>/dev/null
 # about a minute per row (a subprocess that compiles): 6 rows need SCALING_S of 400 or so
 part scaling && timeout "${SCALING_S:-80}" python3 benchmarks/train_scaling.py --cores 2 8 all \
-    --num-envs 64 1024 --output "$OUT/train_scaling.md" 2>&1 | tee "$OUT/scaling.log"
+    --num-envs 64 1024 --output "$OUT/train_scaling.md" 2>&1 | tee -a "$OUT/bench.log"
+# runs sharing the GPU: 1, 2 and 4 `--preset gpu` trainings at once (about SHARE_SECONDS each)
+part share && timeout "${SHARE_S:-420}" python3 benchmarks/shared_device.py --runs 1 2 4 \
+    --seconds "${SHARE_SECONDS:-120}" --output "$OUT/shared_device.md" 2>&1 | tee -a "$OUT/bench.log"
 exit 0
