@@ -18,7 +18,6 @@ the machine's are skipped.
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import os
 import subprocess
@@ -44,15 +43,17 @@ def measure(agent: str, num_envs: int, iterations: int) -> dict:
 
 def table(args: argparse.Namespace, rows: list[dict]) -> str:
     """The Markdown table of the rows measured so far."""
-    from cpg_actor.machine import cpu_model, git_commit, load_average, usable_cores
+    from bench_report import measured
+    from cpg_actor.machine import cpu_model, load_average, usable_cores
 
+    command = (
+        f"python benchmarks/train_scaling.py --cores {' '.join(args.cores)} --num-envs "
+        f"{' '.join(map(str, args.num_envs))} --agent {args.agent}"
+    )
     lines = [
         "# Training throughput against CPU cores",
         "",
-        f"Measured {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC at commit "
-        f"{git_commit()} with "
-        f"`python benchmarks/train_scaling.py --cores {' '.join(args.cores)} --num-envs "
-        f"{' '.join(map(str, args.num_envs))} --agent {args.agent}` on {cpu_model()}, "
+        f"{measured(command)} on {cpu_model()}, "
         f"{usable_cores()} usable cores (load {load_average()}). Throughput preset "
         "(compiled), the run's thread settings: the simulator on the pinned cores, the "
         "rollout's policy on 1 torch thread, the update on every pinned core for minibatches "
