@@ -2,15 +2,16 @@
 # One call on a lent GPU machine (docs/gpu.md, "Measuring on a GPU"): the CUDA tests, the MJX
 # throughput table, a `--preset gpu` training run, (the machine having 16 cores) the CPU
 # scaling table of benchmarks/train_scaling.py, and, when PARTS names it, the combined rate of
-# runs sharing the GPU (benchmarks/shared_device.py); at most 8 files, all under $OUT:
-#   cuda_tests.txt (device, then the tests), train.log + metrics.jsonl + config.yaml,
-#   gpu_throughput.md, train_scaling.md, shared_device.md, and bench.log (the three
-#   benchmarks' output).
+# runs sharing the GPU (benchmarks/shared_device.py) and a training run with MuJoCo on the CPU
+# and PPO on CUDA; at most 8 files, all under $OUT: cuda_tests.txt (device, then the tests),
+# train.log (both trainings' output and configs), metrics.jsonl, metrics_mujoco_cuda.jsonl,
+# gpu_throughput.md, train_scaling.md, shared_device.md, and bench.log (the three
+# benchmarks' output).
 # The machine's image holds CUDA PyTorch and JAX; mujoco, mujoco-mjx, gymnasium and the
 # project's other missing packages travel as wheels in .whl/ (installed to /tmp/site).
 # Each part has a time limit (seconds) and writes as it goes: a part cut short keeps its output.
-# PARTS picks the parts to run, in this order (default: tests bench train scaling; share is
-# only run when named), e.g. PARTS="share scaling".
+# PARTS picks the parts to run, in this order: tests bench train split scaling share (default:
+# tests bench train scaling; split and share run only when named), e.g. PARTS="train split".
 set -o pipefail
 OUT="${OUT:-gpu-check}"
 mkdir -p "$OUT"
@@ -40,8 +41,16 @@ part bench && timeout "${BENCH_S:-170}" python3 benchmarks/gpu_throughput.py \
     --output "$OUT/gpu_throughput.md" 2>&1 | tee -a "$OUT/bench.log"
 # learning at 4,096 envs: as far as the time allows (metrics.jsonl has the evaluation curve)
 part train && timeout "${TRAIN_S:-140}" python3 -m cpg_actor.cli train --preset gpu --total-steps 20M \
-    --run-dir /tmp/gpu-run --no-progress --progress-interval 10 2>&1 | tee "$OUT/train.log"
-part train && cp /tmp/gpu-run/metrics.jsonl /tmp/gpu-run/config.yaml "$OUT/" 2>/dev/null
+    --run-dir /tmp/gpu-run --no-progress --progress-interval 10 2>&1 | tee -a "$OUT/train.log"
+part train && cat /tmp/gpu-run/config.yaml >>"$OUT/train.log" && cp /tmp/gpu-run/metrics.jsonl "$OUT/"
+# the same with MuJoCo's C simulator on the CPU cores and PPO on CUDA: is the GPU run's weaker
+# learning torch's on CUDA or MJX's (docs/gpu.md, "Learning")? Its training return at
+# iterations 21 and 42 against the train part's and the CPU runs' of docs/results/gpu-preset-mujoco-4096
+part split && timeout "${SPLIT_S:-140}" python3 -m cpg_actor.cli train --preset gpu --sim mujoco \
+    --device cuda --total-steps 20M --run-dir /tmp/gpu-run-mujoco --no-progress \
+    --progress-interval 10 2>&1 | tee -a "$OUT/train.log"
+part split && cat /tmp/gpu-run-mujoco/config.yaml >>"$OUT/train.log" \
+    && cp /tmp/gpu-run-mujoco/metrics.jsonl "$OUT/metrics_mujoco_cuda.jsonl"
 # about a minute per row (a subprocess that compiles): 6 rows need SCALING_S of 400 or so
 part scaling && timeout "${SCALING_S:-80}" python3 benchmarks/train_scaling.py --cores 2 8 all \
     --num-envs 64 1024 --output "$OUT/train_scaling.md" 2>&1 | tee -a "$OUT/bench.log"
