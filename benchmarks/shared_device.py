@@ -5,15 +5,18 @@
         [--output benchmarks/results/shared_device.md]
 
 The paper's budget is 25 runs (5 variants x 5 seeds x 20M steps). ``cpg-actor reproduce
---workers K`` trains K of them at a time as separate processes on one GPU (or CPU); what K
-buys depends on how much of the device one run leaves idle. For each K this starts K
-``cpg-actor train`` processes together (seeds 0..K-1, the preset's settings plus
-``--train-args``), watches their ``metrics.jsonl`` (a row per iteration, stamped with the time
-this script saw it) for ``--seconds``, then stops them. Each run's rate is taken over the
-window in which every run was past its second iteration (start-up, JIT and ``torch.compile``
-excluded): its control steps in the window over the window's wall time, evaluations and
-checkpoints included, as a user waits for them. The combined rate is their sum, and the
-paper's budget is given at it. K = 1 is the reference, measured in the same run.
+--workers K`` trains K of them at a time as separate processes on one GPU (or CPU); what K buys
+depends on how much of the device one run leaves idle. For each K this starts K ``cpg-actor
+train`` processes together (seeds 0..K-1, the preset's settings plus ``--train-args``), each
+with its share of the cores for its simulator and update threads and one torch thread for its
+rollout, as ``reproduce`` starts them (``--automatic-threads``: the runs' own automatic
+threads, every usable core each, as runs started by hand get), watches their ``metrics.jsonl``
+(a row per iteration, stamped with the time this script saw it) for ``--seconds``, then stops
+them. Each run's rate is taken over the window in which every run was past its second iteration
+(start-up, JIT and ``torch.compile`` excluded): its control steps in the window over the
+window's wall time, evaluations and checkpoints included, as a user waits for them. The
+combined rate is their sum, and the paper's budget is given at it. K = 1 is the reference,
+measured in the same run.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ import time
 from pathlib import Path
 
 from bench_report import measured, write
+from cpg_actor.experiments.plan import threads_per_run
 from cpg_actor.machine import cpu_model, load_average, usable_cores
 
 PAPER_BUDGET = 5 * 5 * 20_000_000  # control steps: 5 variants x 5 seeds x 20M
@@ -109,6 +113,11 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=150.0)
     parser.add_argument("--train-args", default="", help="more `cpg-actor train` flags")
     parser.add_argument(
+        "--automatic-threads",
+        action="store_true",
+        help="the runs' own thread defaults (every usable core each), not reproduce's shares",
+    )
+    parser.add_argument(
         "--output", default=str(Path(__file__).parent / "results" / "shared_device.md")
     )
     args = parser.parse_args()
@@ -121,15 +130,30 @@ def main() -> None:
         f"python benchmarks/shared_device.py --runs {' '.join(map(str, args.runs))} "
         f"--preset {args.preset} --agent {args.agent} --seconds {args.seconds:g}"
         + (f" --train-args={shlex.quote(args.train_args)}" if args.train_args else "")
+        + (" --automatic-threads" if args.automatic_threads else "")
+    )
+    threads = (
+        "each run's automatic threads"
+        if args.automatic_threads
+        else (
+            "each run's share of the cores for its simulator and update threads, as `reproduce "
+            "--workers K` gives them (`--set env_threads=T --set update_threads=T --set "
+            "torch_threads=1`, T = cores // K)"
+        )
     )
     rows = []
     for k in args.runs:
         with tempfile.TemporaryDirectory(prefix="shared-device-") as tmp:
             run_dirs = [Path(tmp) / f"seed{seed}" for seed in range(k)]
+            share = threads_per_run(k)
+            shares = [] if args.automatic_threads else [
+                "--set", f"env_threads={share}", "--set", f"update_threads={share}",
+                "--set", "torch_threads=1",
+            ]  # fmt: skip
             commands = [
                 [sys.executable, "-m", "cpg_actor.cli", "train", "--preset", args.preset,
                  "--agent", args.agent, "--seed", str(seed), "--total-steps", "1e11",
-                 "--run-dir", str(run_dir), "--no-progress", *extra]
+                 "--run-dir", str(run_dir), "--no-progress", *shares, *extra]
                 for seed, run_dir in enumerate(run_dirs)
             ]  # fmt: skip
             rates, window = window_rates(watch(commands, run_dirs, args.seconds))
@@ -143,8 +167,8 @@ def main() -> None:
             f"{measured(command)}, {cpu_model()}, {usable_cores()} usable cores (load "
             f"{load_average()}). `cpg-actor train --preset {args.preset} --agent {args.agent}`"
             + (f" `{args.train_args}`" if args.train_args else "")
-            + ", K processes started together (seeds 0..K-1); rates over the window in which "
-            "every run was past its second iteration, evaluations included.",
+            + f", K processes started together (seeds 0..K-1), {threads}; rates over the "
+            "window in which every run was past its second iteration, evaluations included.",
             "",
             "| runs | window (s) | each run (control steps/s) | together | "
             f"x {rows[0][0]} run(s) | paper's budget (500M steps) |",

@@ -133,3 +133,23 @@ def test_runs_start_seed_by_seed_so_a_stopped_reproduction_has_whole_pairs(tmp_p
     assert [t.name for t in tasks] == [
         "cpg-actor/seed0", "cho2019-warm/seed0", "cpg-actor/seed1", "cho2019-warm/seed1",
     ]  # fmt: skip
+
+
+def test_each_worker_gets_its_share_of_the_cores(tmp_path, monkeypatch):
+    """The runs of ``--workers K`` split the cores: their automatic threads (every core each)
+    made two runs on 2 cores train 12x slower together (benchmarks/results/shared_device.md)."""
+    from cpg_actor.experiments import plan
+
+    monkeypatch.setattr(plan.os, "cpu_count", lambda: 8)
+    assert [plan.threads_per_run(k) for k in (1, 2, 3, 8, 16)] == [8, 4, 2, 1, 1]
+    settings = plan.ReproduceSettings(variants=["mlp"], seeds=1, total_steps=1000, num_envs=8)
+    (task,) = plan.build_tasks(settings, tmp_path, workers=4)
+    sets = [task.train_args[i + 1] for i, a in enumerate(task.train_args) if a == "--set"]
+    assert {"torch_threads=1", "env_threads=2", "update_threads=2"} <= set(sets)
+    # a --set of the user's wins: no share is added for that key
+    mine = plan.ReproduceSettings(
+        variants=["mlp"], seeds=1, total_steps=1000, num_envs=8, overrides=["update_threads=3"]
+    )
+    (task,) = plan.build_tasks(mine, tmp_path, workers=4)
+    sets = [task.train_args[i + 1] for i, a in enumerate(task.train_args) if a == "--set"]
+    assert "update_threads=2" not in sets and "update_threads=3" in sets

@@ -10,6 +10,7 @@ How the runs are executed (workers, Ray address) may change between invocations.
 from __future__ import annotations
 
 import math
+import os
 import shutil
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -182,6 +183,14 @@ def validate(settings: ReproduceSettings) -> None:
         raise ValueError("--set agent=... / seed=... is not allowed; use --variants / --seeds")
 
 
+def threads_per_run(workers: int) -> int:
+    """The simulator and update threads of each of ``workers`` runs sharing the machine: its
+    share of the cores. The runs' automatic threads (every usable core each) would
+    oversubscribe them: two throughput-preset runs on 2 cores trained 12x slower together than
+    one alone (``benchmarks/results/shared_device.md``)."""
+    return max(1, (os.cpu_count() or 1) // max(1, workers))
+
+
 def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[RunTask]:
     """One :class:`RunTask` per (variant, seed), seed by seed (every variant's seed 0, then
     every variant's seed 1, ...): the order runs start in, so that a reproduction stopped part
@@ -196,9 +205,7 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
             extra += ["--set", f"checkpoint_interval={checkpoint_interval(config)}"]
         if "torch_threads" not in keys:
             extra += ["--set", "torch_threads=1"]
-        import os
-
-        threads = max(1, (os.cpu_count() or 1) // max(1, workers))  # this run's share of cores
+        threads = threads_per_run(workers)
         if "env_threads" not in keys:
             extra += ["--set", f"env_threads={threads}"]
         if "update_threads" not in keys:
