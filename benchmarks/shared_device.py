@@ -125,6 +125,8 @@ def main() -> None:
     signal.signal(signal.SIGTERM, lambda *_: sys.exit(128 + signal.SIGTERM))
     if any(k < 1 for k in args.runs):
         parser.error(f"--runs takes positive integers, got {args.runs}")
+    if not args.seconds > 0:
+        parser.error(f"--seconds must be a positive number of seconds, got {args.seconds:g}")
     extra = shlex.split(args.train_args)
     command = (
         f"python benchmarks/shared_device.py --runs {' '.join(map(str, args.runs))} "

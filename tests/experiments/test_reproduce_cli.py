@@ -140,7 +140,7 @@ def test_each_worker_gets_its_share_of_the_cores(tmp_path, monkeypatch):
     made two runs on 2 cores train 12x slower together (benchmarks/results/shared_device.md)."""
     from cpg_actor.experiments import plan
 
-    monkeypatch.setattr(plan.os, "cpu_count", lambda: 8)
+    monkeypatch.setattr(plan, "usable_cores", lambda: 8)
     assert [plan.threads_per_run(k) for k in (1, 2, 3, 8, 16)] == [8, 4, 2, 1, 1]
     settings = plan.ReproduceSettings(variants=["mlp"], seeds=1, total_steps=1000, num_envs=8)
     (task,) = plan.build_tasks(settings, tmp_path, workers=4)

@@ -10,13 +10,14 @@ How the runs are executed (workers, Ray address) may change between invocations.
 from __future__ import annotations
 
 import math
-import os
 import shutil
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
+
+from cpg_actor.machine import usable_cores
 
 # the paper's progressive-hopping figure: 1M, 20M and 60M of 60M steps
 STAGE_FRACTIONS: tuple[float, ...] = (1 / 60, 1 / 3, 1.0)
@@ -185,10 +186,11 @@ def validate(settings: ReproduceSettings) -> None:
 
 def threads_per_run(workers: int) -> int:
     """The simulator and update threads of each of ``workers`` runs sharing the machine: its
-    share of the cores. The runs' automatic threads (every usable core each) would
-    oversubscribe them: two throughput-preset runs on 2 cores trained 12x slower together than
-    one alone (``benchmarks/results/shared_device.md``)."""
-    return max(1, (os.cpu_count() or 1) // max(1, workers))
+    share of the cores this process may use (``usable_cores``, as the runs' own automatic
+    threads count them). Those automatic threads (every usable core each) would oversubscribe
+    them: two throughput-preset runs on 2 cores trained 12x slower together than one alone
+    (``benchmarks/results/shared_device.md``)."""
+    return max(1, usable_cores() // max(1, workers))
 
 
 def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[RunTask]:
