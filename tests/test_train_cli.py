@@ -496,3 +496,33 @@ def test_sim_mjx_without_jax_says_how_to_install_it(tmp_path, capsys, monkeypatc
     assert 'pip install -e ".[mjx]"' in capsys.readouterr().err
     # nothing half-made is left to refuse the next try
     assert not run_dir.exists() or not any(run_dir.iterdir())
+
+
+SPIN_COUNT_AT_TORCH_IMPORT = """
+import os, sys
+seen = []
+class Watch:  # notes GOMP_SPINCOUNT when torch (and with it libgomp) is first imported
+    def find_spec(self, name, path=None, target=None):
+        if name == "torch" and not seen:
+            seen.append(os.environ.get("GOMP_SPINCOUNT"))
+sys.meta_path.insert(0, Watch())
+import cpg_actor.cli
+print(seen[0] if seen else "torch not imported")
+"""
+
+
+@pytest.mark.parametrize(("given", "expected"), [(None, "2000"), ("50", "50")])
+def test_the_cli_shortens_openmp_spinning_before_torch_loads_unless_the_user_set_it(
+    given, expected
+):
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "GOMP_SPINCOUNT"}
+    if given is not None:
+        env["GOMP_SPINCOUNT"] = given
+    result = subprocess.run(
+        [sys.executable, "-c", SPIN_COUNT_AT_TORCH_IMPORT],
+        capture_output=True, text=True, env=env, check=True, timeout=120,
+    )  # fmt: skip
+    assert result.stdout.strip() == expected
