@@ -24,11 +24,10 @@ def test_the_fused_step_updates_as_the_separate_calls(agent, schedule):
 
     def run(fused: bool):
         runner = fake_runner(
-            agent, compile=True, learning_rate=1e-3, lr_schedule=schedule, **cpg_rate
-        )
-        assert runner.ppo.fused_step is not None
-        if not fused:
-            runner.ppo.fused_step = None
+            agent, compile=True, learning_rate=1e-3, lr_schedule=schedule, fused_step=fused,
+            **cpg_rate,
+        )  # fmt: skip
+        assert (runner.ppo.fused_step is not None) == fused
         start = {k: v.clone() for k, v in runner.agent.state_dict().items()}
         stats = []
         for _ in range(2):
@@ -64,6 +63,7 @@ def test_the_fused_step_updates_as_the_separate_calls(agent, schedule):
 
 def test_the_fused_step_is_used_only_where_it_computes_the_same_algorithm():
     assert fake_runner("mlp", compile=False).ppo.fused_step is None
+    assert fake_runner("mlp", compile=True, fused_step=False).ppo.fused_step is None
     runner = fake_runner("mlp", compile=True)
     assert train_step.usable(runner.ppo.optimizer)
     decayed = torch.optim.Adam(runner.agent.parameters(), weight_decay=0.1)

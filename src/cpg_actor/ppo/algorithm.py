@@ -162,7 +162,7 @@ class PPO:
         # the paper's 64-sample minibatches
         self.fused_step = (
             train_step.make(agent, self.optimizer, config, ppo_loss, compile_reproducibly)
-            if config.compile
+            if config.compile and config.fused_step
             else None
         )
 

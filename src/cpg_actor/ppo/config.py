@@ -64,6 +64,10 @@ class PPOConfig:
     # (ppo/train_step.py), faster again. Results differ from eager in the last bits, not run
     # to run.
     compile: bool = False
+    # with ``compile`` on the CPU: the whole gradient step as one compiled function (above).
+    # False: the separate calls (compiled loss, autograd, clip, fused Adam), the path a CUDA
+    # run always takes, to compare the two (docs/gpu.md, "Learning on MJX")
+    fused_step: bool = True
     # the gradient through the CPG (beyond the paper): the PPO loss replays each step's CPG
     # state from the state stored k - 1 steps earlier, so the gradient reaches the CPG and
     # feedback parameters through k steps (truncated BPTT). 1 is the paper's one-step
