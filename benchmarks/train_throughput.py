@@ -25,12 +25,15 @@ import sys
 import time
 from pathlib import Path
 
-import torch
+from cpg_actor.machine import brief_openmp_spinning, cpu_model, load_average, usable_cores
 
-from cpg_actor.config import TrainConfig, apply_dict
-from cpg_actor.machine import cpu_model, load_average, usable_cores
-from cpg_actor.presets import preset_values
-from cpg_actor.runner import Runner
+brief_openmp_spinning(os.environ)  # as the cpg-actor command runs (before torch loads)
+
+import torch  # noqa: E402
+
+from cpg_actor.config import TrainConfig, apply_dict  # noqa: E402
+from cpg_actor.presets import preset_values  # noqa: E402
+from cpg_actor.runner import Runner  # noqa: E402
 
 AGENTS = ("mlp", "cpg-actor", "cpg-actor-open-loop")
 

@@ -11,15 +11,11 @@ import importlib
 import os
 import sys
 
-# torch's OpenMP threads (libgomp, read once when torch loads) spin up to 300,000 times at
-# each barrier before they sleep. Alone on the machine that spinning is idle cores; with runs
-# started side by side it holds the cores the other runs' threads wait for: two
-# throughput-preset runs on 2 cores trained at 1.2k control steps/s together with it and
-# 15.1k with 2,000 spins, one run alone as fast either way (benchmarks/shared_device.py,
-# benchmarks/results/shared_device.md). A value the user set is kept.
-os.environ.setdefault("GOMP_SPINCOUNT", "2000")
+from cpg_actor.machine import brief_openmp_spinning
 
-from cpg_actor.envs.mjx.runtime import MjxUnavailable  # noqa: E402 (torch loads after this)
+brief_openmp_spinning(os.environ)  # before anything imports torch
+
+from cpg_actor.envs.mjx.runtime import MjxUnavailable  # noqa: E402
 from cpg_actor.envs.video import RenderingUnavailable  # noqa: E402
 
 # command name -> module in cpg_actor.commands

@@ -28,6 +28,19 @@ def usable_cores() -> int:
         return os.cpu_count() or 1
 
 
+def brief_openmp_spinning(environ) -> None:
+    """Set ``GOMP_SPINCOUNT=2000`` in ``environ`` (e.g. ``os.environ``) unless it is set. Only
+    effective before torch is first imported: libgomp, torch's OpenMP, reads it when it loads.
+
+    torch's OpenMP threads spin up to 300,000 times at each barrier before they sleep. Alone
+    on the machine that spinning only uses idle cores; with runs started side by side it holds
+    the cores the other runs' threads wait for. Two throughput-preset runs on 2 cores trained
+    at 1.2k control steps/s together with it and 14-15k with 2,000 spins, one run alone as fast
+    either way (``benchmarks/shared_device.py``, ``benchmarks/results/shared_device.md``). The
+    ``cpg-actor`` command and the benchmarks that time what it runs set it."""
+    environ.setdefault("GOMP_SPINCOUNT", "2000")
+
+
 def load_average() -> str:
     """The 1, 5 and 15 minute load averages, or "n/a"."""
     if not hasattr(os, "getloadavg"):
