@@ -32,7 +32,7 @@ import time
 from pathlib import Path
 
 from bench_report import measured, write
-from cpg_actor.experiments.plan import threads_per_run
+from cpg_actor.experiments.plan import thread_shares
 from cpg_actor.machine import cpu_model, load_average, usable_cores
 
 PAPER_BUDGET = 5 * 5 * 20_000_000  # control steps: 5 variants x 5 seeds x 20M
@@ -147,10 +147,8 @@ def main() -> None:
     for k in args.runs:
         with tempfile.TemporaryDirectory(prefix="shared-device-") as tmp:
             run_dirs = [Path(tmp) / f"seed{seed}" for seed in range(k)]
-            share = threads_per_run(k)
             shares = [] if args.automatic_threads else [
-                "--set", f"env_threads={share}", "--set", f"update_threads={share}",
-                "--set", "torch_threads=1",
+                arg for key, n in thread_shares(k).items() for arg in ("--set", f"{key}={n}")
             ]  # fmt: skip
             commands = [
                 [sys.executable, "-m", "cpg_actor.cli", "train", "--preset", args.preset,

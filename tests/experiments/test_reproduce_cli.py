@@ -141,7 +141,9 @@ def test_each_worker_gets_its_share_of_the_cores(tmp_path, monkeypatch):
     from cpg_actor.experiments import plan
 
     monkeypatch.setattr(plan, "usable_cores", lambda: 8)
-    assert [plan.threads_per_run(k) for k in (1, 2, 3, 8, 16)] == [8, 4, 2, 1, 1]
+    shares = [plan.thread_shares(k)["update_threads"] for k in (1, 2, 3, 8, 16)]
+    assert shares == [8, 4, 2, 1, 1]
+    assert plan.thread_shares(2) == {"torch_threads": 1, "env_threads": 4, "update_threads": 4}
     settings = plan.ReproduceSettings(variants=["mlp"], seeds=1, total_steps=1000, num_envs=8)
     (task,) = plan.build_tasks(settings, tmp_path, workers=4)
     sets = [task.train_args[i + 1] for i, a in enumerate(task.train_args) if a == "--set"]

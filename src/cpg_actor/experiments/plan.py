@@ -184,13 +184,14 @@ def validate(settings: ReproduceSettings) -> None:
         raise ValueError("--set agent=... / seed=... is not allowed; use --variants / --seeds")
 
 
-def threads_per_run(workers: int) -> int:
-    """The simulator and update threads of each of ``workers`` runs sharing the machine: its
-    share of the cores this process may use (``usable_cores``, as the runs' own automatic
-    threads count them). Those automatic threads (every usable core each) would oversubscribe
-    them: two throughput-preset runs on 2 cores trained 12x slower together than one alone
-    (``benchmarks/results/shared_device.md``)."""
-    return max(1, usable_cores() // max(1, workers))
+def thread_shares(workers: int) -> dict[str, int]:
+    """The thread settings of each of ``workers`` runs sharing the machine: one torch thread
+    for the rollout, and for the simulator and the update its share of the cores this process
+    may use (``usable_cores``, as the runs' own automatic threads count them). Those automatic
+    threads (every usable core each) would oversubscribe them: two throughput-preset runs on 2
+    cores trained 12x slower together than one alone (``benchmarks/results/shared_device.md``)."""
+    share = max(1, usable_cores() // max(1, workers))
+    return {"torch_threads": 1, "env_threads": share, "update_threads": share}
 
 
 def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[RunTask]:
@@ -205,13 +206,9 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
         extra: list[str] = []
         if "checkpoint_interval" not in keys:
             extra += ["--set", f"checkpoint_interval={checkpoint_interval(config)}"]
-        if "torch_threads" not in keys:
-            extra += ["--set", "torch_threads=1"]
-        threads = threads_per_run(workers)
-        if "env_threads" not in keys:
-            extra += ["--set", f"env_threads={threads}"]
-        if "update_threads" not in keys:
-            extra += ["--set", f"update_threads={threads}"]
+        for key, value in thread_shares(workers).items():  # a --set of the user's wins
+            if key not in keys:
+                extra += ["--set", f"{key}={value}"]
         for seed in settings.seed_range:
             run_dir = out / "runs" / variant / f"seed{seed}"
             agent, variant_overrides = variant_agent(variant)
