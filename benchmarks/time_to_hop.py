@@ -13,27 +13,34 @@ two measurements share the CPU). SB3 (``pip install stable-baselines3``) runs st
 ``cpg_actor/AnymalHopper-v0`` with actions rescaled to [-1, 1] and no VecNormalize. The
 physics ceiling (``mujoco.rollout`` on the project's MJCF, the same N envs) is measured in the
 same run (``benchmarks/env_throughput.py``).
+
+Each of the project's runs is a fresh process (this script with ``--one-run``) with
+``PYTHONPATH`` set to a tree's ``src``. ``--reference-src REF/src`` also runs every agent and
+preset with the package of another tree (e.g. the commit before a redesign), taking turns with
+this tree's runs, so the two are measured on the same machine in the same run; ``--set``
+applies to this tree's runs and SB3's env, ``--reference-set`` to the reference's (a
+reference older than a config key needs none: ``env.actuator_law=coast`` here is the only law
+before 26 Nov 2026).
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import json
 import math
+import os
+import subprocess
 import sys
 import time
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
-import torch
 
-from cpg_actor.config import TrainConfig, apply_dict, parse_override
-from cpg_actor.evaluation import evaluate
-from cpg_actor.machine import cpu_model, load_average, usable_cores
-from cpg_actor.policy import PolicyStep
-from cpg_actor.presets import preset_values
-from cpg_actor.runner import EVAL_SEED_KEY, Runner, derived_seed
+# The project's imports are in the functions: a run with --one-run imports the package of the
+# tree its PYTHONPATH names, which may be older than this script.
+HERE = Path(__file__).resolve().parent
 
 EVAL_EVERY = 10_240  # env steps between evaluations (5 iterations of 2,048 steps)
 EVAL_EPISODES = 5
@@ -48,11 +55,17 @@ def reached(evaluation: dict[str, float], threshold: tuple[float, float]) -> boo
     )
 
 
-def project_run(agent: str, preset: str, seed: int, overrides: tuple[str, ...] = ()) -> dict:
+def project_run(agent: str, preset: str, seed: int, values: list[dict]) -> dict:
+    """One run of the package on ``sys.path`` (any tree since the learning issue): ``preset``,
+    then each of ``values`` (nested config mappings), until the threshold or the budget."""
+    from cpg_actor.config import TrainConfig, apply_dict
+    from cpg_actor.presets import preset_values
+    from cpg_actor.runner import Runner
+
     config = TrainConfig()
     apply_dict(config, preset_values(preset), prefix="")
-    for text in overrides:
-        apply_dict(config, parse_override(text), prefix="")
+    for mapping in values:
+        apply_dict(config, mapping, prefix="")
     config.agent, config.seed, config.total_steps = agent, seed, BUDGETS[agent]
     config.eval_interval = max(1, round(EVAL_EVERY / config.steps_per_iteration))
     config.eval_episodes = EVAL_EPISODES
@@ -77,6 +90,18 @@ def project_run(agent: str, preset: str, seed: int, overrides: tuple[str, ...] =
     return summarize(history, THRESHOLDS[agent])
 
 
+def tree_run(src: Path, agent: str, preset: str, seed: int, values: list[dict]) -> dict:
+    """:func:`project_run` in a fresh process with the package in ``src``."""
+    spec = json.dumps({"agent": agent, "preset": preset, "seed": seed, "values": values})
+    env = dict(os.environ, PYTHONPATH=str(src))
+    done = subprocess.run(
+        [sys.executable, __file__, "--one-run", spec], env=env, capture_output=True, text=True
+    )
+    if done.returncode != 0:
+        raise RuntimeError(f"the run {spec} with {src} failed:\n{done.stderr[-3000:]}")
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 class SB3Policy:
     """An SB3 model behind the :class:`cpg_actor.policy.Policy` calls :func:`evaluate` makes."""
 
@@ -86,23 +111,29 @@ class SB3Policy:
     def reset(self, num_envs: int) -> None:
         pass
 
-    def act(self, obs: np.ndarray, deterministic: bool = True) -> PolicyStep:
+    def act(self, obs: np.ndarray, deterministic: bool = True):
+        import torch
+
+        from cpg_actor.policy import PolicyStep
+
         action, _ = self.model.predict(np.asarray(obs), deterministic=True)  # in [-1, 1]
         desired = self.low + (np.asarray(action) + 1.0) * (self.high - self.low) / 2.0
         agent = SimpleNamespace(extras={})
         return PolicyStep(desired.astype(np.float32), torch.as_tensor(obs), torch.zeros(0), agent)
 
 
-def sb3_run(seed: int, overrides: tuple[str, ...] = ()) -> dict:
+def sb3_run(seed: int, values: list[dict]) -> dict:
     import gymnasium as gym
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
 
     from cpg_actor.envs import ENV_ID, HopperConfig, HopperVectorEnv
+    from cpg_actor.evaluation import evaluate
+    from cpg_actor.runner import EVAL_SEED_KEY, derived_seed
 
     env_values = {}  # --set env.KEY=VALUE reaches SB3's env too
-    for text in overrides:
-        env_values.update(parse_override(text).get("env", {}))
+    for mapping in values:
+        env_values.update(mapping.get("env", {}))
     env = gym.wrappers.RescaleAction(gym.make(ENV_ID, **env_values), -1.0, 1.0)
     eval_env = HopperVectorEnv(EVAL_EPISODES, HopperConfig(**env_values))
     low, high = env.unwrapped.action_space.low, env.unwrapped.action_space.high
@@ -166,7 +197,23 @@ def fmt_runs(runs: list[dict]) -> tuple[str, str, str]:
     return f"{len(hits)}/{len(runs)}", f"{steps / 1000:.0f}k", f"{wall:.0f} s"
 
 
+def one_run(spec: str) -> int:
+    """``--one-run``: a :func:`project_run` from its JSON spec; prints its result as JSON."""
+    run = json.loads(spec)
+    result = project_run(run["agent"], run["preset"], run["seed"], run["values"])
+    print(json.dumps(result))
+    return 0
+
+
+def median_wall(runs: list[dict]) -> float:
+    hits = [r["wall"] for r in runs if r["reached"]]
+    return float(np.median(hits)) if hits else math.nan
+
+
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv[:1] == ["--one-run"]:
+        return one_run(argv[1])
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--agents", default="mlp,cpg-actor")
@@ -175,21 +222,51 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--output", default="benchmarks/results/time_to_hop.md")
     parser.add_argument(
         "--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
-        help="a config value for every run, e.g. env.actuator_law=coast (repeatable)",
+        help="a config value for this tree's runs and SB3's env, e.g. env.actuator_law=coast",
+    )  # fmt: skip
+    parser.add_argument("--reference-src", help="src/ of a tree to run next to this one")
+    parser.add_argument(
+        "--reference-set", dest="reference_overrides", action="append", default=[],
+        metavar="KEY=VALUE", help="a config value for the reference tree's runs",
     )  # fmt: skip
     args = parser.parse_args(argv)
-    overrides = tuple(args.overrides)
-    torch.set_num_threads(1)
-    methods: list[tuple[str, str, object]] = []
+
+    from cpg_actor.machine import brief_openmp_spinning
+
+    brief_openmp_spinning(os.environ)  # as the cpg-actor command runs (before torch loads)
+    import torch
+
+    from cpg_actor.config import TrainConfig, parse_override
+    from cpg_actor.machine import cpu_model, git_commit, load_average, usable_cores
+    from cpg_actor.presets import preset_values
+
+    values = [parse_override(text) for text in args.overrides]
+    reference_values = [parse_override(text) for text in args.reference_overrides]
+    trees = {"this tree": HERE.parent / "src"}
+    if args.reference_src:
+        trees["reference"] = Path(args.reference_src).resolve()
+        if not (trees["reference"] / "cpg_actor").is_dir():
+            parser.error(f"--reference-src {args.reference_src} holds no cpg_actor package")
+    commits = {tree: git_commit(src) for tree, src in trees.items()}
+    torch.set_num_threads(1)  # SB3 here; each project run sets its own threads
+    methods: list[tuple[str, object]] = []  # (label, (agent, preset, tree) or None for SB3)
     for agent in args.agents.split(","):
         for preset in args.presets.split(","):
-            methods.append((agent, f"cpg-actor `{agent}`, `{preset}` preset", (agent, preset)))
+            for tree in trees:
+                suffix = "" if tree == "this tree" else f" (reference, {commits[tree]})"
+                label = f"cpg-actor `{agent}`, `{preset}` preset{suffix}"
+                methods.append((label, (agent, preset, tree)))
         if agent == "mlp" and not args.no_sb3:
-            methods.append(("mlp", "Stable-Baselines3 PPO, defaults (MLP)", None))
-    results: dict[str, list[dict]] = {label: [] for _, label, _ in methods}
+            methods.append(("Stable-Baselines3 PPO, defaults (MLP)", None))
+    results: dict[str, list[dict]] = {label: [] for label, _ in methods}
     for seed in range(args.seeds):
-        for _agent, label, spec in methods:
-            run = sb3_run(seed, overrides) if spec is None else project_run(*spec, seed, overrides)
+        for label, spec in methods:
+            if spec is None:
+                run = sb3_run(seed, values)
+            else:
+                agent, preset, tree = spec
+                tree_values = values if tree == "this tree" else reference_values
+                run = tree_run(trees[tree], agent, preset, seed, tree_values)
             results[label].append(run)
             print(f"seed {seed} {label}: {run}", flush=True)
     sizes = {1} | {
@@ -197,15 +274,23 @@ def main(argv: list[str] | None = None) -> int:
         for p in args.presets.split(",")
     }
     ceilings = {n: ceiling(n) for n in sorted(sizes)}
+    command = (
+        f"python benchmarks/time_to_hop.py --seeds {args.seeds} --agents {args.agents} "
+        f"--presets {args.presets}"
+        + (" --no-sb3" if args.no_sb3 else "")
+        + "".join(f" --set {o}" for o in args.overrides)
+        + (" --reference-src REF/src" if args.reference_src else "")
+        + "".join(f" --reference-set {o}" for o in args.reference_overrides)
+    )
+    code = f"this tree at commit {commits['this tree']}" + (
+        f", REF at commit {commits['reference']}" if args.reference_src else ""
+    )
     lines = [
         "# Time to hop: wall-clock time until a deterministic evaluation reaches a threshold",
         "",
-        f"Measured {datetime.date.today().isoformat()} by `python benchmarks/time_to_hop.py "
-        f"--seeds {args.seeds} --agents {args.agents} --presets {args.presets}"
-        + (" --no-sb3" if args.no_sb3 else "")
-        + "".join(f" --set {o}" for o in overrides)
-        + f"` on {cpu_model()}, {usable_cores()} usable cores (load "
-        f"{load_average()} at the end), torch {torch.__version__}, 1 torch thread.",
+        f"Measured {datetime.date.today().isoformat()} by `{command}` ({code}) on "
+        f"{cpu_model()}, {usable_cores()} usable cores (load {load_average()} at the end), "
+        f"torch {torch.__version__}; each project run in a fresh process, one at a time.",
         "",
         f"Threshold: mean return and hop height over {EVAL_EPISODES} deterministic episodes, "
         f"evaluated every {EVAL_EVERY:,} env steps (mlp and SB3: return >= "
@@ -213,12 +298,12 @@ def main(argv: list[str] | None = None) -> int:
         f"{BUDGETS['mlp']:,} steps; cpg-actor: return >= {THRESHOLDS['cpg-actor'][0]:.0f} and "
         f"hop >= {THRESHOLDS['cpg-actor'][1]} m within {BUDGETS['cpg-actor']:,} steps). "
         "Steps and time are medians over the seeds that reached it; time is training wall "
-        "time without the evaluations.",
+        "time without the evaluations (compilation included).",
         "",
         "| method | seeds that reached it | env steps | wall time | per seed |",
         "| --- | ---: | ---: | ---: | --- |",
     ]
-    for _, label, _ in methods:
+    for label, _ in methods:
         runs = results[label]
         hit, steps, wall = fmt_runs(runs)
         per_seed = "; ".join(
@@ -228,6 +313,19 @@ def main(argv: list[str] | None = None) -> int:
             for r in runs
         )
         lines.append(f"| {label} | {hit} | {steps} | {wall} | {per_seed} |")
+    if args.reference_src:
+        lines += ["", "Median wall time to the threshold, reference / this tree:", ""]
+        by_spec = {spec: results[label] for label, spec in methods if spec is not None}
+        for agent in args.agents.split(","):
+            for preset in args.presets.split(","):
+                ours = median_wall(by_spec[agent, preset, "this tree"])
+                theirs = median_wall(by_spec[agent, preset, "reference"])
+                ratio = (
+                    f"{theirs:.0f} s / {ours:.0f} s = **{theirs / ours:.2f}x**"
+                    if math.isfinite(ours) and math.isfinite(theirs)
+                    else "not reached by both trees"
+                )
+                lines.append(f"- `{agent}`, `{preset}` preset: {ratio}")
     lines += [
         "",
         "Physics ceiling in the same run (`mujoco.rollout`, 10 substeps per control step, "
