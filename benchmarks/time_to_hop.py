@@ -30,7 +30,6 @@ import datetime
 import json
 import math
 import os
-import subprocess
 import sys
 import time
 from pathlib import Path
@@ -92,14 +91,10 @@ def project_run(agent: str, preset: str, seed: int, values: list[dict]) -> dict:
 
 def tree_run(src: Path, agent: str, preset: str, seed: int, values: list[dict]) -> dict:
     """:func:`project_run` in a fresh process with the package in ``src``."""
+    from bench_report import json_from_tree
+
     spec = json.dumps({"agent": agent, "preset": preset, "seed": seed, "values": values})
-    env = dict(os.environ, PYTHONPATH=str(src))
-    done = subprocess.run(
-        [sys.executable, __file__, "--one-run", spec], env=env, capture_output=True, text=True
-    )
-    if done.returncode != 0:
-        raise RuntimeError(f"the run {spec} with {src} failed:\n{done.stderr[-3000:]}")
-    return json.loads(done.stdout.strip().splitlines()[-1])
+    return json_from_tree(src, [__file__, "--one-run", spec])
 
 
 class SB3Policy:
@@ -193,8 +188,7 @@ def fmt_runs(runs: list[dict]) -> tuple[str, str, str]:
     if not hits:
         return f"0/{len(runs)}", "not reached", "-"
     steps = np.median([r["steps"] for r in hits])
-    wall = np.median([r["wall"] for r in hits])
-    return f"{len(hits)}/{len(runs)}", f"{steps / 1000:.0f}k", f"{wall:.0f} s"
+    return f"{len(hits)}/{len(runs)}", f"{steps / 1000:.0f}k", f"{median_wall(runs):.0f} s"
 
 
 def one_run(spec: str) -> int:

@@ -154,11 +154,11 @@ def reference(
     src: str, presets: list[str], agents: list[str], iterations: int, compile: bool
 ) -> dict:
     """The same measurements with the package in ``src``, in a subprocess."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([src, os.environ.get("PYTHONPATH", "")]))
-    command = [sys.executable, __file__, "--json", "--iterations", str(iterations)]
-    command += ["--presets", *presets, "--agents", *agents] + (["--compile"] if compile else [])
-    out = subprocess.run(command, env=env, capture_output=True, text=True, check=True).stdout
-    return json.loads(out.strip().splitlines()[-1])
+    arguments = [__file__, "--json", "--iterations", str(iterations)]
+    arguments += ["--presets", *presets, "--agents", *agents] + (["--compile"] if compile else [])
+    from bench_report import json_from_tree
+
+    return json_from_tree(src, arguments)
 
 
 def measure_all(args: argparse.Namespace) -> dict[str, dict[str, float]]:
