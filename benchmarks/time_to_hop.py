@@ -54,9 +54,10 @@ def reached(evaluation: dict[str, float], threshold: tuple[float, float]) -> boo
     )
 
 
-def project_run(agent: str, preset: str, seed: int, values: list[dict]) -> dict:
+def project_run(agent: str, preset: str, seed: int, values: list[dict], budget: int) -> dict:
     """One run of the package on ``sys.path`` (any tree since the learning issue): ``preset``,
-    then each of ``values`` (nested config mappings), until the threshold or the budget."""
+    then each of ``values`` (nested config mappings), until the threshold or ``budget`` env
+    steps."""
     from cpg_actor.config import TrainConfig, apply_dict
     from cpg_actor.presets import preset_values
     from cpg_actor.runner import Runner
@@ -65,7 +66,7 @@ def project_run(agent: str, preset: str, seed: int, values: list[dict]) -> dict:
     apply_dict(config, preset_values(preset), prefix="")
     for mapping in values:
         apply_dict(config, mapping, prefix="")
-    config.agent, config.seed, config.total_steps = agent, seed, BUDGETS[agent]
+    config.agent, config.seed, config.total_steps = agent, seed, budget
     config.eval_interval = max(1, round(EVAL_EVERY / config.steps_per_iteration))
     config.eval_episodes = EVAL_EPISODES
     runner = Runner(config, run_dir=None, tensorboard=False)
@@ -89,11 +90,15 @@ def project_run(agent: str, preset: str, seed: int, values: list[dict]) -> dict:
     return summarize(history, THRESHOLDS[agent])
 
 
-def tree_run(src: Path, agent: str, preset: str, seed: int, values: list[dict]) -> dict:
+def tree_run(
+    src: Path, agent: str, preset: str, seed: int, values: list[dict], budget: int
+) -> dict:
     """:func:`project_run` in a fresh process with the package in ``src``."""
     from bench_report import json_from_tree
 
-    spec = json.dumps({"agent": agent, "preset": preset, "seed": seed, "values": values})
+    spec = json.dumps(
+        {"agent": agent, "preset": preset, "seed": seed, "values": values, "budget": budget}
+    )
     return json_from_tree(src, [__file__, "--one-run", spec])
 
 
@@ -117,7 +122,7 @@ class SB3Policy:
         return PolicyStep(desired.astype(np.float32), torch.as_tensor(obs), torch.zeros(0), agent)
 
 
-def sb3_run(seed: int, values: list[dict]) -> dict:
+def sb3_run(seed: int, values: list[dict], budget: int) -> dict:
     import gymnasium as gym
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
@@ -160,7 +165,7 @@ def sb3_run(seed: int, values: list[dict]) -> dict:
 
     model = PPO("MlpPolicy", env, seed=seed, device="cpu", verbose=0)
     try:
-        model.learn(total_timesteps=BUDGETS["mlp"], callback=Evaluate())
+        model.learn(total_timesteps=budget, callback=Evaluate())
     finally:
         env.close()
         eval_env.close()
@@ -194,7 +199,7 @@ def fmt_runs(runs: list[dict]) -> tuple[str, str, str]:
 def one_run(spec: str) -> int:
     """``--one-run``: a :func:`project_run` from its JSON spec; prints its result as JSON."""
     run = json.loads(spec)
-    result = project_run(run["agent"], run["preset"], run["seed"], run["values"])
+    result = project_run(run["agent"], run["preset"], run["seed"], run["values"], run["budget"])
     print(json.dumps(result))
     return 0
 
@@ -202,6 +207,26 @@ def one_run(spec: str) -> int:
 def median_wall(runs: list[dict]) -> float:
     hits = [r["wall"] for r in runs if r["reached"]]
     return float(np.median(hits)) if hits else math.nan
+
+
+def wall_ratio(reference: list[dict], ours: list[dict]) -> str:
+    """Median wall time to the threshold over all seeds, reference / this tree. A seed that
+    did not reach it counts as reaching it after its budget's time (a lower bound), so a
+    median over such seeds is marked ">=" and a ratio with only its numerator so is too."""
+
+    def median(runs: list[dict]) -> tuple[float, bool]:  # (seconds, a lower bound only)
+        mid = float(np.median([r["wall"] if r["reached"] else math.inf for r in runs]))
+        if math.isfinite(mid):
+            return mid, False
+        bounds = [r["wall"] for r in runs]
+        return float(np.median(bounds)), True
+
+    theirs, theirs_bound = median(reference)
+    mine, mine_bound = median(ours)
+    if mine_bound:
+        return f"this tree's median seed did not reach it ({mine:.0f} s or more); no ratio"
+    sign = ">= " if theirs_bound else ""
+    return f"{sign}{theirs:.0f} s / {mine:.0f} s = **{sign}{theirs / mine:.2f}x**"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -217,6 +242,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--set", dest="overrides", action="append", default=[], metavar="KEY=VALUE",
         help="a config value for this tree's runs and SB3's env, e.g. env.actuator_law=coast",
+    )  # fmt: skip
+    parser.add_argument(
+        "--budget", dest="budgets", action="append", default=[], metavar="AGENT=STEPS",
+        help="a step budget other than the learning issue's (mlp 300000, cpg-actor 500000); "
+        "SB3 has mlp's",
     )  # fmt: skip
     parser.add_argument("--reference-src", help="src/ of a tree to run next to this one")
     parser.add_argument(
@@ -234,6 +264,15 @@ def main(argv: list[str] | None = None) -> int:
     from cpg_actor.machine import cpu_model, git_commit, load_average, usable_cores
     from cpg_actor.presets import preset_values
 
+    budgets = dict(BUDGETS)
+    for text in args.budgets:
+        agent, _, steps = text.partition("=")
+        if agent not in BUDGETS or not steps.isdigit() or int(steps) <= 0:
+            parser.error(
+                f"--budget {text!r}: expected AGENT=STEPS with AGENT one of "
+                f"{', '.join(BUDGETS)} and STEPS a positive integer"
+            )
+        budgets[agent] = int(steps)
     values = [parse_override(text) for text in args.overrides]
     reference_values = [parse_override(text) for text in args.reference_overrides]
     trees = {"this tree": HERE.parent / "src"}
@@ -256,11 +295,11 @@ def main(argv: list[str] | None = None) -> int:
     for seed in range(args.seeds):
         for label, spec in methods:
             if spec is None:
-                run = sb3_run(seed, values)
+                run = sb3_run(seed, values, budgets["mlp"])
             else:
                 agent, preset, tree = spec
                 tree_values = values if tree == "this tree" else reference_values
-                run = tree_run(trees[tree], agent, preset, seed, tree_values)
+                run = tree_run(trees[tree], agent, preset, seed, tree_values, budgets[agent])
             results[label].append(run)
             print(f"seed {seed} {label}: {run}", flush=True)
     sizes = {1} | {
@@ -272,6 +311,7 @@ def main(argv: list[str] | None = None) -> int:
         f"python benchmarks/time_to_hop.py --seeds {args.seeds} --agents {args.agents} "
         f"--presets {args.presets}"
         + (" --no-sb3" if args.no_sb3 else "")
+        + "".join(f" --budget {b}" for b in args.budgets)
         + "".join(f" --set {o}" for o in args.overrides)
         + (" --reference-src REF/src" if args.reference_src else "")
         + "".join(f" --reference-set {o}" for o in args.reference_overrides)
@@ -289,8 +329,8 @@ def main(argv: list[str] | None = None) -> int:
         f"Threshold: mean return and hop height over {EVAL_EPISODES} deterministic episodes, "
         f"evaluated every {EVAL_EVERY:,} env steps (mlp and SB3: return >= "
         f"{THRESHOLDS['mlp'][0]:.0f} and hop >= {THRESHOLDS['mlp'][1]} m within "
-        f"{BUDGETS['mlp']:,} steps; cpg-actor: return >= {THRESHOLDS['cpg-actor'][0]:.0f} and "
-        f"hop >= {THRESHOLDS['cpg-actor'][1]} m within {BUDGETS['cpg-actor']:,} steps). "
+        f"{budgets['mlp']:,} steps; cpg-actor: return >= {THRESHOLDS['cpg-actor'][0]:.0f} and "
+        f"hop >= {THRESHOLDS['cpg-actor'][1]} m within {budgets['cpg-actor']:,} steps). "
         "Steps and time are medians over the seeds that reached it; time is training wall "
         "time without the evaluations (compilation included).",
         "",
@@ -312,14 +352,12 @@ def main(argv: list[str] | None = None) -> int:
         by_spec = {spec: results[label] for label, spec in methods if spec is not None}
         for agent in args.agents.split(","):
             for preset in args.presets.split(","):
-                ours = median_wall(by_spec[agent, preset, "this tree"])
-                theirs = median_wall(by_spec[agent, preset, "reference"])
-                ratio = (
-                    f"{theirs:.0f} s / {ours:.0f} s = **{theirs / ours:.2f}x**"
-                    if math.isfinite(ours) and math.isfinite(theirs)
-                    else "not reached by both trees"
+                lines.append(
+                    f"- `{agent}`, `{preset}` preset: "
+                    + wall_ratio(
+                        by_spec[agent, preset, "reference"], by_spec[agent, preset, "this tree"]
+                    )
                 )
-                lines.append(f"- `{agent}`, `{preset}` preset: {ratio}")
     lines += [
         "",
         "Physics ceiling in the same run (`mujoco.rollout`, 10 substeps per control step, "

@@ -25,7 +25,14 @@ import sys
 import time
 from pathlib import Path
 
-from cpg_actor.machine import brief_openmp_spinning, cpu_model, load_average, usable_cores
+from cpg_actor.machine import (
+    brief_openmp_spinning,
+    cpu_model,
+    cpu_times,
+    load_average,
+    stolen_share,
+    usable_cores,
+)
 
 brief_openmp_spinning(os.environ)  # as the cpg-actor command runs (before torch loads)
 
@@ -72,17 +79,21 @@ def measure(
     ceiling: bool = False,
 ) -> dict[str, float]:
     """One warm-up iteration (and the compile), then ``iterations`` timed ones; with
-    ``ceiling``, also the physics ceiling of the timed iterations' motion (``ceiling``)."""
+    ``ceiling``, also the physics ceiling of the timed iterations' motion (``ceiling``).
+    ``stolen`` and ``ceiling_stolen``: the share of the machine's CPU time its hypervisor
+    took during the timed iterations and during the ceiling (:func:`stolen_share`)."""
     config = make_config(agent, preset, compile, device, num_envs, torch_threads, update_threads)
     config.total_steps = (iterations + 1) * config.steps_per_iteration
     runner = Runner(config, run_dir=None, tensorboard=False)
     collect = update = simulation = 0.0
-    recorder = None
+    recorder = cpu_start = None
     try:
         runner.start_episodes()
         for i in range(iterations + 1):
             if i == 1 and ceiling:
                 recorder = record_motion(runner)
+            if i == 1:
+                cpu_start = cpu_times()
             start = time.perf_counter()
             info = runner.collect()
             collected = time.perf_counter()
@@ -95,13 +106,18 @@ def measure(
                 collect += collected - start
                 update += end - collected
                 simulation += info["simulation_time"]
+        cpu_end = cpu_times()
         motion = recorder.stop() if recorder is not None else None
     finally:
         runner.close()
     samples = iterations * config.steps_per_iteration
-    extra = {"ceiling": replay_ceiling(recorder, motion)} if motion is not None else {}
+    extra = {}
+    if motion is not None:
+        extra["ceiling"] = replay_ceiling(recorder, motion)
+        extra["ceiling_stolen"] = stolen_share(cpu_end, cpu_times())
     return {
         **extra,
+        "stolen": stolen_share(cpu_start, cpu_end),
         "num_envs": config.num_envs,
         "SPS": samples / (collect + update),
         "collect_us": 1e6 * collect / samples,
@@ -204,6 +220,12 @@ def fmt_ceiling(row: dict[str, float]) -> str:
     return f"{row['ceiling']:,.0f} | {row['SPS'] / row['ceiling']:.0%}"
 
 
+def fmt_stolen(row: dict[str, float]) -> str:
+    """The hypervisor's share of the CPU time during the training and its ceiling."""
+    shares = [row.get(key, float("nan")) for key in ("stolen", "ceiling_stolen")]
+    return " / ".join("-" if share != share else f"{share:.0%}" for share in shares)
+
+
 def fmt_speedup(ratios: list[float]) -> str:
     """The median speed-up and, over several repeats, the range of the paired ones."""
     if len(ratios) < 2:
@@ -285,14 +307,14 @@ def main() -> None:
         "`ThreadedRollout`; `benchmarks/env_throughput.py`, `ReplayCeiling`).",
         "",
         "| preset | agent | envs | training SPS | ceiling | of ceiling | collection us/step | "
-        "of which simulation | outside the simulation | update us/sample |"
+        "of which simulation | outside the simulation | update us/sample | CPU stolen |"
         + (
             " reference SPS | speed-up | reference simulation | reference outside the "
             "simulation | update speed-up |"
             if ref
             else ""
         ),
-        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
         + (" ---: | ---: | ---: | ---: | ---: |" if ref else ""),
     ]
     for key, r in results.items():
@@ -300,7 +322,8 @@ def main() -> None:
         row = (
             f"| {preset} | {agent} | {r['num_envs']} | {r['SPS']:,.0f} | {fmt_ceiling(r)} | "
             f"{r['collect_us']:.1f} | "
-            f"{r['simulation_us']:.1f} | {r['outside_us']:.1f} | {r['update_us']:.1f} |"
+            f"{r['simulation_us']:.1f} | {r['outside_us']:.1f} | {r['update_us']:.1f} | "
+            f"{fmt_stolen(r)} |"
         )
         old = ref.get(key)
         if old:
@@ -337,7 +360,9 @@ def main() -> None:
         "With `--repeats N`: each figure is the median of N measurements, the rows, the",
         "reference taken in turn; a speed-up is the median of the N paired",
         "ones (each repeat's code against the reference measured right after it), their",
-        "range in brackets.",
+        "range in brackets. CPU stolen: the share of the machine's CPU time that its",
+        "hypervisor gave to something else (`steal` in `/proc/stat`), during the row's timed",
+        "iterations / during its ceiling: on a shared host, a neighbour's load.",
         "",
     ]
     Path(args.output).parent.mkdir(parents=True, exist_ok=True)

@@ -48,6 +48,31 @@ def load_average() -> str:
     return ", ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
+def cpu_times(stat: str | Path = "/proc/stat") -> tuple[int, int] | None:
+    """(stolen, total) CPU time of the whole machine since boot, in clock ticks, from the
+    ``cpu`` line of ``/proc/stat``; None where there is none (not Linux). "Stolen" is the
+    time the hypervisor of a virtual machine ran something else while this machine's CPUs
+    were ready to run: the share a neighbour on a shared host took."""
+    try:
+        with open(stat, encoding="utf-8") as lines:
+            fields = lines.readline().split()
+    except OSError:
+        return None
+    if len(fields) < 9 or fields[0] != "cpu":
+        return None
+    # user nice system idle iowait irq softirq steal [guest guest_nice: counted in user]
+    ticks = [int(value) for value in fields[1:9]]
+    return ticks[7], sum(ticks)
+
+
+def stolen_share(before: tuple[int, int] | None, after: tuple[int, int] | None) -> float:
+    """The share of the machine's CPU time the hypervisor took between two
+    :func:`cpu_times` readings (0..1); NaN if either is None or no time passed."""
+    if before is None or after is None or after[1] <= before[1]:
+        return float("nan")
+    return (after[0] - before[0]) / (after[1] - before[1])
+
+
 def git_commit(path: str | Path | None = None) -> str:
     """The short git commit of the checkout holding ``path`` (default: this package), marked
     "(uncommitted changes)" when the tree differs from it; "unknown" outside a checkout."""
