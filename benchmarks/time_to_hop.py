@@ -261,7 +261,14 @@ def main(argv: list[str] | None = None) -> int:
     import torch
 
     from cpg_actor.config import TrainConfig, parse_override
-    from cpg_actor.machine import cpu_model, git_commit, load_average, usable_cores
+    from cpg_actor.machine import (
+        cpu_model,
+        cpu_times,
+        git_commit,
+        load_average,
+        stolen_share,
+        usable_cores,
+    )
     from cpg_actor.presets import preset_values
 
     budgets = dict(BUDGETS)
@@ -294,12 +301,14 @@ def main(argv: list[str] | None = None) -> int:
     results: dict[str, list[dict]] = {label: [] for label, _ in methods}
     for seed in range(args.seeds):
         for label, spec in methods:
+            cpu_start = cpu_times()
             if spec is None:
                 run = sb3_run(seed, values, budgets["mlp"])
             else:
                 agent, preset, tree = spec
                 tree_values = values if tree == "this tree" else reference_values
                 run = tree_run(trees[tree], agent, preset, seed, tree_values, budgets[agent])
+            run["stolen"] = stolen_share(cpu_start, cpu_times())  # a neighbour's load
             results[label].append(run)
             print(f"seed {seed} {label}: {run}", flush=True)
     sizes = {1} | {
@@ -332,10 +341,12 @@ def main(argv: list[str] | None = None) -> int:
         f"{budgets['mlp']:,} steps; cpg-actor: return >= {THRESHOLDS['cpg-actor'][0]:.0f} and "
         f"hop >= {THRESHOLDS['cpg-actor'][1]} m within {budgets['cpg-actor']:,} steps). "
         "Steps and time are medians over the seeds that reached it; time is training wall "
-        "time without the evaluations (compilation included).",
+        "time without the evaluations (compilation included). CPU stolen: per seed, the "
+        "share of the machine's CPU time that its hypervisor gave to something else during "
+        "the run (`steal` in `/proc/stat`; a neighbour's load on a shared host).",
         "",
-        "| method | seeds that reached it | env steps | wall time | per seed |",
-        "| --- | ---: | ---: | ---: | --- |",
+        "| method | seeds that reached it | env steps | wall time | per seed | CPU stolen |",
+        "| --- | ---: | ---: | ---: | --- | ---: |",
     ]
     for label, _ in methods:
         runs = results[label]
@@ -346,7 +357,10 @@ def main(argv: list[str] | None = None) -> int:
             else f"best {r['return']:.0f} (hop {r['hop']:.2f} m), budget in {r['wall']:.0f} s"
             for r in runs
         )
-        lines.append(f"| {label} | {hit} | {steps} | {wall} | {per_seed} |")
+        stolen = ", ".join(
+            f"{r['stolen']:.0%}" if math.isfinite(r["stolen"]) else "-" for r in runs
+        )
+        lines.append(f"| {label} | {hit} | {steps} | {wall} | {per_seed} | {stolen} |")
     if args.reference_src:
         lines += ["", "Median wall time to the threshold, reference / this tree:", ""]
         by_spec = {spec: results[label] for label, spec in methods if spec is not None}
