@@ -20,7 +20,11 @@ preset with the package of another tree (e.g. the commit before a redesign), tak
 this tree's runs, so the two are measured on the same machine in the same run; ``--set``
 applies to this tree's runs and SB3's env, ``--reference-set`` to the reference's (a
 reference older than a config key needs none: ``env.actuator_law=coast`` here is the only law
-before 26 Nov 2026).
+before 26 Nov 2026). The ratio of the two trees' median wall times counts a seed that missed
+the threshold as later than its whole budget, so that median is a lower bound (">=");
+``--budget AGENT=STEPS`` gives an agent another budget (the threshold stays). Each run also
+records the share of the machine's CPU time its hypervisor took meanwhile
+(:func:`cpg_actor.machine.cpu_times`).
 """
 
 from __future__ import annotations
