@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
+import math
 import os
 import statistics
 import subprocess
@@ -223,7 +224,7 @@ def fmt_ceiling(row: dict[str, float]) -> str:
 def fmt_stolen(row: dict[str, float]) -> str:
     """The hypervisor's share of the CPU time during the training and its ceiling."""
     shares = [row.get(key, float("nan")) for key in ("stolen", "ceiling_stolen")]
-    return " / ".join("-" if share != share else f"{share:.0%}" for share in shares)
+    return " / ".join("-" if math.isnan(share) else f"{share:.0%}" for share in shares)
 
 
 def fmt_speedup(ratios: list[float]) -> str:
