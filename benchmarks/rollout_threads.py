@@ -20,7 +20,7 @@ Then it replays the same calls (the recorded states and controls) back to back o
 threads, as the physics ceiling is measured (``benchmarks/env_throughput.py``): the helpers
 sleep only from one call to the next. The ratio of the two wall times is what interleaving the
 policy with the simulation costs the simulation. Last, the two chunk schedules on the same
-calls, with the training's mean pause between calls (the calling thread busy meanwhile, as with
+calls, with the training's median pause between calls (the calling thread busy meanwhile, as with
 the policy): the guided one the rollout uses
 (:func:`~cpg_actor.envs.backends.threaded_rollout.guided_chunks`) and 4 fixed chunks per thread
 (the schedule before 28 Nov 2026), alternating, 4 pairs; the median of the paired ratios of
@@ -128,10 +128,11 @@ class CallRecorder:
         }
 
     def pause_ms(self) -> float:
-        """Mean time between the end of one call and the start of the next (the policy, the
-        env's numpy work, storage: the helpers sleep meanwhile)."""
+        """Median time between the end of one call and the start of the next (the policy, the
+        env's numpy work, storage: the helpers sleep meanwhile; the median leaves out the
+        PPO updates between rollouts)."""
         gaps = [b["start"] - a["end"] for a, b in zip(self.calls, self.calls[1:], strict=False)]
-        return 1e3 * statistics.fmean(gaps) if gaps else 0.0
+        return 1e3 * statistics.median(gaps) if gaps else 0.0
 
     def replay_ms(
         self, rollout: threaded_rollout.ThreadedRollout | None = None, pause_ms: float = 0.0
