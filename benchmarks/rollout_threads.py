@@ -11,10 +11,12 @@ sleep. This script trains the throughput preset (compiled) for ``--iterations`` 
 and records, for every ``rollout`` call:
 
 * its wall time;
-* how long after the call each helper started its first chunk (the *start delay*: waking a
-  sleeping thread);
+* how long after the call the first helper woke and began taking chunks (the *start delay*:
+  waking a sleeping thread; it is recorded even when the calling thread has taken every chunk
+  by then);
 * how long the calling thread waited for the helpers after its own last chunk;
-* the share of the call's thread time (wall x threads) spent stepping robots.
+* the share of the call's thread time (wall x threads) spent in the threads' chunk loops
+  (``mujoco.rollout`` and taking the next chunk).
 
 Then it replays the same calls (the recorded states and controls) back to back on the same
 threads, as the physics ceiling is measured (``benchmarks/env_throughput.py``): the helpers
@@ -30,7 +32,7 @@ driver and its halt-polling window: a virtual CPU that halts when idle is woken 
 host, which is slow when the guest's halt polling is off.
 
 The instrumentation wraps the rollout's methods from this script (the package is not
-changed); it adds two clock reads per chunk.
+changed); it adds two clock reads per thread and call.
 """
 
 from __future__ import annotations
@@ -93,7 +95,8 @@ class CallRecorder:
         def timed_call(state, control, next_state, sensordata, control_spec, nstep):
             record = {"main": [], "helpers": []}
             recorder._current = record
-            self.inputs.append((state.copy(), control.copy(), control_spec, nstep))
+            sensors = None if sensordata is None else sensordata.shape
+            self.inputs.append((state.copy(), control.copy(), control_spec, nstep, sensors))
             record["start"] = time.perf_counter()
             call(state, control, next_state, sensordata, control_spec, nstep)
             record["end"] = time.perf_counter()
@@ -106,7 +109,8 @@ class CallRecorder:
 
     def stop(self) -> None:
         threaded_rollout._ChunkStepper.__call__ = self._restore
-        del self.rollout.rollout  # the instance attribute: the class's method again
+        if "rollout" in vars(self.rollout):  # the instance attribute: the class's method again
+            del self.rollout.rollout
 
     def summary(self) -> dict[str, float]:
         walls, delays, waits, busy = [], [], [], 0.0
@@ -114,8 +118,8 @@ class CallRecorder:
         for c in self.calls:
             walls.append(c["end"] - c["start"])
             busy += sum(e - s for s, e in c["main"] + c["helpers"])
-            if c["helpers"]:
-                delays.append(c["helpers"][0][0] - c["start"])
+            if c["helpers"]:  # the first helper to wake (records are added as each finishes)
+                delays.append(min(start for start, _ in c["helpers"]) - c["start"])
             waits.append(c["end"] - c["main"][-1][1])
         return {
             "calls": len(walls),
@@ -140,13 +144,16 @@ class CallRecorder:
         """Mean wall time of the recorded calls replayed on ``rollout`` (default: the recorded
         one), the calling thread busy for ``pause_ms`` between calls (0: back to back)."""
         rollout = rollout or self.rollout
-        out = sensors = None
+        outputs: dict[tuple, np.ndarray] = {}  # by shape: one array each, as the env keeps
         total = 0.0
-        for state, control, spec, nstep in self.inputs:
-            if out is None:
-                out = np.empty((state.shape[0], nstep, state.shape[1]))
-                model = rollout._steppers[0].models[0]
-                sensors = np.empty((state.shape[0], nstep, model.nsensordata))
+        for state, control, spec, nstep, sensor_shape in self.inputs:
+            shape = (state.shape[0], nstep, state.shape[1])
+            out = outputs.setdefault(shape, np.empty(shape))
+            sensors = (
+                None
+                if sensor_shape is None
+                else outputs.setdefault(sensor_shape, np.empty(sensor_shape))
+            )
             start = time.perf_counter()
             rollout.rollout(state, control, out, sensors, spec, nstep)
             end = time.perf_counter()
@@ -156,7 +163,9 @@ class CallRecorder:
         return 1e3 * total / len(self.inputs)
 
 
-def fixed_chunks(rollout: threaded_rollout.ThreadedRollout) -> threaded_rollout.ThreadedRollout:
+def fixed_chunk_rollout(
+    rollout: threaded_rollout.ThreadedRollout,
+) -> threaded_rollout.ThreadedRollout:
     """A rollout of the same robots and threads with 4 fixed chunks per thread (the schedule
     before the guided one)."""
     model = rollout._steppers[0].models[0]
@@ -193,12 +202,21 @@ def measure(agent: str, num_envs: int, iterations: int) -> dict[str, float]:
         result["replay_ms"] = recorder.replay_ms()
         # the schedules compared on the same calls, with training's pauses between them
         result["pause_ms"] = recorder.pause_ms()
-        fixed = fixed_chunks(backend._rollout)
-        ratios = []
-        for _ in range(4):  # alternating, paired
-            guided_ms = recorder.replay_ms(pause_ms=result["pause_ms"])
-            ratios.append(recorder.replay_ms(fixed, result["pause_ms"]) / guided_ms)
-        fixed.close()
+        fixed = fixed_chunk_rollout(backend._rollout)
+        try:
+            pause = result["pause_ms"]
+            recorder.replay_ms(fixed, pause)  # its threads' first calls
+            ratios = []
+            for pair in range(4):  # paired, each schedule first in every other pair
+                if pair % 2 == 0:
+                    guided_ms = recorder.replay_ms(pause_ms=pause)
+                    fixed_ms = recorder.replay_ms(fixed, pause)
+                else:
+                    fixed_ms = recorder.replay_ms(fixed, pause)
+                    guided_ms = recorder.replay_ms(pause_ms=pause)
+                ratios.append(fixed_ms / guided_ms)
+        finally:
+            fixed.close()
         result["fixed_over_guided"] = statistics.median(ratios)
         result["threads"] = backend._rollout.num_threads
         result["stolen"] = stolen
@@ -260,14 +278,17 @@ def main() -> None:
         "",
         "`env.step`: the whole step as training times it (the rollout call, observation, "
         "reward, resets, the tensors the trainer gets), per env. "
-        "A rollout call steps every robot through one control step (10 physics substeps). "
-        "*Helper start delay*: from the call to the helper's first chunk; *calling thread "
-        "waits*: from its own last chunk to the call's end; *threads stepping robots*: the "
-        "share of the call's thread time (wall x threads) spent in `mujoco.rollout`; *back "
+        "A rollout call steps every robot through one control step (with the default "
+        "actuator law: 10 physics substeps). *Helper start delay*: from the call to the "
+        "first helper waking to take chunks; *calling thread waits*: from its own last "
+        "chunk to the call's end; *threads stepping robots*: the "
+        "share of the call's thread time (wall x threads) in the threads' chunk loops "
+        "(`mujoco.rollout` and taking the next chunk); *back "
         "to back*: the recorded calls replayed with nothing between them, as the physics "
         "ceiling is measured; *fixed chunks / guided*: the same calls with 4 fixed chunks "
-        "per thread over the guided schedule, with training's pause between calls (median "
-        "of 4 alternating pairs; above 1: the guided schedule is faster). CPU stolen: the "
+        "per thread over the guided schedule, with training's median pause between calls "
+        "(median of 4 pairs, each schedule first in every other pair, after a warm-up; "
+        "above 1: the guided schedule is faster). CPU stolen: the "
         "hypervisor's share of the machine's CPU time during the training.",
     ]
     write(args.output, lines)

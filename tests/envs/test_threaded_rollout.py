@@ -116,18 +116,27 @@ def test_threads_and_chunks_must_be_positive(setup):
 
 @pytest.mark.parametrize(("robots", "threads"), [(1, 1), (37, 2), (256, 2), (1024, 16), (5, 8)])
 def test_the_guided_schedule_covers_every_robot_once_in_shrinking_chunks(robots, threads):
-    chunks = guided_chunks(robots, threads)
-    starts = [start for start, _ in chunks]
-    sizes = [size for _, size in chunks]
+    sizes = [size for _, size in guided_chunks(robots, threads)]
+    starts = [start for start, _ in guided_chunks(robots, threads)]
     assert starts == [sum(sizes[:i]) for i in range(len(sizes))]  # contiguous, in order
     assert sum(sizes) == robots
     assert all(a >= b for a, b in zip(sizes, sizes[1:], strict=False))  # never growing
     assert all(size >= 4 for size in sizes[:-1])  # none below the minimum but the remainder
-    assert sizes[0] == min(robots, max(4, -(-robots // (2 * threads))))  # 1/(2n) of them
 
 
 def test_the_guided_schedule_hands_out_a_quarter_of_what_is_left_on_two_threads():
-    assert [size for _, size in guided_chunks(256, 2)][:4] == [64, 48, 36, 27]
+    assert [size for _, size in guided_chunks(256, 2)] == [
+        64, 48, 36, 27, 21, 15, 12, 9, 6, 5, 4, 4, 4, 1
+    ]  # fmt: skip
+    assert [size for _, size in guided_chunks(16, 2)] == [4, 4, 4, 4]
+    with pytest.raises(ValueError, match="num_threads and min_size must be >= 1"):
+        guided_chunks(16, 0)
+
+
+def test_the_rollout_uses_the_guided_schedule_unless_given_a_chunk_size(setup):
+    model = setup[0]
+    assert ThreadedRollout(model, K, 2).chunks == tuple(guided_chunks(K, 2))
+    assert ThreadedRollout(model, K, 2, chunk_size=16).chunks == ((0, 16), (16, 16), (32, 5))
 
 
 def test_a_forked_copy_refuses_to_step_instead_of_waiting_forever(setup, monkeypatch):

@@ -51,14 +51,12 @@ class ThreadedRollout:
             raise ValueError(f"num_threads must be >= 1, got {num_threads}")
         self.num_robots = int(num_robots)
         self.num_threads = int(num_threads)
-        if chunk_size is None:
-            self.chunks = guided_chunks(self.num_robots, self.num_threads)
-        else:
-            size = int(chunk_size)
-            if size < 1:
-                raise ValueError(f"chunk_size must be >= 1, got {chunk_size}")
-            starts = range(0, self.num_robots, size)
-            self.chunks = [(start, min(size, self.num_robots - start)) for start in starts]
+        # one schedule, shared by every call: (first row, rows) of each chunk
+        self.chunks = tuple(
+            guided_chunks(self.num_robots, self.num_threads)
+            if chunk_size is None
+            else even_chunks(self.num_robots, int(chunk_size))
+        )
         self._models = [model] * self.num_robots
         self._pid = os.getpid()  # a forked child has none of the helper threads
         self._steppers = [_ChunkStepper(model, self._models) for _ in range(self.num_threads)]
@@ -125,9 +123,11 @@ def guided_chunks(num_robots: int, num_threads: int, min_size: int = 4) -> list[
     the robots not yet handed out, at least ``min_size`` (256 robots on 2 threads: 64, 48,
     36, 27, 21, 15, 12, 9, 6, 5, 4, 4, 4, 1). The large chunks first keep the calls few, the
     small ones last let the threads finish together. Against 4 fixed chunks per thread, in
-    training at 256 robots on 2 threads: the calling thread waits 0.1-0.2 ms for the helper
-    instead of 0.3-0.6, and a call costs 0-15 % less (``benchmarks/rollout_threads.py``;
-    ``docs/training.md``, "The simulator's threads inside training")."""
+    training at 256 robots on 2 threads, the calling thread waits about a third as long for
+    the helper (``benchmarks/rollout_threads.py``; ``docs/training.md``, "The simulator's
+    threads inside training")."""
+    if num_threads < 1 or min_size < 1:
+        raise ValueError(f"num_threads and min_size must be >= 1, got {num_threads} and {min_size}")
     chunks, start = [], 0
     while start < num_robots:
         left = num_robots - start
@@ -135,6 +135,13 @@ def guided_chunks(num_robots: int, num_threads: int, min_size: int = 4) -> list[
         chunks.append((start, size))
         start += size
     return chunks
+
+
+def even_chunks(num_robots: int, size: int) -> list[tuple[int, int]]:
+    """``(first row, rows)`` of chunks of ``size`` robots, the last one shorter if need be."""
+    if size < 1:
+        raise ValueError(f"chunk_size must be >= 1, got {size}")
+    return [(start, min(size, num_robots - start)) for start in range(0, num_robots, size)]
 
 
 class _Job(NamedTuple):
