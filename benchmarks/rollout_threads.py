@@ -1,13 +1,16 @@
 """How well the simulator's threads are used inside training, against the same calls back to back.
 
-    python benchmarks/rollout_threads.py [--agent cpg-actor] [--num-envs 256]
-        [--iterations 6] [--repeats 3] [--output benchmarks/results/rollout_threads.md]
+    python benchmarks/rollout_threads.py [--agent cpg-actor] [--preset throughput]
+        [--num-envs 256] [--iterations 6] [--repeats 3]
+        [--output benchmarks/results/rollout_threads.md]
 
-Inside a training rollout the hopper's MuJoCo backend steps its robots with
+Inside a training rollout the MuJoCo envs (the hopper's backend, the quadruped's vector env)
+step their robots with
 :class:`~cpg_actor.envs.backends.threaded_rollout.ThreadedRollout`: at every control step the
 calling thread hands a job to the helper threads and steps chunks of robots itself, then
 waits for the helpers. Between two control steps the policy acts on one core and the helpers
-sleep. This script trains the throughput preset (compiled) for ``--iterations`` rollouts
+sleep. This script trains ``--preset`` (default ``throughput``, compiled; ``anymal``: the
+quadruped with that recipe) for ``--iterations`` rollouts
 and records, for every ``rollout`` call:
 
 * its wall time;
@@ -173,22 +176,29 @@ def fixed_chunk_rollout(
     return threaded_rollout.ThreadedRollout(model, rollout.num_robots, rollout.num_threads, size)
 
 
-def measure(agent: str, num_envs: int, iterations: int) -> dict[str, float]:
+def env_rollout(env) -> threaded_rollout.ThreadedRollout:
+    """The ``ThreadedRollout`` of a MuJoCo env: the hopper's backend's or the quadruped's."""
+    for holder in (getattr(getattr(env, "sim", None), "backend", None), env):
+        stepper = getattr(holder, "_rollout", None)
+        if isinstance(stepper, threaded_rollout.ThreadedRollout):
+            return stepper
+    raise SystemExit(f"{type(env).__name__} does not step with ThreadedRollout")
+
+
+def measure(agent: str, preset: str, num_envs: int, iterations: int) -> dict[str, float]:
     """Train ``iterations`` rollouts (and updates) after a warm-up one, recording the
     simulator's calls; then replay them."""
     config = TrainConfig(agent=agent)
-    apply_dict(config, preset_values("throughput"), "")
+    apply_dict(config, preset_values(preset), "")
     config.eval_interval, config.num_envs = 0, num_envs
     config.total_steps = (iterations + 1) * config.steps_per_iteration
     runner = Runner(config, run_dir=None, tensorboard=False)
     try:
-        backend = runner.env.unwrapped.sim.backend
-        if not hasattr(backend, "_rollout"):
-            raise SystemExit(f"{type(backend).__name__} does not step with ThreadedRollout")
+        stepper = env_rollout(runner.env.unwrapped)
         runner.start_episodes()
         runner.collect()
         runner.update()
-        recorder = CallRecorder(backend._rollout)
+        recorder = CallRecorder(stepper)
         before = cpu_times()
         simulation = 0.0
         try:
@@ -202,7 +212,7 @@ def measure(agent: str, num_envs: int, iterations: int) -> dict[str, float]:
         result["replay_ms"] = recorder.replay_ms()
         # the schedules compared on the same calls, with training's pauses between them
         result["pause_ms"] = recorder.pause_ms()
-        fixed = fixed_chunk_rollout(backend._rollout)
+        fixed = fixed_chunk_rollout(stepper)
         try:
             pause = result["pause_ms"]
             recorder.replay_ms(fixed, pause)  # its threads' first calls
@@ -218,7 +228,7 @@ def measure(agent: str, num_envs: int, iterations: int) -> dict[str, float]:
         finally:
             fixed.close()
         result["fixed_over_guided"] = statistics.median(ratios)
-        result["threads"] = backend._rollout.num_threads
+        result["threads"] = stepper.num_threads
         result["stolen"] = stolen
         result["simulation_us"] = 1e6 * simulation / (iterations * config.steps_per_iteration)
         result["num_envs"] = config.num_envs
@@ -230,6 +240,7 @@ def measure(agent: str, num_envs: int, iterations: int) -> dict[str, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--agent", default="cpg-actor")
+    parser.add_argument("--preset", default="throughput", help="throughput or anymal")
     parser.add_argument("--num-envs", type=int, default=256)
     parser.add_argument("--iterations", type=int, default=6)
     parser.add_argument("--repeats", type=int, default=3, help="fresh runs, one after another")
@@ -240,12 +251,13 @@ def main() -> None:
     torch.set_num_threads(1)
     rows = []
     for repeat in range(args.repeats):
-        row = measure(args.agent, args.num_envs, args.iterations)
+        row = measure(args.agent, args.preset, args.num_envs, args.iterations)
         rows.append(row)
         print(f"repeat {repeat + 1}: {row}", flush=True)
 
     command = (
-        f"python benchmarks/rollout_threads.py --agent {args.agent} --num-envs {args.num_envs} "
+        f"python benchmarks/rollout_threads.py --agent {args.agent} --preset {args.preset} "
+        f"--num-envs {args.num_envs} "
         f"--iterations {args.iterations} --repeats {args.repeats}"
     )
     lines = [
@@ -254,7 +266,7 @@ def main() -> None:
         f"{measured(command)}.",
         "",
         f"Machine: {cpu_model()}, {usable_cores()} usable cores (load {load_average()}), "
-        f"{sysfs_facts()}, torch {torch.__version__}. Throughput preset (compiled), "
+        f"{sysfs_facts()}, torch {torch.__version__}. Preset `{args.preset}` (compiled), "
         f"`{args.agent}`, {args.num_envs} envs, {rows[0]['threads']} simulator threads, "
         f"{args.iterations} rollouts of 32 control steps per repeat after a warm-up one.",
         "",
@@ -278,7 +290,7 @@ def main() -> None:
         "",
         "`env.step`: the whole step as training times it (the rollout call, observation, "
         "reward, resets, the tensors the trainer gets), per env. "
-        "A rollout call steps every robot through one control step (with the default "
+        "A rollout call steps every robot through one control step (the hopper with its default "
         "actuator law: 10 physics substeps). *Helper start delay*: from the call to the "
         "first helper waking to take chunks; *calling thread waits*: from its own last "
         "chunk to the call's end; *threads stepping robots*: the "
