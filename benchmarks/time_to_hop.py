@@ -22,7 +22,9 @@ applies to this tree's runs and SB3's env, ``--reference-set`` to the reference'
 reference older than a config key needs none: ``env.actuator_law=coast`` here is the only law
 before 26 Nov 2026). The ratio of the two trees' median wall times counts a seed that missed
 the threshold as later than its whole budget, so that median is a lower bound (">=");
-``--budget AGENT=STEPS`` gives an agent another budget (the threshold stays). Each run also
+``--budget AGENT=STEPS`` gives an agent another budget (the threshold stays);
+``--threshold AGENT=RETURN,HOP`` another threshold, or one to an agent the learning issue set
+none for (``cpg-actor-open-loop``, the Cho et al. agents: they need both). Each run also
 records the share of the machine's CPU time its hypervisor took meanwhile
 (:func:`cpg_actor.machine.cpu_times`).
 """
@@ -58,10 +60,17 @@ def reached(evaluation: dict[str, float], threshold: tuple[float, float]) -> boo
     )
 
 
-def project_run(agent: str, preset: str, seed: int, values: list[dict], budget: int) -> dict:
+def project_run(
+    agent: str,
+    preset: str,
+    seed: int,
+    values: list[dict],
+    budget: int,
+    threshold: tuple[float, float],
+) -> dict:
     """One run of the package on ``sys.path`` (any tree since the learning issue): ``preset``,
-    then each of ``values`` (nested config mappings), until the threshold or ``budget`` env
-    steps."""
+    then each of ``values`` (nested config mappings), until ``threshold`` (return, hop
+    height) or ``budget`` env steps."""
     from cpg_actor.config import TrainConfig, apply_dict
     from cpg_actor.presets import preset_values
     from cpg_actor.runner import Runner
@@ -85,24 +94,87 @@ def project_run(agent: str, preset: str, seed: int, values: list[dict], budget: 
                 evaluation["eval/hop_height"],
             )
         )
-        return reached(evaluation, THRESHOLDS[agent])
+        return reached(evaluation, threshold)
 
     try:
         runner.learn(stop_when=stop)
     finally:
         runner.close()
-    return summarize(history, THRESHOLDS[agent])
+    return summarize(history, threshold)
+
+
+def parse_targets(texts: list[str], option: str, form: str, parse) -> dict:
+    """``AGENT=VALUE`` texts -> {agent: parse(VALUE)}; ValueError naming ``option`` and
+    ``form`` for a text that does not fit."""
+    targets = {}
+    for text in texts:
+        agent, _, value = text.partition("=")
+        try:
+            if not agent:
+                raise ValueError
+            targets[agent] = parse(value)
+        except ValueError:
+            raise ValueError(f"{option} {text!r}: expected {form}") from None
+    return targets
+
+
+def positive_steps(text: str) -> int:
+    if not text.isdigit() or int(text) <= 0:
+        raise ValueError(text)
+    return int(text)
+
+
+def return_and_hop(text: str) -> tuple[float, float]:
+    ret, hop = (float(v) for v in text.split(","))  # ValueError unless two numbers
+    if not (math.isfinite(ret) and math.isfinite(hop)):
+        raise ValueError(text)
+    return ret, hop
+
+
+def agent_targets(
+    agents: list[str], budget_texts: list[str], threshold_texts: list[str]
+) -> tuple[dict[str, int], dict[str, tuple[float, float]]]:
+    """Each agent's step budget and (return, hop height) threshold: the learning issue's,
+    replaced by ``--budget`` and ``--threshold``; ValueError for a malformed one or an agent
+    left without either."""
+    budgets = {**BUDGETS, **parse_targets(budget_texts, "--budget", "AGENT=STEPS with STEPS "
+                                          "a positive integer", positive_steps)}  # fmt: skip
+    thresholds = {**THRESHOLDS, **parse_targets(threshold_texts, "--threshold",
+                                                 "AGENT=RETURN,HOP with two numbers, e.g. "
+                                                 "cho2019=700,0.3", return_and_hop)}  # fmt: skip
+    named = set(parse_targets(budget_texts, "--budget", "", str))
+    named |= set(parse_targets(threshold_texts, "--threshold", "", str))
+    if named - set(agents):
+        raise ValueError(
+            f"--budget/--threshold for {', '.join(sorted(named - set(agents)))}, which is not "
+            f"among --agents ({', '.join(agents)})"
+        )
+    for agent in agents:
+        if agent not in budgets or agent not in thresholds:
+            raise ValueError(
+                f"{agent} has no threshold or step budget of the learning issue (only "
+                f"{', '.join(THRESHOLDS)} do); give both: --threshold {agent}=RETURN,HOP "
+                f"--budget {agent}=STEPS"
+            )
+    return budgets, thresholds
 
 
 def tree_run(
-    src: Path, agent: str, preset: str, seed: int, values: list[dict], budget: int
+    src: Path,
+    agent: str,
+    preset: str,
+    seed: int,
+    values: list[dict],
+    budget: int,
+    threshold: tuple[float, float],
 ) -> dict:
     """:func:`project_run` in a fresh process with the package in ``src``."""
     from bench_report import json_from_tree
 
     spec = json.dumps(
-        {"agent": agent, "preset": preset, "seed": seed, "values": values, "budget": budget}
-    )
+        {"agent": agent, "preset": preset, "seed": seed, "values": values, "budget": budget,
+         "threshold": list(threshold)}
+    )  # fmt: skip
     return json_from_tree(src, [__file__, "--one-run", spec])
 
 
@@ -126,7 +198,7 @@ class SB3Policy:
         return PolicyStep(desired.astype(np.float32), torch.as_tensor(obs), torch.zeros(0), agent)
 
 
-def sb3_run(seed: int, values: list[dict], budget: int) -> dict:
+def sb3_run(seed: int, values: list[dict], budget: int, threshold: tuple[float, float]) -> dict:
     import gymnasium as gym
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
@@ -142,7 +214,6 @@ def sb3_run(seed: int, values: list[dict], budget: int) -> dict:
     eval_env = HopperVectorEnv(EVAL_EPISODES, HopperConfig(**env_values))
     low, high = env.unwrapped.action_space.low, env.unwrapped.action_space.high
     history: list[tuple[int, float, float, float]] = []
-    threshold = THRESHOLDS["mlp"]
     clock = {"start": 0.0, "eval": 0.0}
 
     class Evaluate(BaseCallback):
@@ -203,7 +274,10 @@ def fmt_runs(runs: list[dict]) -> tuple[str, str, str]:
 def one_run(spec: str) -> int:
     """``--one-run``: a :func:`project_run` from its JSON spec; prints its result as JSON."""
     run = json.loads(spec)
-    result = project_run(run["agent"], run["preset"], run["seed"], run["values"], run["budget"])
+    result = project_run(
+        run["agent"], run["preset"], run["seed"], run["values"], run["budget"],
+        tuple(run["threshold"]),
+    )  # fmt: skip
     print(json.dumps(result))
     return 0
 
@@ -250,7 +324,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--budget", dest="budgets", action="append", default=[], metavar="AGENT=STEPS",
         help="a step budget other than the learning issue's (mlp 300000, cpg-actor 500000); "
-        "SB3 has mlp's",
+        "SB3 has mlp's (and its threshold)",
+    )  # fmt: skip
+    parser.add_argument(
+        "--threshold", dest="thresholds", action="append", default=[],
+        metavar="AGENT=RETURN,HOP", help="a threshold other than the learning issue's (mlp "
+        "800,0.28; cpg-actor 600,0.3), or one for another agent (with --budget)",
     )  # fmt: skip
     parser.add_argument("--reference-src", help="src/ of a tree to run next to this one")
     parser.add_argument(
@@ -275,15 +354,11 @@ def main(argv: list[str] | None = None) -> int:
     )
     from cpg_actor.presets import preset_values
 
-    budgets = dict(BUDGETS)
-    for text in args.budgets:
-        agent, _, steps = text.partition("=")
-        if agent not in BUDGETS or not steps.isdigit() or int(steps) <= 0:
-            parser.error(
-                f"--budget {text!r}: expected AGENT=STEPS with AGENT one of "
-                f"{', '.join(BUDGETS)} and STEPS a positive integer"
-            )
-        budgets[agent] = int(steps)
+    agents = args.agents.split(",")
+    try:
+        budgets, thresholds = agent_targets(agents, args.budgets, args.thresholds)
+    except ValueError as error:
+        parser.error(str(error))
     values = [parse_override(text) for text in args.overrides]
     reference_values = [parse_override(text) for text in args.reference_overrides]
     trees = {"this tree": HERE.parent / "src"}
@@ -294,7 +369,7 @@ def main(argv: list[str] | None = None) -> int:
     commits = {tree: git_commit(src) for tree, src in trees.items()}
     torch.set_num_threads(1)  # SB3 here; each project run sets its own threads
     methods: list[tuple[str, object]] = []  # (label, (agent, preset, tree) or None for SB3)
-    for agent in args.agents.split(","):
+    for agent in agents:
         for preset in args.presets.split(","):
             for tree in trees:
                 suffix = "" if tree == "this tree" else f" (reference, {commits[tree]})"
@@ -307,11 +382,14 @@ def main(argv: list[str] | None = None) -> int:
         for label, spec in methods:
             cpu_start = cpu_times()
             if spec is None:
-                run = sb3_run(seed, values, budgets["mlp"])
+                run = sb3_run(seed, values, budgets["mlp"], thresholds["mlp"])
             else:
                 agent, preset, tree = spec
                 tree_values = values if tree == "this tree" else reference_values
-                run = tree_run(trees[tree], agent, preset, seed, tree_values, budgets[agent])
+                run = tree_run(
+                    trees[tree], agent, preset, seed, tree_values, budgets[agent],
+                    thresholds[agent],
+                )  # fmt: skip
             run["stolen"] = stolen_share(cpu_start, cpu_times())  # a neighbour's load
             results[label].append(run)
             print(f"seed {seed} {label}: {run}", flush=True)
@@ -325,6 +403,7 @@ def main(argv: list[str] | None = None) -> int:
         f"--presets {args.presets}"
         + (" --no-sb3" if args.no_sb3 else "")
         + "".join(f" --budget {b}" for b in args.budgets)
+        + "".join(f" --threshold {t}" for t in args.thresholds)
         + "".join(f" --set {o}" for o in args.overrides)
         + (" --reference-src REF/src" if args.reference_src else "")
         + "".join(f" --reference-set {o}" for o in args.reference_overrides)
@@ -340,10 +419,14 @@ def main(argv: list[str] | None = None) -> int:
         f"torch {torch.__version__}; each project run in a fresh process, one at a time.",
         "",
         f"Threshold: mean return and hop height over {EVAL_EPISODES} deterministic episodes, "
-        f"evaluated every {EVAL_EVERY:,} env steps (mlp and SB3: return >= "
-        f"{THRESHOLDS['mlp'][0]:.0f} and hop >= {THRESHOLDS['mlp'][1]} m within "
-        f"{budgets['mlp']:,} steps; cpg-actor: return >= {THRESHOLDS['cpg-actor'][0]:.0f} and "
-        f"hop >= {THRESHOLDS['cpg-actor'][1]} m within {budgets['cpg-actor']:,} steps). "
+        f"evaluated every {EVAL_EVERY:,} env steps ("
+        + "; ".join(
+            f"{agent}{' and SB3' if agent == 'mlp' and not args.no_sb3 else ''}: return >= "
+            f"{thresholds[agent][0]:.0f} and hop >= {thresholds[agent][1]} m within "
+            f"{budgets[agent]:,} steps"
+            for agent in agents
+        )
+        + "). "
         "Steps and time are medians over the seeds that reached it; time is training wall "
         "time without the evaluations (compilation included). CPU stolen: per seed, the "
         "share of the machine's CPU time that its hypervisor gave to something else during "
@@ -368,7 +451,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.reference_src:
         lines += ["", "Median wall time to the threshold, reference / this tree:", ""]
         by_spec = {spec: results[label] for label, spec in methods if spec is not None}
-        for agent in args.agents.split(","):
+        for agent in agents:
             for preset in args.presets.split(","):
                 lines.append(
                     f"- `{agent}`, `{preset}` preset: "
