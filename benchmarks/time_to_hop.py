@@ -40,6 +40,7 @@ import sys
 import time
 from pathlib import Path
 from types import SimpleNamespace
+from typing import NamedTuple
 
 import numpy as np
 
@@ -60,17 +61,22 @@ def reached(evaluation: dict[str, float], threshold: tuple[float, float]) -> boo
     )
 
 
-def project_run(
-    agent: str,
-    preset: str,
-    seed: int,
-    values: list[dict],
-    budget: int,
-    threshold: tuple[float, float],
-) -> dict:
-    """One run of the package on ``sys.path`` (any tree since the learning issue): ``preset``,
-    then each of ``values`` (nested config mappings), until ``threshold`` (return, hop
-    height) or ``budget`` env steps."""
+class RunSpec(NamedTuple):
+    """One project run: ``agent`` trained with ``preset``, then each of ``values`` (nested
+    config mappings), from ``seed`` until ``threshold`` (return, hop height) or ``budget``
+    env steps. JSON-able as a dict, for a run in a fresh process."""
+
+    agent: str
+    preset: str
+    seed: int
+    values: list[dict]
+    budget: int
+    threshold: tuple[float, float]
+
+
+def project_run(spec: RunSpec) -> dict:
+    """One run of the package on ``sys.path`` (any tree since the learning issue)."""
+    agent, preset, seed, values, budget, threshold = spec
     from cpg_actor.config import TrainConfig, apply_dict
     from cpg_actor.presets import preset_values
     from cpg_actor.runner import Runner
@@ -137,13 +143,18 @@ def agent_targets(
     """Each agent's step budget and (return, hop height) threshold: the learning issue's,
     replaced by ``--budget`` and ``--threshold``; ValueError for a malformed one or an agent
     left without either."""
-    budgets = {**BUDGETS, **parse_targets(budget_texts, "--budget", "AGENT=STEPS with STEPS "
-                                          "a positive integer", positive_steps)}  # fmt: skip
-    thresholds = {**THRESHOLDS, **parse_targets(threshold_texts, "--threshold",
-                                                 "AGENT=RETURN,HOP with two numbers, e.g. "
-                                                 "cho2019=700,0.3", return_and_hop)}  # fmt: skip
-    named = set(parse_targets(budget_texts, "--budget", "", str))
-    named |= set(parse_targets(threshold_texts, "--threshold", "", str))
+    given_budgets = parse_targets(
+        budget_texts, "--budget", "AGENT=STEPS with STEPS a positive integer", positive_steps
+    )
+    given_thresholds = parse_targets(
+        threshold_texts,
+        "--threshold",
+        "AGENT=RETURN,HOP with two numbers, e.g. cho2019=700,0.3",
+        return_and_hop,
+    )
+    budgets = {**BUDGETS, **given_budgets}
+    thresholds = {**THRESHOLDS, **given_thresholds}
+    named = set(given_budgets) | set(given_thresholds)
     if named - set(agents):
         raise ValueError(
             f"--budget/--threshold for {', '.join(sorted(named - set(agents)))}, which is not "
@@ -159,23 +170,11 @@ def agent_targets(
     return budgets, thresholds
 
 
-def tree_run(
-    src: Path,
-    agent: str,
-    preset: str,
-    seed: int,
-    values: list[dict],
-    budget: int,
-    threshold: tuple[float, float],
-) -> dict:
+def tree_run(src: Path, spec: RunSpec) -> dict:
     """:func:`project_run` in a fresh process with the package in ``src``."""
     from bench_report import json_from_tree
 
-    spec = json.dumps(
-        {"agent": agent, "preset": preset, "seed": seed, "values": values, "budget": budget,
-         "threshold": list(threshold)}
-    )  # fmt: skip
-    return json_from_tree(src, [__file__, "--one-run", spec])
+    return json_from_tree(src, [__file__, "--one-run", json.dumps(spec._asdict())])
 
 
 class SB3Policy:
@@ -271,14 +270,10 @@ def fmt_runs(runs: list[dict]) -> tuple[str, str, str]:
     return f"{len(hits)}/{len(runs)}", f"{steps / 1000:.0f}k", f"{median_wall(runs):.0f} s"
 
 
-def one_run(spec: str) -> int:
+def one_run(text: str) -> int:
     """``--one-run``: a :func:`project_run` from its JSON spec; prints its result as JSON."""
-    run = json.loads(spec)
-    result = project_run(
-        run["agent"], run["preset"], run["seed"], run["values"], run["budget"],
-        tuple(run["threshold"]),
-    )  # fmt: skip
-    print(json.dumps(result))
+    spec = RunSpec(**json.loads(text))
+    print(json.dumps(project_run(spec._replace(threshold=tuple(spec.threshold)))))
     return 0
 
 
@@ -386,10 +381,10 @@ def main(argv: list[str] | None = None) -> int:
             else:
                 agent, preset, tree = spec
                 tree_values = values if tree == "this tree" else reference_values
-                run = tree_run(
-                    trees[tree], agent, preset, seed, tree_values, budgets[agent],
-                    thresholds[agent],
-                )  # fmt: skip
+                run_spec = RunSpec(
+                    agent, preset, seed, tree_values, budgets[agent], thresholds[agent]
+                )
+                run = tree_run(trees[tree], run_spec)
             run["stolen"] = stolen_share(cpu_start, cpu_times())  # a neighbour's load
             results[label].append(run)
             print(f"seed {seed} {label}: {run}", flush=True)
