@@ -112,6 +112,11 @@ class MotionRecorder:
         self.torques.append(np.array(torque, dtype=np.float64))
         return torque
 
+    def slice(self, start: int) -> tuple[np.ndarray, np.ndarray]:
+        """The states (T, K, nstate) and torques (T, K, 2) recorded from control step
+        ``start`` on, recording going on."""
+        return np.stack(self.states[start:]), np.stack(self.torques[start:])
+
     def stop(self) -> tuple[np.ndarray, np.ndarray]:
         """Unwrap ``track``; the recorded states (T, K, nstate) and torques (T, K, 2)."""
         del self.backend.track

@@ -80,21 +80,26 @@ def measure(
     ceiling: bool = False,
 ) -> dict[str, float]:
     """One warm-up iteration (and the compile), then ``iterations`` timed ones; with
-    ``ceiling``, also the physics ceiling of the timed iterations' motion (``ceiling``).
-    ``stolen`` and ``ceiling_stolen``: the share of the machine's CPU time its hypervisor
-    took during the timed iterations and during the ceiling (:func:`stolen_share`)."""
+    ``ceiling``, also the physics ceiling of the timed iterations' motion (``ceiling``), and
+    ``paired_share``: the median over the timed iterations of each one's control steps per
+    second over the ceiling of its own motion, replayed right after it (within a second, so
+    that a machine whose speed drifts slows both alike; the replays are not timed as
+    training). ``stolen`` and ``ceiling_stolen``: the share of the machine's CPU time its
+    hypervisor took during the timed iterations and during the ceiling
+    (:func:`stolen_share`)."""
     config = make_config(agent, preset, compile, device, num_envs, torch_threads, update_threads)
     config.total_steps = (iterations + 1) * config.steps_per_iteration
     runner = Runner(config, run_dir=None, tensorboard=False)
-    collect = update = simulation = 0.0
-    recorder = cpu_start = None
+    collect = update = simulation = stolen_cpu = 0.0
+    recorder = None
+    shares: list[float] = []  # each timed iteration's SPS over its own motion's ceiling
     try:
         runner.start_episodes()
         for i in range(iterations + 1):
             if i == 1 and ceiling:
                 recorder = record_motion(runner)
-            if i == 1:
-                cpu_start = cpu_times()
+            recorded = len(recorder.states) if recorder is not None else 0
+            cpu_start = cpu_times()
             start = time.perf_counter()
             info = runner.collect()
             collected = time.perf_counter()
@@ -107,18 +112,24 @@ def measure(
                 collect += collected - start
                 update += end - collected
                 simulation += info["simulation_time"]
-        cpu_end = cpu_times()
+                stolen_cpu += stolen_share(cpu_start, cpu_times()) * (end - start)
+                if recorder is not None:
+                    motion = recorder.slice(recorded)
+                    rate = replay_ceiling(recorder, motion, repeats=1)
+                    shares.append(config.steps_per_iteration / (end - start) / rate)
         motion = recorder.stop() if recorder is not None else None
     finally:
         runner.close()
     samples = iterations * config.steps_per_iteration
     extra = {}
     if motion is not None:
+        cpu_end = cpu_times()
         extra["ceiling"] = replay_ceiling(recorder, motion)
         extra["ceiling_stolen"] = stolen_share(cpu_end, cpu_times())
+        extra["paired_share"] = statistics.median(shares)
     return {
         **extra,
-        "stolen": stolen_share(cpu_start, cpu_end),
+        "stolen": stolen_cpu / (collect + update),
         "num_envs": config.num_envs,
         "SPS": samples / (collect + update),
         "collect_us": 1e6 * collect / samples,
@@ -214,11 +225,29 @@ def paired_speedups(runs: list[dict], ref_runs: list[dict], key: str, field: str
     return [new / old if field == "SPS" else old / new for new, old in pairs]
 
 
-def fmt_ceiling(row: dict[str, float]) -> str:
-    """The row's ceiling and its share of it ("- | -" without a MuJoCo ceiling, e.g. MJX)."""
+def fmt_ceiling(row: dict[str, float], repeats: list[dict[str, float]] = ()) -> str:
+    """The row's ceiling and its share of it ("- | -" without a MuJoCo ceiling, e.g. MJX);
+    with ``repeats`` (the row's measurements, each against its own ceiling), their lowest and
+    highest share in brackets."""
     if "ceiling" not in row:
         return "- | -"
-    return f"{row['ceiling']:,.0f} | {row['SPS'] / row['ceiling']:.0%}"
+    text = f"{row['ceiling']:,.0f} | {row['SPS'] / row['ceiling']:.0%}"
+    if len(repeats) > 1:
+        shares = [run["SPS"] / run["ceiling"] for run in repeats]
+        text += f" ({min(shares):.0%}-{max(shares):.0%})"
+    return text
+
+
+def fmt_paired(row: dict[str, float], repeats: list[dict[str, float]] = ()) -> str:
+    """The median share of the ceiling paired per iteration (:func:`measure`), and over
+    several repeats the lowest and highest repeat's in brackets ("-" without a ceiling)."""
+    if "paired_share" not in row:
+        return "-"
+    text = f"{row['paired_share']:.0%}"
+    if len(repeats) > 1:
+        shares = [run["paired_share"] for run in repeats]
+        text += f" ({min(shares):.0%}-{max(shares):.0%})"
+    return text
 
 
 def fmt_stolen(row: dict[str, float]) -> str:
@@ -307,7 +336,8 @@ def main() -> None:
         "the env applied held constant; the faster of MuJoCo's thread pool and the env's "
         "`ThreadedRollout`; `benchmarks/env_throughput.py`, `ReplayCeiling`).",
         "",
-        "| preset | agent | envs | training SPS | ceiling | of ceiling | collection us/step | "
+        "| preset | agent | envs | training SPS | ceiling | of ceiling | of ceiling, paired per "
+        "iteration | collection us/step | "
         "of which simulation | outside the simulation | update us/sample | CPU stolen |"
         + (
             " reference SPS | speed-up | reference simulation | reference outside the "
@@ -315,13 +345,15 @@ def main() -> None:
             if ref
             else ""
         ),
-        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
+        "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
         + (" ---: | ---: | ---: | ---: | ---: |" if ref else ""),
     ]
     for key, r in results.items():
         preset, agent = key.split("/")
         row = (
-            f"| {preset} | {agent} | {r['num_envs']} | {r['SPS']:,.0f} | {fmt_ceiling(r)} | "
+            f"| {preset} | {agent} | {r['num_envs']} | {r['SPS']:,.0f} | "
+            f"{fmt_ceiling(r, [run[key] for run in runs])} | "
+            f"{fmt_paired(r, [run[key] for run in runs])} | "
             f"{r['collect_us']:.1f} | "
             f"{r['simulation_us']:.1f} | {r['outside_us']:.1f} | {r['update_us']:.1f} | "
             f"{fmt_stolen(r)} |"
@@ -361,7 +393,12 @@ def main() -> None:
         "With `--repeats N`: each figure is the median of N measurements, the rows, the",
         "reference taken in turn; a speed-up is the median of the N paired",
         "ones (each repeat's code against the reference measured right after it), their",
-        "range in brackets. CPU stolen: the share of the machine's CPU time that its",
+        "range in brackets; the share of the ceiling is the medians' ratio, and in brackets",
+        "the lowest and highest of the N repeats, each against its own ceiling. Paired per",
+        "iteration: each timed iteration's control steps per second over the ceiling of that",
+        "iteration's motion replayed right after it (within a second: a machine whose speed",
+        "drifts slows both alike), the median over the iterations. CPU",
+        "stolen: the share of the machine's CPU time that its",
         "hypervisor gave to something else (`steal` in `/proc/stat`), during the row's timed",
         "iterations / during its ceiling: on a shared host, a neighbour's load.",
         "",
