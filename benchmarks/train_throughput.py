@@ -82,11 +82,11 @@ def measure(
     """One warm-up iteration (and the compile), then ``iterations`` timed ones; with
     ``ceiling``, also the physics ceiling of the timed iterations' motion (``ceiling``), and
     ``paired_share``: the median over the timed iterations of each one's control steps per
-    second over the ceiling of its own motion, replayed right after it (within a second, so
-    that a machine whose speed drifts slows both alike; the replays are not timed as
-    training). ``stolen`` and ``ceiling_stolen``: the share of the machine's CPU time its
-    hypervisor took during the timed iterations and during the ceiling
-    (:func:`stolen_share`)."""
+    second over the ceiling of its own motion, replayed right after it, the better of two
+    replays as for ``ceiling`` (within a second or two, so that a machine whose speed drifts
+    slows both alike; the replays are not timed as training). ``stolen`` and
+    ``ceiling_stolen``: the share of the machine's CPU time its hypervisor took during the
+    timed iterations and during the ceiling (:func:`stolen_share`)."""
     config = make_config(agent, preset, compile, device, num_envs, torch_threads, update_threads)
     config.total_steps = (iterations + 1) * config.steps_per_iteration
     runner = Runner(config, run_dir=None, tensorboard=False)
@@ -115,7 +115,7 @@ def measure(
                 stolen_cpu += stolen_share(cpu_start, cpu_times()) * (end - start)
                 if recorder is not None:
                     motion = recorder.slice(recorded)
-                    rate = replay_ceiling(recorder, motion, repeats=1)
+                    rate = replay_ceiling(recorder, motion)  # best of 2, as below
                     shares.append(config.steps_per_iteration / (end - start) / rate)
         motion = recorder.stop() if recorder is not None else None
     finally:
@@ -396,8 +396,9 @@ def main() -> None:
         "range in brackets; the share of the ceiling is the medians' ratio, and in brackets",
         "the lowest and highest of the N repeats, each against its own ceiling. Paired per",
         "iteration: each timed iteration's control steps per second over the ceiling of that",
-        "iteration's motion replayed right after it (within a second: a machine whose speed",
-        "drifts slows both alike), the median over the iterations. CPU",
+        "iteration's motion replayed right after it (the better of two replays, as for the",
+        "ceiling; within seconds: a machine whose speed drifts slows both alike), the median",
+        "over the iterations. CPU",
         "stolen: the share of the machine's CPU time that its",
         "hypervisor gave to something else (`steal` in `/proc/stat`), during the row's timed",
         "iterations / during its ceiling: on a shared host, a neighbour's load.",
