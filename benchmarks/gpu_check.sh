@@ -51,9 +51,10 @@ part split && timeout "${SPLIT_S:-140}" python3 -m cpg_actor.cli train --preset 
     --progress-interval 10 2>&1 | tee -a "$OUT/train.log"
 part split && cat /tmp/gpu-run-mujoco/config.yaml >>"$OUT/train.log" \
     && cp /tmp/gpu-run-mujoco/metrics.jsonl "$OUT/metrics_mujoco_cuda.jsonl"
-# about a minute per row (a subprocess that compiles): 6 rows need SCALING_S of 400 or so
+# about a minute per row (a subprocess that compiles): 6 rows need SCALING_S of 400 or so;
+# SCALING_ENVS="64 256 1024" adds the throughput preset's own 256 envs (the 2-core 50 % target)
 part scaling && timeout "${SCALING_S:-80}" python3 benchmarks/train_scaling.py --cores 2 8 all \
-    --num-envs 64 1024 --output "$OUT/train_scaling.md" 2>&1 | tee -a "$OUT/bench.log"
+    --num-envs ${SCALING_ENVS:-64 1024} --output "$OUT/train_scaling.md" 2>&1 | tee -a "$OUT/bench.log"
 # runs sharing the GPU: 1, 2 and 4 `--preset gpu` trainings at once (about SHARE_SECONDS each)
 part share && timeout "${SHARE_S:-420}" python3 benchmarks/shared_device.py --runs 1 2 4 \
     --seconds "${SHARE_SECONDS:-120}" --output "$OUT/shared_device.md" 2>&1 | tee -a "$OUT/bench.log"

@@ -59,15 +59,23 @@ def table(args: argparse.Namespace, rows: list[dict]) -> str:
         "rollout's policy on 1 torch thread, the update on every pinned core for minibatches "
         "of at least 1,024 samples (128 envs and more), else on 1 thread.",
         "",
-        "| cores | envs | training SPS | ceiling (`mujoco.rollout`) | of ceiling | "
-        "collection us/step | update us/sample |",
-        "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+        "| cores | envs | training SPS | ceiling (`mujoco.rollout`) | of ceiling | of ceiling, "
+        "paired per iteration | collection us/step | update us/sample |",
+        "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
     ]
     for r in rows:
+        paired = f"{r['paired_share']:.0%}" if "paired_share" in r else "-"
         lines.append(
             f"| {r['cores']} | {r['num_envs']} | {r['SPS']:,.0f} | {r['ceiling']:,.0f} | "
-            f"{r['SPS'] / r['ceiling']:.0%} | {r['collect_us']:.1f} | {r['update_us']:.1f} |"
+            f"{r['SPS'] / r['ceiling']:.0%} | {paired} | {r['collect_us']:.1f} | "
+            f"{r['update_us']:.1f} |"
         )
+    lines += [
+        "",
+        "Of ceiling: the training SPS over the ceiling replayed after the row; paired per "
+        "iteration: the median over the timed iterations of each one's SPS over the ceiling of "
+        "its own motion replayed right after it (`train_throughput.py`).",
+    ]
     return "\n".join(lines) + "\n"
 
 
