@@ -112,6 +112,11 @@ class MotionRecorder:
         self.torques.append(np.array(torque, dtype=np.float64))
         return torque
 
+    @property
+    def steps(self) -> int:
+        """Control steps recorded so far."""
+        return len(self.states)
+
     def slice(self, start: int) -> tuple[np.ndarray, np.ndarray]:
         """The states (T, K, nstate) and torques (T, K, 2) recorded from control step
         ``start`` on, recording going on."""

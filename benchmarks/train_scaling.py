@@ -88,6 +88,8 @@ def main() -> None:
     parser.add_argument("--output", default=str(HERE / "results" / "train_scaling.md"))
     parser.add_argument("--child", nargs=2, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.iterations < 1:
+        parser.error(f"--iterations must be >= 1, got {args.iterations}")
     if args.child:  # one measurement, printed as JSON
         print(json.dumps(measure(args.agent, args.child[1], args.iterations)))
         return

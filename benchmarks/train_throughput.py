@@ -98,7 +98,7 @@ def measure(
         for i in range(iterations + 1):
             if i == 1 and ceiling:
                 recorder = record_motion(runner)
-            recorded = len(recorder.states) if recorder is not None else 0
+            recorded = recorder.steps if recorder is not None else 0
             cpu_start = cpu_times()
             start = time.perf_counter()
             info = runner.collect()
@@ -225,29 +225,23 @@ def paired_speedups(runs: list[dict], ref_runs: list[dict], key: str, field: str
     return [new / old if field == "SPS" else old / new for new, old in pairs]
 
 
+def fmt_share(share: float, repeats: list[float]) -> str:
+    """A share of the ceiling and, over several repeats, their lowest and highest in brackets."""
+    text = f"{share:.0%}"
+    if len(repeats) > 1:
+        text += f" ({min(repeats):.0%}-{max(repeats):.0%})"
+    return text
+
+
 def fmt_ceiling(row: dict[str, float], repeats: list[dict[str, float]] = ()) -> str:
-    """The row's ceiling and its share of it ("- | -" without a MuJoCo ceiling, e.g. MJX);
-    with ``repeats`` (the row's measurements, each against its own ceiling), their lowest and
-    highest share in brackets."""
+    """The row's ceiling, its share of it and its paired share (:func:`measure`), each share
+    with the lowest and highest of ``repeats`` (the row's measurements) in brackets;
+    "- | - | -" without a MuJoCo ceiling (e.g. MJX)."""
     if "ceiling" not in row:
-        return "- | -"
-    text = f"{row['ceiling']:,.0f} | {row['SPS'] / row['ceiling']:.0%}"
-    if len(repeats) > 1:
-        shares = [run["SPS"] / run["ceiling"] for run in repeats]
-        text += f" ({min(shares):.0%}-{max(shares):.0%})"
-    return text
-
-
-def fmt_paired(row: dict[str, float], repeats: list[dict[str, float]] = ()) -> str:
-    """The median share of the ceiling paired per iteration (:func:`measure`), and over
-    several repeats the lowest and highest repeat's in brackets ("-" without a ceiling)."""
-    if "paired_share" not in row:
-        return "-"
-    text = f"{row['paired_share']:.0%}"
-    if len(repeats) > 1:
-        shares = [run["paired_share"] for run in repeats]
-        text += f" ({min(shares):.0%}-{max(shares):.0%})"
-    return text
+        return "- | - | -"
+    share = fmt_share(row["SPS"] / row["ceiling"], [r["SPS"] / r["ceiling"] for r in repeats])
+    paired = fmt_share(row["paired_share"], [r["paired_share"] for r in repeats])
+    return f"{row['ceiling']:,.0f} | {share} | {paired}"
 
 
 def fmt_stolen(row: dict[str, float]) -> str:
@@ -288,8 +282,10 @@ def main() -> None:
     args = parser.parse_args()
     torch.set_num_threads(1)
 
-    if args.repeats < 1:
-        parser.error(f"--repeats must be >= 1, got {args.repeats}")
+    if args.repeats < 1 or args.iterations < 1:
+        parser.error(
+            f"--repeats and --iterations must be >= 1, got {args.repeats} and {args.iterations}"
+        )
     runs, ref_runs = [], []
     for _ in range(args.repeats):  # interleaved: a busy neighbour affects all alike
         runs.append(measure_all(args))
@@ -353,7 +349,6 @@ def main() -> None:
         row = (
             f"| {preset} | {agent} | {r['num_envs']} | {r['SPS']:,.0f} | "
             f"{fmt_ceiling(r, [run[key] for run in runs])} | "
-            f"{fmt_paired(r, [run[key] for run in runs])} | "
             f"{r['collect_us']:.1f} | "
             f"{r['simulation_us']:.1f} | {r['outside_us']:.1f} | {r['update_us']:.1f} | "
             f"{fmt_stolen(r)} |"
