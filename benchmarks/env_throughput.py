@@ -137,7 +137,8 @@ class ReplayCeiling:
 
     * :meth:`rollout_rate`: ``mujoco.rollout`` of all K robots per control step, the faster
       of MuJoCo's thread pool (``Rollout(nthread=threads)``) and the env's own
-      :class:`~cpg_actor.envs.backends.threaded_rollout.ThreadedRollout`.
+      :class:`~cpg_actor.envs.backends.threaded_rollout.ThreadedRollout`
+      (:meth:`rollout_rates`: each of the two).
     * :meth:`loop_rate`: a Python loop of ``mj_setState`` and ``mujoco.mj_step`` over the
       robots, split across ``threads`` threads (``mj_step`` releases the GIL).
     """
@@ -164,8 +165,10 @@ class ReplayCeiling:
         self.roll_datas = [mujoco.MjData(self.model) for _ in range(self.threads)]
         self.threaded = ThreadedRollout(self.model, robots, self.threads)
 
-    def rollout_rate(self) -> float:
-        """Control steps per second of ``mujoco.rollout`` over the whole recorded motion."""
+    def rollout_rates(self) -> dict[str, float]:
+        """Control steps per second of ``mujoco.rollout`` over the whole recorded motion,
+        stepped by MuJoCo's thread pool (``pool``) and by the env's ``ThreadedRollout``
+        (``threaded``)."""
         steps, robots = self.states.shape[:2]
         spec = self.mujoco.mjtState.mjSTATE_QFRC_APPLIED.value
         chunk = max(1, robots // (4 * self.threads))
@@ -185,7 +188,11 @@ class ReplayCeiling:
                 )
 
         work = steps * robots
-        return max(best_rate(pool, work, 1), best_rate(threaded, work, 1))
+        return {"pool": best_rate(pool, work, 1), "threaded": best_rate(threaded, work, 1)}
+
+    def rollout_rate(self) -> float:
+        """Control steps per second of ``mujoco.rollout`` over the whole recorded motion."""
+        return max(self.rollout_rates().values())
 
     def loop_rate(self) -> float:
         """Control steps per second of a bare ``mj_step`` loop over a quarter of the motion."""

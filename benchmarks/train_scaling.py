@@ -60,21 +60,25 @@ def table(args: argparse.Namespace, rows: list[dict]) -> str:
         "of at least 1,024 samples (128 envs and more), else on 1 thread.",
         "",
         "| cores | envs | training SPS | ceiling (`mujoco.rollout`) | of ceiling | of ceiling, "
-        "paired per iteration | collection us/step | update us/sample |",
-        "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+        "paired per iteration | of MuJoCo's pool, paired | collection us/step | update "
+        "us/sample |",
+        "| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
     ]
     for r in rows:
         paired = f"{r['paired_share']:.0%}" if "paired_share" in r else "-"
+        pool = f"{r['paired_share_pool']:.0%}" if "paired_share_pool" in r else "-"
         lines.append(
             f"| {r['cores']} | {r['num_envs']} | {r['SPS']:,.0f} | {r['ceiling']:,.0f} | "
-            f"{r['SPS'] / r['ceiling']:.0%} | {paired} | {r['collect_us']:.1f} | "
+            f"{r['SPS'] / r['ceiling']:.0%} | {paired} | {pool} | {r['collect_us']:.1f} | "
             f"{r['update_us']:.1f} |"
         )
     lines += [
         "",
         "Of ceiling: the training SPS over the ceiling replayed after the row; paired per "
         "iteration: the median over the timed iterations of each one's SPS over the ceiling of "
-        "its own motion replayed right after it (`train_throughput.py`).",
+        "its own motion replayed right after it (`train_throughput.py`); of MuJoCo's pool: "
+        "the same against `mujoco.rollout`'s own thread pool alone (the ceiling takes the "
+        "faster of it and the env's `ThreadedRollout`).",
     ]
     return "\n".join(lines) + "\n"
 

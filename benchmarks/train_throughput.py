@@ -93,6 +93,7 @@ def measure(
     collect = update = simulation = stolen_cpu = 0.0
     recorder = None
     shares: list[float] = []  # each timed iteration's SPS over its own motion's ceiling
+    pool_shares: list[float] = []  # the same over MuJoCo's own pool stepping that motion
     try:
         runner.start_episodes()
         for i in range(iterations + 1):
@@ -115,8 +116,10 @@ def measure(
                 stolen_cpu += stolen_share(cpu_start, cpu_times()) * (end - start)
                 if recorder is not None:
                     motion = recorder.slice(recorded)
-                    rate = replay_ceiling(recorder, motion)  # best of 2, as below
-                    shares.append(config.steps_per_iteration / (end - start) / rate)
+                    rates = replay_ceiling(recorder, motion)  # best of 2, as below
+                    sps = config.steps_per_iteration / (end - start)
+                    shares.append(sps / rates["ceiling"])
+                    pool_shares.append(sps / rates["pool"])
         motion = recorder.stop() if recorder is not None else None
     finally:
         runner.close()
@@ -124,9 +127,11 @@ def measure(
     extra = {}
     if motion is not None:
         cpu_end = cpu_times()
-        extra["ceiling"] = replay_ceiling(recorder, motion)
+        rates = replay_ceiling(recorder, motion)
+        extra["ceiling"], extra["ceiling_pool"] = rates["ceiling"], rates["pool"]
         extra["ceiling_stolen"] = stolen_share(cpu_end, cpu_times())
         extra["paired_share"] = statistics.median(shares)
+        extra["paired_share_pool"] = statistics.median(pool_shares)
     return {
         **extra,
         "stolen": stolen_cpu / (collect + update),
@@ -164,18 +169,22 @@ def record_motion(runner: Runner):
     return None if backend is None else _benchmarks().MotionRecorder(backend)
 
 
-def replay_ceiling(recorder, motion: tuple, repeats: int = 2) -> float:
+def replay_ceiling(recorder, motion: tuple, repeats: int = 2) -> dict[str, float]:
     """Control steps per second of ``mujoco.rollout`` replaying the ``motion`` that
     ``recorder`` recorded (:class:`env_throughput.ReplayCeiling`, on as many threads as the
-    backend), best of ``repeats``."""
+    backend), best of ``repeats``: ``ceiling``, the faster of MuJoCo's thread pool and the
+    env's ``ThreadedRollout``, and ``pool``, MuJoCo's thread pool alone (``mujoco.rollout``
+    as it comes, the issue's ceiling)."""
     backend = recorder.backend
     ceiling = _benchmarks().ReplayCeiling(
         backend.model, *motion, recorder.substeps, backend.num_threads
     )
     try:
-        return max(ceiling.rollout_rate() for _ in range(repeats))
+        rates = [ceiling.rollout_rates() for _ in range(repeats)]
     finally:
         ceiling.close()
+    pool = max(r["pool"] for r in rates)
+    return {"ceiling": max(max(r.values()) for r in rates), "pool": pool}
 
 
 def reference(
@@ -234,14 +243,16 @@ def fmt_share(share: float, repeats: list[float]) -> str:
 
 
 def fmt_ceiling(row: dict[str, float], repeats: list[dict[str, float]] = ()) -> str:
-    """The row's ceiling, its share of it and its paired share (:func:`measure`), each share
-    with the lowest and highest of ``repeats`` (the row's measurements) in brackets;
-    "- | - | -" without a MuJoCo ceiling (e.g. MJX)."""
+    """The row's ceiling, its share of it, its paired share and its paired share of
+    MuJoCo's own pool (:func:`measure`), each share with the lowest and highest of
+    ``repeats`` (the row's measurements) in brackets; dashes without a MuJoCo ceiling (e.g.
+    MJX)."""
     if "ceiling" not in row:
-        return "- | - | -"
+        return "- | - | - | -"
     share = fmt_share(row["SPS"] / row["ceiling"], [r["SPS"] / r["ceiling"] for r in repeats])
     paired = fmt_share(row["paired_share"], [r["paired_share"] for r in repeats])
-    return f"{row['ceiling']:,.0f} | {share} | {paired}"
+    pool = fmt_share(row["paired_share_pool"], [r["paired_share_pool"] for r in repeats])
+    return f"{row['ceiling']:,.0f} | {share} | {paired} | {pool}"
 
 
 def fmt_stolen(row: dict[str, float]) -> str:
@@ -330,10 +341,12 @@ def main() -> None:
         "(`mujoco.rollout` replaying the control steps its timed iterations visited: from "
         "each recorded state, 10 substeps with the actuators off and the mean joint torques "
         "the env applied held constant; the faster of MuJoCo's thread pool and the env's "
-        "`ThreadedRollout`; `benchmarks/env_throughput.py`, `ReplayCeiling`).",
+        "`ThreadedRollout`; `benchmarks/env_throughput.py`, `ReplayCeiling`). The last "
+        "share column takes MuJoCo's thread pool alone (`mujoco.rollout` as it comes, the "
+        "issue's ceiling), paired per iteration the same way.",
         "",
         "| preset | agent | envs | training SPS | ceiling | of ceiling | of ceiling, paired per "
-        "iteration | collection us/step | "
+        "iteration | of MuJoCo's pool, paired | collection us/step | "
         "of which simulation | outside the simulation | update us/sample | CPU stolen |"
         + (
             " reference SPS | speed-up | reference simulation | reference outside the "
@@ -342,7 +355,7 @@ def main() -> None:
             else ""
         ),
         "| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"
-        + (" ---: | ---: | ---: | ---: | ---: |" if ref else ""),
+        " ---: |" + (" ---: | ---: | ---: | ---: | ---: |" if ref else ""),
     ]
     for key, r in results.items():
         preset, agent = key.split("/")
