@@ -7,7 +7,7 @@ import torch
 
 from cpg_actor.checkpoint import load_checkpoint
 from cpg_actor.config import TrainConfig
-from cpg_actor.ppo import PPOConfig
+from cpg_actor.ppo import PPO, PPOConfig
 from cpg_actor.runner import Runner, TrainingDiverged
 
 from .fake_env import FakeConfig, FakeHopperVectorEnv
@@ -80,6 +80,37 @@ def test_update_on_several_threads_is_reproducible():
     assert runner(auto).update_threads() == auto.torch_threads
     with pytest.raises(ValueError, match="update_threads must be a positive integer or null"):
         TrainConfig(update_threads=0).validate()
+
+
+def test_compiled_calls_skip_their_guard_checks_once_built_and_train_the_same(tmp_path):
+    """ppo.skip_guard_checks: after a runner's first iteration its compiled calls (policy
+    step, reward scaling, gradient step, output check) no longer check dynamo's guards. The
+    same compiled code runs, so a run trains the same numbers as one that checks them, with
+    episodes ending, evaluations and checkpoints in between. A new compiled PPO in the
+    process (dynamo forgets every compiled function) makes the runner build and check them
+    again for one iteration."""
+    fast = runner(config(4, eval_interval=2, compile=True), tmp_path / "fast")
+    assert not fast.skips_guard_checks  # nothing built yet
+    fast.learn()
+    assert fast.skips_guard_checks
+    fast_params, fast_row = params(fast), fast.last_row
+
+    checked = runner(config(4, eval_interval=2, compile=True, skip_guard_checks=False),
+                     tmp_path / "checked")  # fmt: skip
+    assert not fast.skips_guard_checks  # its compiled functions were forgotten
+    checked.learn()
+    assert not checked.skips_guard_checks
+    assert_same(fast_params, params(checked))
+    assert fast_row["losses/policy_loss"] == checked.last_row["losses/policy_loss"]
+
+    fast.collect()  # built again, guards checked
+    fast.update()
+    assert fast.skips_guard_checks
+    PPO(fast.agent, PPOConfig(compile=True))
+    assert not fast.skips_guard_checks
+    eager = runner(config(1))
+    eager.learn()
+    assert not eager.skips_guard_checks  # nothing compiled
 
 
 @pytest.mark.parametrize("agent", ["cpg-actor", "mlp"])

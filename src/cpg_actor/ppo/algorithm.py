@@ -112,6 +112,24 @@ def cpp_compiler() -> str | None:
     return None
 
 
+_compiles_forgotten = 0  # how many times PPO made dynamo forget every compiled function
+
+
+def forget_compiled() -> None:
+    """``torch.compiler.reset()``, counted by :func:`compile_generation`."""
+    global _compiles_forgotten
+    torch.compiler.reset()
+    _compiles_forgotten += 1
+
+
+def compile_generation() -> int:
+    """A count that changes whenever a new :class:`PPO` with ``compile`` makes dynamo
+    forget every compiled function (``torch.compiler.reset()``): a runner whose compiled
+    functions were built before must build them again, with their guards checked
+    (``Runner.compiled_calls``)."""
+    return _compiles_forgotten
+
+
 def compile_reproducibly(fn, **options):
     """``torch.compile(fn)`` as this project compiles (the loss, the policy step, the reward
     normaliser): kernels specialised per shape (``dynamic=False``: the same whatever shapes
@@ -152,7 +170,7 @@ class PPO:
         if config.compile:
             # a fresh compile for every run: dynamo caches per function, and a process that
             # builds many runs (tests, sweeps) would otherwise pile up recompilations
-            torch.compiler.reset()
+            forget_compiled()
             self.loss = compile_reproducibly(ppo_loss)
             # the check after every update: one fused pass instead of the eager actor and
             # critic over the whole rollout (about 6 % of a throughput-preset update)
