@@ -216,7 +216,18 @@ class Runner:
             yield
             return
         with torch.compiler.set_stance(skip_guard_eval_unsafe=True):
-            yield
+            try:
+                yield
+            except RuntimeError as error:
+                if "skip_guard_eval_unsafe" not in str(error):
+                    raise
+                raise RuntimeError(
+                    "a compiled function of the training loop had to be compiled again after "
+                    "the run's first iteration, which ppo.skip_guard_checks assumes never "
+                    "happens (did something call torch.compiler.reset() or change torch's "
+                    "threads mid-run?); train with --set ppo.skip_guard_checks=false. "
+                    f"torch: {error}"
+                ) from None
 
     def collect(self) -> dict[str, float]:
         """One rollout of ``ppo.num_steps`` control steps in every environment."""

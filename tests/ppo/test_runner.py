@@ -88,7 +88,7 @@ def test_compiled_calls_skip_their_guard_checks_once_built_and_train_the_same(tm
     same compiled code runs, so a run trains the same numbers as one that checks them, with
     episodes ending, evaluations and checkpoints in between. A new compiled PPO in the
     process (dynamo forgets every compiled function) makes the runner build and check them
-    again for one iteration."""
+    again for one iteration; forgotten behind its back, the next call is a clear error."""
     fast = runner(config(4, eval_interval=2, compile=True), tmp_path / "fast")
     assert not fast.skips_guard_checks  # nothing built yet
     fast.learn()
@@ -106,6 +106,9 @@ def test_compiled_calls_skip_their_guard_checks_once_built_and_train_the_same(tm
     fast.collect()  # built again, guards checked
     fast.update()
     assert fast.skips_guard_checks
+    torch.compiler.reset()  # behind the runner's back: its next call finds nothing built
+    with pytest.raises(RuntimeError, match="train with --set ppo.skip_guard_checks=false"):
+        fast.collect()
     PPO(fast.agent, PPOConfig(compile=True))
     assert not fast.skips_guard_checks
     eager = runner(config(1))
