@@ -58,9 +58,9 @@ from cpg_actor.ppo import (
     RewardNormalizer,
     RolloutStorage,
     RunningNormalizer,
+    compile_generation,
     compile_reproducibly,
 )
-from cpg_actor.ppo.algorithm import compile_generation
 from cpg_actor.progress import evaluation_text, make_progress, metrics_text
 from cpg_actor.run_log import RunLog
 

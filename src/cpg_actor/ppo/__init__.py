@@ -1,6 +1,12 @@
 """PPO written out: rollout storage with the CPG state, GAE, running normalisation, update."""
 
-from cpg_actor.ppo.algorithm import PPO, NonFiniteLossError, compile_reproducibly, gaussian_kl
+from cpg_actor.ppo.algorithm import (
+    PPO,
+    NonFiniteLossError,
+    compile_generation,
+    compile_reproducibly,
+    gaussian_kl,
+)
 from cpg_actor.ppo.config import PPOConfig
 from cpg_actor.ppo.normalizer import RewardNormalizer, RunningNormalizer
 from cpg_actor.ppo.storage import RolloutStorage, compute_gae
@@ -12,6 +18,7 @@ __all__ = [
     "RewardNormalizer",
     "RolloutStorage",
     "RunningNormalizer",
+    "compile_generation",
     "compile_reproducibly",
     "compute_gae",
     "gaussian_kl",
