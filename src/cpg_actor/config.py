@@ -173,10 +173,12 @@ def compose_config(
     overrides: typing.Iterable[str] = (),
 ) -> TrainConfig:
     """The one place a run's config is put together, in this order (later wins): the
-    defaults, the preset (``preset``, else the config file's, else ``paper``), the YAML
-    ``config_file``, ``values`` (a nested mapping: the command-line flags), then each
-    ``KEY=VALUE`` of ``overrides`` (``--set``). Validated; a clear ValueError (or
-    FileNotFoundError) names what is wrong."""
+    defaults, the agent's defaults for the robot (its tuned settings,
+    :attr:`cpg_actor.agents.AgentSpec.defaults`), the preset (``preset``, else the config
+    file's, else ``paper``), the YAML ``config_file``, ``values`` (a nested mapping: the
+    command-line flags), then each ``KEY=VALUE`` of ``overrides`` (``--set``). Validated; a
+    clear ValueError (or FileNotFoundError) names what is wrong."""
+    from cpg_actor.agents import get_agent_spec
     from cpg_actor.presets import preset_values
 
     file_data: dict[str, Any] = {}
@@ -190,13 +192,23 @@ def compose_config(
             raise FileNotFoundError(f"config file {path} does not exist")
         file_data = read_config_file(path)
     preset = preset or file_data.get("preset") or "paper"
-    config = TrainConfig()
-    apply_dict(config, preset_values(preset), prefix="")
-    apply_dict(config, file_data, prefix="")
-    config.preset = preset
-    apply_dict(config, dict(values or {}), prefix="")
-    for text in overrides:
-        apply_dict(config, parse_override(text), prefix="")
+    overrides = [parse_override(text) for text in overrides]
+
+    def compose(agent_defaults: dict[str, Any]) -> TrainConfig:
+        config = TrainConfig()
+        apply_dict(config, agent_defaults, prefix="")
+        apply_dict(config, preset_values(preset), prefix="")
+        apply_dict(config, file_data, prefix="")
+        config.preset = preset
+        apply_dict(config, dict(values or {}), prefix="")
+        for override in overrides:
+            apply_dict(config, override, prefix="")
+        return config
+
+    config = compose({})  # which agent and robot: their defaults come first
+    defaults = get_agent_spec(config.agent).defaults.get(config.robot)
+    if defaults:
+        config = compose(defaults)
     config.validate()
     return config
 

@@ -204,7 +204,7 @@ def load_policy(
     if env_config is not None:
         config.env = env_config
     spec = get_agent_spec(config.agent)
-    env = spec.make_env(1, config.env, 1)
+    env = spec.make_env(1, config.env, 1, config.agent_config)
     try:
         low = np.asarray(env.single_action_space.low, dtype=np.float32)
         high = np.asarray(env.single_action_space.high, dtype=np.float32)

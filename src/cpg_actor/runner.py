@@ -118,7 +118,9 @@ class Runner:
         self.env = TorchVectorEnv(
             env
             if env is not None
-            else self.spec.make_env(config.num_envs, config.env, config.env_threads),
+            else self.spec.make_env(
+                config.num_envs, config.env, config.env_threads, config.agent_config
+            ),
             self.device,
         )
         if self.env.num_envs != config.num_envs:
@@ -380,7 +382,7 @@ class Runner:
         seed = derived_seed(cfg.seed, WARM_START_SEED_KEY)
         normalizer = self.normalizer if cfg.ppo.normalize_observations else None
         losses = self.spec.warm_start(
-            self.agent, normalizer, self.env.unwrapped, cfg.warm_start, seed
+            self.agent, normalizer, self.env.unwrapped, cfg, seed
         )
         self._episodes_started = False
         if self.show_progress:
@@ -400,7 +402,9 @@ class Runner:
         cfg = self.config
         start = time.perf_counter()
         if self.eval_env is None:
-            self.eval_env = self.spec.make_env(cfg.eval_episodes, cfg.env, cfg.env_threads)
+            self.eval_env = self.spec.make_env(
+                cfg.eval_episodes, cfg.env, cfg.env_threads, cfg.agent_config
+            )
         # a policy of its own (the same agent and normaliser): the training envs' CPG states
         # stay untouched
         policy = Policy(

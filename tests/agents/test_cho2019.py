@@ -167,3 +167,54 @@ def test_the_papers_cho2019_acts_on_frequency_and_amplitude_and_sees_the_hopper_
     runner.learn()  # PPO trains on it end to end
     assert runner.global_step == runner.config.total_steps
     runner.close()
+
+
+def test_with_a_start_gait_cho_is_warm_started_toward_its_parameters_and_runs_its_cpg(tmp_path):
+    """cho2019-warm's defaults start it from the same gait as the CPG-Actor: the target is the
+    gait's frequency, amplitude and phase bias, and the CPG inside the env has its a and w."""
+    from cpg_actor.agents.start_gait import hopper_gait_parameters
+
+    path = tmp_path / "gait.yaml"
+    path.write_text(
+        "cpg_initial:\n  frequency: [1.8, 1.8]\n  amplitude: [0.4, 0.5]\n  convergence: 12.0\n"
+        "  coupling_weight: 6.0\n  phase_bias: [[0.0, -0.5], [0.5, 0.0]]\n"
+    )
+    target = action_to_parameters(reference_action(str(path)))
+    np.testing.assert_allclose(target, hopper_gait_parameters({"frequency": [1.8, 1.8],
+        "amplitude": [0.4, 0.5], "phase_bias": [[0.0, -0.5], [0.5, 0.0]]}), rtol=1e-6)  # fmt: skip
+    run = config("cho2019-warm")
+    run.agent_config.start_gait = str(path)
+    runner = Runner(run, tmp_path / "run", tensorboard=False)
+    values = runner.env.unwrapped.cpg.parametrisation.values()
+    assert values["convergence"].tolist() == [12.0, 12.0]
+    assert float(values["coupling_weight"][0, 1].detach()) == 6.0
+    runner.close()
+    # the packaged gait is the default of cho2019-warm (and not of the paper's baseline)
+    from cpg_actor.config import compose_config
+
+    assert compose_config(values={"agent": "cho2019-warm"}).agent_config.start_gait == "search"
+    assert compose_config(values={"agent": "cho2019-paper"}).agent_config.start_gait == ""
+
+
+def test_mlp_warm_clones_the_start_gait_and_hops_with_it(tmp_path):
+    """mlp-warm: behaviour cloning of the start gait's joint commands; the cloned MLP, run
+    deterministically, hops like the gait (hop height within 30 % of the open-loop CPG's)."""
+    from cpg_actor.agents.warm_start import collect_gait
+
+    run = config("mlp-warm", rollout_steps=200, epochs=60)
+    run.agent_config.start_gait = "search"
+    run.env = HopperConfig(episode_steps=200)
+    run.eval_interval, run.eval_episodes = 1, 2
+    runner = Runner(run, tmp_path / "run", tensorboard=False)
+    losses = runner.run_warm_start()
+    assert losses[-1] < 0.05 * losses[0]
+    cloned = runner.run_evaluation()["eval/hop_height"]
+    env = runner.spec.make_env(2, run.env, 1, run.agent_config)
+    observations, commands = collect_gait(env, run.agent_config, 200, seed=5)
+    assert observations.shape == (400, 8) and commands.shape == (400, 2)
+    env.close()
+    cpg = Runner(TrainConfig(**{**run.__dict__, "agent": "cpg-actor-open-loop"}), tensorboard=False)
+    gait = cpg.run_evaluation()["eval/hop_height"]
+    assert gait > 0.3 and abs(cloned - gait) < 0.3 * gait, (cloned, gait)
+    runner.close()
+    cpg.close()

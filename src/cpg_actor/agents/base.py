@@ -59,6 +59,29 @@ class AgentConfig:
     # the CPG's drive d (eq. 3) follows the robot's drive observation (the quadruped's
     # forward-speed command; RobotSpec.drive_observation). False, or a robot without one: d = 0
     cpg_drive: bool = True
+    # -- beyond the paper: the CPG-Actor's start, exploration and output bound --------------
+    # where the CPG starts: "" the robot's CPG preset (the paper's start), "search" the gait
+    # the open-loop search (agent open-loop-es) found for the robot, shipped with the package,
+    # or the path of a gait file (a run's gait.yaml); cpg_initial overrides it. cho2019-warm
+    # and mlp-warm are warm-started toward the same gait
+    start_gait: str = ""
+    # where the CPG-Actor explores: "position" (the paper: Gaussian noise on the desired joint
+    # positions, std init_std) or "cpg" (the joint command is the CPG's output, deterministic;
+    # at each step the feedback MLP's pre-bound output and the CPG vector V are sampled, with
+    # initial stds feedback_std and cpg_noise, and the log-probability is theirs)
+    exploration: str = "position"
+    feedback_std: float = 0.5  # "cpg": initial std of the feedback's pre-tanh values
+    cpg_noise: float = 0.05  # "cpg": initial std of each entry of V (V's own units)
+    # "cpg": no sampled std falls below this fraction of its initial value
+    # (std = floor + exp(log_std)), so exploration cannot collapse to nothing
+    std_floor: float = 0.1
+    # the command inside the joint range: the amplitude rho of each oscillator bounded to
+    # (0, joint half-range - kappa_bound), the convergence a to convergence_bounds (and 1/dt),
+    # and kappa = kappa_bound a^2 / 4 tanh(out), whose steady-state change of the amplitude
+    # (4 kappa / a^2) is at most kappa_bound rad
+    output_bound: bool = False
+    kappa_bound: float = 0.2  # rad
+    convergence_bounds: tuple[float, float] = (2.0, 100.0)  # 1/s
 
     def validate(self) -> None:
         if self.activation not in ACTIVATIONS:
@@ -89,6 +112,33 @@ class AgentConfig:
             raise ValueError(
                 f"agent_config.feedback_noise must be >= 0, got {self.feedback_noise!r}"
             )
+        if self.exploration not in EXPLORATIONS:
+            raise ValueError(
+                f"agent_config.exploration must be one of {', '.join(EXPLORATIONS)}, "
+                f"got {self.exploration!r}"
+            )
+        for name in ("feedback_std", "cpg_noise", "kappa_bound"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"agent_config.{name} must be > 0, got {getattr(self, name)!r}")
+        if not 0 <= self.std_floor < 1:
+            raise ValueError(
+                f"agent_config.std_floor must be in [0, 1) (a fraction of the initial std), "
+                f"got {self.std_floor!r}"
+            )
+        low, high = (tuple(self.convergence_bounds) + (None, None))[:2]
+        if len(self.convergence_bounds) != 2 or not 0 < low < high:
+            raise ValueError(
+                "agent_config.convergence_bounds must be [low, high] with 0 < low < high (1/s), "
+                f"got {list(self.convergence_bounds)!r}"
+            )
+        if self.exploration == "cpg" and self.feedback_noise > 0:
+            raise ValueError(
+                "agent_config.feedback_noise samples the feedback under position noise; with "
+                "exploration 'cpg' the feedback is sampled already (feedback_std): set it to 0"
+            )
+
+
+EXPLORATIONS = ("position", "cpg")
 
 
 def tanh(x: Tensor) -> Tensor:

@@ -20,14 +20,21 @@ import numpy as np
 
 from cpg_actor.agents.base import Agent, AgentConfig
 from cpg_actor.agents.mlp import MLPAgent
-from cpg_actor.agents.warm_start import WarmStartConfig, warm_start
+from cpg_actor.agents.start_gait import hopper_gait_parameters, start_parameters
+from cpg_actor.agents.warm_start import warm_start
 
 
-def cpg_parameter_wrapper(env: Any):
-    """The CPG put inside the hopper env: actions become CPG parameters in [-1, 1]."""
+def cpg_parameter_wrapper(env: Any, agent_config: AgentConfig | None = None):
+    """The CPG put inside the hopper env: actions become CPG parameters in [-1, 1]. With a
+    start gait (``agent_config.start_gait``), its CPG has the gait's convergence rate and
+    coupling weight, the parameters the actions do not set."""
     from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
 
-    return CPGParameterVectorEnv(env)
+    initial = None
+    if agent_config is not None and agent_config.start_gait:
+        gait = start_parameters(agent_config.start_gait, env.robot.name)
+        initial = {k: gait[k] for k in ("convergence", "coupling_weight") if k in gait}
+    return CPGParameterVectorEnv(env, cpg_initial=initial)
 
 
 def build_cho2019(config: AgentConfig, env: Any) -> Agent:
@@ -38,17 +45,29 @@ def build_cho2019(config: AgentConfig, env: Any) -> Agent:
     return MLPAgent(obs_dim, action_scale, config, nominal_pose=[0.0] * len(action_scale))
 
 
-def reference_action() -> np.ndarray:
-    """The reference hopping parameters as an action in [-1, 1]."""
-    from cpg_actor.envs.cho2019 import parameters_to_action
+def reference_action(start_gait: str = "", robot_name: str = "anymal-hopper") -> np.ndarray:
+    """The warm start's target as an action in [-1, 1]: the reference hopping parameters
+    (``cpg-actor cho2019-reference``), or with ``start_gait`` the frequency, amplitude and
+    phase bias of that gait (:mod:`cpg_actor.agents.start_gait`), each moved inside the
+    action range by 5 % of it if it lies outside (a target on the clip would pull the
+    Gaussian mean onto the edge)."""
+    from cpg_actor.envs.cho2019 import PARAMETER_RANGES, parameters_to_action
     from cpg_actor.envs.cho2019_reference import REFERENCE_PARAMETERS
 
-    return parameters_to_action(np.asarray(REFERENCE_PARAMETERS)).astype(np.float32)
+    parameters = np.asarray(REFERENCE_PARAMETERS, dtype=np.float64)
+    if start_gait:
+        gait = hopper_gait_parameters(start_parameters(start_gait, robot_name))
+        low, high = PARAMETER_RANGES[:, 0], PARAMETER_RANGES[:, 1]
+        margin = 0.05 * (high - low)
+        parameters = np.clip(np.asarray(gait), low + margin, high - margin)
+    return parameters_to_action(parameters).astype(np.float32)
 
 
-def warm_start_cho2019(agent: Agent, normalizer, env, config: WarmStartConfig, seed: int):
-    """Fit the actor's mean to :func:`reference_action`; returns the loss of each epoch."""
-    return warm_start(agent, normalizer, env, reference_action(), config, seed)
+def warm_start_cho2019(agent: Agent, normalizer, env, config, seed: int):
+    """Fit the actor's mean to :func:`reference_action` (``config`` the run's
+    :class:`TrainConfig`); returns the loss of each epoch."""
+    target = reference_action(config.agent_config.start_gait, env.robot.name)
+    return warm_start(agent, normalizer, env, target, config.warm_start, seed)
 
 
 # Ijspeert et al. 2007 (Science 315:1416, supplementary material), the limb oscillators of the
@@ -67,7 +86,7 @@ def ijspeert_2007_parameters() -> np.ndarray:
     return np.array([nu, nu, rho, rho])
 
 
-def paper_cpg_parameter_wrapper(env: Any):
+def paper_cpg_parameter_wrapper(env: Any, agent_config: AgentConfig | None = None):
     """The CPG inside the hopper env as the paper has it: frequency and amplitude actions,
     no CPG state in the observation."""
     from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
@@ -75,9 +94,9 @@ def paper_cpg_parameter_wrapper(env: Any):
     return CPGParameterVectorEnv(env, action_set="paper", observe_cpg=False)
 
 
-def warm_start_cho2019_paper(agent: Agent, normalizer, env, config: WarmStartConfig, seed: int):
+def warm_start_cho2019_paper(agent: Agent, normalizer, env, config, seed: int):
     """Fit the actor's mean to :func:`ijspeert_2007_parameters` (as a paper-set action)."""
     from cpg_actor.envs.cho2019 import PAPER_PARAMETER_RANGES, parameters_to_action
 
     target = parameters_to_action(ijspeert_2007_parameters(), PAPER_PARAMETER_RANGES)
-    return warm_start(agent, normalizer, env, target.astype(np.float32), config, seed)
+    return warm_start(agent, normalizer, env, target.astype(np.float32), config.warm_start, seed)

@@ -9,6 +9,7 @@ parameters V and the feedback MLP together with no backpropagation through time.
 from __future__ import annotations
 
 import inspect
+import math
 from collections.abc import Sequence
 
 import torch
@@ -24,6 +25,7 @@ from cpg_actor.agents.base import (
     mlp,
     tanh,
 )
+from cpg_actor.agents.start_gait import start_parameters
 from cpg_actor.cpg import CPGNetwork, CPGState, JointMap, hopper_cpg
 from cpg_actor.cpg.foot_space import FootSpaceMap
 from cpg_actor.cpg.gaits import OSCILLATOR_JOINTS, quadruped_cpg, quadruped_leg_cpg
@@ -44,6 +46,34 @@ CPG_PRESETS = {
 }
 
 
+def output_bounds(
+    robot: RobotSpec,
+    joints: Sequence[int] | None,
+    config: AgentConfig,
+    dt: float,
+) -> dict[str, tuple]:
+    """``agent_config.output_bound``'s bounds: per oscillator, the amplitude rho in ``(0,
+    h - kappa_bound)``, h the half-range of its joint around the nominal pose (the nearer
+    stop), and the convergence a in ``convergence_bounds``, capped at ``1 / dt``."""
+    joints = range(robot.num_joints) if joints is None else joints
+    pose, low, high_stop = robot.nominal_pose, robot.action_low, robot.action_high
+    half = [min(high_stop[j] - pose[j], pose[j] - low[j]) for j in joints]
+    high = [h - config.kappa_bound for h in half]
+    if min(high) <= 0:
+        raise ValueError(
+            f"agent_config.kappa_bound {config.kappa_bound} rad leaves no amplitude inside the "
+            f"joint half-ranges {[round(h, 3) for h in half]}: lower it"
+        )
+    low_a, high_a = config.convergence_bounds
+    high_a = min(high_a, 1.0 / dt)
+    if not low_a < high_a:
+        raise ValueError(
+            f"agent_config.convergence_bounds {list(config.convergence_bounds)}: the lower bound "
+            f"must be below 1 / dt = {1.0 / dt:g}"
+        )
+    return {"amplitude": (0.0, high), "convergence": (low_a, high_a)}
+
+
 class CPGActorAgent(Agent):
     """Gaussian policy whose mean is ``JointMap(x)``, x the CPG output of eq. 1 (or, in the
     quadruped's ``leg`` layout, ``FootSpaceMap(theta, r)`` of the CPG's next state).
@@ -57,6 +87,25 @@ class CPGActorAgent(Agent):
       is drawn around its output. The sample is kept after the action in
       :attr:`ActStep.action` (``sample_dim = 2N + 2N``) and the log-probability is that of
       both draws, so PPO's ratio moves the feedback MLP through its own likelihood.
+
+    * ``exploration="cpg"`` (beyond the paper): the joint command is the CPG's output,
+      deterministic. At each step the feedback MLP's pre-bound output ``u`` and the CPG vector
+      V are sampled, ``u ~ N(MLP(obs), s_u^2)`` and ``V_t ~ N(V, s_V^2)``, and the CPG steps
+      with ``[xi, kappa]`` from ``u`` and its parameters from ``V_t``: noise the CPG filters
+      into a smooth motion. :attr:`ActStep.action` is ``[command, u, V_t]`` (``sample_dim =
+      A + 2N + M``) and the log-probability is that of ``u`` and ``V_t`` alone, so PPO's ratio
+      moves the feedback MLP and V through their own likelihoods. The command's entries of
+      :attr:`ActStep.mean` and :attr:`ActStep.std` are 0 and 1 in every step (no KL): it is
+      not sampled. Each std is ``floor + exp(log_std)``, never below ``std_floor`` of its
+      initial value.
+    * ``output_bound`` (beyond the paper): rho_i in ``(0, h_i - kappa_bound)``, h_i the
+      half-range of oscillator i's joint around the nominal pose, and a in
+      ``convergence_bounds`` (sigmoid transforms of V, :class:`Parametrisation`); kappa is
+      ``kappa_bound a^2 / 4`` times the bounded feedback, so its steady-state change of the
+      amplitude, ``4 kappa / a^2``, is at most ``kappa_bound`` rad. The amplitude equation of
+      eq. 1 is critically damped (its impulse response is positive), so r stays between the
+      lowest and highest ``rho + 4 kappa / a^2`` it has been driven toward, and the command
+      ``nominal + r cos(theta)`` inside the joint range.
 
     The critic sees the observation and the CPG state as ``cos(phase), sin(phase), amplitude``.
     The CPG state is reset to :meth:`CPGNetwork.initial_state` (rest, amplitude 0, the preset
@@ -100,9 +149,20 @@ class CPGActorAgent(Agent):
                 f"agent_config.cpg_gait: the CPG preset of robot '{robot.name}' has no gaits; "
                 "leave it empty"
             )
-        cpg = preset(
-            robot.control_dt, initial=config.cpg_initial or None, check_inputs=False, **options
-        )
+        initial = {**start_parameters(config.start_gait, robot.name), **config.cpg_initial}
+        if config.output_bound:
+            if pattern is not None:
+                raise ValueError(
+                    f"agent_config.output_bound needs oscillators that drive joints; the "
+                    f"'{layout}' layout's amplitude is a foot step: set it to false"
+                )
+            if "bounds" not in inspect.signature(preset).parameters:
+                raise ValueError(
+                    f"agent_config.output_bound: the CPG preset of robot '{robot.name}' takes "
+                    "no bounds; set it to false"
+                )
+            options["bounds"] = output_bounds(robot, joints, config, robot.control_dt)
+        cpg = preset(robot.control_dt, initial=initial or None, check_inputs=False, **options)
         n = cpg.num_oscillators
         driven = n if joints is None else len(joints)
         if (
@@ -126,6 +186,7 @@ class CPGActorAgent(Agent):
         self.state_shape = (5, n) if self.drive_index is None else (6, n)
         self.xi_scale = config.xi_scale
         self.kappa_scale = config.kappa_scale
+        self.kappa_bound = config.kappa_bound if config.output_bound else None
         self.feedback_tanh = config.feedback_tanh
         self.feedback = (
             mlp([obs_dim, *config.actor_hidden, 2 * n], config.activation, config.output_gain)
@@ -142,6 +203,25 @@ class CPGActorAgent(Agent):
             scales = torch.tensor([config.xi_scale] * n + [config.kappa_scale] * n)
             self.feedback_log_std = torch.nn.Parameter(torch.log(config.feedback_noise * scales))
             self.sample_dim = self.action_dim + 2 * n
+        # exploration "cpg": the stds of the sampled feedback u and vector V, floor + exp(.)
+        self.cpg_exploration = config.exploration == "cpg"
+        self.latent_log_std: torch.nn.Parameter | None = None
+        self.vector_log_std: torch.nn.Parameter | None = None
+        if self.cpg_exploration:
+            m = self.cpg.parametrisation.num_parameters
+            floor = config.std_floor
+            self.vector_floor = floor * config.cpg_noise
+            self.vector_log_std = torch.nn.Parameter(
+                torch.full((m,), math.log(config.cpg_noise - self.vector_floor))
+            )
+            latent = 0
+            if self.feedback is not None:
+                latent = 2 * n
+                self.latent_floor = floor * config.feedback_std
+                self.latent_log_std = torch.nn.Parameter(
+                    torch.full((latent,), math.log(config.feedback_std - self.latent_floor))
+                )
+            self.sample_dim = self.action_dim + latent + m
 
     def initial_state(self, batch_size: int) -> Tensor:
         state = self.cpg.initial_state(batch_size).as_tensor()
@@ -154,6 +234,14 @@ class CPGActorAgent(Agent):
         action through the CPG state, so that one step shows little of its change."""
         feedback = [] if self.feedback is None else list(self.feedback.parameters())
         return list(self.cpg.parameters()) + feedback
+
+    def exploration_stds(self) -> tuple[Tensor | None, Tensor]:
+        """Exploration ``"cpg"``: the stds of the sampled feedback ``u`` ``(2N,)`` (None
+        without feedback) and of V ``(M,)``, each ``floor + exp(log_std)``."""
+        latent = None
+        if self.latent_log_std is not None:
+            latent = self.latent_floor + self.latent_log_std.exp()
+        return latent, self.vector_floor + self.vector_log_std.exp()
 
     def observe(self, obs: Tensor, state: Tensor) -> Tensor:
         """The state with the drive row set from the raw observation (class docstring)."""
@@ -189,6 +277,13 @@ class CPGActorAgent(Agent):
             for i, name in enumerate(names):
                 row[f"feedback/xi_std_{name}"] = stds[i]
                 row[f"feedback/kappa_std_{name}"] = stds[len(names) + i]
+        if self.cpg_exploration:
+            latent, vector = (t if t is None else t.detach() for t in self.exploration_stds())
+            if latent is not None:
+                for i, name in enumerate(names):
+                    row[f"feedback/xi_std_{name}"] = float(latent[i])
+                    row[f"feedback/kappa_std_{name}"] = float(latent[len(names) + i])
+            row["cpg/vector_std_mean"] = float(vector.mean())
         values = {k: v.detach() for k, v in self.cpg.parametrisation.values().items()}
         values["convergence"] = values["convergence"].clamp(max=self.cpg.max_convergence)
         fields = [("frequency", "nu"), ("amplitude", "rho"), ("convergence", "a")]
@@ -216,25 +311,56 @@ class CPGActorAgent(Agent):
             out["feedback/output_bias"] = last.bias.detach()
         return out
 
-    def feedback_mean(self, obs: Tensor) -> Tensor:
-        """``[xi, kappa]`` of the feedback MLP, ``(B, 2N)`` (zeros without feedback)."""
+    def feedback_latent(self, obs: Tensor) -> Tensor:
+        """The feedback MLP's output before its bound and scale, ``(B, 2N)`` (zeros without
+        feedback)."""
         n = self.cpg.num_oscillators
         if self.feedback is None:
             return torch.zeros(obs.shape[0], 2 * n, dtype=obs.dtype, device=obs.device)
-        out = self.feedback(obs)
-        if self.feedback_tanh:
-            out = tanh(out)
-        return torch.cat([self.xi_scale * out[:, :n], self.kappa_scale * out[:, n:]], dim=-1)
+        return self.feedback(obs)
 
-    def actor(self, obs: Tensor, state: Tensor, feedback: Tensor | None = None) -> ActorOutput:
-        """One CPG step from ``state`` with ``feedback`` ``[xi, kappa]`` (default: the MLP's
-        output, the mean when the feedback is sampled)."""
+    def feedback_from_latent(
+        self, latent: Tensor, drive: Tensor | float = 0.0, vector: Tensor | None = None
+    ) -> Tensor:
+        """``[xi, kappa]`` ``(B, 2N)`` from the MLP's output: ``xi_scale tanh(u)`` and
+        ``kappa_scale tanh(u)`` (``feedback_tanh``; else unbounded ``scale u``), or with
+        ``output_bound`` ``kappa = kappa_bound a^2 / 4 tanh(u)``, a the convergence rate the
+        step uses (``vector``: a sampled V)."""
         n = self.cpg.num_oscillators
-        if feedback is None:
-            feedback = self.feedback_mean(obs)
-        xi, kappa = feedback[:, :n], feedback[:, n:]
+        out = tanh(latent) if self.feedback_tanh else latent
+        xi = self.xi_scale * out[:, :n]
+        if self.kappa_bound is None:
+            kappa = self.kappa_scale * out[:, n:]
+        else:
+            a = self.cpg.oscillator_parameters(drive, vector).convergence
+            kappa = self.kappa_bound * a * a / 4.0 * out[:, n:]
+        return torch.cat([xi, kappa], dim=-1)
+
+    def feedback_mean(self, obs: Tensor, state: Tensor | None = None) -> Tensor:
+        """``[xi, kappa]`` of the feedback MLP, ``(B, 2N)`` (zeros without feedback);
+        ``state`` gives the drive where the bound on kappa needs the convergence rate."""
+        n = self.cpg.num_oscillators
+        if self.feedback is None:
+            return torch.zeros(obs.shape[0], 2 * n, dtype=obs.dtype, device=obs.device)
+        drive = 0.0 if state is None else self._split(state)[1]
+        return self.feedback_from_latent(self.feedback(obs), drive)
+
+    def actor(
+        self,
+        obs: Tensor,
+        state: Tensor,
+        feedback: Tensor | None = None,
+        vector: Tensor | None = None,
+    ) -> ActorOutput:
+        """One CPG step from ``state`` with ``feedback`` ``[xi, kappa]`` (default: the MLP's
+        output, the mean when the feedback is sampled) and the CPG vector ``vector``
+        (default: V; ``(B, M)``, a sampled V per row)."""
+        n = self.cpg.num_oscillators
         cpg_state, drive = self._split(state)
-        output, next_cpg_state = self.cpg(cpg_state, drive, xi, kappa)
+        if feedback is None:
+            feedback = self.feedback_from_latent(self.feedback_latent(obs), drive, vector)
+        xi, kappa = feedback[:, :n], feedback[:, n:]
+        output, next_cpg_state = self.cpg(cpg_state, drive, xi, kappa, vector)
         next_state = next_cpg_state.as_tensor()
         if self.drive_index is not None:  # the drive is held until the next observation
             next_state = torch.cat([next_state, state[:, 5:]], dim=1)
@@ -252,11 +378,53 @@ class CPGActorAgent(Agent):
         }
         return ActorOutput(mean, self.std(obs.shape[0]), next_state, extras)
 
+    # -- exploration "cpg": sampled feedback u and CPG vector V, deterministic command --------
+    def _cpg_distribution(self, obs: Tensor) -> tuple[Tensor, Tensor]:
+        """Mean and std ``(B, 2N + M)`` of the sampled ``[u, V_t]``."""
+        latent_std, vector_std = self.exploration_stds()
+        batch = obs.shape[0]
+        vector = self.cpg.parametrisation.vector
+        means = [vector.expand(batch, -1)]
+        stds = [vector_std.expand(batch, -1)]
+        if latent_std is not None:
+            means.insert(0, self.feedback_latent(obs))
+            stds.insert(0, latent_std.expand(batch, -1))
+        return torch.cat(means, dim=-1), torch.cat(stds, dim=-1)
+
+    def _cpg_step(self, obs: Tensor, state: Tensor, sampled: Tensor) -> ActorOutput:
+        """The CPG step with a sampled ``[u, V_t]``."""
+        m = self.cpg.parametrisation.num_parameters
+        latent, vector = sampled[:, : sampled.shape[1] - m], sampled[:, sampled.shape[1] - m :]
+        feedback = None
+        if self.feedback is not None:
+            feedback = self.feedback_from_latent(latent, self._split(state)[1], vector)
+        return self.actor(obs, state, feedback, vector)
+
+    def _with_command(self, out: ActorOutput, mean: Tensor, std: Tensor):
+        """``(mean, std)`` of the whole sample: the command's entries 0 and 1 (not sampled)."""
+        return (
+            torch.cat([torch.zeros_like(out.mean), mean], dim=-1),
+            torch.cat([torch.ones_like(out.mean), std], dim=-1),
+        )
+
+    def _act_cpg(self, obs: Tensor, state: Tensor, deterministic: bool) -> ActStep:
+        mean, std = self._cpg_distribution(obs)
+        with torch.no_grad():
+            sampled = mean if deterministic else torch.normal(mean, std)
+        out = self._cpg_step(obs, state, sampled)
+        log_prob = gaussian_log_prob(sampled, mean, std).sum(-1)
+        sample = torch.cat([out.mean, sampled], dim=-1)
+        full_mean, full_std = self._with_command(out, mean, std)
+        value = self.value(obs, state)
+        return ActStep(sample, log_prob, value, full_mean, full_std, out.next_state, out.extras)
+
     # -- sampled feedback (feedback_noise > 0) -----------------------------------------------
     def act(self, obs: Tensor, state: Tensor, deterministic: bool = False) -> ActStep:
+        if self.cpg_exploration:
+            return self._act_cpg(obs, state, deterministic)
         if self.feedback_log_std is None:
             return super().act(obs, state, deterministic)
-        feedback_mean = self.feedback_mean(obs)
+        feedback_mean = self.feedback_mean(obs, state)
         feedback_std = self.feedback_log_std.exp().expand_as(feedback_mean)
         with torch.no_grad():
             feedback = feedback_mean if deterministic else torch.normal(feedback_mean, feedback_std)
@@ -274,14 +442,28 @@ class CPGActorAgent(Agent):
 
     def _sampled(self, obs: Tensor, state: Tensor, sample: Tensor) -> tuple[ActorOutput, ...]:
         feedback = sample[:, self.action_dim :]
-        return self.actor(obs, state, feedback), self.feedback_mean(obs)
+        return self.actor(obs, state, feedback), self.feedback_mean(obs, state)
 
     def replay_state(self, obs: Tensor, state: Tensor, sample: Tensor) -> Tensor:
+        if self.cpg_exploration:
+            return self._cpg_step(obs, state, sample[:, self.action_dim :]).next_state
         if self.feedback_log_std is None:
             return super().replay_state(obs, state, sample)
         return self._sampled(obs, state, sample)[0].next_state
 
     def evaluate(self, obs: Tensor, state: Tensor, actions: Tensor) -> tuple[Tensor, ...]:
+        if self.cpg_exploration:
+            sampled = actions[:, self.action_dim :]
+            mean, std = self._cpg_distribution(obs)
+            out = self._cpg_step(obs, state, sampled)
+            full_mean, full_std = self._with_command(out, mean, std)
+            return (
+                gaussian_log_prob(sampled, mean, std).sum(-1),
+                gaussian_entropy(std).sum(-1),
+                self.value(obs, state),
+                full_mean,
+                full_std,
+            )
         if self.feedback_log_std is None:
             return super().evaluate(obs, state, actions)
         out, feedback_mean = self._sampled(obs, state, actions)

@@ -9,7 +9,7 @@ else.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -24,6 +24,7 @@ from cpg_actor.agents.cho2019 import (
 )
 from cpg_actor.agents.cpg_actor import CPGActorAgent
 from cpg_actor.agents.mlp import MLPAgent
+from cpg_actor.agents.warm_start import warm_start_mlp
 
 
 def make_robot_env(num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
@@ -48,8 +49,11 @@ class AgentSpec:
     """``build(agent_config, env) -> Agent``: the agent for an env, from its spaces and its
     ``robot`` (:class:`cpg_actor.robot.RobotSpec`: joints, nominal pose, control period);
     ``env_factory(num_envs, env_config, num_threads) -> vector env`` (the robot's env, the
-    hopper by default); ``wrapper(env) -> env``, an environment around the robot's that the
-    agent needs (``cho2019``: the CPG inside the env); an optional supervised warm start."""
+    hopper by default); ``wrapper(env, agent_config) -> env``, an environment around the
+    robot's that the agent needs (``cho2019``: the CPG inside the env); an optional supervised
+    warm start; ``defaults``, per robot (``TrainConfig.robot``), config values (a nested
+    mapping, as a preset's) that the agent trains with unless the preset, a config file or the
+    command line say otherwise: its tuned settings (:func:`cpg_actor.config.compose_config`)."""
 
     name: str
     description: str
@@ -59,14 +63,22 @@ class AgentSpec:
     # the robots (``TrainConfig.robot``) it is built for; None: any robot whose env follows the
     # contract (cho2019: its CPG sits in the hopper's env)
     robots: tuple[str, ...] | None = None
-    # ``warm_start(agent, normalizer, env, WarmStartConfig, seed) -> losses``, run once before
+    # ``warm_start(agent, normalizer, env, TrainConfig, seed) -> losses``, run once before
     # the first PPO iteration of a new run (not on resume)
     warm_start: Callable[..., list[float]] | None = None
+    defaults: dict[str, dict[str, Any]] = field(default_factory=dict)
 
-    def make_env(self, num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
-        """The env this agent acts on: the robot's env, wrapped if the agent declares it."""
+    def make_env(
+        self,
+        num_envs: int,
+        env_config: Any,
+        num_threads: int | None = None,
+        agent_config: AgentConfig | None = None,
+    ) -> Any:
+        """The env this agent acts on: the robot's env, wrapped if the agent declares it
+        (the wrapper sees ``agent_config``: e.g. the start gait of the CPG inside the env)."""
         env = self.env_factory(num_envs, env_config, num_threads)
-        return env if self.wrapper is None else self.wrapper(env)
+        return env if self.wrapper is None else self.wrapper(env, agent_config)
 
 
 AGENTS: dict[str, AgentSpec] = {}
@@ -95,13 +107,40 @@ def build_cpg_actor(config: AgentConfig, env: Any, feedback: bool = True) -> Age
     return CPGActorAgent(*env_shapes(env), config, env.robot, feedback=feedback)
 
 
+# The CPG-Actor at its best (docs/training.md, "The CPG-Actor's settings"): the start gait
+# of the open-loop search, the command inside the joint range, exploration in the CPG's
+# terms. cpg-actor-paper is the paper's method (its preset start, position noise, one step).
+CPG_ACTOR_DEFAULTS: dict[str, Any] = {
+    "agent_config": {"start_gait": "search", "output_bound": True, "exploration": "cpg"},
+}
+
 register_agent(
     AgentSpec("mlp", "classic actor-critic: MLP actor on desired joint positions", build_mlp)
 )
 register_agent(
     AgentSpec(
+        "mlp-warm",
+        "the MLP actor warm-started by behaviour cloning toward the start gait's motion",
+        build_mlp,
+        warm_start=warm_start_mlp,
+        defaults={"hopper": {"agent_config": {"start_gait": "search"}}},
+    )
+)
+register_agent(
+    AgentSpec(
         "cpg-actor",
-        "CPG-Actor: feedback MLP -> (xi, kappa) -> Hopf CPG -> desired joint positions",
+        "CPG-Actor: feedback MLP -> (xi, kappa) -> Hopf CPG -> desired joint positions "
+        "(from the open-loop search's gait, exploring in the CPG's terms, inside the joint "
+        "range)",
+        build_cpg_actor,
+        defaults={"hopper": CPG_ACTOR_DEFAULTS},
+    )
+)
+register_agent(
+    AgentSpec(
+        "cpg-actor-paper",
+        "the CPG-Actor exactly as the paper: the preset's start, Gaussian noise on the "
+        "joint positions, the one-step gradient",
         build_cpg_actor,
     )
 )
@@ -129,6 +168,7 @@ register_agent(
         wrapper=cpg_parameter_wrapper,
         warm_start=warm_start_cho2019,
         robots=("hopper",),
+        defaults={"hopper": {"agent_config": {"start_gait": "search"}}},
     )
 )
 register_agent(

@@ -1,8 +1,9 @@
-"""Supervised warm start of the Cho et al. 2019 actor (paper section IV-A).
+"""Supervised warm starts: the Cho et al. 2019 actor (paper section IV-A) and ``mlp-warm``.
 
-Before PPO, the actor's mean output is trained for ``epochs`` epochs toward a reference CPG
-parameter set (:data:`cpg_actor.envs.cho2019_reference.REFERENCE_PARAMETERS`), on the
-observations met while the reference CPG drives the hopper. Those observations also seed the
+Before PPO, the actor's mean output is trained for ``epochs`` epochs toward a target on the
+observations met while the target behaviour drives the robot: for Cho et al. a constant CPG
+parameter set (the reference, or a start gait's), for ``mlp-warm`` the joint command of the
+start gait's open-loop CPG at each step (behaviour cloning). Those observations also seed the
 running observation normaliser, so the warm-started actor is trained on exactly the
 normalised inputs it will see when PPO starts.
 """
@@ -62,16 +63,32 @@ def warm_start(
     updated with the reference observations first (None: no normalisation).
     """
     config.validate()
-    device = agent.log_std.device
     observations = collect_reference_observations(env, target_action, config.rollout_steps, seed)
+    target = torch.as_tensor(target_action, dtype=torch.float32)
+    target = target.expand(observations.shape[0], -1)
+    return fit_actor(agent, normalizer, observations, target, config, generator)
+
+
+def fit_actor(
+    agent: Agent,
+    normalizer: RunningNormalizer | None,
+    observations: torch.Tensor,
+    target: torch.Tensor,
+    config: WarmStartConfig,
+    generator: torch.Generator | None = None,
+) -> list[float]:
+    """Fit the actor's mean on raw ``observations`` ``(S, D)`` to ``target`` ``(S, A)`` by
+    mean squared error; the loss per epoch. ``normalizer`` is updated with the observations
+    first (None: no normalisation)."""
+    config.validate()
+    device = agent.log_std.device
     observations = observations.to(device)
     if normalizer is not None:
         normalizer.update(observations)
         inputs = normalizer(observations)
     else:
         inputs = observations
-    target = torch.as_tensor(target_action, dtype=torch.float32, device=device)
-    target = target.expand(inputs.shape[0], -1)
+    target = target.to(device=device, dtype=torch.float32)
     empty_state = agent.initial_state(inputs.shape[0])
     actor_parameters = [
         p
@@ -93,3 +110,44 @@ def warm_start(
             total += loss.item() * len(batch)
         losses.append(total / inputs.shape[0])
     return losses
+
+
+def collect_gait(env, agent_config, steps: int, seed: int) -> tuple[torch.Tensor, torch.Tensor]:
+    """Drive every env with the open-loop CPG of ``agent_config.start_gait`` (the CPG-Actor
+    without feedback, deterministic) for ``steps`` steps: raw observations ``(T*N, D)`` and
+    the joint commands sent ``(T*N, A)``, clipped to the action space."""
+    from dataclasses import replace
+
+    from cpg_actor.agents.cpg_actor import CPGActorAgent
+    from cpg_actor.agents.registry import env_shapes
+
+    config = replace(agent_config, exploration="position", feedback_noise=0.0)
+    cpg = CPGActorAgent(*env_shapes(env), config, env.robot, feedback=False)
+    low = torch.as_tensor(env.single_action_space.low, dtype=torch.float32)
+    high = torch.as_tensor(env.single_action_space.high, dtype=torch.float32)
+    obs, _ = env.reset(seed=seed)
+    state = cpg.initial_state(env.num_envs)
+    observations, commands = [], []
+    with torch.no_grad():
+        for _ in range(steps):
+            obs_t = torch.as_tensor(np.asarray(obs, dtype=np.float32))
+            out = cpg.actor(obs_t, cpg.observe(obs_t, state))
+            command = torch.minimum(torch.maximum(out.mean, low), high)
+            observations.append(obs_t)
+            commands.append(command)
+            obs, _, terminated, truncated, _ = env.step(command.numpy())
+            done = torch.as_tensor(np.logical_or(terminated, truncated))
+            fresh = cpg.initial_state(env.num_envs)
+            mask = done.reshape(-1, *([1] * (state.dim() - 1)))
+            state = torch.where(mask, fresh, out.next_state)
+    return torch.cat(observations), torch.cat(commands)
+
+
+def warm_start_mlp(agent: Agent, normalizer, env, config, seed: int) -> list[float]:
+    """``mlp-warm``: behaviour cloning of the start gait (``config`` the run's
+    :class:`TrainConfig`): the MLP's mean fitted to the open-loop CPG's joint commands on the
+    observations that CPG meets; the loss per epoch."""
+    cfg = config.warm_start
+    cfg.validate()
+    observations, commands = collect_gait(env, config.agent_config, cfg.rollout_steps, seed)
+    return fit_actor(agent, normalizer, observations, commands, cfg)

@@ -153,7 +153,9 @@ def evaluate(policy, config, episodes: int, seed: int) -> dict[str, np.ndarray]:
     from cpg_actor.agents import get_agent_spec
     from cpg_actor.evaluation import evaluate as run_episodes
 
-    env = get_agent_spec(config.agent).make_env(episodes, config.env, config.env_threads)
+    env = get_agent_spec(config.agent).make_env(
+        episodes, config.env, config.env_threads, config.agent_config
+    )
     try:
         traces = run_episodes(
             policy,
@@ -174,7 +176,7 @@ def record_video(policy, config, path: Path, seed: int, overwrite: bool) -> None
     from cpg_actor.agents import get_agent_spec
     from cpg_actor.envs import write_video
 
-    env = get_agent_spec(config.agent).make_env(1, config.env, 1)
+    env = get_agent_spec(config.agent).make_env(1, config.env, 1, config.agent_config)
 
     def frames():
         obs, _ = env.reset(seed=seed)

@@ -69,6 +69,8 @@ class CPGNetwork(nn.Module):
         check_inputs: validate shapes, dtypes, devices and finiteness on every call (a host
             sync on CUDA). Tensor inputs must have the network's dtype and device.
         dtype: floating dtype of the parameters (default: torch's default dtype).
+        bounds: fields kept inside ``(low, high)`` by a sigmoid transform of V (see
+            :class:`Parametrisation`).
     """
 
     def __init__(
@@ -82,6 +84,7 @@ class CPGNetwork(nn.Module):
         initial_phase: float | Sequence[float] = 0.0,
         check_inputs: bool = True,
         dtype: torch.dtype | None = None,
+        bounds: Mapping[str, tuple] | None = None,
     ) -> None:
         super().__init__()
         if (
@@ -97,7 +100,7 @@ class CPGNetwork(nn.Module):
         self.dt = float(dt)
         self.check_inputs = check_inputs
         dtype = dtype or torch.get_default_dtype()
-        self.parametrisation = Parametrisation(topology, initial, frozen, ties, dtype)
+        self.parametrisation = Parametrisation(topology, initial, frozen, ties, dtype, bounds)
         phase = torch.as_tensor(initial_phase, dtype=dtype)
         if phase.dim() > 1 or phase.numel() not in (1, topology.num_oscillators):
             raise ValueError(
@@ -114,11 +117,15 @@ class CPGNetwork(nn.Module):
         """The largest convergence rate ``a`` a step uses: ``MAX_CONVERGENCE_STEP / dt``."""
         return MAX_CONVERGENCE_STEP / self.dt
 
-    def oscillator_parameters(self, drive: Tensor | float = 0.0) -> OscillatorParameters:
+    def oscillator_parameters(
+        self, drive: Tensor | float = 0.0, vector: Tensor | None = None
+    ) -> OscillatorParameters:
         """The parameters of eq. 1 at ``drive``, the convergence rate ``a`` capped at
         :attr:`max_convergence` (eq. 2 diverges past ``a dt`` = 1.528; see
-        ``MAX_CONVERGENCE_STEP``). Below the cap they are the parametrisation's, unchanged."""
-        params = self.parametrisation.oscillator_parameters(drive)
+        ``MAX_CONVERGENCE_STEP``). Below the cap they are the parametrisation's, unchanged.
+        ``vector``: a V other than the trained one, ``(M,)`` or one per batch row ``(B, M)``
+        (the CPG-Actor's exploration in parameter space)."""
+        params = self.parametrisation.oscillator_parameters(drive, vector)
         return params._replace(convergence=params.convergence.clamp(max=self.max_convergence))
 
     def initial_state(
@@ -144,11 +151,13 @@ class CPGNetwork(nn.Module):
         drive: Tensor | float = 0.0,
         xi: Tensor | float = 0.0,
         kappa: Tensor | float = 0.0,
+        vector: Tensor | None = None,
     ) -> tuple[CPGOutput, CPGState]:
-        """One step: ``(state, drive, xi, kappa) -> (CPGOutput(x, x_dot), next_state)``."""
+        """One step: ``(state, drive, xi, kappa) -> (CPGOutput(x, x_dot), next_state)``;
+        ``vector`` as in :meth:`oscillator_parameters`."""
         if self.check_inputs:
             self._validate(state, drive, xi, kappa)
-        params = self.oscillator_parameters(drive)
+        params = self.oscillator_parameters(drive, vector)
         return hopf_step(params, state, self.parametrisation.coupling, self.dt, xi, kappa)
 
     def _validate(self, state: CPGState, drive, xi, kappa) -> None:

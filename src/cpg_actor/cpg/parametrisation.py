@@ -26,6 +26,13 @@ With the drive law of Ijspeert et al. 2007, ``nu(d) = c_nu1 d + c_nu0`` and
 ``rho(d) = c_R1 d + c_R0``, and a drive ``d >= 0`` (checked), nu and rho are positive.
 A gain of exactly 0 cannot be written as ``exp(v)``: freeze it (the default), or start it
 above 0 to train it. Coupling entries outside the topology are always frozen at 0.
+
+**Bounded fields** (beyond the paper). ``bounds={field: (low, high)}`` replaces a field's
+transform by ``low + (high - low) sigmoid(V[k])``, so the value stays strictly inside
+``(low, high)`` whatever the optimiser does to V: the CPG-Actor bounds the amplitude rho so
+that the joint command stays inside the joint range, and the convergence rate a so that eq. 2
+stays stable and the feedback's effect on the amplitude stays known. ``low`` and ``high`` are
+scalars or have the field's shape.
 """
 
 from __future__ import annotations
@@ -75,6 +82,8 @@ class Parametrisation(nn.Module):
         frozen: Mapping[str, bool | Sequence | Tensor] | None = None,
         ties: Iterable[Sequence[Entry]] = (),
         dtype: torch.dtype | None = None,
+        bounds: Mapping[str, tuple[float | Sequence | Tensor, float | Sequence | Tensor]]
+        | None = None,
     ) -> None:
         super().__init__()
         self.topology = topology
@@ -116,6 +125,7 @@ class Parametrisation(nn.Module):
                 value = torch.where(adjacency, value, torch.zeros_like(value))
             values[field], masks[field] = value, mask
         self._check_positive(values, masks)
+        lows, highs = self._bounds(bounds or {}, values, n)
 
         # Assign an index of V to every trainable entry; ties share one index.
         index = {f: torch.full(_field_shape(f, n), -1, dtype=torch.long) for f in FIELDS}
@@ -127,7 +137,14 @@ class Parametrisation(nn.Module):
                 continue
             k = len(raw)
             first_field, first_idx, first_sign = self._check_entry(group[0], n, masks)
-            raw.append(self._to_raw(first_field, first_sign * values[first_field][first_idx]))
+            raw.append(
+                self._to_raw(
+                    first_field,
+                    first_sign * values[first_field][first_idx],
+                    lows[first_field][first_idx],
+                    highs[first_field][first_idx],
+                )
+            )
             for entry in group:
                 field, idx, s = self._check_entry(entry, n, masks)
                 if index[field][idx] >= 0:
@@ -145,7 +162,9 @@ class Parametrisation(nn.Module):
                 idx = tuple(int(i) for i in idx)
                 if index[field][idx] < 0:
                     index[field][idx] = len(raw)
-                    raw.append(self._to_raw(field, values[field][idx]))
+                    raw.append(
+                        self._to_raw(field, values[field][idx], lows[field][idx], highs[field][idx])
+                    )
 
         # Created in ``dtype`` (default: torch's default dtype, float32 unless changed). Pass
         # dtype=torch.float64 to keep the initial values exact in float64: .double() afterwards
@@ -155,15 +174,21 @@ class Parametrisation(nn.Module):
         # All fields flattened into one row, so that the map V -> parameters is one gather,
         # one exp and one select for every field at once (a few operators per CPG step).
         self.shapes = {field: _field_shape(field, n) for field in FIELDS}
-        flat = {name: [] for name in ("index", "sign", "fixed", "trainable", "positive")}
+        names = ("index", "sign", "fixed", "trainable", "positive", "bounded", "low", "span")
+        flat = {name: [] for name in names}
         for field in FIELDS:
             flat["index"].append(index[field].flatten().clamp(min=0))
             flat["trainable"].append(index[field].flatten() >= 0)
             flat["sign"].append(sign[field].flatten())
             flat["fixed"].append(values[field].flatten())
+            bounded = torch.isfinite(lows[field]).flatten()
+            flat["bounded"].append(bounded)
             flat["positive"].append(
                 torch.full((index[field].numel(),), field in POSITIVE_FIELDS, dtype=torch.bool)
+                & ~bounded
             )
+            flat["low"].append(torch.where(bounded, lows[field].flatten(), 0.0))
+            flat["span"].append(torch.where(bounded, (highs[field] - lows[field]).flatten(), 0.0))
         for name, parts in flat.items():
             value = torch.cat(parts)
             if value.is_floating_point():
@@ -173,8 +198,51 @@ class Parametrisation(nn.Module):
 
     # -- construction helpers -------------------------------------------------------------
     @staticmethod
-    def _to_raw(field: str, value: Tensor) -> float:
+    def _to_raw(field: str, value: Tensor, low: Tensor, high: Tensor) -> float:
+        if torch.isfinite(low):  # bounded: the logit of the value's place in (low, high)
+            unit = (float(value) - float(low)) / (float(high) - float(low))
+            return math.log(unit / (1.0 - unit))
         return math.log(float(value)) if field in POSITIVE_FIELDS else float(value)
+
+    @staticmethod
+    def _bounds(
+        bounds: Mapping, values: dict[str, Tensor], n: int
+    ) -> tuple[dict[str, Tensor], dict[str, Tensor]]:
+        """Per field, the lower and upper bound of each entry (-inf, inf: unbounded), checked:
+        low < high, low >= 0 for positive fields, the initial value strictly inside."""
+        unknown = set(bounds) - set(FIELDS)
+        if unknown:
+            raise ValueError(f"unknown fields in bounds: {sorted(unknown)}; accepted: {FIELDS}")
+        lows, highs = {}, {}
+        for field in FIELDS:
+            shape = _field_shape(field, n)
+            if field not in bounds:
+                lows[field] = torch.full(shape, -math.inf, dtype=torch.float64)
+                highs[field] = torch.full(shape, math.inf, dtype=torch.float64)
+                continue
+            try:
+                low, high = bounds[field]
+                low = torch.as_tensor(low, dtype=torch.float64).expand(shape).clone()
+                high = torch.as_tensor(high, dtype=torch.float64).expand(shape).clone()
+            except (TypeError, ValueError, RuntimeError):
+                raise ValueError(
+                    f"bounds['{field}'] must be (low, high), each a scalar or of shape {shape}"
+                ) from None
+            if not (torch.isfinite(low).all() and torch.isfinite(high).all()):
+                raise ValueError(f"bounds['{field}'] must be finite, got {low.tolist()}, "
+                                 f"{high.tolist()}")  # fmt: skip
+            if not (low < high).all() or (field in POSITIVE_FIELDS and (low < 0).any()):
+                need = "0 <= low < high" if field in POSITIVE_FIELDS else "low < high"
+                raise ValueError(f"bounds['{field}'] need {need}, got {low.tolist()}, "
+                                 f"{high.tolist()}")  # fmt: skip
+            value = values[field]
+            if not ((low < value) & (value < high)).all():
+                raise ValueError(
+                    f"the initial '{field}' {value.tolist()} must lie strictly inside its bounds "
+                    f"({low.tolist()}, {high.tolist()})"
+                )
+            lows[field], highs[field] = low, high
+        return lows, highs
 
     @staticmethod
     def _check_positive(values: dict[str, Tensor], masks: dict[str, Tensor]) -> None:
@@ -227,29 +295,40 @@ class Parametrisation(nn.Module):
         index = torch.where(self.flat_trainable[rows], self.flat_index[rows], -1)
         return index.reshape(self.shapes[name])
 
-    def values(self) -> dict[str, Tensor]:
-        """All fields, physical values, differentiable in V (one gather for all of them)."""
-        if self.vector.numel() == 0:
-            flat = self.flat_fixed.to(self.vector.dtype)
+    def values(self, vector: Tensor | None = None) -> dict[str, Tensor]:
+        """All fields, physical values, differentiable in V (one gather for all of them).
+
+        ``vector``: a V to use instead of :attr:`vector`, ``(M,)`` or a batch ``(B, M)`` (one
+        V per row: the fields then get a leading batch dimension)."""
+        vector = self.vector if vector is None else vector
+        batch = tuple(vector.shape[:-1])
+        if vector.shape[-1] == 0:
+            flat = self.flat_fixed.to(vector.dtype).expand(*batch, -1)
         else:
-            raw = self.flat_sign * self.vector[self.flat_index]
-            # exp only where the field is positive (exp of a large weight would be inf, and
-            # where() would turn its zero gradient into NaN)
-            positive = torch.exp(torch.where(self.flat_positive, raw, torch.zeros_like(raw)))
+            raw = self.flat_sign * vector[..., self.flat_index]
+            # exp and sigmoid only where the field uses them (exp of a large weight would be
+            # inf, and where() would turn its zero gradient into NaN)
+            zeros = torch.zeros_like(raw)
+            positive = torch.exp(torch.where(self.flat_positive, raw, zeros))
+            bounded = self.flat_low + self.flat_span * torch.sigmoid(raw)
             value = torch.where(self.flat_positive, positive, raw)
+            value = torch.where(self.flat_bounded, bounded, value)
             flat = torch.where(self.flat_trainable, value, self.flat_fixed.to(value.dtype))
         sizes = [math.prod(self.shapes[field]) for field in FIELDS]
         return {
-            field: part.reshape(self.shapes[field])
-            for field, part in zip(FIELDS, flat.split(sizes), strict=True)
+            field: part.reshape(*batch, *self.shapes[field])
+            for field, part in zip(FIELDS, flat.split(sizes, dim=-1), strict=True)
         }
 
-    def oscillator_parameters(self, drive: Tensor | float = 0.0) -> OscillatorParameters:
+    def oscillator_parameters(
+        self, drive: Tensor | float = 0.0, vector: Tensor | None = None
+    ) -> OscillatorParameters:
         """nu(d) = c_nu1 d + c_nu0, rho(d) = c_R1 d + c_R0 (Ijspeert et al. 2007), a, W, Phi.
 
-        ``drive`` is a scalar, ``(N,)`` or ``(B, N)`` and must be >= 0.
+        ``drive`` is a scalar, ``(N,)`` or ``(B, N)`` and must be >= 0; ``vector`` as in
+        :meth:`values`.
         """
-        values = self.values()
+        values = self.values(vector)
         if isinstance(drive, (int, float)) and drive == 0:  # the hopper: no drive term to add
             frequency, amplitude = values["frequency"], values["amplitude"]
         else:

@@ -33,12 +33,14 @@ def hopper_cpg(
     frozen: Mapping[str, bool | Sequence | Tensor] | None = None,
     check_inputs: bool = True,
     dtype: torch.dtype | None = None,
+    bounds: Mapping[str, tuple] | None = None,
 ) -> CPGNetwork:
     """The hopper's CPG: HFE and KFE oscillators coupled both ways (w symmetric, phi antisymmetric).
 
     ``initial`` entries override :data:`HOPPER_INITIAL`. Trainable by default: frequency,
     amplitude and convergence per oscillator, one shared coupling weight and one phase bias
     (M = 8). Gains on the drive are frozen at 0: the hopper gets a constant drive.
+    ``bounds``: fields kept inside ``(low, high)`` (:class:`Parametrisation`).
     """
     topology = Topology.all_to_all(2, names=HOPPER_JOINTS)
     return CPGNetwork(
@@ -50,6 +52,7 @@ def hopper_cpg(
         initial_phase=(0.0, math.pi),
         check_inputs=check_inputs,
         dtype=dtype,
+        bounds=bounds,
     )
 
 

@@ -115,6 +115,8 @@ class CPGParameterVectorEnv(VectorEnv):
         action_set: ``"extended"`` (5 actions, the phase bias included) or ``"paper"`` (4:
             frequency and amplitude; the phase bias fixed at the preset's).
         observe_cpg: append the CPG state to the observation (16 values; False: 8).
+        cpg_initial: overrides of the hopper CPG preset (:func:`hopper_cpg`): the convergence
+            rate and coupling weight the actions do not set.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
@@ -126,6 +128,7 @@ class CPGParameterVectorEnv(VectorEnv):
         num_threads: int | None = None,
         action_set: str = "extended",
         observe_cpg: bool = True,
+        cpg_initial: dict | None = None,
     ) -> None:
         if action_set not in ACTION_SETS:
             raise ValueError(f"action_set must be one of {sorted(ACTION_SETS)}, got {action_set!r}")
@@ -149,9 +152,12 @@ class CPGParameterVectorEnv(VectorEnv):
         # the CPGs run in torch (float64) where the hopper runs: the CPU for the numpy
         # simulators, JAX's device for MJX (whose tensor face this wrapper then offers too)
         self.device = torch.device(getattr(self.env, "device", "cpu"))
-        # The hopper preset supplies a, w, the topology and the initial phases; its trainable
-        # vector is never used for gradients here.
-        self.cpg = hopper_cpg(self.config.control_dt, dtype=torch.float64).to(self.device)
+        # The hopper preset supplies a, w, the topology and the initial phases (``cpg_initial``
+        # overrides them: a start gait's a and w); its trainable vector is never used for
+        # gradients here.
+        self.cpg = hopper_cpg(
+            self.config.control_dt, initial=cpg_initial, dtype=torch.float64
+        ).to(self.device)
         values = self.cpg.parametrisation.values()
         self._convergence = values["convergence"].detach()
         self._coupling_weight = values["coupling_weight"].detach()

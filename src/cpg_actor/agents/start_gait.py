@@ -1,0 +1,92 @@
+"""Where a CPG agent starts: ``agent_config.start_gait`` resolved to CPG parameters.
+
+A gait is the open-loop CPG's physical parameters in the form of ``agent_config.cpg_initial``
+(``frequency``, ``amplitude``, ``convergence``, ``coupling_weight``, ``phase_bias``, ...). The
+CPG-Actor starts its CPG there, ``cho2019-warm`` fits its actor toward the gait's frequency,
+amplitude and phase bias, and ``mlp-warm`` toward the joint motion the gait makes, so that
+the agents differ in their method and not in their prior.
+"""
+
+from __future__ import annotations
+
+import math
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+GAIT_FIELDS = (
+    "frequency",
+    "frequency_gain",
+    "amplitude",
+    "amplitude_gain",
+    "convergence",
+    "coupling_weight",
+    "phase_bias",
+)
+SEARCH = "search"  # the packaged gait found by the open-loop search for the robot
+
+
+def read_gait(path: str | Path) -> dict[str, Any]:
+    """The CPG parameters of a gait file (a mapping with ``cpg_initial``, or the fields
+    themselves); one clear ValueError for a missing or malformed file."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"gait file {path} does not exist (agent_config.start_gait)")
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (yaml.YAMLError, UnicodeDecodeError) as error:
+        raise ValueError(f"gait file {path} is not valid YAML: {error}") from None
+    if isinstance(data, dict) and isinstance(data.get("cpg_initial"), dict):
+        data = data["cpg_initial"]
+    if not isinstance(data, dict) or not {"frequency", "amplitude"} <= set(data):
+        raise ValueError(
+            f"gait file {path} must hold CPG parameters (at least frequency and amplitude, "
+            f"under cpg_initial or at the top); accepted fields: {', '.join(GAIT_FIELDS)}"
+        )
+    unknown = set(data) - set(GAIT_FIELDS)
+    if unknown:
+        raise ValueError(
+            f"gait file {path}: unknown CPG fields {sorted(unknown)}; accepted: "
+            f"{', '.join(GAIT_FIELDS)}"
+        )
+    return dict(data)
+
+
+def packaged_gait_path(robot_name: str) -> Path:
+    """The gait shipped for ``robot_name`` (``agents/gaits/ROBOT.yaml``)."""
+    path = Path(str(resources.files("cpg_actor.agents") / "gaits" / f"{robot_name}.yaml"))
+    if not path.is_file():
+        raise ValueError(
+            f"agent_config.start_gait 'search': no gait is shipped for robot '{robot_name}'; "
+            "run `cpg-actor train --agent open-loop-es` and pass its gait.yaml, or leave "
+            "start_gait empty (the CPG preset)"
+        )
+    return path
+
+
+def start_parameters(start_gait: str, robot_name: str) -> dict[str, Any]:
+    """The CPG parameters ``start_gait`` names: ``{}`` for "" (the preset), the packaged
+    gait for "search", else the gait file at that path."""
+    if not start_gait:
+        return {}
+    if start_gait == SEARCH:
+        return read_gait(packaged_gait_path(robot_name))
+    return read_gait(start_gait)
+
+
+def hopper_gait_parameters(gait: dict[str, Any]) -> tuple[float, float, float, float, float]:
+    """``(nu_HFE, nu_KFE, rho_HFE, rho_KFE, phi_HFE,KFE)`` of a hopper gait: what the Cho et
+    al. baseline's actions set."""
+
+    def pair(value: Any) -> tuple[float, float]:
+        if isinstance(value, (int, float)):
+            return float(value), float(value)
+        return float(value[0]), float(value[1])
+
+    nu, rho = pair(gait["frequency"]), pair(gait["amplitude"])
+    phi = gait.get("phase_bias", 0.0)
+    phi = float(phi) if isinstance(phi, (int, float)) else float(phi[0][1])
+    phi = math.remainder(phi, 2 * math.pi)
+    return nu[0], nu[1], rho[0], rho[1], phi
