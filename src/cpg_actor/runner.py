@@ -136,7 +136,7 @@ class Runner:
         if config.ppo.bptt_steps > 1 and math.prod(self.agent.state_shape) == 0:
             raise ValueError(
                 f"ppo.bptt_steps={config.ppo.bptt_steps} needs an agent with a recurrent state "
-                f"(cpg-actor, cpg-actor-open-loop); '{config.agent}' has none: use 1"
+                f"(a CPG agent); '{config.agent}' has none: use 1"
             )
         self.normalizer = RunningNormalizer(obs_dim).to(self.device)
         self.policy = Policy(

@@ -21,7 +21,7 @@ from cpg_actor.presets import PRESETS
 from cpg_actor.progress import evaluation_text, metrics_text
 from cpg_actor.run_lock import LOCK_NAME, RunLock
 
-HELP = "train an agent (cpg-actor, cpg-actor-open-loop, mlp, cho2019, cho2019-warm) with PPO"
+HELP = "train an agent (cpg-actor, cpg-actor-paper, mlp, mlp-warm, cho2019-warm, ...) with PPO"
 
 DEFAULT_RUN_DIR = "runs/{agent}_{sim}_seed{seed}"
 

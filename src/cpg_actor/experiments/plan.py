@@ -38,11 +38,12 @@ IDENTITY_KEYS = (
 
 
 # Variants that are an agent with settings of their own: name -> (agent, --set overrides).
-# Their settings come before the reproduction's own --set, which can still change them.
+# Their settings come before the reproduction's own --set, which can still change them. The
+# paper's CPG-Actor (cpg-actor-paper) with one change each, against which they are compared.
 VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     # the paper's feedback: the MLP's linear output is xi (rad/s) and kappa (rad/s^2)
     "cpg-actor-unbounded": (
-        "cpg-actor",
+        "cpg-actor-paper",
         (
             "agent_config.feedback_tanh=false",
             "agent_config.xi_scale=1.0",
@@ -50,12 +51,12 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
         ),
     ),
     # the hop-height reward: r1 paid once per flight, at its apex (env.hop_reward=apex)
-    "cpg-actor-apex": ("cpg-actor", ("env.hop_reward=apex",)),
+    "cpg-actor-apex": ("cpg-actor-paper", ("env.hop_reward=apex",)),
     "mlp-apex": ("mlp", ("env.hop_reward=apex",)),
     # beyond the paper's one-step gradient (docs/training.md): k = 32 was the best of
     # k = 1, 4, 8, 32 on the tuning seeds 100 and 101 (250k steps), which are never reported
-    "cpg-actor-bptt32": ("cpg-actor", ("ppo.bptt_steps=32",)),
-    "cpg-actor-feedback-noise": ("cpg-actor", ("agent_config.feedback_noise=0.1",)),
+    "cpg-actor-bptt32": ("cpg-actor-paper", ("ppo.bptt_steps=32",)),
+    "cpg-actor-feedback-noise": ("cpg-actor-paper", ("agent_config.feedback_noise=0.1",)),
 }
 
 
