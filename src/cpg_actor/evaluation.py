@@ -63,7 +63,11 @@ def evaluate(
     ``metric_names`` and, with ``traces``, per-step traces ``(T, E, ...)`` (rows after an env's
     episode ended are NaN), with ``foot_contact``, ``base_forward_speed`` and ``command`` where
     the env's step info has them (``TRACED_INFO``; the columns of ``foot_contact`` are named
-    in ``foot_names``).
+    in ``foot_names``). ``desired_position`` is the command the env tracked (after its clip
+    to the joint limits, ``action_low`` / ``action_high``, saved too) and
+    ``desired_velocity`` its finite difference over ``control_dt``, for every agent alike
+    (NaN at the first step); a CPG's output ``x`` and analytic ``x_dot`` are ``cpg_position``
+    and ``cpg_velocity``.
     """
     num_envs = env.num_envs
     columns = observation_columns(env.robot)
@@ -72,8 +76,9 @@ def evaluate(
     hip = columns.get("hip_height")
     standing = float(obs[:, hip[0]].mean()) if hip else float("nan")
     policy.reset(num_envs)
-    # every episode starts tracking the nominal pose
-    previous_desired = np.tile(np.asarray(env.robot.nominal_pose), (num_envs, 1))
+    # the desired velocity of the first step is left out (NaN): the command before it is the
+    # env's reset pose, not the agent's
+    previous_desired = None
     active = np.ones(num_envs, dtype=bool)
     length = np.zeros(num_envs, dtype=np.int64)
     returns = np.zeros(num_envs)
@@ -115,6 +120,9 @@ def evaluate(
     result.update(metrics)
     result["metric_names"] = np.array(sorted(metrics), dtype=str)
     result["joint_names"] = np.array(env.robot.joint_names, dtype=str)
+    # the action space the desired positions were clipped to (the joint limits, rad)
+    result["action_low"] = np.asarray(env.robot.action_low, dtype=np.float64)
+    result["action_high"] = np.asarray(env.robot.action_high, dtype=np.float64)
     if "foot_contact" in result:  # the columns of foot_contact
         feet = getattr(getattr(env, "unwrapped", env), "foot_names", None)
         if feet is None:
@@ -128,8 +136,10 @@ def evaluate(
 def _trace_row(
     extras, info, desired, previous_desired, measured, columns, reward, dt
 ) -> dict[str, Any]:
-    # the desired positions the robot tracked: the clipped action for agents acting on joint
-    # positions, the CPG's output for agents whose env holds the CPG (cho2019)
+    # the desired positions the robot tracked, as the env reports them: the action clipped to
+    # the joint limits for agents acting on joint positions, the nominal pose + the CPG's
+    # output, clipped, for agents whose env holds the CPG (cho2019); an env that does not
+    # report them gets the policy's action (already clipped to the action space)
     applied = np.asarray(info.get("desired_position", desired), dtype=np.float64)
     num_envs = applied.shape[0]
     row = {"desired_position": applied}
@@ -139,13 +149,18 @@ def _trace_row(
         row["measured_position"] = np.asarray(info["measured_position"], dtype=np.float64)
     row["foot_height"] = np.asarray(info.get("foot_height", np.full(num_envs, np.nan)))
     row["reward"] = np.asarray(reward, dtype=np.float64)
-    if "desired_velocity" in extras:
-        row["desired_velocity"] = extras["desired_velocity"].cpu().numpy()
-    elif "desired_velocity" in info:  # CPG inside the environment
-        row["desired_velocity"] = np.asarray(info["desired_velocity"])
-    else:  # the MLP has no analytic velocity: finite difference of its desired positions
+    # one definition for every agent: the finite difference of the desired positions sent
+    # over the control period (a CPG's analytic x_dot ignores the clip and, for a foot-space
+    # pattern, is not a joint velocity at all); kept apart as cpg_velocity
+    if previous_desired is None:
+        row["desired_velocity"] = np.full_like(applied, np.nan)
+    else:
         row["desired_velocity"] = (applied - previous_desired) / dt
-    for key in ("theta_dot", "r_ddot", "xi", "kappa", "cpg_parameters"):
+    if "desired_velocity" in extras:
+        row["cpg_velocity"] = extras["desired_velocity"].cpu().numpy()
+    elif "desired_velocity" in info:  # CPG inside the environment
+        row["cpg_velocity"] = np.asarray(info["desired_velocity"])
+    for key in ("theta_dot", "r_ddot", "xi", "kappa", "cpg_parameters", "cpg_position"):
         if key in extras:
             row[key] = extras[key].cpu().numpy()
         elif key in info:

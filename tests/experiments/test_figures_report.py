@@ -2,10 +2,12 @@
 not run are skipped with a note; progress lines read metrics.jsonl."""
 
 import json
+import re
 
 import numpy as np
 import pytest
 
+from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.execute import Progress, read_progress
 from cpg_actor.experiments.figures import make_figures
 from cpg_actor.experiments.plan import RunTask
@@ -13,7 +15,7 @@ from cpg_actor.experiments.report import write_report
 from cpg_actor.experiments.results import Results
 
 
-def _fake_run(out, variant, seed, bang_bang=False, steps=500, responsive=False):
+def _fake_run(out, variant, seed, bang_bang=False, steps=500, responsive=False, stop_steps=0):
     run = out / "runs" / variant / f"seed{seed}"
     (run / "eval" / "stage0").mkdir(parents=True)
     rows = [
@@ -25,6 +27,7 @@ def _fake_run(out, variant, seed, bang_bang=False, steps=500, responsive=False):
     t = 0.01 * np.arange(1, 201)
     wave = np.sign(np.sin(4 * np.pi * t)) if bang_bang else np.sin(4 * np.pi * t)
     position = np.stack([0.4 + 0.2 * wave, -0.8 + 0.3 * wave], axis=-1)[:, None, :]
+    position[:stop_steps, :, 0] = 1.3  # the HFE at its upper stop (the hopper's limit)
     traces = {
         "time": t,
         "desired_position": position,
@@ -63,14 +66,15 @@ def test_missing_variants_are_skipped_with_notes(tmp_path):
 
     report = write_report(out).read_text()
     assert "| MLP actor (`mlp`) | 2 (2) |" in report
-    assert report.count("not tested in this run") == 7
+    assert report.count("**not tested in this run**") == 7
     assert "cpg_actor_training_over_time: cpg-actor was not run" in report
 
 
 def test_report_verdicts_from_constructed_traces(tmp_path):
     out = tmp_path / "out"
-    _fake_run(out, "mlp", 0, bang_bang=True)
-    _fake_run(out, "cpg-actor", 0)
+    for seed in range(3):
+        _fake_run(out, "mlp", seed, bang_bang=True)
+        _fake_run(out, "cpg-actor", seed)
     write_report(out)
     summary = json.loads((out / "summary.json").read_text())
     verdicts = {c["claim"]: c["verdict"] for c in summary["claims"]}
@@ -79,8 +83,95 @@ def test_report_verdicts_from_constructed_traces(tmp_path):
     assert smooth == ["supported"]  # a sine vs a square wave
     cho = [v for claim, v in verdicts.items() if "Cho" in claim]
     assert cho == ["not tested in this run"] * 3
-    assert summary["variants"]["cpg-actor"]["seeds"] == 1
-    assert summary["variants"]["mlp"]["smoothness"][0] > 0
+    cpg, mlp = summary["variants"]["cpg-actor"], summary["variants"]["mlp"]
+    assert cpg["seeds"] == 3 and cpg["kind"] == "cpg" and mlp["kind"] == "mlp"
+    # per seed, then the median over seeds with its CI (here the seeds are equal)
+    smoothness = mlp["per_seed"]["smoothness"][0]
+    assert smoothness > 0 and mlp["median"]["smoothness"] == pytest.approx([smoothness] * 3)
+    # the velocity is the finite difference of the positions over the period (the traces'
+    # `time`: they have no control_dt), not their stored desired_velocity
+    traces = np.load(out / "runs" / "cpg-actor" / "seed0" / "eval" / "stage0" / "traces.npz")
+    by_hand = np.percentile(np.abs(np.diff(traces["desired_position"], axis=0) / 0.01), 99)
+    assert cpg["per_seed"]["velocity_p99"][0] == pytest.approx(by_hand)
+    assert cpg["per_seed"]["time_at_stop"] == [0.0] * 3
+
+
+def _interval_free(text):
+    """The lines of a report section that would show an empty interval: a value +- 0, or a CI
+    whose ends are equal."""
+    return [
+        line
+        for line in text.splitlines()
+        if "+- 0 " in line or "+- 0 |" in line or re.search(r"\[(\S+), \1\]", line)
+    ]
+
+
+def test_a_report_of_one_seed_has_no_verdicts_and_no_intervals(tmp_path):
+    """1 seed per variant (and 2 for one of them): every claim "not tested", no interval, no
+    "+- 0", the per-seed values in the tables."""
+    from cpg_actor.experiments.floor import FLOOR_FILE
+
+    out = tmp_path / "out"
+    n = 20
+    rising = np.linspace(0.2, 1.0, n)
+    _curve_run(out, "cpg-actor", 0, 3000.0 * rising, 0.15 + 0.25 * rising**2, responsive=True)
+    _curve_run(out, "cpg-actor-open-loop", 0, 800.0 * rising, np.full(n, 0.1))
+    _curve_run(out, "cho2019-warm", 0, 500.0 * rising, np.full(n, 0.1))
+    for seed in (0, 1):
+        _curve_run(out, "mlp", seed, 600.0 * rising + seed, np.full(n, 0.2), square=True)
+    floor = {"candidates": 4, "env": {}, "best_return": {"episode_return": 400.0,
+             "parameters": {"frequency": 2.0}, "hop_height_p90": 0.2},
+             "best_hop": {"hop_height_p90": 0.3, "episode_return": 300.0}}  # fmt: skip
+    (out / FLOOR_FILE).write_text(json.dumps(floor))
+    transfer = {"episodes": 2, "seed": 1000, "runs": {"cpg-actor": {"0": {
+        "trained_in": "mujoco", "mujoco": {"return": 100.0, "hop_height": 0.3},
+        "pybullet": {"return": 90.0, "hop_height": 0.3}}}}}  # fmt: skip
+    (out / "transfer.json").write_text(json.dumps(transfer))
+    verdicts = _claims(out)
+    assert set(verdicts.values()) == {"not tested in this run"}, verdicts
+    summary = json.loads((out / "summary.json").read_text())
+    for claim in summary["claims"]:
+        assert "[" not in claim["detail"], claim  # no interval in the evidence
+    assert summary["variants"]["mlp"]["median"]["final_return"] is None
+    report = (out / "report.md").read_text()
+    assert _interval_free(report) == []
+    assert "| MLP actor (`mlp`) | 2 (2) | 486, 487 | 10, 10 |" in report  # the seeds' values
+    assert "fewer than 3 seeds, not tested: `cpg-actor`" in report  # the floor
+    assert "not tested (< 3 seeds)" in report  # MLP vs CPG-Actor beyond the paper
+    assert "| 90% |" in report  # transfer: the share kept, without an interval
+    assert "not tested (fewer than 3 seeds" in report  # the ratio to Cho et al. (warm)
+
+
+def test_new_and_unknown_variants_are_reported_by_kind(tmp_path):
+    """Variants the report has no special case for (agents added later, a name of no known
+    kind) are reported without error; CPG kinds appear in the CPG figures; the time at a
+    joint stop is the share of steps a desired position sits at its limit."""
+    out = tmp_path / "out"
+    for seed in range(3):
+        _fake_run(out, "cpg-actor-paper", seed, responsive=True)
+        _fake_run(out, "open-loop-es", seed)
+        _fake_run(out, "mlp-warm", seed, bang_bang=True, stop_steps=50 + seed)
+        _fake_run(out, "someone-elses-agent", seed)
+    (out / "reproduce.yaml").write_text(
+        "settings:\n  total_steps: 500\n  variants: [cpg-actor-paper, open-loop-es, mlp-warm, "
+        "someone-elses-agent, cho2019-paper, cpg-actor]\n"
+    )
+    write_report(out)
+    summary = json.loads((out / "summary.json").read_text())
+    kinds = {variant: row["kind"] for variant, row in summary["variants"].items()}
+    assert kinds == {"cpg-actor-paper": "cpg", "open-loop-es": "cpg", "mlp-warm": "mlp",
+                     "someone-elses-agent": None}  # fmt: skip
+    # 50, 51, 52 of 200 steps at the HFE stop: the median 51 / 200
+    stop = summary["variants"]["mlp-warm"]["median"]["time_at_stop"]
+    assert stop[0] == pytest.approx(51 / 200) and stop[1:] == pytest.approx([50 / 200, 52 / 200])
+    assert summary["variants"]["open-loop-es"]["per_seed"]["time_at_stop"] == [0.0] * 3
+    report = (out / "report.md").read_text()
+    assert "| MLP actor (warm) (`mlp-warm`) | 3 (3) |" in report
+    assert "25.5% [25.0%, 26.0%] |" in report
+    assert set(c["verdict"] for c in summary["claims"]) == {"not tested in this run"}
+    assert "cpg_output: cpg-actor-paper was not run" not in report
+    assert "cpg_output: open-loop-es was not run" not in report
+    assert "cpg_output: cho2019-paper was not run" in report
 
 
 def test_progress_lines_read_metrics(tmp_path):
@@ -116,8 +207,12 @@ def _curve_run(
     ]  # fmt: skip
     (run / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
     traces = dict(np.load(run / "eval" / "stage0" / "traces.npz"))
-    velocity = traces["desired_velocity"]
-    traces["desired_velocity"] = velocity * (p99 / np.percentile(np.abs(velocity), 99))
+    # the desired velocity is the positions' finite difference over the control period: a
+    # shorter period scales it to p99 about ``p99`` (the smoothness, per step, stays)
+    natural = m.velocity_p99(m.desired_velocity(traces["desired_position"], 0.01))
+    traces["control_dt"] = np.array(0.01 * natural / p99)
+    # a stored desired_velocity (older traces: a CPG's analytic x_dot) is not read
+    traces["desired_velocity"] = np.full_like(traces["desired_velocity"], 1e3)
     np.savez(run / "eval" / "stage0" / "traces.npz", **traces)
 
 
@@ -264,4 +359,4 @@ def test_the_report_shows_a_run_that_stopped_learning(tmp_path):
     assert mlp["final_std"][0] == pytest.approx(0.5)
     report = (out / "report.md").read_text()
     section = report.split("## Learning over the run")[1].split("## ")[0]
-    assert "| CPG-Actor | 500 +- 0 | 1,200,000 | 300 +- 0 | -200 +- 0 | 0.000123 +- 0 |" in section
+    assert "| CPG-Actor | 500 | 1,200,000 | 300 | -200 | 0.000123 |" in section  # one seed

@@ -102,41 +102,173 @@ def test_bootstrap_ratio_and_difference():
     assert same.low < 0 < same.high
 
 
-def test_claim_verdicts():
-    ok = m.Interval(6.2, 4.0, 8.0)
-    assert m.verdict_reward_ratio(ok, ran=True)[0] == m.SUPPORTED
-    assert m.verdict_reward_ratio(m.Interval(1.5, 1.1, 2.0), ran=True)[0] == m.NOT_SUPPORTED
-    assert m.verdict_reward_ratio(m.Interval(5.0, 0.5, 9.0), ran=True)[0] == m.NOT_SUPPORTED
-    assert m.verdict_reward_ratio(None, ran=True)[0] == m.NOT_SUPPORTED
-    assert m.verdict_reward_ratio(None, ran=False)[0] == m.NOT_TESTED
+def test_desired_velocity_is_the_finite_difference_of_the_sent_positions():
+    # two steps of one env, two joints, by hand: (p[t] - p[t-1]) / dt, the first step NaN
+    p = np.array([[[0.40, -0.80]], [[0.45, -0.90]], [[0.45, -0.70]]])  # (T=3, E=1, J=2)
+    v = m.desired_velocity(p, dt=0.01)
+    assert v.shape == p.shape and np.isnan(v[0]).all()
+    assert v[1, 0] == pytest.approx([5.0, -10.0]) and v[2, 0] == pytest.approx([0.0, 20.0])
+    # after an episode ends (NaN rows) the differences are NaN too, and left out of p99
+    ended = np.concatenate([p, np.full((2, 1, 2), np.nan)])
+    assert np.isnan(m.desired_velocity(ended, 0.01)[3:]).all()
+    assert m.velocity_p99(m.desired_velocity(ended, 0.01)) == pytest.approx(
+        np.percentile([5.0, 10.0, 0.0, 20.0], 99)
+    )
+    with pytest.raises(ValueError, match="dt"):
+        m.desired_velocity(p, 0.0)
 
-    above, spans = m.Interval(3.0, 1.0, 5.0), m.Interval(1.0, -1.0, 3.0)
-    assert m.verdict_better({"cho2019-warm": above}, ran=True)[0] == m.SUPPORTED
-    verdict, detail = m.verdict_better({"cho2019-warm": above, "cho2019": spans}, ran=True)
-    assert verdict == m.NOT_SUPPORTED and "cho2019" in detail
-    assert m.verdict_better({}, ran=False)[0] == m.NOT_TESTED
 
-    assert m.verdict_smooth(1e-5, 1e-2)[0] == m.SUPPORTED
-    assert m.verdict_smooth(1e-3, 2e-3)[0] == m.NOT_SUPPORTED
-    assert m.verdict_smooth(float("nan"), 1.0)[0] == m.NOT_TESTED
+def test_time_at_a_joint_stop_by_hand():
+    low, high = (-0.5, -1.7), (1.3, 0.1)
+    p = np.array(
+        [
+            [[0.4, -0.8], [1.3, -0.8]],  # env 1 at the HFE upper stop
+            [[-0.5 + 5e-4, -0.8], [0.4, 0.1]],  # env 0 within the tolerance, env 1 KFE stop
+            [[0.4, -1.69], [np.nan, np.nan]],  # 0.01 rad from the KFE stop: not at it; ended
+            [[1.3, 0.1], [np.nan, np.nan]],  # both joints at a stop: one step
+        ]
+    )
+    # 6 steps with data (4 steps x 2 envs, 2 after env 1 ended), 4 at a stop
+    assert m.joint_stop_share(p, low, high) == pytest.approx(4 / 6)
+    assert m.joint_stop_share(p, low, high, tolerance=0.02) == pytest.approx(5 / 6)
+    assert math.isnan(m.joint_stop_share(np.full((3, 1, 2), np.nan), low, high))
+    with pytest.raises(ValueError, match="one limit per joint"):
+        m.joint_stop_share(p, (0.0,), (1.0,))
 
-    assert m.verdict_near_limits(14.0, 0.99)[0] == m.SUPPORTED
-    assert m.verdict_near_limits(3.0, 1.0)[0] == m.NOT_SUPPORTED  # far below the limit
-    assert m.verdict_near_limits(40.0, 0.5)[0] == m.NOT_SUPPORTED  # far above it
-    assert m.verdict_near_limits(float("nan"), float("nan"))[0] == m.NOT_TESTED
 
-    doubled = m.bootstrap_ratio([0.22, 0.24, 0.2], [0.1, 0.11, 0.12])
-    flat = m.bootstrap_ratio([0.3, 0.2, 0.25], [0.2, 0.22, 0.24])
-    assert m.verdict_hop_doubles(doubled, 1e6, 2e6)[0] == m.SUPPORTED
-    assert m.verdict_hop_doubles(flat, 1e6, 20e6)[0] == m.NOT_SUPPORTED
-    assert m.verdict_hop_doubles(doubled, 1e6, 1.5e6)[0] == m.NOT_TESTED  # too short a run
-    assert m.verdict_hop_doubles(None, 1e6, 2e6)[0] == m.NOT_TESTED
+def test_bootstrap_is_deterministic_with_the_documented_resamples():
+    values = [4.3e-4, 7.4e-4, 4.9e-3, 6.9e-3, 6.1e-4]
+    first, second = m.bootstrap(values), m.bootstrap(values)
+    assert (first.estimate, first.low, first.high) == (second.estimate, second.low, second.high)
+    assert first.estimate == pytest.approx(7.4e-4)  # the median of the seeds
+    assert first.low <= 6.1e-4 and first.high >= 4.9e-3
+    assert m.RESAMPLES == 10_000 and m.BOOTSTRAP_SEED == 0
+    assert m.bootstrap([]) is None
+    assert m.bootstrap([1.0, 2.0, 6.0], "mean").estimate == pytest.approx(3.0)
+    with pytest.raises(ValueError, match="statistic"):
+        m.bootstrap([1.0], "mode")
 
-    above = {"mlp": m.bootstrap_difference([5.0, 6.0, 7.0], [1.0, 2.0, 1.5])}
-    mixed = dict(above, cho=m.bootstrap_difference([5.0, 6.0, 7.0], [8.0, 9.0, 8.5]))
-    assert m.verdict_best_during_training(above, ran=True)[0] == m.SUPPORTED
-    assert m.verdict_best_during_training(mixed, ran=True)[0] == m.NOT_SUPPORTED
-    assert m.verdict_best_during_training({}, ran=True)[0] == m.NOT_TESTED
+
+def test_the_paired_bootstrap_resamples_seed_indices_once_for_both():
+    early = [0.05, 0.1, 0.2, 0.4, 0.8]  # seeds differ a lot, each exactly doubles
+    final = [2 * x for x in early]
+    paired = m.bootstrap_ratio(final, early, paired=True)
+    assert (paired.estimate, paired.low, paired.high) == pytest.approx((2.0, 2.0, 2.0))
+    unpaired = m.bootstrap_ratio(final, early)
+    assert unpaired.low < 1.0 < unpaired.high  # the seeds' spread, not the change
+    assert m.verdict_hop_doubles(final, early, 1e6, 2e6)[0] == m.SUPPORTED
+    with pytest.raises(ValueError, match="one pair per seed"):
+        m.bootstrap_ratio([1.0, 2.0], [1.0], paired=True)
+
+
+def test_smoothness_uses_medians_not_means():
+    """One rough seed carries the mean; the median over seeds is the seeds' typical value."""
+    cpg = [4.3e-4, 7.4e-4, 4.9e-3, 6.9e-3, 6.1e-4]  # the CPG-Actor at 20M steps, per seed
+    assert m.mean_std(cpg)[0] == pytest.approx(2.72e-3, rel=0.01)
+    assert m.bootstrap(cpg).estimate == pytest.approx(7.4e-4)
+
+
+# Each verdict on synthetic per-seed results: (supporting results, contradicting results),
+# each a function of the number of seeds n that returns the verdict.
+_PASS_FAIL = {
+    "reward ratio": (
+        lambda n: m.verdict_reward_ratio([600.0, 620.0, 580.0, 610.0, 590.0][:n],
+                                         [100.0, 105.0, 98.0, 102.0, 95.0][:n]),
+        lambda n: m.verdict_reward_ratio([440.0, 420.0, 460.0, 450.0, 430.0][:n],
+                                         [640.0, 650.0, 630.0, 660.0, 620.0][:n]),
+    ),
+    "open loop better": (
+        lambda n: m.verdict_better([600.0, 610.0, 620.0, 605.0][:n],
+                                   {"cho2019-warm": [400.0, 410.0, 420.0, 415.0][:n]}),
+        lambda n: m.verdict_better([490.0, 500.0, 480.0, 510.0][:n],
+                                   {"cho2019-warm": [640.0, 650.0, 630.0, 645.0][:n]}),
+    ),
+    "smooth": (
+        lambda n: m.verdict_smooth([1e-5, 2e-5, 3e-5, 1.5e-5, 2.5e-5][:n],
+                                   [5e-3, 6e-3, 7e-3, 5.5e-3, 6.5e-3][:n]),
+        # the 20M-step reproduction's per-seed values: the mean passed neither
+        lambda n: m.verdict_smooth([4.3e-4, 7.4e-4, 4.9e-3, 6.9e-3, 6.1e-4][:n],
+                                   [3.31e-3, 4.09e-3, 4.86e-3, 7.90e-3, 6.28e-3][:n]),
+    ),
+    "near limits": (
+        lambda n: m.verdict_near_limits([14.0, 15.0, 16.0, 13.0, 14.5][:n],
+                                        [0.99, 0.98, 0.97, 0.99, 0.99][:n]),
+        lambda n: m.verdict_near_limits([14.5, 20.0, 66.8, 75.6, 19.2][:n]),
+    ),
+    "hop doubles": (
+        lambda n: m.verdict_hop_doubles([0.42, 0.44, 0.40, 0.41][:n], [0.20, 0.21, 0.19, 0.2][:n],
+                                        1e6, 2e6),
+        lambda n: m.verdict_hop_doubles([0.27, 0.26, 0.28, 0.27][:n], [0.26, 0.27, 0.27, 0.25][:n],
+                                        1e6, 20e6),
+    ),
+    "best during training": (
+        lambda n: m.verdict_best_during_training([5.0, 6.0, 7.0, 6.5][:n],
+                                                 {"mlp": [1.0, 2.0, 1.5, 1.2][:n]}),
+        lambda n: m.verdict_best_during_training(
+            [5.0, 6.0, 7.0, 6.5][:n],
+            {"mlp": [1.0, 2.0, 1.5, 1.2][:n], "cho": [8.0, 9.0, 8.5, 8.2][:n]},
+        ),
+    ),
+    "cho flat": (
+        lambda n: m.verdict_cho_flat(
+            {"theta_dot": [3.0, 3.2, 2.9, 3.1][:n], "r_ddot": [20.0, 22.0, 21.0, 19.0][:n]},
+            {"cho2019-warm": {"theta_dot": [0.3, 0.31, 0.29, 0.3][:n],
+                              "r_ddot": [1.0, 1.1, 0.9, 1.0][:n]}},
+        ),
+        lambda n: m.verdict_cho_flat(
+            {"theta_dot": [2.9, 3.0, 3.1, 2.8][:n], "r_ddot": [20.0, 22.0, 21.0, 19.0][:n]},
+            {"cho2019-warm": {"theta_dot": [9.2, 9.0, 8.8, 9.1][:n],
+                              "r_ddot": [1.0, 1.1, 0.9, 1.0][:n]}},
+        ),
+    ),
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("claim", sorted(_PASS_FAIL))
+def test_each_verdict_both_ways_and_not_tested_with_fewer_than_3_seeds(claim):
+    supporting, contradicting = _PASS_FAIL[claim]
+    for n in (3, 4):
+        assert supporting(n)[0] == m.SUPPORTED, (n, supporting(n))
+        assert contradicting(n)[0] == m.NOT_SUPPORTED, (n, contradicting(n))
+    for n in (0, 1, 2):
+        for verdict in (supporting, contradicting):
+            result, detail = verdict(n)
+            assert result == m.NOT_TESTED, (n, detail)
+            assert "[" not in detail  # no interval without enough seeds
+
+
+def test_verdict_edge_cases():
+    # any side short of seeds: not tested, with the counts
+    verdict, detail = m.verdict_better([1.0, 2.0, 3.0], {"cho2019-warm": [1.0] * 3,
+                                                         "cho2019": [1.0, 2.0]})  # fmt: skip
+    assert verdict == m.NOT_TESTED and "cho2019 2" in detail
+    verdict, detail = m.verdict_smooth(None, [1.0, 2.0, 3.0])
+    assert verdict == m.NOT_TESTED and "cpg-actor not run" in detail
+    assert m.verdict_better([1.0] * 3, {})[0] == m.NOT_TESTED
+    assert m.verdict_best_during_training([1.0] * 3, {})[0] == m.NOT_TESTED
+    assert m.verdict_cho_flat(None, {})[0] == m.NOT_TESTED
+    # NaN seeds (no data) do not count
+    assert m.verdict_near_limits([14.0, 15.0, float("nan")])[0] == m.NOT_TESTED
+    # a ratio of returns needs a positive denominator
+    assert m.verdict_reward_ratio([1.0, 2.0, 3.0], [-1.0, -2.0, -3.0])[0] == m.NOT_SUPPORTED
+    # the reward ratio needs its CI above 1 as well as the estimate near 6
+    wide = m.verdict_reward_ratio([10.0, 1200.0, 600.0], [100.0, 100.0, 100.0])
+    assert wide[0] == m.NOT_SUPPORTED
+    # the hop height: too short a run, or not logged at 1M steps
+    assert m.verdict_hop_doubles([0.4] * 3, [0.2] * 3, 1e6, 1.5e6)[0] == m.NOT_TESTED
+    nan3 = [float("nan")] * 3
+    assert m.verdict_hop_doubles([0.4] * 3, nan3, 1e6, 2e6)[0] == m.NOT_TESTED
+    # ratios of medians: a flat (0) smaller side is an infinite ratio, a flat larger side none
+    assert m.ratio_of_medians([5.0, 6.0, 7.0], [0.0, 0.0, 0.0]).low == math.inf
+    assert m.ratio_of_medians([0.0, 0.0, 1.0], [1.0, 2.0, 3.0]) is None
+    assert m.verdict_smooth([0.0] * 3, [5e-3, 6e-3, 7e-3])[0] == m.SUPPORTED  # straight lines
+    assert m.verdict_smooth([1e-5] * 3, [0.0] * 3)[0] == m.NOT_SUPPORTED  # the MLP flat too
+    flat_cho = {"cho2019": {"theta_dot": [0.0] * 3, "r_ddot": [0.0] * 3}}
+    moving = {"theta_dot": [3.0, 3.1, 2.9], "r_ddot": [20.0, 21.0, 22.0]}
+    assert m.verdict_cho_flat(moving, flat_cho)[0] == m.SUPPORTED
+    assert m.verdict_cho_flat(flat_cho["cho2019"], {"cho2019": moving})[0] == m.NOT_SUPPORTED
+    # the velocity band is judged by the CI: a median inside it with seeds far outside fails
+    assert m.verdict_near_limits([14.0, 15.0, 40.0, 3.0, 16.0])[0] == m.NOT_SUPPORTED
 
 
 def test_stage_checkpoints_are_the_nearest():

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from cpg_actor.experiments.metrics import VELOCITY_LIMIT
-from cpg_actor.experiments.results import Results, Run, color, label
+from cpg_actor.experiments.results import Results, Run, color, label, sent_velocity
 
 JOINTS = ("HFE", "KFE")
 TRACE_WINDOW_S = 3.0  # seconds of an episode shown in the trace figures
@@ -88,16 +88,19 @@ def ep_reward(results: Results, directory: Path) -> Output:
 
 
 # -- fig:cpg_output, fig:cpg_theta_dot, fig:cpg_r_dot_dot ------------------------------------------
-CPG_VARIANTS = ("cho2019", "cho2019-warm", "cho2019-paper", "cpg-actor-open-loop", "cpg-actor")
+CPG_VARIANTS = ("cho2019", "cho2019-warm", "cho2019-paper", "cpg-actor-open-loop", "open-loop-es",
+                "cpg-actor-paper", "cpg-actor")  # fmt: skip
 
 
 def _final_traces(
     results: Results, variants: tuple[str, ...], key: str, name: str
 ) -> tuple[list[tuple[str, Run, dict]], list[str]]:
     """(variant, run, traces) of the lowest seed's final evaluation, for runs whose traces hold
-    ``key`` with one value per joint; notes for the others."""
+    ``key`` with one value per joint; notes for the others that were asked for."""
     found, notes = [], []
     for variant in variants:
+        if variant not in results.variants:  # neither asked for nor found: nothing to note
+            continue
         run = results.first(variant)
         if run is None:
             notes.append(f"{name}: {variant} was not run")
@@ -106,6 +109,11 @@ def _final_traces(
         if traces is None:
             notes.append(f"{name}: {variant} seed {run.seed} has no eval traces")
             continue
+        if key == "desired_velocity":  # every agent's: the finite difference of what was sent
+            velocity = sent_velocity(traces)
+            traces = {k: v for k, v in traces.items() if k != key}
+            if velocity is not None:
+                traces[key] = velocity
         if key not in traces or traces[key].ndim != 3 or traces[key].shape[-1] != len(JOINTS):
             notes.append(f"{name}: {variant} traces have no per-joint '{key}'")
             continue
@@ -190,7 +198,8 @@ def cpg_r_dot_dot(results: Results, directory: Path) -> Output:
 
 # -- fig:des_output (des_pos, des_vel) ---------------------------------------------------------
 def des_output(results: Results, directory: Path) -> Output:
-    """Desired positions and velocities of the MLP actor vs the CPG-Actor, +-15 rad/s lines."""
+    """Desired positions and velocities of the MLP actor vs the CPG-Actor, +-15 rad/s lines;
+    the velocities of both the finite difference of the desired positions sent."""
     paths, notes = [], []
     variants = ("mlp", "cpg-actor")
     for key, name, ylabel, limit in (

@@ -17,13 +17,19 @@ from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.figures import make_figures, steps_per_iteration
 from cpg_actor.experiments.floor import FLOOR_FILE, load_floor
 from cpg_actor.experiments.plan import STAGE_LABELS, load_settings_file
-from cpg_actor.experiments.results import Results, label
+from cpg_actor.experiments.results import (
+    Results,
+    agent_kind,
+    label,
+    sent_positions,
+    sent_velocity,
+    trace_joint_limits,
+)
 from cpg_actor.experiments.transfer import load_transfer, transfer_lines
 from cpg_actor.machine import cpu_model, git_commit
 
 PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
 PAPER_STAGE_STEPS = (1_000_000, 20_000_000, 60_000_000)
-CHO_VARIANTS = ("cho2019-warm", "cho2019", "cho2019-paper")
 EARLY_ROWS = 3  # logged evaluations averaged for a hop height "at" a step
 
 
@@ -38,6 +44,7 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
             "smoothness",
             "velocity_share",
             "velocity_p99",
+            "time_at_stop",
             "first_stage_hop_height",
             "hop_height_at_1M",
             "final_hop_height_logged",
@@ -82,6 +89,7 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
                 "smoothness",
                 "velocity_share",
                 "velocity_p99",
+                "time_at_stop",
                 "theta_dot_variability",
                 "r_ddot_variability",
                 "xi_at_bound",
@@ -91,14 +99,20 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
         else:
             out["eval_return"].append(float(np.mean(traces["episode_return"])))
             out["hop_height"].append(float(np.mean(traces["hop_height"])))
-            position = traces.get("desired_position")
-            velocity = traces.get("desired_velocity")
-            # per joint (T, E, 2); anything else (e.g. CPG parameters as actions) is not used
-            per_joint = position is not None and position.ndim == 3 and position.shape[-1] == 2
-            out["smoothness"].append(m.smoothness(position) if per_joint else nan)
-            per_joint = velocity is not None and velocity.ndim == 3 and velocity.shape[-1] == 2
-            out["velocity_share"].append(m.velocity_share(velocity) if per_joint else nan)
-            out["velocity_p99"].append(m.velocity_p99(velocity) if per_joint else nan)
+            # the desired positions the env tracked (T, E, joints), and for every agent alike
+            # their finite difference over the control period
+            position = sent_positions(traces)
+            velocity = sent_velocity(traces)
+            limits = trace_joint_limits(traces) if position is not None else None
+            if limits is not None and limits[0].size != position.shape[-1]:
+                limits = None
+            out["smoothness"].append(m.smoothness(position) if position is not None else nan)
+            has_velocity = velocity is not None
+            out["velocity_share"].append(m.velocity_share(velocity) if has_velocity else nan)
+            out["velocity_p99"].append(m.velocity_p99(velocity) if has_velocity else nan)
+            out["time_at_stop"].append(
+                m.joint_stop_share(position, *limits) if limits is not None else nan
+            )
             for name in ("theta_dot", "r_ddot"):
                 signal = traces.get(name)
                 out[f"{name}_variability"].append(
@@ -121,10 +135,6 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
             float(np.mean(first["hop_height"])) if first is not None else nan
         )
     return out
-
-
-def _finite(values: list[float]) -> bool:
-    return bool(np.isfinite(np.asarray(values, dtype=float)).any())
 
 
 def _stages(results: Results, variant: str) -> list[dict[str, Any]]:
@@ -174,8 +184,23 @@ def reward_of(results: Results, variant: str) -> str:
     return ", ".join(f"{k}={v}" for k, v in values.items())
 
 
+# the per-seed numbers of the per-variant table: each a median over seeds with its bootstrap CI
+TABLE_KEYS = ("final_return", "eval_return", "hop_height", "smoothness", "velocity_p99",
+              "velocity_share", "time_at_stop")  # fmt: skip
+
+
+def _median_interval(values: list[float]) -> list[float] | None:
+    """``[median, low, high]`` over seeds (bootstrap CI), None with fewer than ``MIN_SEEDS``
+    seeds with data (no interval for them)."""
+    if not m.enough_seeds(values):
+        return None
+    interval = m.bootstrap(values, "median")
+    return [interval.estimate, interval.low, interval.high]
+
+
 def summarise(results: Results, total_steps: int) -> dict[str, Any]:
-    """Per-variant numbers (means and stds over seeds) and the claim verdicts."""
+    """Per-variant numbers (means and stds, medians with bootstrap CIs over seeds, the
+    per-seed values) and the claim verdicts."""
     comparison_step = min(total_steps, PAPER_COMPARISON_STEPS)
     variants: dict[str, Any] = {}
     seeds: dict[str, dict[str, list[float]]] = {}
@@ -186,52 +211,39 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         at_comparison = _per_seed(results, variant, at_step=comparison_step)["final_return"]
         seeds[variant]["return_at_comparison"] = at_comparison
         variants[variant] = {
+            "kind": agent_kind(variant),
             "reward": reward_of(results, variant),
             "seeds": len(results.runs[variant]),
             "finished": sum(run.finished for run in results.runs[variant]),
             **{key: m.mean_std(values) for key, values in seeds[variant].items()},
+            "median": {key: _median_interval(seeds[variant][key]) for key in TABLE_KEYS},
             "per_seed": seeds[variant],
             "stages": _stages(results, variant),
         }
 
-    def has(*names: str) -> bool:
-        return all(name in variants for name in names)
+    def per_seed(variant: str, key: str) -> list[float] | None:
+        """A variant's per-seed values; None when it did not run."""
+        return seeds[variant][key] if variant in seeds else None
 
+    cho_variants = [variant for variant in variants if agent_kind(variant) == "cho"]
     claims: list[dict[str, str]] = []
     # 1. about 6x the reward of Cho et al. (warm)
-    ran = has("cpg-actor", "cho2019-warm")
-    ratio = (
-        m.bootstrap_ratio(
-            seeds["cpg-actor"]["return_at_comparison"],
-            seeds["cho2019-warm"]["return_at_comparison"],
-        )
-        if ran
-        else None
+    verdict, detail = m.verdict_reward_ratio(
+        per_seed("cpg-actor", "return_at_comparison"),
+        per_seed("cho2019-warm", "return_at_comparison"),
     )
-    verdict, detail = m.verdict_reward_ratio(ratio, ran)
-    if ran and not (
-        _finite(seeds["cpg-actor"]["return_at_comparison"])
-        and _finite(seeds["cho2019-warm"]["return_at_comparison"])
-    ):
-        verdict, detail = m.NOT_TESTED, "no finished training episodes logged"
     claims.append(
         {
             "claim": "CPG-Actor reaches about 6x the reward of Cho et al. (warm) after 20M steps",
             "verdict": verdict,
-            "detail": f"at {comparison_step:,} steps: {detail}",
+            "detail": f"final returns at {comparison_step:,} steps: {detail}",
         }
     )
     # 2. open-loop CPG-Actor beats Cho et al.
-    differences = {
-        cho: m.bootstrap_difference(
-            seeds["cpg-actor-open-loop"]["final_return"], seeds[cho]["final_return"]
-        )
-        for cho in CHO_VARIANTS
-        if has("cpg-actor-open-loop", cho)
-        and _finite(seeds["cpg-actor-open-loop"]["final_return"])
-        and _finite(seeds[cho]["final_return"])
-    }
-    verdict, detail = m.verdict_better(differences, bool(differences))
+    verdict, detail = m.verdict_better(
+        per_seed("cpg-actor-open-loop", "final_return"),
+        {cho: per_seed(cho, "final_return") for cho in cho_variants},
+    )
     claims.append(
         {
             "claim": "the open-loop CPG-Actor beats Cho et al.",
@@ -240,10 +252,8 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         }
     )
     # 3. smooth vs bang-bang
-    nan = float("nan")
-    cpg_smooth = variants["cpg-actor"]["smoothness"][0] if has("cpg-actor") else nan
-    mlp_smooth = variants["mlp"]["smoothness"][0] if has("mlp") else nan
-    verdict, detail = m.verdict_smooth(cpg_smooth, mlp_smooth)
+    verdict, detail = m.verdict_smooth(per_seed("cpg-actor", "smoothness"),
+                                       per_seed("mlp", "smoothness"))  # fmt: skip
     claims.append(
         {
             "claim": "CPG-Actor desired positions are smooth where the MLP actor is bang-bang",
@@ -252,9 +262,9 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         }
     )
     # 4. near the motor limits
-    p99 = variants["cpg-actor"]["velocity_p99"][0] if has("cpg-actor") else nan
-    share = variants["cpg-actor"]["velocity_share"][0] if has("cpg-actor") else nan
-    verdict, detail = m.verdict_near_limits(p99, share)
+    verdict, detail = m.verdict_near_limits(
+        per_seed("cpg-actor", "velocity_p99"), per_seed("cpg-actor", "velocity_share")
+    )
     claims.append(
         {
             "claim": "CPG-Actor desired velocities stay near (within) the +-15 rad/s motor limits",
@@ -263,14 +273,12 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         }
     )
     # 5. the hop height about doubles: 1M steps -> the end, as in the paper (1M -> 60M)
-    early_step = PAPER_STAGE_STEPS[0]
-    ratio = None
-    if has("cpg-actor"):
-        early = seeds["cpg-actor"]["hop_height_at_1M"]
-        final = seeds["cpg-actor"]["final_hop_height_logged"]
-        if _finite(early) and _finite(final):
-            ratio = m.bootstrap_ratio(final, early)
-    verdict, detail = m.verdict_hop_doubles(ratio, early_step, total_steps)
+    verdict, detail = m.verdict_hop_doubles(
+        per_seed("cpg-actor", "final_hop_height_logged"),
+        per_seed("cpg-actor", "hop_height_at_1M"),
+        PAPER_STAGE_STEPS[0],
+        total_steps,
+    )
     claims.append(
         {
             "claim": "the CPG-Actor's hop height about doubles with training (1M -> 60M steps "
@@ -280,19 +288,18 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         }
     )
     # 6. the CPG-Actor performs best during training (paper Fig. 6)
-    # against the variants trained on the same reward only (returns of other rewards differ)
-    differences = {
-        other: m.bootstrap_difference(
-            seeds["cpg-actor"]["mean_eval_return"], seeds[other]["mean_eval_return"]
-        )
+    # against the variants trained on the same reward only (returns of other rewards differ),
+    # and with evaluation curves logged
+    others = {
+        other: seeds[other]["mean_eval_return"]
         for other in variants
         if other != "cpg-actor"
-        and has("cpg-actor")
+        and "cpg-actor" in variants
         and variants[other]["reward"] == variants["cpg-actor"]["reward"]
-        and _finite(seeds[other]["mean_eval_return"])
+        and m.seeds_with_data(seeds[other]["mean_eval_return"])
     }
-    ran = has("cpg-actor") and _finite(seeds["cpg-actor"]["mean_eval_return"])
-    verdict, detail = m.verdict_best_during_training(differences, ran)
+    verdict, detail = m.verdict_best_during_training(per_seed("cpg-actor", "mean_eval_return"),
+                                                     others)  # fmt: skip
     claims.append(
         {
             "claim": "the CPG-Actor performs best during training",
@@ -302,12 +309,14 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
     )
 
     # 7. Cho et al.'s theta_dot and r_ddot stay flat; the CPG-Actor's respond (section V)
-    def flatness(variant: str) -> dict[str, float]:
-        return {n: variants[variant][f"{n}_variability"][0] for n in ("theta_dot", "r_ddot")}
+    def flatness(variant: str) -> dict[str, list[float]] | None:
+        if variant not in seeds:
+            return None
+        return {n: seeds[variant][f"{n}_variability"] for n in m.CPG_SIGNALS}
 
-    cpg_flatness = flatness("cpg-actor") if has("cpg-actor") else {"theta_dot": nan, "r_ddot": nan}
-    cho_flatness = {cho: flatness(cho) for cho in CHO_VARIANTS if has(cho)}
-    verdict, detail = m.verdict_cho_flat(cpg_flatness, cho_flatness)
+    verdict, detail = m.verdict_cho_flat(
+        flatness("cpg-actor"), {cho: flatness(cho) for cho in cho_variants}
+    )
     claims.append(
         {
             "claim": "Cho et al.'s theta_dot and r_ddot stay almost flat, the CPG-Actor's are "
@@ -325,6 +334,8 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
     }
 
 
+TOO_FEW = f"not tested (< {m.MIN_SEEDS} seeds)"
+
 # Questions beyond the paper's claims, each a pair (first, second) of variants run together:
 # is the first better than the second?
 COMPARISONS = (
@@ -335,19 +346,25 @@ COMPARISONS = (
     ("mlp-apex", "cpg-actor-apex", "MLP vs CPG-Actor, apex (hop-height) reward"),
     ("cpg-actor", "cho2019-paper", "CPG-Actor vs Cho et al. as the paper has it"),
     ("cho2019-warm", "cho2019-paper", "the stronger Cho et al. vs the paper's"),
+    ("cpg-actor", "cpg-actor-paper", "CPG-Actor vs the CPG-Actor in the paper's form"),
+    ("open-loop-es", "cpg-actor-open-loop", "open-loop CPG: black-box search vs PPO"),
+    ("mlp-warm", "mlp", "MLP actor warm-started vs from scratch"),
 )
 
 
 def _comparisons(seeds: dict[str, dict[str, list[float]]]) -> list[dict[str, Any]]:
     """For each pair of :data:`COMPARISONS` that ran: the differences of the final
     (logged, deterministic) return and hop height, with bootstrap CIs over seeds, and which
-    one is better where a CI excludes 0."""
+    one is better where a CI excludes 0; neither with fewer than ``MIN_SEEDS`` seeds a side."""
     rows = []
     for first, second, question in COMPARISONS:
         if first not in seeds or second not in seeds:
             continue
         row: dict[str, Any] = {"first": first, "second": second, "question": question}
         for key, name in (("final_return", "return"), ("final_hop_height_logged", "hop")):
+            if not m.enough_seeds(seeds[first][key], seeds[second][key]):
+                row[name], row[f"{name}_better"] = None, TOO_FEW
+                continue
             interval = m.bootstrap_difference(seeds[first][key], seeds[second][key])
             row[name] = (
                 None if interval is None else [interval.estimate, interval.low, interval.high]
@@ -394,13 +411,17 @@ def _floor_lines(
     best = floor["best_return"]
     value = best["episode_return"]
     described = ", ".join(f"{k} {v:.3g}" for k, v in best["parameters"].items())
-    above, below, unresolved = [], [], []
+    above, below, unresolved, few = [], [], [], []
     for variant, per_seed in seeds.items():
-        interval = m.bootstrap_difference(per_seed["final_return"], [value])
-        if interval is None:
+        if not m.seeds_with_data(per_seed["final_return"]):
             continue
+        if not m.enough_seeds(per_seed["final_return"]):  # no interval: listed apart
+            few.append(f"`{variant}`")
+            continue
+        interval = m.bootstrap_difference(per_seed["final_return"], [value])
         target = above if interval.low > 0 else below if interval.high < 0 else unresolved
         target.append(f"`{variant}` ({interval.estimate:+.0f})")
+    few_text = f"; fewer than {m.MIN_SEEDS} seeds, not tested: {', '.join(few)}" if few else ""
     return [
         f"**Open-loop grid floor** (no learning; `{FLOOR_FILE}`): the best of "
         f"{floor['candidates']} constant CPG parameter sets ({described}; a, w at the preset's; "
@@ -409,7 +430,8 @@ def _floor_lines(
         f"hopping set: {floor['best_hop']['hop_height_p90']:.2f} m, return "
         f"{floor['best_hop']['episode_return']:.0f}). Final return minus the floor, CI over "
         f"seeds (variants trained on this reward): above it {', '.join(above) or 'none'}; "
-        f"below it {', '.join(below) or 'none'}; not resolved {', '.join(unresolved) or 'none'}.",
+        f"below it {', '.join(below) or 'none'}; not resolved {', '.join(unresolved) or 'none'}"
+        f"{few_text}.",
         "",
     ]
 
@@ -513,15 +535,32 @@ def _trained_commits(results: Results) -> str:
 
 
 def _pm(value: tuple[float, float], digits: int = 3) -> str:
+    """Mean +- std; the mean alone where the std is not given (fewer than 3 seeds)."""
     mean, std = value
     if not np.isfinite(mean):
         return "-"
-    return f"{mean:.{digits}g} +- {std:.2g}"
+    return f"{mean:.{digits}g}" + (f" +- {std:.2g}" if np.isfinite(std) else "")
 
 
 def _pct(value: tuple[float, float]) -> str:
     mean, std = value
-    return "-" if not np.isfinite(mean) else f"{100 * mean:.1f}% +- {100 * std:.1g}"
+    if not np.isfinite(mean):
+        return "-"
+    return f"{100 * mean:.1f}%" + (f" +- {100 * std:.1g}" if np.isfinite(std) else "")
+
+
+def _seed_cell(row: dict[str, Any], key: str, digits: int = 3, percent: bool = False) -> str:
+    """A variant's ``key``: the median over seeds with its bootstrap 95% CI, ``median [low,
+    high]``; with fewer than ``MIN_SEEDS`` seeds with data, their values (no interval); "-"
+    for none."""
+
+    def text(x: float) -> str:
+        return f"{100 * x:.1f}%" if percent else f"{x:.{digits}g}"
+
+    interval = row["median"][key]
+    if interval is None:
+        return ", ".join(text(x) for x in m.finite(row["per_seed"][key])) or "-"
+    return f"{text(interval[0])} [{text(interval[1])}, {text(interval[2])}]"
 
 
 def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> Path:
@@ -592,37 +631,46 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
     lines += [
         "## Results per variant",
         "",
-        "Mean +- standard deviation over seeds. *Final return*: mean of the last "
-        f"{m.FINAL_ROWS} deterministic evaluations logged during training (`eval/return`, "
-        "the mean return of the policy's mean action over a few episodes on evaluation envs; "
-        "runs logged without it: `charts/episode_return`, the mean return of the last 100 "
-        "training episodes). *Eval return*, *hop height*, *smoothness*, *|v| <= 15* "
-        "and *p99 |v|* come from the deterministic evaluation of the final checkpoint.",
+        f"Per seed one number; per variant the **median over seeds [its bootstrap 95% CI]** "
+        f"({m.RESAMPLES:,} resamples of the seeds); a variant with fewer than {m.MIN_SEEDS} "
+        "seeds with data shows its per-seed values instead, with no interval. *Final return*: "
+        f"mean of the last {m.FINAL_ROWS} deterministic evaluations logged during training "
+        "(`eval/return`, the mean return of the policy's mean action over a few episodes on "
+        "evaluation envs; runs logged without it: `charts/episode_return`, the mean return of "
+        "the last 100 training episodes). The other columns come from the deterministic "
+        "evaluation of the final checkpoint: *desired velocity* is, for every agent, the finite "
+        "difference of the desired joint positions sent to the env (after its clip to the joint "
+        "limits) over the control period; *at a joint stop*: the share of control steps at "
+        f"which a desired position sent is within {m.JOINT_STOP_TOLERANCE:g} rad of its "
+        "joint's limit.",
         "",
         "| variant | seeds (finished) | final return | eval return | hop height (m) | "
-        "smoothness (rad^2) | desired vel. within +-15 rad/s | p99 desired \\|v\\| (rad/s) |",
-        "| --- | --- | --- | --- | --- | --- | --- | --- |",
+        "smoothness (rad^2) | p99 desired \\|v\\| (rad/s) | desired vel. within +-15 rad/s | "
+        "time at a joint stop |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for variant, row in summary["variants"].items():
         lines.append(
             f"| {label(variant)} (`{variant}`) | {row['seeds']} ({row['finished']}) | "
-            f"{_pm(row['final_return'])} | {_pm(row['eval_return'])} | "
-            f"{_pm(row['hop_height'])} | {_pm(row['smoothness'])} | "
-            f"{_pct(row['velocity_share'])} | {_pm(row['velocity_p99'])} |"
+            f"{_seed_cell(row, 'final_return')} | {_seed_cell(row, 'eval_return')} | "
+            f"{_seed_cell(row, 'hop_height')} | {_seed_cell(row, 'smoothness')} | "
+            f"{_seed_cell(row, 'velocity_p99')} | "
+            f"{_seed_cell(row, 'velocity_share', percent=True)} | "
+            f"{_seed_cell(row, 'time_at_stop', percent=True)} |"
         )
     floor = load_floor(out)
     floor_reward = _floor_reward(floor)
     lines += [""] + _floor_lines(floor, seeds_of(summary, floor_reward))
     if "cpg-actor" in summary["variants"] and "cho2019-warm" in summary["variants"]:
-        ratio = m.bootstrap_ratio(
-            summary["variants"]["cpg-actor"]["per_seed"]["return_at_comparison"],
-            summary["variants"]["cho2019-warm"]["per_seed"]["return_at_comparison"],
-        )
-        text = (
-            str(ratio)
-            if ratio is not None
-            else "undefined (Cho et al. (warm) mean return is not positive)"
-        )
+        cpg = summary["variants"]["cpg-actor"]["per_seed"]["return_at_comparison"]
+        cho = summary["variants"]["cho2019-warm"]["per_seed"]["return_at_comparison"]
+        ratio = m.bootstrap_ratio(cpg, cho) if m.enough_seeds(cpg, cho) else None
+        if not m.enough_seeds(cpg, cho):
+            text = f"not tested (fewer than {m.MIN_SEEDS} seeds with data on a side)"
+        elif ratio is None:
+            text = "undefined (Cho et al. (warm) mean return is not positive)"
+        else:
+            text = str(ratio)
         lines += [
             f"Ratio of mean final returns CPG-Actor / Cho et al. (warm) at "
             f"{summary['comparison_step']:,} steps, with its bootstrap 95% CI over seeds: "
@@ -736,21 +784,36 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
     lines += [
         "## Definitions",
         "",
+        "* desired position: the joint position command the env tracked (the agent's command "
+        "clipped to the joint limits; Cho et al.: the nominal pose + the CPG's x, clipped);",
+        "* desired velocity (every agent alike): its finite difference over the control "
+        "period, `(p[t] - p[t-1]) / dt`; the first step of an episode is left out (its "
+        "previous command is the env's reset pose, not the agent's);",
         "* smoothness: mean over steps, joints and eval episodes of the squared second "
         "difference of the desired position, `(p[t+1] - 2 p[t] + p[t-1])^2`, in rad^2 (per "
         "control step of 0.01 s); lower is smoother, a bang-bang signal scores high;",
-        "* velocity share: share of desired joint velocities (CPG agents: the CPG's `x_dot`; "
-        "MLP: finite difference of its desired positions) with `|v| <= 15 rad/s`;",
+        "* velocity share: share of desired joint velocities with `|v| <= 15 rad/s`; p99: "
+        "the 99th percentile of `|v|`; both over the steps, joints and eval episodes of a seed;",
+        "* time at a joint stop: share of control steps at which a desired position sent lies "
+        f"within {m.JOINT_STOP_TOLERANCE:g} rad of its joint's limit (the action space's bound);",
         "* hop height: per eval episode, the maximum hip height minus the standing hip height;",
-        "* bootstrap CI: seeds resampled with replacement within each variant, 10,000 "
-        "resamples, 2.5 and 97.5 percentiles of the ratio (or difference) of the means;",
-        "* claim thresholds: reward ratio within [3, 12] with CI above 1; open-loop beats Cho "
-        "et al. if the CI of the difference of mean final returns is above 0 for each Cho "
-        "variant run; smooth vs bang-bang if the MLP's smoothness measure is >= 10x the "
-        "CPG-Actor's; near the limits if the 99th percentile of |desired velocity| lies in "
-        "[9, 18] rad/s; hop height doubles if final / first-stage hop height >= 1.5; "
-        "Cho et al. flat if the CPG-Actor's standard deviation over an episode (after 50 "
-        "steps) of theta_dot and of r_ddot is >= 3x every Cho variant's.",
+        f"* bootstrap CI: seeds resampled with replacement, {m.RESAMPLES:,} resamples from a "
+        f"generator seeded with {m.BOOTSTRAP_SEED} (the same numbers every time), 2.5 and 97.5 "
+        "percentiles; each variant resampled on its own, except the hop height at two times "
+        "(one draw of seeds for both: the same runs);",
+        f"* fewer than {m.MIN_SEEDS} seeds with data on a side: no interval and no verdict "
+        "(*not tested in this run*);",
+        "* claim thresholds: reward ratio of means within [3, 12] with CI above 1; open-loop "
+        "beats Cho et al. if the CI of the difference of mean final returns is above 0 for each "
+        "Cho variant run; smooth vs bang-bang if the CI of the ratio of medians MLP / CPG-Actor "
+        "has its lower bound >= 10; near the limits if the CI of the median over seeds of the "
+        "per-seed 99th percentile of |desired velocity| lies in [9, 18] rad/s; hop height "
+        "doubles if the ratio of mean hop heights at the end / at 1M steps (paired) is >= 1.5 "
+        "with its CI above 1; best during training if the CI of the difference of mean returns "
+        "over the run is above 0 against every variant of the same reward; Cho et al. flat if, "
+        "for theta_dot and r_ddot and every Cho variant, the CI of the ratio of medians "
+        "CPG-Actor / Cho of the standard deviation over an episode (after 50 steps) has its "
+        "lower bound >= 3.",
         "",
     ]
     if notes:

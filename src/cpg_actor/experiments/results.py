@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from cpg_actor.experiments.execute import MARKER, STAGES_FILE, list_checkpoints
+from cpg_actor.experiments.metrics import desired_velocity
 
 LABELS = {
     "cpg-actor": "CPG-Actor",
@@ -24,6 +25,9 @@ LABELS = {
     "mlp-apex": "MLP actor (apex reward)",
     "cpg-actor-bptt32": "CPG-Actor (32-step gradient)",
     "cpg-actor-feedback-noise": "CPG-Actor (feedback noise)",
+    "cpg-actor-paper": "CPG-Actor (paper's form)",
+    "open-loop-es": "open-loop CPG (black-box search)",
+    "mlp-warm": "MLP actor (warm)",
 }
 # the paper's colours: CPG-Actor green, open loop orange, Cho et al. warm red, cold blue
 COLORS = {
@@ -38,6 +42,16 @@ COLORS = {
     "mlp-apex": "indigo",
     "cpg-actor-bptt32": "tab:cyan",
     "cpg-actor-feedback-noise": "tab:brown",
+    "cpg-actor-paper": "limegreen",
+    "open-loop-es": "goldenrod",
+    "mlp-warm": "mediumpurple",
+}
+# What kind of agent a variant is, where the report tells them apart (the CPG figures, the
+# Cho et al. claims); names not listed go by their prefix (:func:`agent_kind`)
+KINDS = {
+    "cpg-actor-paper": "cpg",
+    "open-loop-es": "cpg",
+    "mlp-warm": "mlp",
 }
 
 
@@ -47,6 +61,63 @@ def label(variant: str) -> str:
 
 def color(variant: str) -> str | None:
     return COLORS.get(variant)
+
+
+def agent_kind(variant: str) -> str | None:
+    """``"cho"`` (the CPG in the environment, Cho et al.), ``"cpg"`` (a CPG in the agent:
+    the CPG-Actor in any form, open-loop CPGs) or ``"mlp"``; None for a name of no known kind."""
+    if variant in KINDS:
+        return KINDS[variant]
+    for prefix, kind in (("cho2019", "cho"), ("cpg-actor", "cpg"), ("open-loop", "cpg"),
+                         ("mlp", "mlp")):  # fmt: skip
+        if variant.startswith(prefix):
+            return kind
+    return None
+
+
+def trace_control_dt(traces: dict[str, np.ndarray]) -> float | None:
+    """The control period of a traces file: its ``control_dt``, else the step of its
+    ``time`` (traces saved before ``control_dt`` was); None if neither says."""
+    if "control_dt" in traces:
+        return float(traces["control_dt"])
+    time = np.asarray(traces.get("time", ()), dtype=float).ravel()
+    return float(time[1] - time[0]) if time.size > 1 and time[1] > time[0] else None
+
+
+def trace_joint_limits(traces: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray] | None:
+    """The action space's bounds (rad, per joint) the traces' desired positions were clipped
+    to: ``action_low`` / ``action_high`` as :func:`cpg_actor.evaluation.evaluate` saves them;
+    for traces saved before it did, the hopper's joint limits when the traces are the
+    hopper's (joints HFE, KFE, or no joint names); None otherwise."""
+    if "action_low" in traces and "action_high" in traces:
+        return np.asarray(traces["action_low"], float), np.asarray(traces["action_high"], float)
+    from cpg_actor.envs.robot import description as hopper
+
+    joints = tuple(str(name) for name in traces.get("joint_names", hopper.JOINT_NAMES))
+    if joints != tuple(hopper.JOINT_NAMES):
+        return None
+    limits = np.array([hopper.JOINT_LIMITS[name] for name in joints], dtype=float)
+    return limits[:, 0], limits[:, 1]
+
+
+def sent_positions(traces: dict[str, np.ndarray]) -> np.ndarray | None:
+    """The desired joint positions the env tracked, ``(T, E, joints)``; None where the traces
+    hold no such array (one column per joint of ``joint_names``, the hopper's 2 for traces
+    without names)."""
+    position = traces.get("desired_position")
+    joints = len(traces["joint_names"]) if "joint_names" in traces else 2
+    if position is None or position.ndim != 3 or position.shape[-1] != joints:
+        return None
+    return np.asarray(position, dtype=float)
+
+
+def sent_velocity(traces: dict[str, np.ndarray]) -> np.ndarray | None:
+    """Every agent's desired velocity: the finite difference of :func:`sent_positions` over
+    the control period (:func:`cpg_actor.experiments.metrics.desired_velocity`; the first step
+    of an episode NaN), computed here from the positions so that traces saved when CPG agents
+    stored their analytic ``x_dot`` instead are read alike; None where it cannot be."""
+    position, dt = sent_positions(traces), trace_control_dt(traces)
+    return None if position is None or dt is None else desired_velocity(position, dt)
 
 
 @dataclass

@@ -85,9 +85,21 @@ def kept(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
             "seeds": len(seeds),
             **{f"{key}_own": m.mean_std(own[key]) for key in own},
             **{f"{key}_other": m.mean_std(other[key]) for key in other},
-            **{f"{key}_kept": m.bootstrap_ratio(other[key], own[key], paired=True) for key in own},
+            **{f"{key}_kept": _kept(other[key], own[key]) for key in own},
         }
     return table
+
+
+def _kept(other: list[float], own: list[float]) -> m.Interval | None:
+    """other / own, ratio of means over the seeds, with a paired bootstrap CI; with fewer
+    than ``MIN_SEEDS`` seeds the ratio alone (its ``low`` and ``high`` NaN: no interval)."""
+    a, b = np.asarray(other, dtype=float), np.asarray(own, dtype=float)
+    keep = np.isfinite(a) & np.isfinite(b)
+    if keep.sum() >= m.MIN_SEEDS:
+        return m.bootstrap_ratio(a, b, paired=True)
+    if not keep.any() or b[keep].mean() <= 0:
+        return None
+    return m.Interval(float(a[keep].mean() / b[keep].mean()), float("nan"), float("nan"))
 
 
 def transfer_lines(data: dict[str, Any] | None) -> list[str]:
@@ -97,6 +109,8 @@ def transfer_lines(data: dict[str, Any] | None) -> list[str]:
     def kept_text(interval) -> str:
         if interval is None:
             return "undefined (own value not positive)"
+        if not np.isfinite(interval.low):  # too few seeds for an interval
+            return f"{100 * interval.estimate:.0f}%"
         return (
             f"{100 * interval.estimate:.0f}% [{100 * interval.low:.0f}, {100 * interval.high:.0f}]"
         )
@@ -106,7 +120,8 @@ def transfer_lines(data: dict[str, Any] | None) -> list[str]:
         "",
         f"Each final policy evaluated deterministically ({data['episodes']} episodes, env seed "
         f"{data['seed']}) in the simulator it trained in and in the other one (`cpg-actor "
-        "transfer`); *kept*: other / own, mean over seeds with a paired bootstrap 95% CI.",
+        "transfer`); *kept*: other / own, mean over seeds with a paired bootstrap 95% CI "
+        f"(no CI with fewer than {m.MIN_SEEDS} seeds).",
         "",
         "| variant | trained in | seeds | return own | return other | return kept | "
         "hop own (m) | hop other (m) | hop kept |",
