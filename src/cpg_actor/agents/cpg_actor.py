@@ -270,7 +270,8 @@ class CPGActorAgent(Agent):
     def log_scalars(self) -> dict[str, float]:
         """The log-std and the CPG's physical parameters: nu, rho, a per oscillator, w and phi
         per edge of the topology."""
-        row = super().log_scalars()
+        # the joint command's log-std only where it is sampled
+        row = {} if self.cpg_exploration else super().log_scalars()
         names = self.cpg.topology.names
         if self.feedback_log_std is not None:
             stds = self.feedback_log_std.detach().exp().tolist()
