@@ -38,7 +38,7 @@ FORMATS = ("torchscript", "onnx")
 SUFFIXES = {"torchscript": ".pt", "onnx": ".onnx"}
 INPUT_NAMES = ["observation", "state"]
 OUTPUT_NAMES = ["action", "next_state"]
-EXPORTABLE = ("mlp", "cpg-actor", "cpg-actor-open-loop")
+EXPORTABLE = ("mlp", "cpg-actor", "cpg-actor-open-loop", "open-loop-es")
 
 
 class ControlStep(nn.Module):

@@ -115,6 +115,11 @@ class Runner:
         self.device = resolve_device(config.device)
         seed_everything(config.seed)
         self.spec = get_agent_spec(config.agent)
+        if self.spec.trainer != "ppo":
+            raise ValueError(
+                f"agent '{config.agent}' is trained by {self.spec.trainer}, not PPO; use "
+                "cpg_actor.es_runner.ESRunner (cpg-actor train picks it)"
+            )
         self.env = TorchVectorEnv(
             env
             if env is not None

@@ -49,7 +49,8 @@ class AgentSpec:
     ``robot`` (:class:`cpg_actor.robot.RobotSpec`: joints, nominal pose, control period);
     ``env_factory(num_envs, env_config, num_threads) -> vector env`` (the robot's env, the
     hopper by default); ``wrapper(env) -> env``, an environment around the robot's that the
-    agent needs (``cho2019``: the CPG inside the env); an optional supervised warm start."""
+    agent needs (``cho2019``: the CPG inside the env); an optional supervised warm start;
+    ``trainer``, what trains it (PPO, or the open-loop search)."""
 
     name: str
     description: str
@@ -62,6 +63,9 @@ class AgentSpec:
     # ``warm_start(agent, normalizer, env, WarmStartConfig, seed) -> losses``, run once before
     # the first PPO iteration of a new run (not on resume)
     warm_start: Callable[..., list[float]] | None = None
+    # what trains it: "ppo" (cpg_actor.runner.Runner) or "es", the open-loop CMA-ES search
+    # (cpg_actor.es_runner.ESRunner)
+    trainer: str = "ppo"
 
     def make_env(self, num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
         """The env this agent acts on: the robot's env, wrapped if the agent declares it."""
@@ -140,5 +144,14 @@ register_agent(
         wrapper=paper_cpg_parameter_wrapper,
         warm_start=warm_start_cho2019_paper,
         robots=("hopper",),
+    )
+)
+register_agent(
+    AgentSpec(
+        "open-loop-es",
+        "the open-loop CPG (no feedback) with its parameters V tuned by CMA-ES on the return: "
+        "the search baseline, and the gait other CPG agents can start from",
+        lambda config, env: build_cpg_actor(config, env, feedback=False),
+        trainer="es",
     )
 )

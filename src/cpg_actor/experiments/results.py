@@ -24,6 +24,7 @@ LABELS = {
     "mlp-apex": "MLP actor (apex reward)",
     "cpg-actor-bptt32": "CPG-Actor (32-step gradient)",
     "cpg-actor-feedback-noise": "CPG-Actor (feedback noise)",
+    "open-loop-es": "open-loop CPG (CMA-ES)",
 }
 # the paper's colours: CPG-Actor green, open loop orange, Cho et al. warm red, cold blue
 COLORS = {
@@ -38,6 +39,7 @@ COLORS = {
     "mlp-apex": "indigo",
     "cpg-actor-bptt32": "tab:cyan",
     "cpg-actor-feedback-noise": "tab:brown",
+    "open-loop-es": "tab:gray",
 }
 
 
