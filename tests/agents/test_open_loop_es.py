@@ -345,3 +345,18 @@ def test_reproduce_plans_a_search_run_in_generations(tmp_path):
     assert "checkpoint_interval=1" in task.train_args
     config = compose_config(values={"agent": "open-loop-es"})
     assert planned_iterations(config) == (500_000 // 8000, 8000)
+
+
+def test_a_search_cma_es_ended_stops_there_and_resume_says_so(tmp_path, capsys, monkeypatch):
+    """CMA-ES's own termination (here made to fire after two generations) ends the run
+    before its budget, with a final checkpoint and gait; resuming it is not an error."""
+    monkeypatch.setattr(
+        CMASearch, "stop_reason", property(lambda self: "tolx=1e-11" * (self.generation >= 2))
+    )
+    run = tmp_path / "run"
+    assert main(["train", "--run-dir", str(run), *TINY, "--total-steps", str(5 * GENERATION)]) == 0
+    assert "CMA-ES stopped: tolx=1e-11" in capsys.readouterr().out
+    assert load_checkpoint(run / "checkpoints" / "last.pt")["iteration"] == 2
+    assert load_gait(run)["steps_searched"] == 2 * GENERATION
+    assert main(["train", "--run-dir", str(run), "--resume", "--no-progress"]) == 0
+    assert "nothing to continue" in capsys.readouterr().out

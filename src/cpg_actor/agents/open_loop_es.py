@@ -16,11 +16,12 @@ generation run in one vector env of as many sub-envs, every candidate's CPG step
 batched call (``torch.func.vmap`` over V of the agent's own control step).
 
 Budget: every env step the search takes counts toward ``total_steps``: a generation costs
-``sub-envs x control steps`` (``popsize x episodes x episode_steps`` when no episode ends
-early, the hopper's case; fewer when all of them do). A run makes ``total_steps //
+``sub-envs x control steps`` until its last episode ended (``popsize x episodes x
+episode_steps`` when one runs to the time limit, the hopper's case). A run makes ``total_steps //
 (popsize x episodes x episode_steps)`` generations, so it never exceeds ``total_steps``.
 
-CMA-ES is Hansen's ``cma`` package; its random numbers come from a generator of its own
+CMA-ES (Hansen and Ostermeier 2001, with the defaults of Hansen's ``cma`` package, which runs
+it here) minimises ``-fitness``; its random numbers come from a generator of its own
 (:class:`NormalSource`, seeded from the run seed), kept with the rest of its state, so a
 search continued from a saved state draws exactly what the uninterrupted one would.
 """
@@ -176,6 +177,7 @@ class CMASearch:
             "verbose": -9,
             "verb_disp": 0,
             "verb_log": 0,
+            "signals_filename": "",  # no option changes read from a file in the working dir
         }
         self.es = cma.CMAEvolutionStrategy(np.asarray(x0, dtype=np.float64), sigma0, options)
         self.generation = 0
