@@ -18,6 +18,7 @@ from typing import Any
 import yaml
 
 from cpg_actor.agents.base import AgentConfig
+from cpg_actor.agents.open_loop_es import ESConfig
 from cpg_actor.agents.warm_start import WarmStartConfig
 from cpg_actor.device import check_device_name
 from cpg_actor.ppo.config import PPOConfig
@@ -57,6 +58,7 @@ class TrainConfig:
     warm_start: WarmStartConfig = field(default_factory=WarmStartConfig)  # cho2019-warm only
     # the robot's env config: cpg_actor.envs.HopperConfig, or QuadrupedConfig for the anymal
     env: Any = field(default_factory=_default_env_config)
+    es: ESConfig = field(default_factory=ESConfig)  # open-loop-es only: the CMA-ES search
 
     @property
     def steps_per_iteration(self) -> int:
@@ -138,6 +140,7 @@ class TrainConfig:
         self.warm_start.validate()
         if self.steps_per_iteration < self.ppo.num_minibatches:
             raise ValueError("num_envs * ppo.num_steps must be >= ppo.num_minibatches")
+        self.es.validate()
 
     # -- (de)serialisation -------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:

@@ -38,7 +38,14 @@ FORMATS = ("torchscript", "onnx")
 SUFFIXES = {"torchscript": ".pt", "onnx": ".onnx"}
 INPUT_NAMES = ["observation", "state"]
 OUTPUT_NAMES = ["action", "next_state"]
-EXPORTABLE = ("mlp", "mlp-warm", "cpg-actor", "cpg-actor-paper", "cpg-actor-open-loop")
+EXPORTABLE = (
+    "mlp",
+    "mlp-warm",
+    "cpg-actor",
+    "cpg-actor-paper",
+    "cpg-actor-open-loop",
+    "open-loop-es",
+)
 
 
 class ControlStep(nn.Module):

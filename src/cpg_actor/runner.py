@@ -115,6 +115,11 @@ class Runner:
         self.device = resolve_device(config.device)
         seed_everything(config.seed)
         self.spec = get_agent_spec(config.agent)
+        if self.spec.trainer != "ppo":
+            raise ValueError(
+                f"agent '{config.agent}' is trained by {self.spec.trainer}, not PPO; use "
+                "cpg_actor.es_runner.ESRunner (cpg-actor train picks it)"
+            )
         self.env = TorchVectorEnv(
             env
             if env is not None
@@ -381,9 +386,7 @@ class Runner:
         cfg = self.config
         seed = derived_seed(cfg.seed, WARM_START_SEED_KEY)
         normalizer = self.normalizer if cfg.ppo.normalize_observations else None
-        losses = self.spec.warm_start(
-            self.agent, normalizer, self.env.unwrapped, cfg, seed
-        )
+        losses = self.spec.warm_start(self.agent, normalizer, self.env.unwrapped, cfg, seed)
         self._episodes_started = False
         if self.show_progress:
             print(

@@ -176,7 +176,8 @@ def test_with_a_start_gait_cho_is_warm_started_toward_its_parameters_and_runs_it
 
     path = tmp_path / "gait.yaml"
     path.write_text(
-        "cpg_initial:\n  frequency: [1.8, 1.8]\n  amplitude: [0.4, 0.5]\n  convergence: 12.0\n"
+        "robot: hopper\nfitness: 1.0\nsteps: 0\nseed: 0\ncpg_initial:\n"
+        "  frequency: [1.8, 1.8]\n  amplitude: [0.4, 0.5]\n  convergence: 12.0\n"
         "  coupling_weight: 6.0\n  phase_bias: [[0.0, -0.5], [0.5, 0.0]]\n"
     )
     target = action_to_parameters(reference_action(str(path)))

@@ -135,28 +135,22 @@ def test_the_packaged_start_gait_is_where_the_cpg_starts(tmp_path):
     )
     # a gait file of the user's, overridden entry by entry by cpg_initial
     path = tmp_path / "gait.yaml"
-    path.write_text("cpg_initial:\n  frequency: [1.2, 1.2]\n  amplitude: [0.3, 0.4]\n")
+    path.write_text(
+        "robot: hopper\nfitness: 1.0\nsteps: 0\nseed: 0\n"
+        "cpg_initial:\n  frequency: [1.2, 1.2]\n  amplitude: [0.3, 0.4]\n  convergence: 20.0\n"
+    )
     b = agent(start_gait=str(path), cpg_initial={"amplitude": [0.2, 0.25]})
     values = b.cpg.parametrisation.values()
     assert values["frequency"].tolist() == pytest.approx([1.2, 1.2])
     assert values["amplitude"].tolist() == pytest.approx([0.2, 0.25])
 
 
-@pytest.mark.parametrize(
-    ("text", "message"),
-    [
-        (None, "does not exist"),
-        ("cpg_initial: [1, 2]\n", "must hold CPG parameters"),
-        ("frequency: 1.0\namplitude: 0.3\nspeed: 2\n", "unknown CPG fields"),
-        ("frequency: [1.0\n", "not valid YAML"),
-    ],
-)
-def test_a_bad_gait_file_is_refused_with_one_clear_line(tmp_path, text, message):
-    path = tmp_path / "gait.yaml"
-    if text is not None:
-        path.write_text(text)
-    with pytest.raises(ValueError, match=message):
-        read_gait(path)
+def test_a_missing_or_bad_gait_file_is_refused_with_one_clear_line(tmp_path):
+    with pytest.raises(ValueError, match="does not exist .agent_config.start_gait"):
+        read_gait(tmp_path / "gait.yaml")
+    (tmp_path / "gait.yaml").write_text("robot: hopper\n")
+    with pytest.raises(ValueError, match="lacks fitness"):
+        read_gait(tmp_path / "gait.yaml")
 
 
 def test_cpg_actor_trains_with_its_tuned_defaults_and_cpg_actor_paper_as_the_paper():

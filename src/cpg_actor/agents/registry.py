@@ -53,7 +53,8 @@ class AgentSpec:
     robot's that the agent needs (``cho2019``: the CPG inside the env); an optional supervised
     warm start; ``defaults``, per robot (``TrainConfig.robot``), config values (a nested
     mapping, as a preset's) that the agent trains with unless the preset, a config file or the
-    command line say otherwise: its tuned settings (:func:`cpg_actor.config.compose_config`)."""
+    command line say otherwise: its tuned settings (:func:`cpg_actor.config.compose_config`);
+    ``trainer``, what trains it (PPO, or the open-loop search)."""
 
     name: str
     description: str
@@ -67,6 +68,9 @@ class AgentSpec:
     # the first PPO iteration of a new run (not on resume)
     warm_start: Callable[..., list[float]] | None = None
     defaults: dict[str, dict[str, Any]] = field(default_factory=dict)
+    # what trains it: "ppo" (cpg_actor.runner.Runner) or "es", the open-loop CMA-ES search
+    # (cpg_actor.es_runner.ESRunner)
+    trainer: str = "ppo"
 
     def make_env(
         self,
@@ -180,5 +184,16 @@ register_agent(
         wrapper=paper_cpg_parameter_wrapper,
         warm_start=warm_start_cho2019_paper,
         robots=("hopper",),
+    )
+)
+register_agent(
+    AgentSpec(
+        "open-loop-es",
+        "the open-loop CPG (no feedback) with its parameters V tuned by CMA-ES on the return: "
+        "the search baseline, and the gait other CPG agents can start from",
+        lambda config, env: build_cpg_actor(config, env, feedback=False),
+        trainer="es",
+        # inside the CPG-Actor's output bound, so that the gait it finds is a start it accepts
+        defaults={"hopper": {"agent_config": {"output_bound": True}}},
     )
 )

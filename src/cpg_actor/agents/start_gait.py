@@ -14,44 +14,19 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import yaml
+from cpg_actor.agents.gait_file import load_gait
 
-GAIT_FIELDS = (
-    "frequency",
-    "frequency_gain",
-    "amplitude",
-    "amplitude_gain",
-    "convergence",
-    "coupling_weight",
-    "phase_bias",
-)
 SEARCH = "search"  # the packaged gait found by the open-loop search for the robot
 
 
 def read_gait(path: str | Path) -> dict[str, Any]:
-    """The CPG parameters of a gait file (a mapping with ``cpg_initial``, or the fields
-    themselves); one clear ValueError for a missing or malformed file."""
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"gait file {path} does not exist (agent_config.start_gait)")
+    """The CPG parameters (``cpg_initial``) of a gait file or a search run's directory
+    (:func:`cpg_actor.agents.gait_file.load_gait`); one clear ValueError for a missing or
+    malformed file."""
     try:
-        data = yaml.safe_load(path.read_text())
-    except (yaml.YAMLError, UnicodeDecodeError) as error:
-        raise ValueError(f"gait file {path} is not valid YAML: {error}") from None
-    if isinstance(data, dict) and isinstance(data.get("cpg_initial"), dict):
-        data = data["cpg_initial"]
-    if not isinstance(data, dict) or not {"frequency", "amplitude"} <= set(data):
-        raise ValueError(
-            f"gait file {path} must hold CPG parameters (at least frequency and amplitude, "
-            f"under cpg_initial or at the top); accepted fields: {', '.join(GAIT_FIELDS)}"
-        )
-    unknown = set(data) - set(GAIT_FIELDS)
-    if unknown:
-        raise ValueError(
-            f"gait file {path}: unknown CPG fields {sorted(unknown)}; accepted: "
-            f"{', '.join(GAIT_FIELDS)}"
-        )
-    return dict(data)
+        return dict(load_gait(path)["cpg_initial"])
+    except FileNotFoundError as error:
+        raise ValueError(f"{error} (agent_config.start_gait)") from None
 
 
 def packaged_gait_path(robot_name: str) -> Path:

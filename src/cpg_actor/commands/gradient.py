@@ -121,9 +121,11 @@ def run(args: argparse.Namespace) -> int:
     policy, config = build_policy(args.run, args.seed)
     from cpg_actor.agents import get_agent_spec
 
-    env = TorchVectorEnv(get_agent_spec(config.agent).make_env(
-        args.envs, config.env, agent_config=config.agent_config
-    ))
+    env = TorchVectorEnv(
+        get_agent_spec(config.agent).make_env(
+            args.envs, config.env, agent_config=config.agent_config
+        )
+    )
     try:
         rollout = collect_rollout(policy, env, args.steps, args.seed, config.ppo.gamma)
     finally:

@@ -21,7 +21,10 @@ from cpg_actor.presets import PRESETS
 from cpg_actor.progress import evaluation_text, metrics_text
 from cpg_actor.run_lock import LOCK_NAME, RunLock
 
-HELP = "train an agent (cpg-actor, cpg-actor-paper, mlp, mlp-warm, cho2019-warm, ...) with PPO"
+HELP = (
+    "train an agent (cpg-actor, cpg-actor-paper, mlp, mlp-warm, cho2019-warm, ...) with PPO, "
+    "or search one (open-loop-es: CMA-ES)"
+)
 
 DEFAULT_RUN_DIR = "runs/{agent}_{sim}_seed{seed}"
 
@@ -185,8 +188,18 @@ def _lock(run_dir: Path, locks: list[RunLock]) -> None:
     locks.append(RunLock(run_dir).acquire())
 
 
+def _searches(config: TrainConfig) -> bool:
+    """The agent is trained by the open-loop search (``AgentSpec.trainer == "es"``)."""
+    from cpg_actor.agents import get_agent_spec
+
+    return get_agent_spec(config.agent).trainer == "es"
+
+
 def _runner(config: TrainConfig, run_dir: Path, args: argparse.Namespace):
-    from cpg_actor.runner import Runner
+    if _searches(config):
+        from cpg_actor.es_runner import ESRunner as Runner
+    else:
+        from cpg_actor.runner import Runner
 
     return Runner(
         config, run_dir, progress=not args.no_progress, progress_interval=args.progress_interval
@@ -235,7 +248,13 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         except (ValueError, FileNotFoundError):
             runner.close()
             raise
-        if runner.iteration >= config.num_iterations:
+        if _searches(config) and runner.finished:
+            runner.close()
+            if runner.stop_reason:  # a search that has ended: nothing to continue, no error
+                print(_search_finished_text(runner))
+                return 0
+            raise ValueError(_search_finished_text(runner))
+        if not _searches(config) and runner.iteration >= config.num_iterations:
             runner.close()
             raise ValueError(
                 f"the run is already at iteration {runner.iteration} "
@@ -260,18 +279,21 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
             runner.close()
             raise
         config.save(run_dir / "config.yaml")
-        planned = config.num_iterations * config.steps_per_iteration
-        if planned != config.total_steps:
+        if _searches(config):
+            print(_search_start_text(runner, run_dir, args))
+        else:
+            planned = config.num_iterations * config.steps_per_iteration
+            if planned != config.total_steps:
+                print(
+                    f"note: {config.total_steps:,} steps is not a whole number of iterations "
+                    f"of {config.steps_per_iteration:,}; training {planned:,}"
+                )
             print(
-                f"note: {config.total_steps:,} steps is not a whole number of iterations of "
-                f"{config.steps_per_iteration:,}; training {planned:,}"
+                f"training {config.agent} ({config.preset} preset) on {simulator(config)} for "
+                f"{config.total_steps:,} steps "
+                f"({config.num_iterations} iterations of {config.steps_per_iteration} steps), "
+                f"run directory {run_dir}"
             )
-        print(
-            f"training {config.agent} ({config.preset} preset) on {simulator(config)} for "
-            f"{config.total_steps:,} steps "
-            f"({config.num_iterations} iterations of {config.steps_per_iteration} steps), "
-            f"run directory {run_dir}"
-        )
     try:
         runner.learn()
     except TrainingDiverged as error:
@@ -286,6 +308,9 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         return 130
     finally:
         runner.close()
+    if _searches(config):
+        print(_search_done_text(runner))
+        return 0
     row = getattr(runner, "last_row", {})
     nan = float("nan")
     evaluation = getattr(runner, "last_evaluation", None)
@@ -306,6 +331,52 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         f"{training}{evaluated}; checkpoint {runner.last_checkpoint_path()}"
     )
     return 0
+
+
+def _search_start_text(runner, run_dir: Path, args: argparse.Namespace) -> str:
+    """What a new open-loop search will do (cpg_actor.es_runner)."""
+    config, es = runner.config, runner.config.es
+    lines = []
+    if args.num_envs is not None:
+        lines.append(
+            f"note: --num-envs is not used by the search; it runs es.popsize x es.episodes = "
+            f"{es.popsize * es.episodes} envs"
+        )
+    if runner.planned_steps != config.total_steps:
+        lines.append(
+            f"note: {config.total_steps:,} steps is not a whole number of generations of "
+            f"{runner.generation_steps:,}; searching {runner.planned_steps:,} (a search never "
+            "exceeds its budget)"
+        )
+    lines.append(
+        f"searching {config.agent} (CMA-ES, sigma0 {es.sigma0:g}) on {simulator(config)} for "
+        f"{runner.planned_steps:,} steps ({runner.num_generations} generations of {es.popsize} "
+        f"candidates x {es.episodes} episode{'s' if es.episodes > 1 else ''}, "
+        f"{runner.generation_steps:,} steps), run directory {run_dir}"
+    )
+    return "\n".join(lines)
+
+
+def _search_finished_text(runner) -> str:
+    where = f"generation {runner.iteration} ({runner.global_step:,} steps)"
+    if runner.stop_reason:
+        return (
+            f"the search ended at {where}: CMA-ES stopped ({runner.stop_reason}); nothing to "
+            "continue (start a new run to search again)"
+        )
+    return f"the search is already at {where}; pass a larger --total-steps to continue"
+
+
+def _search_done_text(runner) -> str:
+    evaluation = runner.last_evaluation
+    evaluated = f"; deterministic {evaluation_text(evaluation)}" if evaluation else ""
+    stopped = f" (CMA-ES stopped: {runner.stop_reason})" if runner.stop_reason else ""
+    return (
+        f"done: {runner.global_step:,} steps in {runner.train_wall:.0f} s of search, "
+        f"{runner.iteration} generations{stopped}; best return "
+        f"{runner.search.best_fitness:.3f} (generation {runner.search.best_generation})"
+        f"{evaluated}; gait {runner.gait_path()}; checkpoint {runner.last_checkpoint_path()}"
+    )
 
 
 def _resume_config(run_dir: Path) -> tuple[Path, TrainConfig]:

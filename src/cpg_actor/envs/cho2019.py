@@ -155,9 +155,9 @@ class CPGParameterVectorEnv(VectorEnv):
         # The hopper preset supplies a, w, the topology and the initial phases (``cpg_initial``
         # overrides them: a start gait's a and w); its trainable vector is never used for
         # gradients here.
-        self.cpg = hopper_cpg(
-            self.config.control_dt, initial=cpg_initial, dtype=torch.float64
-        ).to(self.device)
+        self.cpg = hopper_cpg(self.config.control_dt, initial=cpg_initial, dtype=torch.float64).to(
+            self.device
+        )
         values = self.cpg.parametrisation.values()
         self._convergence = values["convergence"].detach()
         self._coupling_weight = values["coupling_weight"].detach()

@@ -159,10 +159,30 @@ def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
     return without_compile_if_no_compiler(config)
 
 
+def searches(config) -> bool:
+    """The run's agent is trained by the open-loop search (``open-loop-es``), not PPO."""
+    from cpg_actor.agents import get_agent_spec
+
+    return get_agent_spec(config.agent).trainer == "es"
+
+
+def planned_iterations(config) -> tuple[int, int]:
+    """``(iterations, steps per iteration)`` of a run: PPO's, or the generations of the
+    open-loop search and a generation's most steps (a search never exceeds its budget)."""
+    if searches(config):
+        from cpg_actor.agents.open_loop_es import generation_steps, num_generations
+
+        return num_generations(config), generation_steps(config)
+    return config.num_iterations, config.steps_per_iteration
+
+
 def checkpoint_interval(config) -> int:
     """Iterations between checkpoints: about ``TARGET_CHECKPOINTS`` per run, but at least two
     episodes per environment between checkpoints (so that the evaluation stages are policies
-    that differ by some training; the checkpoints themselves change nothing that is trained)."""
+    that differ by some training; the checkpoints themselves change nothing that is trained).
+    A search generation runs whole episodes: about ``TARGET_CHECKPOINTS`` of them."""
+    if searches(config):
+        return max(1, planned_iterations(config)[0] // TARGET_CHECKPOINTS)
     episode_steps = int(getattr(config.env, "episode_steps", 500))
     at_least = math.ceil(2 * episode_steps / config.ppo.num_steps)
     return max(1, at_least, config.num_iterations // TARGET_CHECKPOINTS)
@@ -204,6 +224,7 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
     tasks = []
     for variant in settings.variants:
         config = resolve_config(settings, variant)  # raises on unknown keys / bad values
+        iterations, steps_per_iteration = planned_iterations(config)
         extra: list[str] = []
         if "checkpoint_interval" not in keys:
             extra += ["--set", f"checkpoint_interval={checkpoint_interval(config)}"]
@@ -232,8 +253,8 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
                     run_dir=str(run_dir),
                     log_path=str(out / "logs" / f"{variant}_seed{seed}.log"),
                     total_steps=settings.total_steps,
-                    num_iterations=config.num_iterations,
-                    planned_steps=config.num_iterations * config.steps_per_iteration,
+                    num_iterations=iterations,
+                    planned_steps=iterations * steps_per_iteration,
                     train_args=tuple(args),
                     stage_fractions=tuple(settings.stage_fractions),
                     eval_episodes=settings.eval_episodes,

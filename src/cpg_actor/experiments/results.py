@@ -26,7 +26,7 @@ LABELS = {
     "cpg-actor-bptt32": "CPG-Actor (32-step gradient)",
     "cpg-actor-feedback-noise": "CPG-Actor (feedback noise)",
     "cpg-actor-paper": "CPG-Actor (paper's form)",
-    "open-loop-es": "open-loop CPG (black-box search)",
+    "open-loop-es": "open-loop CPG (CMA-ES)",
     "mlp-warm": "MLP actor (warm)",
 }
 # the paper's colours: CPG-Actor green, open loop orange, Cho et al. warm red, cold blue

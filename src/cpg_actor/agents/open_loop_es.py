@@ -1,0 +1,367 @@
+"""The open-loop search baseline (agent ``open-loop-es``): the open-loop CPG-Actor's vector V
+tuned by CMA-ES on the env's return, with no gradient and no feedback.
+
+What is searched: V itself (:attr:`cpg_actor.cpg.parametrisation.Parametrisation.vector`,
+paper eq. 3), in V's own coordinates, so whatever transform the parametrisation applies
+(exp for nu, rho and a, a bounded map, ties) keeps every candidate a valid CPG. The search
+starts at the robot's CPG preset (with ``agent_config.cpg_initial``) and a step size
+``es.sigma0`` in V units.
+
+Fitness: each candidate drives ``es.episodes`` full episodes with the CPG's output as the
+desired joint positions (the mean action, no noise); its fitness is the mean undiscounted
+episode return (eq. 4's reward as the env pays it). Every candidate of a generation meets the
+same ``es.episodes`` reset seeds (common random numbers, derived from the run seed and the
+generation), so they are ranked on the same starts. The ``popsize x episodes`` episodes of a
+generation run in one vector env of as many sub-envs, every candidate's CPG stepped in one
+batched call (``torch.func.vmap`` over V of the agent's own control step).
+
+Budget: every env step the search takes counts toward ``total_steps``: a generation costs
+``sub-envs x control steps`` until its last episode ended (``popsize x episodes x
+episode_steps`` when one runs to the time limit, the hopper's case). A run makes ``total_steps //
+(popsize x episodes x episode_steps)`` generations, so it never exceeds ``total_steps``.
+
+CMA-ES (Hansen and Ostermeier 2001, with the defaults of Hansen's ``cma`` package, which runs
+it here) minimises ``-fitness``; its random numbers come from a generator of its own
+(:class:`NormalSource`, seeded from the run seed), kept with the rest of its state, so a
+search continued from a saved state draws exactly what the uninterrupted one would.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import pickle
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+import numpy as np
+import torch
+from torch import Tensor, nn
+
+ES_EPISODE_SEED_KEY = 2**31 + 2  # SeedSequence([seed, this, generation]): reset seeds
+ES_SEARCH_SEED_KEY = 2**31 + 3  # SeedSequence([seed, this]): CMA-ES's normal draws
+
+
+@dataclass
+class ESConfig:
+    """The open-loop CMA-ES search (agent ``open-loop-es``; other agents ignore it)."""
+
+    # CMA-ES's initial step size, in units of V: log units for nu, rho and a (0.2: about 20 %
+    # either way), rad for phase biases, plain units for coupling weights
+    sigma0: float = 0.2
+    # candidates per generation (CMA-ES's lambda); each runs its episodes in envs of its own
+    popsize: int = 16
+    # episodes per candidate; its fitness is their mean undiscounted return
+    episodes: int = 1
+
+    def validate(self) -> None:
+        """ValueError with one line per bad value."""
+        problems = []
+        sigma0 = self.sigma0
+        if (
+            isinstance(sigma0, bool)
+            or not isinstance(sigma0, (int, float))
+            or not (math.isfinite(sigma0) and sigma0 > 0)
+        ):
+            problems.append(f"es.sigma0 must be a finite number > 0 (in V units), got {sigma0!r}")
+        for name, least in (("popsize", 2), ("episodes", 1)):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < least:
+                problems.append(f"es.{name} must be an integer >= {least}, got {value!r}")
+        if problems:
+            raise ValueError("\n".join(problems))
+
+
+# -- the budget -----------------------------------------------------------------------------
+def episode_steps(env_config: Any) -> int:
+    """The longest episode of the robot's env, in control steps (the runner's default when
+    the config names none)."""
+    return int(getattr(env_config, "episode_steps", 10_000))
+
+
+def generation_steps(config: Any) -> int:
+    """The most env steps one generation can take: ``popsize x episodes x episode_steps``."""
+    return config.es.popsize * config.es.episodes * episode_steps(config.env)
+
+
+def num_generations(config: Any) -> int:
+    """The generations a run of ``config.total_steps`` makes (module docstring, Budget);
+    ValueError if not even one fits."""
+    per_generation = generation_steps(config)
+    count = config.total_steps // per_generation
+    if count < 1:
+        raise ValueError(
+            f"total_steps {config.total_steps:,} is less than one generation of the open-loop "
+            f"search: es.popsize {config.es.popsize} x es.episodes {config.es.episodes} x "
+            f"env.episode_steps {episode_steps(config.env)} = {per_generation:,} steps"
+        )
+    return count
+
+
+def episode_seeds(seed: int, generation: int, episodes: int) -> list[int]:
+    """The reset seeds of generation ``generation`` (0-based), one per episode, shared by
+    every candidate of the generation."""
+    state = np.random.SeedSequence([seed, ES_EPISODE_SEED_KEY, generation]).generate_state(episodes)
+    return [int(s) for s in state]
+
+
+# -- CMA-ES -----------------------------------------------------------------------------------
+class NormalSource:
+    """Standard normal draws for CMA-ES (its ``randn`` option, called ``randn(*shape)`` as
+    ``np.random.randn``) from a generator of its own: the global numpy generator is left
+    alone, and the state is pickled with the search's."""
+
+    def __init__(self, seed: int) -> None:
+        self.generator = np.random.RandomState(seed)
+
+    def __call__(self, *shape: int) -> np.ndarray:
+        return self.generator.standard_normal(shape)
+
+
+# What a pickled cma.CMAEvolutionStrategy is made of besides cma's own classes (numpy 2 and 1)
+_STATE_GLOBALS = {
+    *(("builtins", name) for name in ("range", "slice", "set", "frozenset", "complex")),
+    ("numpy", "dtype"),
+    ("numpy", "ndarray"),
+    ("numpy.linalg", "eigh"),
+    ("numpy.random._mt19937", "MT19937"),
+    ("numpy.random._pickle", "__bit_generator_ctor"),
+    ("numpy.random._pickle", "__randomstate_ctor"),
+    *((f"numpy.{core}.multiarray", name)
+      for core in ("_core", "core") for name in ("_reconstruct", "scalar")),
+    *((f"numpy.{core}.numeric", "_frombuffer") for core in ("_core", "core")),
+}  # fmt: skip
+_CMA_FUNCTIONS = {"is_feasible", "_pass"}  # functions cma keeps in its state's attributes
+
+
+PICKLE_PROTOCOL = 4  # fixed, not the running Python's highest
+
+
+class _SearchUnpickler(pickle.Unpickler):
+    """Reads back a pickled search state admitting only what CMA-ES's state is made of:
+    cma's classes (and the two functions it stores), numpy's array and random-generator
+    reconstructors, a few plain builtins and :class:`NormalSource`: a checkpoint cannot name
+    other code to run (``torch.load`` reads the rest with ``weights_only``)."""
+
+    def find_class(self, module: str, name: str) -> Any:
+        if (module, name) in _STATE_GLOBALS or (module, name) == (__name__, "NormalSource"):
+            return super().find_class(module, name)
+        if module == "cma" or module.startswith("cma."):
+            found = super().find_class(module, name)
+            if isinstance(found, type) or name in _CMA_FUNCTIONS:
+                return found
+        raise pickle.UnpicklingError(
+            f"the saved search state refers to {module}.{name}, which is not part of a CMA-ES state"
+        )
+
+
+class CMASearch:
+    """CMA-ES maximising a fitness over V (``cma.CMAEvolutionStrategy``, which minimises: it
+    is told ``-fitness``), and the best candidate evaluated so far.
+
+    ``ask() -> X (popsize, M)``, evaluate, ``tell(X, fitness)``. Non-finite fitness values
+    (a simulation blow-up) rank below every finite one. The search ends early when CMA-ES
+    reports that it has converged (:attr:`stop_reason`); the generation and evaluation limits
+    of ``cma`` are lifted, the budget is the caller's.
+    """
+
+    def __init__(self, x0: np.ndarray, sigma0: float, popsize: int, seed: int) -> None:
+        import cma
+
+        options = {
+            "popsize": int(popsize),
+            "randn": NormalSource(seed),
+            "seed": float("nan"),  # cma must not seed (or draw from) numpy's global generator
+            "maxiter": math.inf,
+            "maxfevals": math.inf,
+            "verbose": -9,
+            "verb_disp": 0,
+            "verb_log": 0,
+            "signals_filename": "",  # no option changes read from a file in the working dir
+        }
+        self.es = cma.CMAEvolutionStrategy(np.asarray(x0, dtype=np.float64), sigma0, options)
+        self.generation = 0
+        self.best_fitness = -math.inf
+        self.best_x: np.ndarray | None = None
+        self.best_generation = 0  # 1-based: the generation that evaluated best_x (0: none)
+
+    @property
+    def sigma(self) -> float:
+        return float(self.es.sigma)
+
+    @property
+    def mean(self) -> np.ndarray:
+        """The search distribution's mean."""
+        return np.array(self.es.mean, dtype=np.float64)
+
+    @property
+    def stop_reason(self) -> str:
+        """Why CMA-ES stopped (its termination criteria), empty while it goes on."""
+        if self.generation == 0:
+            return ""
+        stop = self.es.stop()
+        return ", ".join(f"{key}={value}" for key, value in stop.items())
+
+    def ask(self) -> np.ndarray:
+        return np.stack(self.es.ask())
+
+    def tell(self, candidates: np.ndarray, fitness: np.ndarray) -> None:
+        fitness = np.asarray(fitness, dtype=np.float64)
+        finite = np.isfinite(fitness)
+        ranked = fitness.copy()
+        if not finite.all():  # below every finite value
+            floor = fitness[finite].min() if finite.any() else 0.0
+            ranked[~finite] = floor - 1.0 - abs(floor)
+        self.es.tell(list(candidates), (-ranked).tolist())
+        self.generation += 1
+        best = int(np.argmax(ranked))
+        if finite[best] and fitness[best] > self.best_fitness:
+            self.best_fitness = float(fitness[best])
+            self.best_x = np.array(candidates[best], dtype=np.float64)
+            self.best_generation = self.generation
+
+    # -- state -------------------------------------------------------------------------------
+    def state_dict(self) -> dict[str, Any]:
+        """Tensors and plain values (``torch.load(weights_only=True)`` reads them): the
+        pickled CMA-ES object as bytes (uint8), the best candidate and the counters."""
+        blob = pickle.dumps(self.es, protocol=PICKLE_PROTOCOL)
+        return {
+            "cma": torch.frombuffer(bytearray(blob), dtype=torch.uint8),
+            "generation": self.generation,
+            "best_fitness": self.best_fitness,
+            "best_x": None if self.best_x is None else torch.from_numpy(self.best_x.copy()),
+            "best_generation": self.best_generation,
+        }
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        try:
+            es = _SearchUnpickler(io.BytesIO(state["cma"].numpy().tobytes())).load()
+        except (pickle.UnpicklingError, AttributeError, ImportError, EOFError) as error:
+            raise ValueError(f"the saved CMA-ES state cannot be read: {error}") from None
+        if len(es.mean) != len(self.es.mean):
+            raise ValueError(
+                f"the saved CMA-ES state searches {len(es.mean)} parameters, this agent's V "
+                f"has {len(self.es.mean)}"
+            )
+        self.es = es
+        self.generation = int(state["generation"])
+        self.best_fitness = float(state["best_fitness"])
+        best = state["best_x"]
+        self.best_x = None if best is None else best.numpy().astype(np.float64)
+        self.best_generation = int(state["best_generation"])
+
+
+# -- evaluating candidates ---------------------------------------------------------------------
+class Rollouts(NamedTuple):
+    """The episodes of one generation, ``(popsize, episodes)`` each."""
+
+    returns: np.ndarray  # undiscounted episode returns, float64
+    lengths: np.ndarray  # control steps of each episode
+    metrics: dict[str, np.ndarray]  # the env's episode metrics (hop_height), NaN if none
+    reward_terms: dict[str, np.ndarray]  # each reward term summed over the episode
+    env_steps: int  # every env step taken: sub-envs x control steps
+
+    @property
+    def fitness(self) -> np.ndarray:
+        """Per candidate: the mean return of its episodes."""
+        return self.returns.mean(axis=1)
+
+
+class _ControlStep(nn.Module):
+    """The agent's deterministic control step without clipping: ``(obs, state) -> (mean
+    action, next state)``, as :class:`cpg_actor.policy.Policy` takes it (the open-loop CPG
+    ignores the observation but for the drive, which :meth:`observe` reads raw)."""
+
+    def __init__(self, agent: nn.Module) -> None:
+        super().__init__()
+        self.agent = agent
+
+    def forward(self, obs: Tensor, state: Tensor) -> tuple[Tensor, Tensor]:
+        state = self.agent.observe(obs, state)
+        out = self.agent.actor(obs, state)
+        return out.mean, out.next_state
+
+
+class CandidateRollouts:
+    """Runs ``popsize`` candidate vectors V for ``episodes`` episodes each, all at once, on a
+    vector env of ``popsize x episodes`` sub-envs (candidate-major: sub-env ``c * episodes +
+    e`` is candidate c's episode e).
+
+    ``agent`` is an open-loop :class:`cpg_actor.agents.CPGActorAgent`; its own control step
+    runs under ``torch.func.vmap`` over V (with ``functional_call``), so each candidate
+    acts exactly as the agent would with that V. ``env`` is a
+    :class:`cpg_actor.envs.torch_env.TorchVectorEnv`. Episodes end at the env's
+    termination or truncation, or after ``max_steps`` control steps.
+    """
+
+    def __init__(self, agent: nn.Module, env: Any, episodes: int, max_steps: int) -> None:
+        self.agent = agent
+        self.env = env
+        self.episodes = episodes
+        self.max_steps = max_steps
+        step = _ControlStep(agent)
+        vector = agent.cpg.parametrisation.vector
+        (name,) = [key for key, value in step.named_parameters() if value is vector]
+
+        def one(v: Tensor, obs: Tensor, state: Tensor) -> tuple[Tensor, Tensor]:
+            return torch.func.functional_call(step, {name: v}, (obs, state))
+
+        self._step = torch.func.vmap(one)
+        space = env.single_action_space
+        device = vector.device
+        self.low = torch.as_tensor(np.asarray(space.low, dtype=np.float32), device=device)
+        self.high = torch.as_tensor(np.asarray(space.high, dtype=np.float32), device=device)
+
+    @torch.no_grad()
+    def run(self, vectors: Tensor, seeds: list[int]) -> Rollouts:
+        """``vectors`` ``(popsize, M)`` (V's dtype and device); ``seeds``: one reset seed per
+        episode index, shared by every candidate."""
+        popsize, episodes = vectors.shape[0], self.episodes
+        count = popsize * episodes
+        if count != self.env.num_envs or len(seeds) != episodes:
+            raise ValueError(
+                f"{popsize} candidates x {episodes} episodes need {count} envs and {episodes} "
+                f"seeds; the env has {self.env.num_envs}, got {len(seeds)} seeds"
+            )
+        obs, _ = self.env.reset(seed=[int(s) for _ in range(popsize) for s in seeds])
+        state = self.agent.initial_state(count)
+        shape = tuple(state.shape[1:])
+        device = obs.device
+        returns = torch.zeros(count, dtype=torch.float64, device=device)
+        lengths = torch.zeros(count, dtype=torch.int64, device=device)
+        active = torch.ones(count, dtype=torch.bool, device=device)
+        metrics: dict[str, Tensor] = {}
+        terms: dict[str, Tensor] = {}
+        steps = 0
+        for _ in range(self.max_steps):
+            grouped = (obs.reshape(popsize, episodes, -1), state.reshape(popsize, episodes, *shape))
+            mean, state = self._step(vectors, *grouped)
+            mean, state = mean.reshape(count, -1), state.reshape(count, *shape)
+            action = torch.minimum(torch.maximum(mean, self.low), self.high)
+            out = self.env.step(action)
+            steps += 1
+            reward = out.reward.to(torch.float64)
+            returns += torch.where(active, reward, torch.zeros_like(reward))
+            lengths += active.to(torch.int64)
+            for key, value in out.reward_terms.items():
+                total = terms.setdefault(key, torch.zeros_like(returns))
+                total += torch.where(active, value.to(torch.float64), torch.zeros_like(total))
+            ended = active & (out.terminated | out.truncated)
+            for key, value in out.episode_metrics.items():
+                metric = metrics.setdefault(key, torch.full_like(returns, math.nan))
+                metric[ended] = value.to(torch.float64)[ended]
+            active &= ~ended
+            obs = out.obs
+            if not bool(active.any()):
+                break
+
+        def table(values: Tensor) -> np.ndarray:
+            return values.cpu().numpy().reshape(popsize, episodes)
+
+        return Rollouts(
+            returns=table(returns),
+            lengths=table(lengths),
+            metrics={key: table(value) for key, value in metrics.items()},
+            reward_terms={key: table(value) for key, value in terms.items()},
+            env_steps=steps * count,
+        )
