@@ -40,6 +40,11 @@ class TrainConfig:
     seed: int = 0
     num_envs: int = 16  # x ppo.num_steps = 2,048 samples per update, as Baselines' ppo2
     total_steps: int = 500_000  # the quick start
+    # env steps spent before this run finding its start (the start gait's search, see
+    # agent_config.start_gait), counted in total_steps: the run trains total_steps -
+    # search_steps and its step counter starts at search_steps (cpg-actor reproduce
+    # --count-search-steps sets it); 0: the run's own steps only
+    search_steps: int = 0
     checkpoint_interval: int = 50  # iterations between checkpoints (and one at the end)
     # deterministic evaluation during training: every eval_interval iterations (0: never),
     # one episode on each of eval_episodes envs of its own (cpg_actor.evaluation)
@@ -66,7 +71,7 @@ class TrainConfig:
 
     @property
     def num_iterations(self) -> int:
-        return max(1, math.ceil(self.total_steps / self.steps_per_iteration))
+        return max(1, math.ceil((self.total_steps - self.search_steps) / self.steps_per_iteration))
 
     def validate(self) -> None:
         from cpg_actor.agents import get_agent_spec
@@ -99,6 +104,14 @@ class TrainConfig:
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
                 raise ValueError(f"{name} must be a positive integer, got {value!r}")
+        steps = self.search_steps
+        if isinstance(steps, bool) or not isinstance(steps, int) or not 0 <= steps:
+            raise ValueError(f"search_steps must be an integer >= 0, got {steps!r}")
+        if steps >= self.total_steps:
+            raise ValueError(
+                f"search_steps ({steps:,}) must be below total_steps ({self.total_steps:,}): "
+                "the start gait's search would use the whole budget"
+            )
         if not isinstance(self.seed, int) or self.seed < 0:
             raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
         threads = self.update_threads

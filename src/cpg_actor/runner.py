@@ -167,7 +167,8 @@ class Runner:
             self.device,
         )
         self.iteration = 0
-        self.global_step = 0
+        # env steps so far; a run that counts its start gait's search begins at its steps
+        self.global_step = config.search_steps
         self.train_wall = 0.0  # seconds of collection + update, over the whole run
         self.env_seed: int | None = None
         self.episodes = EpisodeLog(config.num_envs)
@@ -450,7 +451,7 @@ class Runner:
     def _make_progress(self, num_iterations: int):
         if not self.show_progress:
             return None
-        total = num_iterations * self.config.steps_per_iteration
+        total = self.config.search_steps + num_iterations * self.config.steps_per_iteration
         progress, self._task = make_progress(
             self.config.agent,
             total,

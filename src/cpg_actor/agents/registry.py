@@ -68,6 +68,9 @@ class AgentSpec:
     # the first PPO iteration of a new run (not on resume)
     warm_start: Callable[..., list[float]] | None = None
     defaults: dict[str, dict[str, Any]] = field(default_factory=dict)
+    # it starts from agent_config.start_gait where one is set (the CPG agents, cho2019-warm,
+    # mlp-warm): a comparison that counts the gait's search charges it its steps
+    uses_start_gait: bool = False
     # what trains it: "ppo" (cpg_actor.runner.Runner) or "es", the open-loop CMA-ES search
     # (cpg_actor.es_runner.ESRunner)
     trainer: str = "ppo"
@@ -128,6 +131,7 @@ register_agent(
         build_mlp,
         warm_start=warm_start_mlp,
         defaults={"hopper": {"agent_config": {"start_gait": "search"}}},
+        uses_start_gait=True,
     )
 )
 register_agent(
@@ -138,6 +142,7 @@ register_agent(
         "range)",
         build_cpg_actor,
         defaults={"hopper": CPG_ACTOR_DEFAULTS},
+        uses_start_gait=True,
     )
 )
 register_agent(
@@ -146,6 +151,7 @@ register_agent(
         "the CPG-Actor exactly as the paper: the preset's start, Gaussian noise on the "
         "joint positions, the one-step gradient",
         build_cpg_actor,
+        uses_start_gait=True,
     )
 )
 register_agent(
@@ -153,6 +159,7 @@ register_agent(
         "cpg-actor-open-loop",
         "CPG-Actor without feedback (xi = kappa = 0): only the CPG parameters are trained",
         lambda config, env: build_cpg_actor(config, env, feedback=False),
+        uses_start_gait=True,
     )
 )
 register_agent(
@@ -162,6 +169,7 @@ register_agent(
         build_cho2019,
         wrapper=cpg_parameter_wrapper,
         robots=("hopper",),
+        uses_start_gait=True,
     )
 )
 register_agent(
@@ -173,6 +181,7 @@ register_agent(
         warm_start=warm_start_cho2019,
         robots=("hopper",),
         defaults={"hopper": {"agent_config": {"start_gait": "search"}}},
+        uses_start_gait=True,
     )
 )
 register_agent(

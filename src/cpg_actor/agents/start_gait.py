@@ -51,6 +51,25 @@ def start_parameters(start_gait: str, robot_name: str) -> dict[str, Any]:
     return read_gait(start_gait)
 
 
+def search_steps(start_gait: str, robot: str) -> int:
+    """The env steps the search behind ``start_gait`` took (the gait file's
+    ``steps_searched``, else ``steps``), for robot ``robot`` (``TrainConfig.robot``); 0 for
+    the preset. What ``TrainConfig.search_steps`` counts when a comparison charges a start's
+    search to the agents that use it."""
+    if not start_gait:
+        return 0
+    from cpg_actor.envs.robots import robot_env
+
+    path = start_gait
+    if start_gait == SEARCH:
+        path = packaged_gait_path(robot_env(robot).spec_name)
+    try:
+        gait = load_gait(path)
+    except FileNotFoundError as error:
+        raise ValueError(f"{error} (agent_config.start_gait)") from None
+    return int(gait.get("steps_searched", gait["steps"]))
+
+
 def hopper_gait_parameters(gait: dict[str, Any]) -> tuple[float, float, float, float, float]:
     """``(nu_HFE, nu_KFE, rho_HFE, rho_KFE, phi_HFE,KFE)`` of a hopper gait: what the Cho et
     al. baseline's actions set."""

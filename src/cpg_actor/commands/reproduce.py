@@ -49,6 +49,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         parser, "training config override for every run (repeatable), as in `cpg-actor train`"
     )
     parser.add_argument(
+        "--count-search-steps",
+        action="store_true",
+        help="charge the runs that start from a searched gait (cpg-actor, cho2019-warm, "
+        "mlp-warm) with the search's env steps: they train --total-steps minus them",
+    )
+    parser.add_argument(
         "--eval-episodes", type=int, default=5, help="episodes per stage evaluation (default 5)"
     )
     parser.add_argument(
@@ -95,6 +101,7 @@ def run(args: argparse.Namespace) -> int:
         overrides=list(args.overrides),
         eval_episodes=args.eval_episodes,
         first_seed=args.first_seed,
+        count_search_steps=getattr(args, "count_search_steps", False),
     )
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     if workers < 1:
@@ -185,6 +192,8 @@ def _as_argv(args: argparse.Namespace) -> list[str]:
         argv += ["--preset", args.preset]
     if getattr(args, "gpus_per_run", 0):
         argv += ["--gpus-per-run", str(args.gpus_per_run)]
+    if getattr(args, "count_search_steps", False):
+        argv.append("--count-search-steps")
     for text in args.overrides:
         argv += ["--set", text]
     return argv

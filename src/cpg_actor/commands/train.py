@@ -282,17 +282,22 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         if _searches(config):
             print(_search_start_text(runner, run_dir, args))
         else:
-            planned = config.num_iterations * config.steps_per_iteration
+            planned = config.search_steps + config.num_iterations * config.steps_per_iteration
             if planned != config.total_steps:
                 print(
                     f"note: {config.total_steps:,} steps is not a whole number of iterations "
                     f"of {config.steps_per_iteration:,}; training {planned:,}"
                 )
+            searched = (
+                f", the first {config.search_steps:,} spent by the search for its start gait"
+                if config.search_steps
+                else ""
+            )
             print(
                 f"training {config.agent} ({config.preset} preset) on {simulator(config)} for "
                 f"{config.total_steps:,} steps "
-                f"({config.num_iterations} iterations of {config.steps_per_iteration} steps), "
-                f"run directory {run_dir}"
+                f"({config.num_iterations} iterations of {config.steps_per_iteration} steps"
+                f"{searched}), run directory {run_dir}"
             )
     try:
         runner.learn()

@@ -17,6 +17,7 @@ from typing import Any
 class RobotEnv:
     config_class: Callable[[], Any]  # the env config dataclass (with from_dict)
     make: Callable[..., Any]  # (num_envs, config, num_threads) -> vector env
+    spec_name: str  # the name of its RobotSpec (the CPG presets' and start gaits' key)
 
 
 def _hopper() -> RobotEnv:
@@ -25,7 +26,7 @@ def _hopper() -> RobotEnv:
     def make(num_envs: int, config: Any, num_threads: int | None = None) -> Any:
         return make_vector_env(num_envs, config=config, num_threads=num_threads)
 
-    return RobotEnv(HopperConfig, make)
+    return RobotEnv(HopperConfig, make, "anymal-hopper")
 
 
 def _anymal() -> RobotEnv:
@@ -39,7 +40,7 @@ def _anymal() -> RobotEnv:
             return MjxAnymalVectorEnv(num_envs, config, num_threads)
         return AnymalVectorEnv(num_envs, config, num_threads)
 
-    return RobotEnv(QuadrupedConfig, make)
+    return RobotEnv(QuadrupedConfig, make, "anymal-b")
 
 
 ROBOTS: dict[str, Callable[[], RobotEnv]] = {"hopper": _hopper, "anymal": _anymal}

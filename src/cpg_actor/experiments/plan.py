@@ -80,6 +80,9 @@ class ReproduceSettings:
     # seeds first_seed .. first_seed + seeds - 1: tuning on seeds that are never reported
     first_seed: int = 0
     preset: str | None = None  # cpg-actor train --preset (None: the default, paper)
+    # charge each run that starts from a searched gait (agent_config.start_gait) with the
+    # search's env steps (TrainConfig.search_steps): it trains total_steps minus them
+    count_search_steps: bool = False
 
     @property
     def seed_range(self) -> range:
@@ -92,6 +95,8 @@ class ReproduceSettings:
             identity["first_seed"] = self.first_seed
         if self.preset is not None:  # likewise absent unless given
             identity["preset"] = self.preset
+        if self.count_search_steps:
+            identity["count_search_steps"] = True
         return identity
 
 
@@ -142,6 +147,7 @@ def _override_keys(overrides: list[str]) -> set[str]:
 
 def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
     """The :class:`TrainConfig` ``cpg-actor train`` will build for one run (validates it)."""
+    from cpg_actor.agents.start_gait import search_steps
     from cpg_actor.commands.train import without_compile_if_no_compiler
     from cpg_actor.config import compose_config
 
@@ -151,11 +157,15 @@ def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
         values["num_envs"] = settings.num_envs
     if settings.sim is not None:
         values["env"] = {"sim": settings.sim}
-    config = compose_config(
-        preset=settings.preset,
-        values=values,
-        overrides=[*variant_overrides, *settings.overrides],
-    )
+    overrides = [*variant_overrides, *settings.overrides]
+    config = compose_config(preset=settings.preset, values=values, overrides=overrides)
+    from cpg_actor.agents import get_agent_spec
+
+    if settings.count_search_steps and get_agent_spec(config.agent).uses_start_gait:
+        steps = search_steps(config.agent_config.start_gait, config.robot)
+        if steps:
+            values["search_steps"] = steps
+            config = compose_config(preset=settings.preset, values=values, overrides=overrides)
     return without_compile_if_no_compiler(config)
 
 
@@ -226,6 +236,8 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
         config = resolve_config(settings, variant)  # raises on unknown keys / bad values
         iterations, steps_per_iteration = planned_iterations(config)
         extra: list[str] = []
+        if config.search_steps:
+            extra += ["--set", f"search_steps={config.search_steps}"]
         if "checkpoint_interval" not in keys:
             extra += ["--set", f"checkpoint_interval={checkpoint_interval(config)}"]
         for key, value in thread_shares(workers).items():  # a --set of the user's wins
@@ -254,7 +266,7 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
                     log_path=str(out / "logs" / f"{variant}_seed{seed}.log"),
                     total_steps=settings.total_steps,
                     num_iterations=iterations,
-                    planned_steps=iterations * steps_per_iteration,
+                    planned_steps=config.search_steps + iterations * steps_per_iteration,
                     train_args=tuple(args),
                     stage_fractions=tuple(settings.stage_fractions),
                     eval_episodes=settings.eval_episodes,
@@ -298,7 +310,9 @@ def settings_from_file(out: Path) -> ReproduceSettings:
     if data is None:
         raise FileNotFoundError(f"{out / SETTINGS_FILE} does not exist; is {out} a results dir?")
     saved = data["settings"]
-    optional = {key: saved[key] for key in ("first_seed", "preset") if key in saved}
+    optional = {
+        key: saved[key] for key in ("first_seed", "preset", "count_search_steps") if key in saved
+    }
     return ReproduceSettings(**{key: saved[key] for key in IDENTITY_KEYS}, **optional)
 
 
