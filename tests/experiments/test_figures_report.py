@@ -274,7 +274,7 @@ def test_results_that_agree_with_the_paper_are_supported(tmp_path):
 
 
 def test_comparisons_beyond_the_paper_name_the_better_variant_only_when_resolved(tmp_path):
-    """bptt32 clearly above cpg-actor in return (hop heights equal: not resolved); mlp-apex
+    """bptt32 clearly above cpg-actor-paper in return (hop heights equal: not resolved); mlp-apex
     below cpg-actor-apex in hop height; pairs that did not run are left out."""
     out = tmp_path / "out"
     n = 12
@@ -282,6 +282,7 @@ def test_comparisons_beyond_the_paper_name_the_better_variant_only_when_resolved
         jitter = 3.0 * seed
         same_hop = np.full(n, 0.25 + 0.01 * (seed % 2))
         _curve_run(out, "cpg-actor", seed, np.full(n, 400.0 + jitter), same_hop)
+        _curve_run(out, "cpg-actor-paper", seed, np.full(n, 400.0 + jitter), same_hop)
         _curve_run(out, "cpg-actor-bptt32", seed, np.full(n, 600.0 + jitter), same_hop[::-1])
         _curve_run(out, "mlp-apex", seed, np.full(n, 500.0 + jitter), np.full(n, 0.2))
         shuffled = 3.0 * ((seed + 2) % 4)  # the same returns as mlp-apex, other seeds
@@ -299,8 +300,12 @@ def test_comparisons_beyond_the_paper_name_the_better_variant_only_when_resolved
         (r["first"], r["second"]): r
         for r in json.loads((out / "summary.json").read_text())["comparisons"]
     }
-    assert set(rows) == {("cpg-actor-bptt32", "cpg-actor"), ("mlp-apex", "cpg-actor-apex")}
-    bptt = rows[("cpg-actor-bptt32", "cpg-actor")]
+    assert set(rows) == {
+        ("cpg-actor-bptt32", "cpg-actor-paper"),
+        ("mlp-apex", "cpg-actor-apex"),
+        ("cpg-actor", "cpg-actor-paper"),
+    }
+    bptt = rows[("cpg-actor-bptt32", "cpg-actor-paper")]
     assert bptt["return_better"] == "cpg-actor-bptt32" and bptt["return"][0] == pytest.approx(200)
     assert bptt["hop_better"] == "not resolved"
     apex = rows[("mlp-apex", "cpg-actor-apex")]

@@ -339,14 +339,16 @@ TOO_FEW = f"not tested (< {m.MIN_SEEDS} seeds)"
 # Questions beyond the paper's claims, each a pair (first, second) of variants run together:
 # is the first better than the second?
 COMPARISONS = (
-    ("cpg-actor-bptt32", "cpg-actor", "32-step gradient vs the paper's one step"),
-    ("cpg-actor-feedback-noise", "cpg-actor", "feedback noise vs the paper's gradient"),
-    ("cpg-actor-unbounded", "cpg-actor", "the paper's unbounded feedback vs bounded"),
+    ("cpg-actor-bptt32", "cpg-actor-paper", "32-step gradient vs the paper's one step"),
+    ("cpg-actor-feedback-noise", "cpg-actor-paper", "feedback noise vs the paper's gradient"),
+    ("cpg-actor-unbounded", "cpg-actor-paper", "the paper's unbounded feedback vs bounded"),
     ("mlp", "cpg-actor", "MLP vs CPG-Actor, eq. 4 reward"),
     ("mlp-apex", "cpg-actor-apex", "MLP vs CPG-Actor, apex (hop-height) reward"),
     ("cpg-actor", "cho2019-paper", "CPG-Actor vs Cho et al. as the paper has it"),
     ("cho2019-warm", "cho2019-paper", "the stronger Cho et al. vs the paper's"),
     ("cpg-actor", "cpg-actor-paper", "CPG-Actor vs the CPG-Actor in the paper's form"),
+    ("cpg-actor", "open-loop-es", "the feedback vs the best open loop it starts from"),
+    ("cpg-actor", "mlp-warm", "the CPG's structure vs the same start without it"),
     ("open-loop-es", "cpg-actor-open-loop", "open-loop CPG: black-box search vs PPO"),
     ("mlp-warm", "mlp", "MLP actor warm-started vs from scratch"),
 )
