@@ -198,15 +198,18 @@ def test_with_a_start_gait_cho_is_warm_started_toward_its_parameters_and_runs_it
 
 
 def test_mlp_warm_clones_the_start_gait_and_hops_with_it(tmp_path):
-    """mlp-warm: behaviour cloning of the start gait's joint commands; the cloned MLP, run
-    deterministically, hops like the gait (hop height within 30 % of the open-loop CPG's)."""
+    """mlp-warm: behaviour cloning of the start gait's joint commands (with the executed
+    commands perturbed, so that the clone recovers from its own errors); the cloned MLP, run
+    deterministically, hops: at least half the open-loop gait's hop height, and far above the
+    standing MLP it starts as."""
     from cpg_actor.agents.warm_start import collect_gait
 
-    run = config("mlp-warm", rollout_steps=200, epochs=60)
+    run = config("mlp-warm", rollout_steps=500, epochs=100, action_noise=0.1)
     run.agent_config.start_gait = "search"
-    run.env = HopperConfig(episode_steps=200)
-    run.eval_interval, run.eval_episodes = 1, 2
+    run.env = HopperConfig()
+    run.eval_interval, run.eval_episodes = 1, 3
     runner = Runner(run, tmp_path / "run", tensorboard=False)
+    standing = runner.run_evaluation()["eval/hop_height"]
     losses = runner.run_warm_start()
     assert losses[-1] < 0.05 * losses[0]
     cloned = runner.run_evaluation()["eval/hop_height"]
@@ -216,6 +219,6 @@ def test_mlp_warm_clones_the_start_gait_and_hops_with_it(tmp_path):
     env.close()
     cpg = Runner(TrainConfig(**{**run.__dict__, "agent": "cpg-actor-open-loop"}), tensorboard=False)
     gait = cpg.run_evaluation()["eval/hop_height"]
-    assert gait > 0.3 and abs(cloned - gait) < 0.3 * gait, (cloned, gait)
+    assert gait > 0.3 and cloned > 0.5 * gait and cloned > 2 * standing, (standing, cloned, gait)
     runner.close()
     cpg.close()

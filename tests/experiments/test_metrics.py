@@ -302,7 +302,7 @@ def test_variants_are_checked_against_the_registry():
 
 
 def test_a_variant_is_an_agent_with_settings_of_its_own(tmp_path):
-    """cpg-actor-unbounded trains cpg-actor with the paper's linear feedback; the
+    """cpg-actor-unbounded trains cpg-actor-paper with the paper's linear feedback; the
     reproduction's own --set still wins over the variant's settings."""
     assert parse_variants("cpg-actor-unbounded") == ["cpg-actor-unbounded"]
     settings = ReproduceSettings(
@@ -310,11 +310,11 @@ def test_a_variant_is_an_agent_with_settings_of_its_own(tmp_path):
         overrides=["agent_config.kappa_scale=2.0"],
     )  # fmt: skip
     config = resolve_config(settings, "cpg-actor-unbounded")
-    assert config.agent == "cpg-actor" and config.agent_config.feedback_tanh is False
+    assert config.agent == "cpg-actor-paper" and config.agent_config.feedback_tanh is False
     assert (config.agent_config.xi_scale, config.agent_config.kappa_scale) == (1.0, 2.0)
     (task,) = build_tasks(settings, tmp_path, workers=1)
     args = list(task.train_args)
-    assert args[args.index("--agent") + 1] == "cpg-actor"
+    assert args[args.index("--agent") + 1] == "cpg-actor-paper"
     assert args.index("agent_config.feedback_tanh=false") < args.index(
         "agent_config.kappa_scale=2.0"
     )

@@ -27,6 +27,11 @@ class WarmStartConfig:
     rollout_steps: int = 500  # control steps of reference behaviour per env
     minibatch_size: int = 1024
     learning_rate: float = 1e-3
+    # std of Gaussian noise on the actions executed while the target behaviour drives the
+    # robot (in the action's units); the targets stay noise-free. Wider coverage of the states
+    # around the target's, so the fitted actor recovers from its own small errors in closed
+    # loop (DART, Laskey et al. 2017). 0: the target alone, as in the paper
+    action_noise: float = 0.0
 
     def validate(self) -> None:
         for name in ("epochs", "rollout_steps", "minibatch_size"):
@@ -35,17 +40,30 @@ class WarmStartConfig:
                 raise ValueError(f"warm_start.{name} must be a positive integer, got {value!r}")
         if not self.learning_rate > 0:
             raise ValueError(f"warm_start.learning_rate must be > 0, got {self.learning_rate!r}")
+        if not self.action_noise >= 0:
+            raise ValueError(f"warm_start.action_noise must be >= 0, got {self.action_noise!r}")
 
 
-def collect_reference_observations(env, target_action: np.ndarray, steps: int, seed: int):
-    """Drive every env with the constant ``target_action`` for ``steps`` steps: obs ``(T*N, D)``."""
+def collect_reference_observations(
+    env, target_action: np.ndarray, steps: int, seed: int, noise: float = 0.0
+):
+    """Drive every env with the constant ``target_action`` (plus Gaussian ``noise`` on what is
+    executed, drawn from ``seed``) for ``steps`` steps: obs ``(T*N, D)``."""
     obs, _ = env.reset(seed=seed)
+    rng = np.random.default_rng(seed)
     actions = np.tile(np.asarray(target_action, dtype=np.float32), (env.num_envs, 1))
     observations = [np.asarray(obs, dtype=np.float32)]
     for _ in range(steps - 1):
-        obs, *_ = env.step(actions)
+        obs, *_ = env.step(executed(actions, noise, rng))
         observations.append(np.asarray(obs, dtype=np.float32))
     return torch.as_tensor(np.concatenate(observations))
+
+
+def executed(actions: np.ndarray, noise: float, rng: np.random.Generator) -> np.ndarray:
+    """``actions`` with Gaussian noise of std ``noise`` (none when 0)."""
+    if noise == 0:
+        return actions
+    return (actions + rng.normal(0.0, noise, size=actions.shape)).astype(np.float32)
 
 
 def warm_start(
@@ -63,7 +81,9 @@ def warm_start(
     updated with the reference observations first (None: no normalisation).
     """
     config.validate()
-    observations = collect_reference_observations(env, target_action, config.rollout_steps, seed)
+    observations = collect_reference_observations(
+        env, target_action, config.rollout_steps, seed, config.action_noise
+    )
     target = torch.as_tensor(target_action, dtype=torch.float32)
     target = target.expand(observations.shape[0], -1)
     return fit_actor(agent, normalizer, observations, target, config, generator)
@@ -112,10 +132,13 @@ def fit_actor(
     return losses
 
 
-def collect_gait(env, agent_config, steps: int, seed: int) -> tuple[torch.Tensor, torch.Tensor]:
+def collect_gait(
+    env, agent_config, steps: int, seed: int, noise: float = 0.0
+) -> tuple[torch.Tensor, torch.Tensor]:
     """Drive every env with the open-loop CPG of ``agent_config.start_gait`` (the CPG-Actor
-    without feedback, deterministic) for ``steps`` steps: raw observations ``(T*N, D)`` and
-    the joint commands sent ``(T*N, A)``, clipped to the action space."""
+    without feedback, deterministic; Gaussian ``noise`` on what is executed) for ``steps``
+    steps: raw observations ``(T*N, D)`` and the CPG's joint commands ``(T*N, A)``, clipped
+    to the action space."""
     from dataclasses import replace
 
     from cpg_actor.agents.cpg_actor import CPGActorAgent
@@ -126,6 +149,7 @@ def collect_gait(env, agent_config, steps: int, seed: int) -> tuple[torch.Tensor
     low = torch.as_tensor(env.single_action_space.low, dtype=torch.float32)
     high = torch.as_tensor(env.single_action_space.high, dtype=torch.float32)
     obs, _ = env.reset(seed=seed)
+    rng = np.random.default_rng(seed)
     state = cpg.initial_state(env.num_envs)
     observations, commands = [], []
     with torch.no_grad():
@@ -135,7 +159,7 @@ def collect_gait(env, agent_config, steps: int, seed: int) -> tuple[torch.Tensor
             command = torch.minimum(torch.maximum(out.mean, low), high)
             observations.append(obs_t)
             commands.append(command)
-            obs, _, terminated, truncated, _ = env.step(command.numpy())
+            obs, _, terminated, truncated, _ = env.step(executed(command.numpy(), noise, rng))
             done = torch.as_tensor(np.logical_or(terminated, truncated))
             fresh = cpg.initial_state(env.num_envs)
             mask = done.reshape(-1, *([1] * (state.dim() - 1)))
@@ -149,5 +173,7 @@ def warm_start_mlp(agent: Agent, normalizer, env, config, seed: int) -> list[flo
     observations that CPG meets; the loss per epoch."""
     cfg = config.warm_start
     cfg.validate()
-    observations, commands = collect_gait(env, config.agent_config, cfg.rollout_steps, seed)
+    observations, commands = collect_gait(
+        env, config.agent_config, cfg.rollout_steps, seed, cfg.action_noise
+    )
     return fit_actor(agent, normalizer, observations, commands, cfg)

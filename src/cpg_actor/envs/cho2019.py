@@ -11,8 +11,8 @@ mapped affinely onto the parameter ranges of :data:`PARAMETER_RANGES`:
 ==== ============================ ================= ==========================================
  #   parameter                    range             why
 ==== ============================ ================= ==========================================
- 0   nu_HFE, Hz                   0.5 .. 4          hopping rhythms of a 3.4 kg leg: ~1-3 Hz
- 1   nu_KFE, Hz                   0.5 .. 4
+ 0   nu_HFE, Hz                   0.2 .. 4          hopping rhythms of a 3.4 kg leg: ~1-3 Hz;
+ 1   nu_KFE, Hz                   0.2 .. 4          coupled, each may sit below the rhythm
  2   rho_HFE, rad                 0.02 .. 0.6       positive; within the joint stops
  3   rho_KFE, rad                 0.02 .. 0.8       the knee swings farther than the hip
  4   phi_HFE,KFE, rad             -pi .. pi         hip-knee coordination (phi_KFE,HFE = -phi)
@@ -54,7 +54,7 @@ from cpg_actor.envs.vector import make_vector_env
 
 PARAMETER_NAMES = ("nu_HFE", "nu_KFE", "rho_HFE", "rho_KFE", "phi_HFE_KFE")
 PARAMETER_RANGES = np.array(
-    [[0.5, 4.0], [0.5, 4.0], [0.02, 0.6], [0.02, 0.8], [-math.pi, math.pi]], dtype=np.float64
+    [[0.2, 4.0], [0.2, 4.0], [0.02, 0.6], [0.02, 0.8], [-math.pi, math.pi]], dtype=np.float64
 )
 CPG_OBS_NAMES = (
     "cos_theta_HFE", "cos_theta_KFE", "sin_theta_HFE", "sin_theta_KFE",
