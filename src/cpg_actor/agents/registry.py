@@ -122,7 +122,13 @@ CPG_ACTOR_DEFAULTS: dict[str, Any] = {
 }
 
 register_agent(
-    AgentSpec("mlp", "classic actor-critic: MLP actor on desired joint positions", build_mlp)
+    AgentSpec(
+        "mlp",
+        "classic actor-critic: MLP actor on desired joint positions",
+        build_mlp,
+        # the best of its tuning (docs/results/tuning/): seeds 100-101, 500k steps
+        defaults={"hopper": {"agent_config": {"init_std": 0.3}, "ppo": {"learning_rate": 1e-3}}},
+    )
 )
 register_agent(
     AgentSpec(
