@@ -77,11 +77,16 @@ class RunSpec(NamedTuple):
 def project_run(spec: RunSpec) -> dict:
     """One run of the package on ``sys.path`` (any tree since the learning issue)."""
     agent, preset, seed, values, budget, threshold = spec
+    from cpg_actor.agents import get_agent_spec
     from cpg_actor.config import TrainConfig, apply_dict
     from cpg_actor.presets import preset_values
     from cpg_actor.runner import Runner
 
     config = TrainConfig()
+    # the agent's tuned settings first, as `cpg-actor train` composes them (trees without
+    # per-agent defaults have none)
+    spec = get_agent_spec(agent)
+    apply_dict(config, getattr(spec, "defaults", {}).get(config.robot, {}), prefix="")
     apply_dict(config, preset_values(preset), prefix="")
     for mapping in values:
         apply_dict(config, mapping, prefix="")
