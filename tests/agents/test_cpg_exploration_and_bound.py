@@ -156,15 +156,14 @@ def test_a_missing_or_bad_gait_file_is_refused_with_one_clear_line(tmp_path):
 def test_cpg_actor_trains_with_its_tuned_defaults_and_cpg_actor_paper_as_the_paper():
     best = compose_config(values={"agent": "cpg-actor"})
     paper = compose_config(values={"agent": "cpg-actor-paper"})
-    assert best.agent_config.exploration == "cpg" and best.agent_config.output_bound
-    assert best.agent_config.start_gait == "search"
+    assert best.agent_config.output_bound and best.agent_config.start_gait == "search"
+    assert (best.agent_config.exploration, best.agent_config.init_std) == ("position", 0.3)
+    assert best.ppo.bptt_steps == 8
     assert paper.agent_config.exploration == "position" and not paper.agent_config.output_bound
     assert paper.agent_config.start_gait == "" and paper.ppo.bptt_steps == 1
     # the command line wins over an agent's defaults, and the quadruped gets none of them
-    mine = compose_config(
-        values={"agent": "cpg-actor"}, overrides=["agent_config.exploration=position"]
-    )
-    assert mine.agent_config.exploration == "position"
+    mine = compose_config(values={"agent": "cpg-actor"}, overrides=["ppo.bptt_steps=1"])
+    assert mine.ppo.bptt_steps == 1
     quadruped = compose_config(preset="anymal", values={"agent": "cpg-actor"})
     assert quadruped.agent_config.start_gait == "" and not quadruped.agent_config.output_bound
 
