@@ -273,7 +273,11 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
         0.5,
     )
     assert paper.ppo.lr_schedule == "linear" and paper.ppo.normalize_rewards
-    assert paper.agent_config.init_std == 1.0
+    # the paper's own init_std, 1 action half-range; the default agent's tuned one is 0.3
+    assert (
+        build_config(parser.parse_args(["--agent", "cpg-actor-paper"])).agent_config.init_std == 1.0
+    )
+    assert paper.agent_config.init_std == 0.3
     fast = build_config(parser.parse_args(["--preset", "throughput"]))
     assert fast.preset == "throughput" and fast.num_envs == 256 and fast.ppo.num_minibatches == 4
     gpu = build_config(parser.parse_args(["--preset", "gpu"]))

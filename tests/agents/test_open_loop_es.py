@@ -282,6 +282,8 @@ def test_the_gait_file_round_trips_into_an_agent_and_bad_ones_are_clear_errors(t
     # an agent started from the file has the search's V, to the last bit
     policy = load_policy(run)
     config = TrainConfig(agent="cpg-actor-open-loop")
+    # the search's agent settings (on the hopper its V is inside the output bound)
+    config.agent_config = TrainConfig.load(run / "config.yaml").agent_config
     config.agent_config.cpg_initial = gait["cpg_initial"]
     env = get_agent_spec(config.agent).make_env(1, config.env)
     try:

@@ -218,6 +218,8 @@ register_agent(
         wrapper=paper_cpg_parameter_wrapper,
         warm_start=warm_start_cho2019_paper,
         robots=("hopper",),
+        # the best of its tuning (docs/results/tuning/)
+        defaults={"hopper": {"agent_config": {"init_std": 0.3}}},
     )
 )
 register_agent(

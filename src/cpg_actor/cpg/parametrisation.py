@@ -126,6 +126,12 @@ class Parametrisation(nn.Module):
             values[field], masks[field] = value, mask
         self._check_positive(values, masks)
         lows, highs = self._bounds(bounds or {}, values, n)
+        dtype = dtype or torch.get_default_dtype()
+        # a bounded entry's V is the logit of its place in (low, low + span) as the transform
+        # will compute it: with low and span rounded to V's dtype, so that the physical values
+        # of a V (e.g. a gait file) give that V back
+        spans = {f: (highs[f] - lows[f]).to(dtype).double() for f in FIELDS}
+        lows = {f: lows[f].to(dtype).double() for f in FIELDS}
 
         # Assign an index of V to every trainable entry; ties share one index.
         index = {f: torch.full(_field_shape(f, n), -1, dtype=torch.long) for f in FIELDS}
@@ -142,7 +148,7 @@ class Parametrisation(nn.Module):
                     first_field,
                     first_sign * values[first_field][first_idx],
                     lows[first_field][first_idx],
-                    highs[first_field][first_idx],
+                    spans[first_field][first_idx],
                 )
             )
             for entry in group:
@@ -163,13 +169,12 @@ class Parametrisation(nn.Module):
                 if index[field][idx] < 0:
                     index[field][idx] = len(raw)
                     raw.append(
-                        self._to_raw(field, values[field][idx], lows[field][idx], highs[field][idx])
+                        self._to_raw(field, values[field][idx], lows[field][idx], spans[field][idx])
                     )
 
         # Created in ``dtype`` (default: torch's default dtype, float32 unless changed). Pass
         # dtype=torch.float64 to keep the initial values exact in float64: .double() afterwards
         # converts values already rounded to float32.
-        dtype = dtype or torch.get_default_dtype()
         self.vector = nn.Parameter(torch.tensor(raw, dtype=dtype))
         # All fields flattened into one row, so that the map V -> parameters is one gather,
         # one exp and one select for every field at once (a few operators per CPG step).
@@ -188,7 +193,7 @@ class Parametrisation(nn.Module):
                 & ~bounded
             )
             flat["low"].append(torch.where(bounded, lows[field].flatten(), 0.0))
-            flat["span"].append(torch.where(bounded, (highs[field] - lows[field]).flatten(), 0.0))
+            flat["span"].append(torch.where(bounded, spans[field].flatten(), 0.0))
         for name, parts in flat.items():
             value = torch.cat(parts)
             if value.is_floating_point():
@@ -198,9 +203,9 @@ class Parametrisation(nn.Module):
 
     # -- construction helpers -------------------------------------------------------------
     @staticmethod
-    def _to_raw(field: str, value: Tensor, low: Tensor, high: Tensor) -> float:
-        if torch.isfinite(low):  # bounded: the logit of the value's place in (low, high)
-            unit = (float(value) - float(low)) / (float(high) - float(low))
+    def _to_raw(field: str, value: Tensor, low: Tensor, span: Tensor) -> float:
+        if torch.isfinite(low):  # bounded: the logit of the value's place in (low, low + span)
+            unit = (float(value) - float(low)) / float(span)
             return math.log(unit / (1.0 - unit))
         return math.log(float(value)) if field in POSITIVE_FIELDS else float(value)
 
