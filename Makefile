@@ -25,10 +25,9 @@ $(EXTRAS_STAMP): pyproject.toml $(VENV)/.torch
 
 setup: $(EXTRAS_STAMP)
 
-# A new run directory each time: nothing earlier is overwritten. The paper preset (the default):
-# 500k steps in about 100 s of training on 2 cores (26 Nov; 216 s on 27 Nov's slower machine),
-# eval return 400-550 (seed 0, moves with last-bit changes), hop height 0.27-0.28 m
-# (README); benchmarks/results/time_to_hop_dcmotor.md compares it with the throughput preset.
+# A new run directory each time: nothing earlier is overwritten. The default agent (cpg-actor
+# with its tuned settings) and preset (paper): 500k steps, eval return about 800 and a hop
+# height about 0.55 m (README, "Status").
 QUICKSTART_STAMP := $(shell date +%Y%m%d-%H%M%S)
 QUICKSTART_DIR ?= runs/quickstart-$(QUICKSTART_STAMP)
 quickstart: setup
