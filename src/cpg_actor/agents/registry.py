@@ -204,6 +204,7 @@ register_agent(
             "hopper": {
                 "agent_config": {"start_gait": "search"},
                 "warm_start": {"action_noise": 0.05},
+                "ppo": {"learning_rate": 1e-3},  # the best of its tuning
             }
         },
         uses_start_gait=True,
