@@ -57,7 +57,7 @@ from cpg_actor.checkpoint import (
 from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
 from cpg_actor.envs.torch_env import TorchVectorEnv
-from cpg_actor.evaluation import evaluate, finite_mean
+from cpg_actor.evaluation import evaluation_row, finite_mean
 from cpg_actor.policy import Policy
 from cpg_actor.ppo import RunningNormalizer
 from cpg_actor.progress import evaluation_text, make_progress
@@ -288,21 +288,13 @@ class ESRunner:
             self.action_high,
             cfg.ppo.normalize_observations,
         )
-        result = evaluate(
+        row = evaluation_row(
             policy,
             self.eval_env,
             seed=derived_seed(cfg.seed, EVAL_SEED_KEY),
             control_dt=float(cfg.env.control_dt),
             max_steps=episode_steps(cfg.env),
-            traces=False,
         )
-        row = {
-            "eval/return": float(result["episode_return"].mean()),
-            "eval/return_min": float(result["episode_return"].min()),
-            "eval/length": float(result["length"].mean()),
-        }
-        for name in result["metric_names"]:
-            row[f"eval/{name}"] = finite_mean(result[str(name)])
         row["time/eval"] = time.perf_counter() - start
         return row
 

@@ -171,3 +171,18 @@ def _trace_row(
         if key in info:
             row[trace] = np.asarray(info[key])
     return row
+
+
+def evaluation_row(policy, env, seed: int, control_dt: float, max_steps: int) -> dict[str, float]:
+    """The metrics row of one evaluation during training (both runners' ``eval/*``): the mean
+    and worst return, the mean length and the mean of each of the env's own metrics."""
+    result = evaluate(policy, env, seed=seed, control_dt=control_dt, max_steps=max_steps,
+                      traces=False)  # fmt: skip
+    row = {
+        "eval/return": float(result["episode_return"].mean()),
+        "eval/return_min": float(result["episode_return"].min()),
+        "eval/length": float(result["length"].mean()),
+    }
+    for name in result["metric_names"]:  # the env's own (the hopper's hop height)
+        row[f"eval/{name}"] = finite_mean(result[str(name)])
+    return row

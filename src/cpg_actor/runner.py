@@ -49,7 +49,7 @@ from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
 from cpg_actor.envs.torch_env import TorchVectorEnv
 from cpg_actor.episodes import EpisodeLog, EpisodeStats
-from cpg_actor.evaluation import evaluate, finite_mean
+from cpg_actor.evaluation import evaluation_row
 from cpg_actor.machine import usable_cores
 from cpg_actor.policy import Policy
 from cpg_actor.ppo import (
@@ -418,21 +418,13 @@ class Runner:
             self.action_high,
             cfg.ppo.normalize_observations,
         )
-        result = evaluate(
+        row = evaluation_row(
             policy,
             self.eval_env,
             seed=derived_seed(cfg.seed, EVAL_SEED_KEY),
             control_dt=float(cfg.env.control_dt),
             max_steps=int(getattr(cfg.env, "episode_steps", 10_000)),
-            traces=False,
         )
-        row = {
-            "eval/return": float(result["episode_return"].mean()),
-            "eval/return_min": float(result["episode_return"].min()),
-            "eval/length": float(result["length"].mean()),
-        }
-        for name in result["metric_names"]:  # the env's own (the hopper's hop height)
-            row[f"eval/{name}"] = finite_mean(result[str(name)])
         row["time/eval"] = time.perf_counter() - start
         return row
 
