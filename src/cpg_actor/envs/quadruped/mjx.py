@@ -312,7 +312,8 @@ class MjxAnymalVectorEnv(VectorEnv):
     """N ANYmal B robots on MJX: the Gymnasium face of
     :class:`~cpg_actor.envs.quadruped.vector.AnymalVectorEnv` (numpy, copied to the host) and
     the trainer's tensor face (``reset_tensors`` / ``step_tensors``: torch through DLPack on
-    JAX's device), as the MJX hopper's. ``num_threads`` is accepted and ignored."""
+    JAX's device), as the MJX hopper's. ``num_threads`` is accepted and ignored;
+    ``max_episode_steps`` is checked as the MuJoCo env's."""
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
     foot_names = robot.LEGS  # the columns of info["contact"]
@@ -322,8 +323,9 @@ class MjxAnymalVectorEnv(VectorEnv):
         num_envs: int,
         config: QuadrupedConfig | dict | None = None,
         num_threads: int | None = None,
+        max_episode_steps: int | None = None,
     ) -> None:
-        init_spaces(self, num_envs, config)
+        init_spaces(self, num_envs, config, max_episode_steps)
         if self.config.sim != "mjx":
             raise ValueError(f"MjxAnymalVectorEnv simulates with MJX, got sim={self.config.sim!r}")
         self.robot = robot_spec(self.config)

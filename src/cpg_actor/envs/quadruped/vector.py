@@ -77,16 +77,39 @@ def load_model(config: QuadrupedConfig) -> mujoco.MjModel:
     return model
 
 
-def init_spaces(env: VectorEnv, num_envs: int, config: QuadrupedConfig | dict | None) -> None:
-    """``env.config`` (validated), ``num_envs`` and the observation and action spaces of a
-    quadruped vector env (MuJoCo's and MJX's alike)."""
-    if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
-        raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+def resolve_config(config: QuadrupedConfig | dict | None) -> QuadrupedConfig:
+    """``config`` (a :class:`QuadrupedConfig` or a dict of its fields; defaults if None),
+    validated."""
     if config is None:
         config = QuadrupedConfig()
     elif isinstance(config, dict):
         config = QuadrupedConfig.from_dict(config)
-    env.config = config.validate()
+    elif not isinstance(config, QuadrupedConfig):
+        raise ValueError(
+            f"config must be a QuadrupedConfig or a dict of its fields, got {type(config).__name__}"
+        )
+    return config.validate()
+
+
+def init_spaces(
+    env: VectorEnv,
+    num_envs: int,
+    config: QuadrupedConfig | dict | None,
+    max_episode_steps: int | None = None,
+) -> None:
+    """``env.config`` (validated), ``num_envs`` and the observation and action spaces of a
+    quadruped vector env (MuJoCo's and MJX's alike). ``max_episode_steps`` is what
+    ``gymnasium.make_vec`` passes from the registered spec: it must equal the config's
+    ``episode_steps`` (the env truncates its episodes itself)."""
+    if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+        raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+    config = resolve_config(config)
+    if max_episode_steps is not None and max_episode_steps != config.episode_steps:
+        raise ValueError(
+            f"max_episode_steps={max_episode_steps} differs from the config's episode_steps="
+            f"{config.episode_steps} (episode_seconds / control_dt); give both the same value"
+        )
+    env.config = config
     env.num_envs = num_envs
     n_obs, n_act = len(task.OBS_NAMES), len(robot.JOINT_NAMES)
     env.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (n_obs,), np.float32)
@@ -118,6 +141,8 @@ class AnymalVectorEnv(VectorEnv):
         num_envs: N.
         config: a :class:`QuadrupedConfig` or a dict of its fields; defaults if None.
         num_threads: MuJoCo stepping threads; None: the usable cores (>= 8 robots each).
+        max_episode_steps: what ``gymnasium.make_vec`` passes from the registered spec; must
+            equal the config's ``episode_steps`` (the env truncates its episodes itself).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
@@ -128,8 +153,9 @@ class AnymalVectorEnv(VectorEnv):
         num_envs: int,
         config: QuadrupedConfig | dict | None = None,
         num_threads: int | None = None,
+        max_episode_steps: int | None = None,
     ) -> None:
-        init_spaces(self, num_envs, config)
+        init_spaces(self, num_envs, config, max_episode_steps)
         config = self.config
         if config.sim != "mujoco":
             raise ValueError(
@@ -161,6 +187,25 @@ class AnymalVectorEnv(VectorEnv):
         self._camera: mujoco.MjvCamera | None = None
         self._render_model: mujoco.MjModel | None = None
         self._render_data: mujoco.MjData | None = None
+
+    @property
+    def env_rngs(self) -> list[np.random.Generator] | None:
+        """Each env's random generator (reset noise, commands); None before the first reset.
+        Assigning a list of ``num_envs`` generators makes the next draws come from them (the
+        single-robot ``AnymalEnv`` hands its ``np_random`` over this way)."""
+        return self._rngs
+
+    @env_rngs.setter
+    def env_rngs(self, rngs: list[np.random.Generator]) -> None:
+        if not (
+            isinstance(rngs, list | tuple)
+            and len(rngs) == self.num_envs
+            and all(isinstance(rng, np.random.Generator) for rng in rngs)
+        ):
+            raise ValueError(
+                f"env_rngs must be a list of {self.num_envs} numpy Generators, got {rngs!r}"
+            )
+        self._rngs = list(rngs)
 
     # -- episodes ------------------------------------------------------------------------------
     def _start(self, index: np.ndarray) -> None:
