@@ -403,7 +403,13 @@ def test_progress_goes_to_a_log_file_as_plain_lines(tmp_path):
     lines = [line for line in result.stdout.splitlines() if line.startswith("[train cpg-actor]")]
     assert len(lines) == 3  # one per iteration with interval 0, the last with the evaluation
     assert lines[0].startswith("[train cpg-actor] 16/48 steps (33.3%)")
+    # the first iteration includes compiling: no ETA yet; no episode has ended: no return yet
+    assert "ETA after warm-up" in lines[0] and "return -" in lines[0]
+    assert "ETA after warm-up" not in lines[1] and "ETA 0 s" in lines[-1]
+    assert not any("nan" in line for line in lines)
     assert "eval return" in lines[-1] and "48/48 steps (100.0%)" in lines[-1]
+    # where the logs are, before training
+    assert f"logs: {run_dir / 'metrics.jsonl'}; TensorBoard: tensorboard --logdir" in result.stdout
 
 
 def test_file_system_errors_are_one_line_and_nothing_is_lost(tmp_path, capsys):
@@ -422,6 +428,68 @@ def test_step_counts_not_a_whole_iteration_are_announced(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "40 steps is not a whole number of iterations of 16; training 48" in out
     assert "no training episode finished" in out
+
+
+def test_the_rounding_note_is_for_a_budget_the_user_asked_and_the_logs_are_named(
+    tmp_path, capsys, monkeypatch
+):
+    """The default budget (500,000) is not a whole number of iterations either: it trains the
+    same rounded-up steps without a note. The start names metrics.jsonl and TensorBoard."""
+    from cpg_actor.runner import Runner
+
+    monkeypatch.setattr(Runner, "learn", lambda self, stop_when=None: None)  # only the start
+    run_dir = tmp_path / "run"
+    assert main(["train", "--run-dir", str(run_dir), *TINY]) == 0
+    out = capsys.readouterr().out
+    assert "note:" not in out
+    assert "for 500,000 steps (31250 iterations of 16 steps)" in out  # 500,000 / 16: whole
+    assert (
+        f"logs: {run_dir / 'metrics.jsonl'}; TensorBoard: tensorboard --logdir "
+        f"{run_dir / 'tensorboard'}" in out
+    )
+    other = ["--set", "ppo.num_steps=24"]  # 48 steps per iteration: 500,000 rounds up
+    assert main(["train", "--run-dir", str(run_dir), "--overwrite", *TINY, *other]) == 0
+    out = capsys.readouterr().out
+    assert "note:" not in out and "(10417 iterations of 48 steps)" in out
+    assert TrainConfig.load(run_dir / "config.yaml").num_iterations == 10417  # trained as before
+    note = "note: 500,000 steps is not a whole number of iterations of 48; training 500,016"
+    for asked in (["--set", "total_steps=500000"], ["--total-steps", "500k"]):
+        argv = ["train", "--run-dir", str(run_dir), "--overwrite", *TINY, *other, *asked]
+        assert main(argv) == 0
+        assert note in capsys.readouterr().out
+
+
+def test_a_resumed_run_leaves_no_step_twice_in_tensorboard(tmp_path, capsys):
+    """A run interrupted after logging past its last checkpoint: the resumed run logs those
+    steps again; TensorBoard drops the interrupted run's events from there (purge_step), as
+    metrics.jsonl is cut back."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    run_dir = tmp_path / "run"
+    argv = ["train", "--run-dir", str(run_dir), "--total-steps", "64", *TINY]
+    assert main([*argv, "--set", "checkpoint_interval=2", "--set", "histogram_interval=1"]) == 0
+    checkpoints = run_dir / "checkpoints"
+    # the crash: iterations 3 and 4 logged, their checkpoint never written
+    os.replace(checkpoints / "iter_000002.pt", checkpoints / "last.pt")
+    (checkpoints / "iter_000004.pt").unlink()
+    assert main(["train", "--run-dir", str(run_dir), "--resume", "--no-progress"]) == 0
+    assert "resuming" in capsys.readouterr().out
+    events = EventAccumulator(
+        str(run_dir / "tensorboard"), size_guidance={"scalars": 0, "histograms": 0}
+    )
+    events.Reload()
+    tags = events.Tags()["scalars"]
+    assert "charts/SPS" in tags and "eval/return" in tags
+    for tag in tags:
+        steps = [event.step for event in events.Scalars(tag)]
+        assert len(steps) == len(set(steps)), (tag, steps)
+    assert [event.step for event in events.Scalars("charts/SPS")] == [16, 32, 48, 64]
+    assert [event.step for event in events.Scalars("eval/return")] == [0, 64]
+    assert [event.step for event in events.Histograms(events.Tags()["histograms"][0])] == [
+        16, 32, 48, 64
+    ]  # fmt: skip
+    rows = [json.loads(line) for line in (run_dir / "metrics.jsonl").read_text().splitlines()]
+    assert [row["global_step"] for row in rows] == [0, 16, 32, 48, 64]
 
 
 def test_a_full_disk_or_a_read_only_run_is_one_line_and_keeps_what_was_saved(

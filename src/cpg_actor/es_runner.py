@@ -406,6 +406,7 @@ class ESRunner:
         self.train_wall = float(data.get("train_wall", 0.0))
         set_rng_state(data["rng"])
         self._resumed = True
+        self.run_log.purge_step = self.global_step + 1  # TensorBoard drops what came after
 
     def close(self) -> None:
         self.run_log.close()

@@ -1,6 +1,6 @@
 """Drawing shared by the commands that write figures: the gait diagram (which foot is on the
-ground, per leg, over time) of ``cpg-actor gaits`` and ``cpg-actor eval``, and an atomic
-``savefig``."""
+ground, per leg, over time) of ``cpg-actor gaits`` and ``cpg-actor eval``, the unit of a
+steps axis, and an atomic ``savefig``."""
 
 from __future__ import annotations
 
@@ -36,6 +36,24 @@ def draw_gait_diagram(
     axis.set_yticks(range(n), list(legs)[::-1])
     axis.set_ylim(-0.6, n - 0.4)
     axis.set_xlim(start, start + len(shown) * dt)
+
+
+def step_axis(largest: float, name: str = "training steps") -> tuple[float, str]:
+    """``(divisor, label)`` of a steps axis reaching ``largest`` steps: millions from 1M on,
+    thousands from 1k on, else plain steps (a 30k-step run reads 0-30, not 0.00-0.03)."""
+    for divisor, unit in ((1e6, "millions"), (1e3, "thousands")):
+        if largest >= divisor:
+            return divisor, f"{name} ({unit})"
+    return 1.0, name
+
+
+def steps_text(steps: float) -> str:
+    """A step count as budgets are written: ``"500k"``, ``"20M"``, ``"8.19k"`` (3 significant
+    digits unless whole), ``"512"``."""
+    for divisor, suffix in ((1e6, "M"), (1e3, "k")):
+        if steps >= divisor:
+            return f"{steps / divisor:.3g}{suffix}"
+    return f"{steps:.0f}"
 
 
 def save_figure(fig, path: str | os.PathLike, dpi: int = 110) -> Path:

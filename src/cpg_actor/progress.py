@@ -1,5 +1,10 @@
 """Progress display of a training run: a rich progress bar on a terminal, a plain line every
-``interval`` seconds otherwise (a log file, a cluster job)."""
+``interval`` seconds otherwise (a log file, a cluster job).
+
+The first iteration of a run (or of a resumed run) includes torch.compile's compilation and
+the first calls' set-up, so no ETA is shown until a second one has finished; the ETA then
+comes from the iterations after the first only (the rich bar's rate leaves out the first
+update too). Before the first finished episode the return shows as ``-``."""
 
 from __future__ import annotations
 
@@ -34,12 +39,15 @@ class PlainProgress:
     def __init__(self, name: str, total: int, completed: int, interval: float) -> None:
         self.name, self.total, self.interval = name, total, interval
         self.start = self.last = time.perf_counter()
-        self.first_step = completed
+        # (time, steps) at the end of the first iteration (compilation, warm-up): the ETA's start
+        self.warm: tuple[float, int] | None = None
         self.fields: dict[str, Any] = {"completed": completed, "evaluation": ""}
 
     def update(self, task: Any, **fields: Any) -> None:
         self.fields.update(fields)
         now = time.perf_counter()
+        if self.warm is None:
+            self.warm = (now, self.fields["completed"])
         if now - self.last >= self.interval or self.fields["completed"] >= self.total:
             self.last = now
             self.print(now)
@@ -47,18 +55,31 @@ class PlainProgress:
     def print(self, now: float) -> None:
         done = self.fields["completed"]
         elapsed = now - self.start
-        rate = (done - self.first_step) / elapsed if elapsed > 0 else 0.0
-        eta = (self.total - done) / rate if rate > 0 else math.nan
         print(
             f"[train {self.name}] {done:,}/{self.total:,} steps ({100 * done / self.total:.1f}%), "
-            f"{self.fields.get('sps', '-')} SPS, elapsed {elapsed:.0f} s, ETA {eta:.0f} s, "
+            f"{self.fields.get('sps', '-')} SPS, elapsed {elapsed:.0f} s, {self.eta(now, done)}, "
             f"return {self.fields.get('ret', '-')} {self.fields.get('metrics', '')} "
             f"{self.fields['evaluation']}".replace("  ", " ").rstrip(),
             flush=True,
         )
 
+    def eta(self, now: float, done: int) -> str:
+        """``"ETA 290 s"`` from the rate since the first iteration; before a second one has
+        finished, ``"ETA after warm-up"``."""
+        if done >= self.total:
+            return "ETA 0 s"
+        if self.warm is None or done <= self.warm[1] or now <= self.warm[0]:
+            return "ETA after warm-up"
+        rate = (done - self.warm[1]) / (now - self.warm[0])
+        return f"ETA {(self.total - done) / rate:.0f} s"
+
     def stop(self) -> None:
         pass
+
+
+def return_text(value: float) -> str:
+    """The mean episode return for the display; ``-`` before an episode has finished."""
+    return f"{value:.2f}" if math.isfinite(value) else "-"
 
 
 def make_progress(name: str, total: int, completed: int, interval: float, evaluation: str):

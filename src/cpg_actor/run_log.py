@@ -1,6 +1,10 @@
 """What a training run writes about itself: a row of scalars per logged iteration in
 ``metrics.jsonl`` (non-finite values as null) and TensorBoard events (scalars, histograms) in
-``tensorboard/``. Without a run directory nothing is written."""
+``tensorboard/``. Without a run directory nothing is written.
+
+A resumed run sets ``purge_step`` (the first step after its checkpoint) before it logs:
+TensorBoard then drops the events the interrupted run wrote from that step on, as
+``metrics.jsonl`` is cut back, so no step shows twice."""
 
 from __future__ import annotations
 
@@ -15,6 +19,7 @@ class RunLog:
     def __init__(self, run_dir: Path | None, tensorboard: bool = True) -> None:
         self.run_dir = run_dir
         self.use_tensorboard = tensorboard and run_dir is not None
+        self.purge_step: int | None = None  # a resumed run's first step after its checkpoint
         self._writer = None
 
     @property
@@ -23,7 +28,8 @@ class RunLog:
         if self._writer is None and self.use_tensorboard:
             from torch.utils.tensorboard import SummaryWriter
 
-            self._writer = SummaryWriter(log_dir=str(self.run_dir / "tensorboard"))
+            log_dir = str(self.run_dir / "tensorboard")
+            self._writer = SummaryWriter(log_dir=log_dir, purge_step=self.purge_step)
         return self._writer
 
     def write(self, iteration: int, global_step: int, row: dict[str, float]) -> None:

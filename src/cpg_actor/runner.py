@@ -61,7 +61,7 @@ from cpg_actor.ppo import (
     compile_generation,
     compile_reproducibly,
 )
-from cpg_actor.progress import evaluation_text, make_progress, metrics_text
+from cpg_actor.progress import evaluation_text, make_progress, metrics_text, return_text
 from cpg_actor.run_log import RunLog
 
 WARM_START_SEED_KEY = 2**31  # derived_seed(seed, this) seeds the warm start's environments
@@ -343,7 +343,7 @@ class Runner:
                         self._task,
                         completed=self.global_step,
                         sps=f"{sps:,.0f}",
-                        ret=f"{self.episodes.mean('return'):.2f}",
+                        ret=return_text(self.episodes.mean("return")),
                         metrics=metrics_text(self.episodes.env_metrics()),
                         evaluation=getattr(self, "_evaluation_text", ""),
                     )
@@ -592,6 +592,7 @@ class Runner:
         self._resumed = True
         self.iteration = data["iteration"]
         self.global_step = data["global_step"]
+        self.run_log.purge_step = self.global_step + 1  # TensorBoard drops what came after
         self.episodes.load_recent(data["recent"])
         set_rng_state(data["rng"])
         self.env_seed = data.get("env_seed")

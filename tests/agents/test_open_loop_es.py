@@ -197,6 +197,14 @@ def test_interrupted_and_resumed_search_equals_the_straight_one(tmp_path, capsys
     assert [row["iteration"] for row in rows_b] == list(range(6))
     assert [without_timing(r) for r in rows_a] == [without_timing(r) for r in rows_b]
     assert load_gait(straight) == load_gait(split)
+    # generation 3, logged before the interruption and again after the resume: once in
+    # TensorBoard (the resumed writer purges what came after the checkpoint)
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    events = EventAccumulator(str(split / "tensorboard"), size_guidance={"scalars": 0})
+    events.Reload()
+    steps = [event.step for event in events.Scalars("es/best_return")]
+    assert steps == [row["global_step"] for row in rows_b[1:]]
 
 
 def test_steps_are_counted_and_the_budget_is_never_exceeded(tmp_path, capsys):

@@ -365,3 +365,18 @@ def test_the_report_shows_a_run_that_stopped_learning(tmp_path):
     report = (out / "report.md").read_text()
     section = report.split("## Learning over the run")[1].split("## ")[0]
     assert "| CPG-Actor | 500 | 1,200,000 | 300 | -200 | 0.000123 |" in section  # one seed
+
+
+def test_the_episode_reward_figure_counts_steps_in_units_its_runs_read_in(tmp_path, monkeypatch):
+    """5,000-step runs: thousands (0-5), not millions (0.000-0.005)."""
+    from cpg_actor.experiments import figures
+
+    out = tmp_path / "out"
+    for seed in (0, 1):
+        _fake_run(out, "mlp", seed, steps=5000)
+    drawn = []
+    monkeypatch.setattr(figures, "_save", lambda fig, directory, name: drawn.append(fig) or [])
+    figures.ep_reward(Results.load(out, ["mlp"]), tmp_path / "figures")
+    (axis,) = drawn[0].axes
+    assert axis.get_xlabel() == "time steps (thousands)"
+    assert axis.get_lines()[0].get_xdata().max() == pytest.approx(5.0)

@@ -73,6 +73,14 @@ def test_cli_trains_a_pace_resumes_and_logs_the_robots_metrics(tmp_path, capsys)
     rows = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines()]
     assert any(row.get("charts/fell") is not None for row in rows)
     assert any(row.get("charts/speed_error") is not None for row in rows)
+    # the quadruped's reward terms, as the hopper's r1..r5: metrics.jsonl and TensorBoard
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    terms = {f"reward_terms/{name}" for name in QuadrupedConfig().reward_scales}
+    assert terms <= set(rows[-1])
+    events = EventAccumulator(str(run / "tensorboard"))
+    events.Reload()
+    assert terms <= set(events.Tags()["scalars"])
     assert main(["train", "--run-dir", str(run), "--resume", "--total-steps", "48",
                  "--no-progress"]) == 0  # fmt: skip
     assert "anymal-mujoco" in capsys.readouterr().out

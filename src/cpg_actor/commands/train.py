@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import shlex
 import shutil
 import sys
 from pathlib import Path
@@ -263,6 +264,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         config.save(config_path)
         _truncate_metrics(run_dir / "metrics.jsonl", runner.iteration)
         print(f"resuming {run_dir} at iteration {runner.iteration} ({runner.global_step:,} steps)")
+        print(_logs_text(run_dir))
     else:
         config = build_config(args)
         run_dir = Path(
@@ -283,7 +285,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
             print(_search_start_text(runner, run_dir, args))
         else:
             planned = config.search_steps + config.num_iterations * config.steps_per_iteration
-            if planned != config.total_steps:
+            if planned != config.total_steps and _budget_asked(args):
                 print(
                     f"note: {config.total_steps:,} steps is not a whole number of iterations "
                     f"of {config.steps_per_iteration:,}; training {planned:,}"
@@ -299,6 +301,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
                 f"({config.num_iterations} iterations of {config.steps_per_iteration} steps"
                 f"{searched}), run directory {run_dir}"
             )
+        print(_logs_text(run_dir))
     try:
         runner.learn()
     except TrainingDiverged as error:
@@ -338,6 +341,26 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
     return 0
 
 
+def _budget_asked(args: argparse.Namespace) -> bool:
+    """The user gave the budget (``--total-steps``, ``--set total_steps=...`` or a ``--config``
+    file's ``total_steps``), rather than taking the default."""
+    from cpg_actor.config import read_config_file
+
+    if args.total_steps is not None:
+        return True
+    if any(text.partition("=")[0].strip() == "total_steps" for text in args.overrides or ()):
+        return True
+    return args.config is not None and "total_steps" in read_config_file(Path(args.config))
+
+
+def _logs_text(run_dir: Path) -> str:
+    """Where the run's logs go, and the command that shows them."""
+    return (
+        f"logs: {run_dir / 'metrics.jsonl'}; TensorBoard: tensorboard --logdir "
+        f"{shlex.quote(str(run_dir / 'tensorboard'))}"
+    )
+
+
 def _search_start_text(runner, run_dir: Path, args: argparse.Namespace) -> str:
     """What a new open-loop search will do (cpg_actor.es_runner)."""
     config, es = runner.config, runner.config.es
@@ -347,7 +370,7 @@ def _search_start_text(runner, run_dir: Path, args: argparse.Namespace) -> str:
             f"note: --num-envs is not used by the search; it runs es.popsize x es.episodes = "
             f"{es.popsize * es.episodes} envs"
         )
-    if runner.planned_steps != config.total_steps:
+    if runner.planned_steps != config.total_steps and _budget_asked(args):
         lines.append(
             f"note: {config.total_steps:,} steps is not a whole number of generations of "
             f"{runner.generation_steps:,}; searching {runner.planned_steps:,} (a search never "

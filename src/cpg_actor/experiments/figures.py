@@ -15,6 +15,7 @@ import numpy as np
 
 from cpg_actor.experiments.metrics import VELOCITY_LIMIT
 from cpg_actor.experiments.results import Results, Run, color, label, sent_velocity
+from cpg_actor.plots import step_axis, steps_text
 
 JOINTS = ("HFE", "KFE")
 TRACE_WINDOW_S = 3.0  # seconds of an episode shown in the trace figures
@@ -50,7 +51,7 @@ def ep_reward(results: Results, directory: Path) -> Output:
     plt = _plt()
     notes: list[str] = []
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
-    drawn = 0
+    drawn: list[tuple[str, np.ndarray, np.ndarray, int]] = []  # variant, grid, curves, count
     for variant in results.variants:
         runs = results.runs.get(variant)
         if not runs:
@@ -67,18 +68,20 @@ def ep_reward(results: Results, directory: Path) -> Output:
         stacked = np.stack(
             [np.interp(grid, s[np.isfinite(v)], v[np.isfinite(v)]) for s, v in curves]
         )
-        mean = stacked.mean(axis=0)
-        x = grid / 1e6
-        ax.plot(x, mean, color=color(variant), label=f"{label(variant)} (n={len(curves)})")
-        if len(curves) > 1:
-            ax.fill_between(
-                x, stacked.min(axis=0), stacked.max(axis=0), color=color(variant), alpha=0.2
-            )
-        drawn += 1
+        drawn.append((variant, grid, stacked, len(curves)))
     if not drawn:
         plt.close(fig)
         return [], notes + ["ep_reward: nothing to draw"]
-    ax.set_xlabel("time steps (millions)")
+    scale, xlabel = step_axis(max(grid.max() for _, grid, _, _ in drawn), "time steps")
+    for variant, grid, stacked, count in drawn:
+        x = grid / scale
+        mean = stacked.mean(axis=0)
+        ax.plot(x, mean, color=color(variant), label=f"{label(variant)} (n={count})")
+        if count > 1:
+            ax.fill_between(
+                x, stacked.min(axis=0), stacked.max(axis=0), color=color(variant), alpha=0.2
+            )
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("mean episode return")
     ax.set_title("Episode reward (mean over seeds, band: min-max)")
     ax.grid(alpha=0.3)
@@ -320,7 +323,7 @@ def parameters_under_training(results: Results, directory: Path) -> Output:
         for i, (_, step, values) in enumerate(history):
             shade = cmap(i / max(1, len(history) - 1))
             density = _kde(values[key], grid)
-            ax.plot(grid, density, color=shade, lw=1.2, label=f"{step / 1e6:.3g}M")
+            ax.plot(grid, density, color=shade, lw=1.2, label=steps_text(step))
             ax.fill_between(grid, density, color=shade, alpha=0.08)
         ax.set_title(title, fontsize=9)
         ax.set_xlabel("value")
@@ -364,7 +367,7 @@ def cpg_actor_training_over_time(results: Results, directory: Path) -> Output:
 
     def stage_label(stage: dict) -> str:
         if per_iteration:
-            return f"{stage['iteration'] * per_iteration / 1e6:.3g}M steps"
+            return f"{steps_text(stage['iteration'] * per_iteration)} steps"
         return f"iteration {stage['iteration']}"
 
     def draw_heights(ax) -> None:
