@@ -68,8 +68,19 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--ray",
         default=None,
         metavar="ADDRESS",
-        help="run on the Ray cluster at ADDRESS ('auto', 'ray://host:10001'; 'local' starts a "
-        "local instance); OUT must be on a shared file system. Needs pip install cpg-actor[ray]",
+        help="run on the Ray cluster at ADDRESS ('HOST:6379' as `ray start --head` prints it, "
+        "'auto', 'ray://host:10001'; 'local' starts a local instance); a cluster with token "
+        "authentication needs RAY_AUTH_MODE=token and its token (docs/reproduction.md, Ray). "
+        "Needs pip install cpg-actor[ray]",
+    )
+    parser.add_argument(
+        "--ray-results",
+        default="auto",
+        choices=("auto", "shared", "return"),
+        help="with --ray: how each run reaches OUT. shared: the node writes into OUT (a file "
+        "system every node sees at the same path); return: the run trains in a temporary "
+        "directory on its node and comes back to this machine as the task's result; auto "
+        "(default): shared on the nodes that see OUT, return on the others",
     )
     parser.add_argument(
         "--overwrite",
@@ -88,8 +99,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import parse_steps
     from cpg_actor.experiments import execute, plan
-    from cpg_actor.experiments.floor import ensure_floor
-    from cpg_actor.experiments.report import write_report
 
     settings = plan.ReproduceSettings(
         variants=plan.parse_variants(args.variants),
@@ -108,6 +117,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--workers must be >= 1, got {workers}")
     if args.ray is not None:
         execute.import_ray()  # a clear error before anything is written
+    if getattr(args, "ray_results", "auto") != "auto" and args.ray is None:
+        raise ValueError("--ray-results is for --ray; local runs write into OUT")
     if args.gpus_per_run and args.ray is None:
         raise ValueError(
             "--gpus-per-run is for --ray; on one machine, runs share its GPU as processes: "
@@ -117,6 +128,22 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--gpus-per-run must be >= 0, got {args.gpus_per_run}")
     out = Path(args.out)
     tasks = plan.build_tasks(settings, out, workers)  # validates before anything is written
+    if args.ray is None:
+        return _run(args, settings, workers, out, tasks)
+    execute.connect_ray(args.ray)  # an unreachable cluster or a wrong token: nothing written
+    try:
+        return _run(args, settings, workers, out, tasks)
+    finally:
+        execute.disconnect_ray()
+
+
+def _run(args: argparse.Namespace, settings, workers: int, out: Path, tasks: list) -> int:
+    """Everything after validation: write OUT, run the tasks, figures and report."""
+    from cpg_actor.experiments import execute, plan
+    from cpg_actor.experiments.floor import ensure_floor
+    from cpg_actor.experiments.report import write_report
+
+    ray_results = getattr(args, "ray_results", "auto")
     state = plan.prepare_out_dir(out, settings, args.overwrite)
     command = (
         ["cpg-actor", *sys.argv[1:]]
@@ -131,6 +158,7 @@ def run(args: argparse.Namespace) -> int:
             "workers": workers,
             "ray": args.ray,
             "gpus_per_run": args.gpus_per_run,
+            **({"ray_results": ray_results} if args.ray is not None else {}),
             "runs": len(tasks),
         },
     )
@@ -148,7 +176,14 @@ def run(args: argparse.Namespace) -> int:
     progress = execute.Progress(tasks, args.progress_interval, live=live)
     try:
         if args.ray is not None:
-            results = execute.run_ray(tasks, args.ray, progress, args.gpus_per_run)
+            results = execute.run_ray(
+                tasks,
+                args.ray,
+                progress,
+                args.gpus_per_run,
+                results=ray_results,
+                out=out,
+            )
         else:
             results = execute.run_local(tasks, workers, progress)
     except KeyboardInterrupt:
@@ -161,6 +196,9 @@ def run(args: argparse.Namespace) -> int:
         line = f"  {result['name']}: {result['status']} ({result['action']})"
         if result.get("resources", {}).get("GPU"):
             line += f" on {result['resources']['GPU']:g} GPU"
+        if result.get("node"):
+            node = result["node"]
+            line += f" on node {node['hostname']} ({node['ip']}, {node['id'][:8]})"
         if result.get("error"):
             line += f": {result['error']}"
         print(line)

@@ -2,8 +2,10 @@
 
 Each step is a ``cpg-actor`` subprocess (``python -m cpg_actor.cli``), so every run has its own
 torch / MuJoCo threads and a crash stays inside its run. Locally, ``workers`` threads each wait
-on one subprocess at a time; with Ray each run is a task with ``num_cpus=1`` and the results
-directory must be on a file system every node sees.
+on one subprocess at a time; with Ray each run is a task with ``num_cpus=1``. A Ray task writes
+the run into ``OUT`` directly where its node sees ``OUT`` (a shared file system), otherwise it
+runs in a temporary directory on its node and returns the run directory, packed, as its result
+(through Ray's object store); the head unpacks it into ``OUT`` (``RAY_RESULTS``).
 
 A run is *finished* when ``RUN_DIR/reproduce_run.json`` exists with ``status: done``: the
 training reached its total steps and every stage evaluation was written. Anything less is
@@ -13,12 +15,18 @@ evaluations are run.
 
 from __future__ import annotations
 
+import dataclasses
+import io
 import json
 import os
 import re
+import secrets
 import shutil
+import socket
 import subprocess
 import sys
+import tarfile
+import tempfile
 import threading
 import time
 from collections.abc import Callable
@@ -28,6 +36,7 @@ from typing import Any
 
 from cpg_actor.experiments.plan import RunTask
 from cpg_actor.machine import git_commit
+from cpg_actor.run_lock import LOCK_NAME
 
 MARKER = "reproduce_run.json"
 STAGES_FILE = "stages.json"
@@ -109,10 +118,13 @@ def run_is_finished(task: RunTask) -> bool:
     return data.get("status") == "done" and data.get("total_steps") == task.total_steps
 
 
-def run_one(task: RunTask, status: Status | None = None) -> dict[str, Any]:
+def run_one(
+    task: RunTask, status: Status | None = None, node: dict[str, Any] | None = None
+) -> dict[str, Any]:
     """Train (or resume) one run, then evaluate it at the stage checkpoints. Returns a summary
     ``{"name", "status": skipped|done|failed, "action", "error"}``; never raises for a failed
-    subprocess (the error names the log file)."""
+    subprocess (the error names the log file). ``node``: the Ray node that ran it, kept in the
+    run's marker."""
     report = status or (lambda name, state: None)
     run_dir, log = Path(task.run_dir), Path(task.log_path)
     result: dict[str, Any] = {"name": task.name, "variant": task.variant, "seed": task.seed}
@@ -158,6 +170,8 @@ def run_one(task: RunTask, status: Status | None = None) -> dict[str, Any]:
         "commit": git_commit(),  # the code that finished the run
         "stages": stages,
     }
+    if node is not None:
+        marker["node"] = node
     (run_dir / MARKER).write_text(json.dumps(marker, indent=2) + "\n")
     report(task.name, "done")
     return {**result, "status": "done", "action": action}
@@ -366,14 +380,240 @@ def import_ray():
     return ray
 
 
-def run_one_on_ray(task: RunTask) -> dict[str, Any]:
-    """:func:`run_one` as a Ray task, with the resources Ray gave it (``resources``: CPU, and
-    GPU shares; Ray sets ``CUDA_VISIBLE_DEVICES`` for the run's subprocess)."""
+# -- Ray: connecting ----------------------------------------------------------------------------
+# seconds the head's address has to accept a TCP connection: an address nobody answers made
+# ray.init wait for many minutes
+CONNECT_TIMEOUT = 10.0
+TOKEN_HELP = (
+    "on the head, `ray get-auth-token` prints the cluster's token; here set RAY_AUTH_MODE=token "
+    "and RAY_AUTH_TOKEN=<token> (or RAY_AUTH_TOKEN_PATH=<file holding it>; default "
+    "~/.ray/auth_token)"
+)
+
+
+def _host_port(address: str) -> tuple[str, int] | None:
+    """``(host, port)`` of ``host:port``, ``ray://host:port`` or ``[v6]:port`` (None if none)."""
+    text = address.removeprefix("ray://")
+    host, _, port = text.rpartition(":")
+    if not host or not port.isdigit():
+        return None
+    return host.strip("[]"), int(port)
+
+
+def check_reachable(address: str, timeout: float = CONNECT_TIMEOUT) -> None:
+    """Raise ConnectionError (one line) unless the head at ``address`` accepts a TCP
+    connection within ``timeout`` seconds. "auto" is checked as ``RAY_ADDRESS`` when that is
+    set; otherwise Ray looks for a cluster on this machine itself."""
+    if address == "auto":
+        address = os.environ.get("RAY_ADDRESS") or "auto"
+    target = _host_port(address)
+    if target is None:
+        return
+    try:
+        socket.create_connection(target, timeout=timeout).close()
+    except OSError as error:
+        reason = "no answer" if isinstance(error, TimeoutError) else error.strerror or str(error)
+        raise ConnectionError(
+            f"cannot reach the Ray head at {address} within {timeout:g} s ({reason}); check the "
+            f"address (`ray start --head` prints it), that the head runs and that port "
+            f"{target[1]} is open to this machine"
+        ) from None
+
+
+def _token_state() -> str:
+    """What this process would authenticate with, for an error message."""
+    if os.environ.get("RAY_AUTH_MODE", "").lower() != "token":
+        return "RAY_AUTH_MODE is not 'token' here"
+    path = os.environ.get("RAY_AUTH_TOKEN_PATH")
+    if os.environ.get("RAY_AUTH_TOKEN"):
+        return "RAY_AUTH_TOKEN does not match the cluster's token"
+    if path:
+        if not Path(path).is_file():
+            return f"RAY_AUTH_TOKEN_PATH names {path}, which does not exist"
+        return f"the token in RAY_AUTH_TOKEN_PATH={path} does not match the cluster's"
+    if not (Path.home() / ".ray" / "auth_token").is_file():
+        return "no token is set (RAY_AUTH_TOKEN, RAY_AUTH_TOKEN_PATH, ~/.ray/auth_token)"
+    return "the token in ~/.ray/auth_token does not match the cluster's"
+
+
+def _connect_error(address: str, error: BaseException) -> str:
+    """One line for a failed ``ray.init(address=...)``: a missing or wrong token, or else."""
+    chain, seen = [], error
+    while seen is not None and len(chain) < 5:
+        chain.append(f"{type(seen).__name__}: {seen}")
+        seen = seen.__cause__ or seen.__context__
+    text = " ".join(chain)
+    if "InvalidAuthToken" in text or "AuthenticationError" in text:
+        return (
+            f"the Ray cluster at {address} refused this process's authentication token "
+            f"({_token_state()}); {TOKEN_HELP}"
+        )
+    first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+    return (
+        f"cannot connect to the Ray cluster at {address}: {first}; is Ray running there "
+        f"(`ray status --address {address}` on the head)?"
+    )
+
+
+def connect_ray(address: str, local_gpus: int | None = None) -> None:
+    """``ray.init`` for ``--ray ADDRESS`` ("local": a local instance with ``local_gpus`` GPUs
+    declared, None: the GPUs it finds). Raises ConnectionError with one line when the address
+    does not answer or refuses this process's token."""
+    ray = import_ray()
+    if address == "local":
+        ray.init(include_dashboard=False, log_to_driver=False, num_gpus=local_gpus)
+        return
+    check_reachable(address)
+    try:
+        ray.init(address=address, log_to_driver=False)
+    except Exception as error:  # Ray raises ConnectionError, RuntimeError, AuthenticationError
+        raise ConnectionError(_connect_error(address, error)) from None
+
+
+def disconnect_ray() -> None:
+    try:
+        import ray
+    except ImportError:
+        return
+    if ray.is_initialized():
+        ray.shutdown()
+
+
+# -- Ray: moving run directories ------------------------------------------------------------
+# how a Ray task's run reaches OUT: "shared": written there directly (the node sees OUT);
+# "return": trained in a temporary directory on its node, returned to the head packed;
+# "auto": shared where the node sees OUT, return elsewhere
+RAY_RESULTS = ("auto", "shared", "return")
+RETURNED_LOG = "run.log"  # the run's log, next to "run/", in a packed run
+
+
+def pack_run(run_dir: Path, log_path: Path) -> bytes | None:
+    """The run directory (without its lock file) and its log as a gzipped tar, None if
+    neither exists."""
+    run_dir, log_path = Path(run_dir), Path(log_path)
+    if not run_dir.is_dir() and not log_path.is_file():
+        return None
+    buffer = io.BytesIO()
+    with tarfile.open(fileobj=buffer, mode="w:gz", compresslevel=1) as tar:
+        if run_dir.is_dir():
+            tar.add(run_dir, "run", filter=lambda m: None if m.name.endswith(LOCK_NAME) else m)
+        if log_path.is_file():
+            tar.add(log_path, RETURNED_LOG)
+    return buffer.getvalue()
+
+
+def unpack_run(data: bytes, run_dir: Path, log_path: Path) -> None:
+    """Replace ``run_dir`` and ``log_path`` by what :func:`pack_run` packed (the run
+    directory is swapped in whole, so that nothing of an older copy is left in it)."""
+    run_dir, log_path = Path(run_dir), Path(log_path)
+    run_dir.parent.mkdir(parents=True, exist_ok=True)
+    incoming = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.incoming-", dir=run_dir.parent))
+    try:
+        with tarfile.open(fileobj=io.BytesIO(data), mode="r:gz") as tar:
+            if hasattr(tarfile, "data_filter"):  # refuses links and paths out of `incoming`
+                tar.extractall(incoming, filter="data")
+            else:
+                tar.extractall(incoming)
+        if (incoming / "run").is_dir():
+            if run_dir.exists():
+                shutil.rmtree(run_dir)
+            (incoming / "run").rename(run_dir)
+        if (incoming / RETURNED_LOG).is_file():
+            log_path.parent.mkdir(parents=True, exist_ok=True)
+            shutil.move(incoming / RETURNED_LOG, log_path)
+    finally:
+        shutil.rmtree(incoming, ignore_errors=True)
+
+
+def _sees(probe: tuple[str, str] | None) -> bool:
+    """This node reads the head's probe file: it sees OUT at the head's path."""
+    if probe is None:
+        return False
+    try:
+        return Path(probe[0]).read_text() == probe[1]
+    except OSError:
+        return False
+
+
+def _moved(task: RunTask, run_dir: Path, log: Path) -> RunTask:
+    """``task`` with its run directory and log at ``run_dir`` and ``log``."""
+    args = list(task.train_args)
+    args[args.index("--run-dir") + 1] = str(run_dir)
+    return dataclasses.replace(
+        task, run_dir=str(run_dir), log_path=str(log), train_args=tuple(args)
+    )
+
+
+def _in_scratch(task: RunTask, scratch: Path) -> RunTask:
+    """``task`` with its run directory and log in ``scratch``."""
+    return _moved(task, scratch / "run", scratch / RETURNED_LOG)
+
+
+def _absolute(task: RunTask) -> RunTask:
+    """``task`` with absolute paths: a Ray worker's working directory is not the head's."""
+    return _moved(task, Path(task.run_dir).resolve(), Path(task.log_path).resolve())
+
+
+def run_one_on_ray(
+    task: RunTask,
+    results: str = "auto",
+    probe: tuple[str, str] | None = None,
+    files: bytes | None = None,
+) -> dict[str, Any]:
+    """:func:`run_one` as a Ray task, with the node that ran it (``node``: Ray's node id, its
+    IP and host name) and the resources Ray gave it (``resources``: CPU, and GPU shares; Ray
+    sets ``CUDA_VISIBLE_DEVICES`` for the run's subprocess). Where the run is not written into
+    OUT (see ``RAY_RESULTS``), it starts from ``files`` (the head's copy, packed) and
+    ``files`` in the result is the run afterwards, packed, for the head to unpack."""
     import ray
 
-    result = run_one(task)
+    node = {
+        "id": ray.get_runtime_context().get_node_id(),
+        "ip": ray.util.get_node_ip_address(),
+        "hostname": socket.gethostname(),
+    }
+    if probe is None:  # nothing to check against: as asked
+        shared = results == "shared"
+    else:
+        shared = results != "return" and _sees(probe)
+    if results == "shared" and not shared:
+        raise RuntimeError(
+            f"node {node['hostname']} ({node['ip']}) does not see the results directory "
+            f"{Path(probe[0]).parent} of the head: it is not on a file system shared with this "
+            "node; use --ray-results auto or return"
+        )
+    if shared:
+        result = run_one(task, node={**node, "files": "shared"})
+    else:
+        with tempfile.TemporaryDirectory(prefix="cpg-actor-run-") as scratch:
+            local = _in_scratch(task, Path(scratch))
+            if files is not None:
+                unpack_run(files, Path(local.run_dir), Path(local.log_path))
+            result = run_one(local, node={**node, "files": "returned"})
+            result["files"] = pack_run(Path(local.run_dir), Path(local.log_path))
+            if result.get("error"):  # name the head's log, where it will be
+                result["error"] = result["error"].replace(local.log_path, task.log_path)
+    result["node"] = node
     result["resources"] = dict(ray.get_runtime_context().get_assigned_resources())
     return result
+
+
+# -- Ray: scheduling ----------------------------------------------------------------------------
+# a run whose worker or node dies is started again (on another node if its node is gone), this
+# many times; it resumes from its last checkpoint where OUT is shared, and starts from the
+# files the head sent it otherwise
+RAY_RETRIES = 2
+
+
+def _failed(task: RunTask, error: str) -> dict[str, Any]:
+    return {
+        "name": task.name,
+        "variant": task.variant,
+        "seed": task.seed,
+        "status": "failed",
+        "action": "-",
+        "error": error,
+    }
 
 
 def run_ray(
@@ -382,27 +622,47 @@ def run_ray(
     progress: Progress,
     gpus_per_run: float = 0.0,
     local_gpus: int | None = None,
+    results: str = "auto",
+    out: Path | None = None,
 ) -> list[dict[str, Any]]:
-    """One Ray task per run on the cluster at ``address`` ("local": start a local Ray
-    instance, with ``local_gpus`` GPUs declared, None: the GPUs it finds), each asking for one
-    CPU and ``gpus_per_run`` of a GPU (e.g. 0.2: five runs share a GPU; Ray places them and
-    sets ``CUDA_VISIBLE_DEVICES``). ``OUT`` must be on a file system shared by every node."""
+    """One Ray task per unfinished run on the cluster at ``address`` (connected to unless
+    already: :func:`connect_ray`), each asking for one CPU and ``gpus_per_run`` of a GPU (e.g.
+    0.2: five runs share a GPU; Ray places them and sets ``CUDA_VISIBLE_DEVICES``). ``results``
+    (``RAY_RESULTS``) says how runs reach ``out``, the results directory on this machine."""
     if not gpus_per_run >= 0:
         raise ValueError(f"gpus_per_run must be >= 0, got {gpus_per_run!r}")
+    if results not in RAY_RESULTS:
+        raise ValueError(f"--ray-results must be one of {', '.join(RAY_RESULTS)}, got {results!r}")
     ray = import_ray()
-    if address == "local":
-        ray.init(include_dashboard=False, log_to_driver=False, num_gpus=local_gpus)
-    else:
-        ray.init(address=address, log_to_driver=False)
+    if not ray.is_initialized():
+        connect_ray(address, local_gpus)
+    probe_path = None
     try:
-        options = {"num_cpus": 1, "max_retries": 0}
+        probe = None
+        if results != "return" and out is not None:
+            token = secrets.token_hex(16)
+            probe_path = Path(out).resolve() / f".ray-probe-{token[:8]}"
+            probe_path.write_text(token)
+            probe = (str(probe_path), token)
+        options = {"num_cpus": 1, "max_retries": RAY_RETRIES}
         if gpus_per_run > 0:
             options["num_gpus"] = gpus_per_run
         remote = ray.remote(**options)(run_one_on_ray)
-        pending = {remote.remote(task): task for task in tasks}
+        collected: list[dict[str, Any]] = []
+        pending = {}
         for task in tasks:
+            if run_is_finished(task):
+                progress.set(task.name, "skipped")
+                collected.append(
+                    {"name": task.name, "variant": task.variant, "seed": task.seed,
+                     "status": "skipped", "action": "finished earlier"}
+                )  # fmt: skip
+                continue
+            files = None
+            if results != "shared":
+                files = pack_run(Path(task.run_dir), Path(task.log_path))
+            pending[remote.remote(_absolute(task), results, probe, files)] = task
             progress.set(task.name, "submitted")
-        results: list[dict[str, Any]] = []
 
         def finished() -> bool:
             if pending:
@@ -411,21 +671,29 @@ def run_ray(
                     task = pending.pop(ref)
                     try:
                         result = ray.get(ref)
-                    except Exception as error:  # the worker died or run_one raised
-                        result = {
-                            "name": task.name,
-                            "variant": task.variant,
-                            "seed": task.seed,
-                            "status": "failed",
-                            "action": "-",
-                            "error": repr(error),
-                        }
+                        files = result.pop("files", None)
+                        if files is not None:
+                            unpack_run(files, Path(task.run_dir), Path(task.log_path))
+                    except Exception as error:  # the task raised, died RAY_RETRIES + 1 times
+                        result = _failed(task, _one_line(error))
                     progress.set(task.name, result["status"])
-                    results.append(result)
+                    collected.append(result)
             return not pending
 
         progress.watch(finished)
     finally:
+        if probe_path is not None:
+            probe_path.unlink(missing_ok=True)
         ray.shutdown()
     order = {task.name: i for i, task in enumerate(tasks)}
-    return sorted(results, key=lambda r: order[r["name"]])
+    return sorted(collected, key=lambda r: order[r["name"]])
+
+
+def _one_line(error: BaseException) -> str:
+    """A task's error in one line: Ray wraps an exception raised in a task with the remote
+    traceback; its last line is the exception itself."""
+    cause = getattr(error, "cause", None)
+    if isinstance(cause, BaseException):
+        return f"{type(cause).__name__}: {cause}"
+    lines = [line for line in str(error).strip().splitlines() if line.strip()]
+    return lines[-1].strip() if lines else repr(error)

@@ -629,6 +629,16 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
             lines.append(f"* **failed** {r['name']}: {r.get('error', '')}")
         if failed:
             lines.append("")
+        nodes: dict[str, list[str]] = {}
+        for r in run_results:
+            if r.get("node"):
+                node = r["node"]
+                key = f"{node['hostname']} ({node['ip']}, node {node['id'][:8]})"
+                nodes.setdefault(key, []).append(r["name"])
+        if nodes:
+            lines += [f"Ray nodes this invocation ({len(nodes)}):", ""]
+            lines += [f"* {key}: {', '.join(names)}" for key, names in nodes.items()]
+            lines.append("")
 
     lines += [
         "## Results per variant",
