@@ -61,3 +61,34 @@ def test_cpg_demo_rejects_bad_options(tmp_path, capsys, extra, message):
     assert main(argv) == 2
     assert message in capsys.readouterr().err
     assert not (tmp_path / "demo.png").exists()
+
+
+def test_the_two_oscillators_lines_stay_distinguishable_where_they_coincide():
+    """Open loop the HFE and KFE phase velocities are equal: the two lines differ in style
+    and width (the KFE's dashed over the HFE's), the panel says they overlap; the legends sit
+    outside the axes."""
+    import numpy as np
+
+    from cpg_actor.commands.cpg_demo import demo_figure
+    from cpg_actor.cpg import hopper_cpg
+
+    values = {k: v.detach().numpy() for k, v in hopper_cpg(0.01).parametrisation.values().items()}
+    t = 0.01 * np.arange(1, 101)
+    x = np.stack([0.15 * np.cos(4 * np.pi * t), 0.3 * np.cos(4 * np.pi * t + np.pi)], axis=1)
+    same = np.full((100, 2), 4 * np.pi)
+    fig = demo_figure(t, x, same, np.zeros((100, 2)), values, 0.01, (0.0, np.pi), [0.0, 0.0],
+                      [0.0, 0.0])  # fmt: skip
+    hfe, kfe = fig.axes[1].get_lines()[:2]
+    assert (hfe.get_label(), kfe.get_label()) == ("HFE", "KFE")
+    assert hfe.get_linestyle() != kfe.get_linestyle()
+    assert hfe.get_linewidth() > kfe.get_linewidth()  # the wider one shows around the other
+    assert "overlap" in fig.axes[1].get_title(loc="left")
+    assert [axis.get_ylabel().split("\n")[0] for axis in fig.axes] == [
+        "output $x$: offset from", "phase velocity", "amplitude acceleration"]  # fmt: skip
+    for axis in fig.axes:
+        assert axis.get_legend().get_bbox_to_anchor().x0 > axis.bbox.x1
+
+    apart = same + np.array([1.0, -1.0])  # with feedback they differ: nothing to say
+    fig = demo_figure(t, x, apart, np.zeros((100, 2)), values, 0.01, (0.0, np.pi), [1.0, -1.0],
+                      [0.0, 0.0])  # fmt: skip
+    assert fig.axes[1].get_title(loc="left") == ""

@@ -62,3 +62,40 @@ def test_the_leg_layout_trots_forward_faster_with_the_drive(tmp_path):
                         for p, t in zip(phases, trot_table, strict=True)]  # fmt: skip
             assert max(distance) < 0.15, phases
     assert speeds[1.0] > 0.4 and speeds[1.0] > speeds[0.0] + 0.3
+
+
+def test_the_gait_figure_draws_each_gaits_reference_next_to_the_cpgs_result():
+    """Next to each gait's diagram, one cycle of its reference pattern (grey: each leg's
+    touchdown at the gait's phase offset) over the CPG's measured one (blue)."""
+    from cpg_actor.commands.gaits import REFERENCE_DUTY, gaits_figure
+    from cpg_actor.cpg.gaits import GAITS
+
+    contact = np.zeros((100, 4), dtype=bool)
+    contact[::2] = True
+    summary = {
+        gait: {"fell": 0, "robots": 1, "forward_speed": 0.2,
+               "duty_factor": dict.fromkeys(("LF", "RF", "LH", "RH"), 0.6),
+               "touchdown_phase": {"LF": 0.0, "RF": 0.5, "LH": 0.5, "RH": float("nan")}}
+        for gait in ("trot", "walk")
+    }  # fmt: skip
+    fig = gaits_figure({"trot": (contact, 0.02), "walk": (contact, 0.02)}, summary, 0.5)
+    diagrams, references = fig.axes[0::2], fig.axes[1::2]
+    assert [axis.get_title(loc="left").split(":")[0] for axis in diagrams] == ["trot", "walk"]
+    for gait, axis in zip(("trot", "walk"), references, strict=True):
+        assert f"{gait} reference" in axis.get_title(loc="left")
+        labels = [c.get_label() for c in axis.collections]
+        assert labels.count(f"reference {gait}") == 1 and labels.count("CPG (robot 0)") == 1
+        grey = axis.collections[labels.index(f"reference {gait}")].get_facecolor()[0]
+        # each leg's reference bar: from its phase offset (a wrapped bar also starts at 0)
+        starts: dict[str, set[float]] = {}
+        for collection in axis.collections:
+            if not np.allclose(collection.get_facecolor()[0], grey):
+                continue
+            for path in collection.get_paths():
+                leg = ("RH", "LH", "RF", "LF")[int(round(path.vertices[:, 1].mean() - 0.21))]
+                starts.setdefault(leg, set()).add(round(float(path.vertices[:, 0].min()), 6))
+        for leg, offset in zip(("LF", "RF", "LH", "RH"), GAITS[gait], strict=True):
+            assert offset in starts[leg], (gait, leg, starts)
+            assert starts[leg] <= {offset, 0.0}
+        assert axis.get_xlim() == (0.0, 1.0)
+    assert f"{REFERENCE_DUTY:g} of a cycle" in references[-1].get_xlabel()

@@ -1,17 +1,77 @@
 """Drawing shared by the commands that write figures: the gait diagram (which foot is on the
-ground, per leg, over time) of ``cpg-actor gaits`` and ``cpg-actor eval``, the unit of a
-steps axis, and an atomic ``savefig``."""
+ground, per leg, over time) of ``cpg-actor gaits`` and ``cpg-actor eval``, how an env's episode
+metrics are named on an axis, the unit of a steps axis, step counts as legend labels, the
+motor's velocity limit on a velocity axis, and an atomic ``savefig``."""
 
 from __future__ import annotations
 
 import os
 import uuid
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 GAIT_WINDOW = 2.0  # s: the last seconds a gait diagram shows
+
+
+@dataclass(frozen=True)
+class MetricInfo:
+    """How an env's episode metric reads on a figure or in a printed line."""
+
+    label: str  # plain words
+    unit: str = ""  # "" for a ratio or a count
+    undefined: str = ""  # when an episode leaves it NaN (undefined), in words
+
+
+# the episode metrics of the robots' envs (``info["episode_metrics"]``); a metric not listed
+# is shown by its name
+METRICS: dict[str, MetricInfo] = {
+    "hop_height": MetricInfo("hop height", "m"),
+    "speed_error": MetricInfo("forward-speed error", "m/s"),
+    "forward_speed": MetricInfo("forward speed", "m/s"),
+    "fell": MetricInfo("share of episodes that fell"),
+    "episode_seconds": MetricInfo("episode length", "s"),
+    "cost_of_transport": MetricInfo(
+        "cost of transport",
+        undefined="the robot walked less than 0.1 m forward",
+    ),
+    "foot_slip": MetricInfo("foot slip speed", "m/s", undefined="no foot was planted"),
+}
+
+
+def metric_label(name: str) -> str:
+    """An axis label for an episode metric: ``"hop height (m)"``; its name for one not in
+    :data:`METRICS`."""
+    info = METRICS.get(name)
+    if info is None:
+        return name.replace("_", " ")
+    return f"{info.label} ({info.unit})" if info.unit else info.label
+
+
+def step_labels(steps: Sequence[float]) -> list[str]:
+    """Training step counts as short labels (``"4.1k"``, ``"20M"``), the unit chosen by the
+    largest (k under a million, M from it), with as many digits as it takes for different
+    counts to read differently."""
+    values = [float(s) for s in steps]
+    largest = max((abs(v) for v in values), default=0.0)
+    scale, unit = (1e6, "M") if largest >= 1e6 else (1e3, "k") if largest >= 1e3 else (1.0, "")
+    for digits in range(3, 10):
+        labels = [f"{v / scale:.{digits}g}{unit}" if v else "0" for v in values]
+        if len(set(labels)) == len(set(values)):
+            return labels
+    return [f"{v:,.0f}" for v in values]
+
+
+def draw_velocity_limits(axis, limit: float | None) -> None:
+    """Dashed lines at +-``limit`` (rad/s, the motor's speed limit) on a joint-velocity axis,
+    labelled once for the legend; nothing where the limit is not known."""
+    if limit is None or not np.isfinite(limit):
+        return
+    for sign in (1, -1):
+        axis.axhline(sign * limit, color="tab:red", lw=1.0, ls="--",
+                     label=f"motor speed limit ±{limit:g} rad/s" if sign > 0 else None)  # fmt: skip
 
 
 def draw_gait_diagram(
@@ -48,12 +108,8 @@ def step_axis(largest: float, name: str = "training steps") -> tuple[float, str]
 
 
 def steps_text(steps: float) -> str:
-    """A step count as budgets are written: ``"500k"``, ``"20M"``, ``"8.19k"`` (3 significant
-    digits unless whole), ``"512"``."""
-    for divisor, suffix in ((1e6, "M"), (1e3, "k")):
-        if steps >= divisor:
-            return f"{steps / divisor:.3g}{suffix}"
-    return f"{steps:.0f}"
+    """A step count as budgets are written: ``"500k"``, ``"20M"``, ``"8.19k"``, ``"512"``."""
+    return step_labels([steps])[0]
 
 
 def save_figure(fig, path: str | os.PathLike, dpi: int = 110) -> Path:

@@ -380,3 +380,67 @@ def test_the_episode_reward_figure_counts_steps_in_units_its_runs_read_in(tmp_pa
     (axis,) = drawn[0].axes
     assert axis.get_xlabel() == "time steps (thousands)"
     assert axis.get_lines()[0].get_xdata().max() == pytest.approx(5.0)
+
+
+def test_training_over_time_labels_each_snapshot_once_and_titles_it(tmp_path, monkeypatch):
+    """A budget too short for the stages: two of them evaluate the same checkpoint (iteration
+    0). Each policy is drawn once, its legend label the steps in k (not "0M" twice); the titles
+    say what is drawn, on which robot; des_vel's limit lines are the runs' configured motor
+    limit."""
+    from cpg_actor.experiments import figures
+
+    out = tmp_path / "out"
+    for variant in ("cpg-actor", "mlp"):
+        run = _fake_run(out, variant, 0)
+        rows = [{"iteration": i, "global_step": 2048 * i} for i in range(3)]
+        (run / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+        stages = [{"stage": k, "fraction": f, "iteration": i, "checkpoint": "x",
+                   "traces": "eval/stage0/traces.npz"}
+                  for k, (f, i) in enumerate(((1 / 60, 0), (1 / 3, 0), (1.0, 2)))]  # fmt: skip
+        (run / "eval" / "stages.json").write_text(json.dumps(stages))
+        (run / "config.yaml").write_text("robot: hopper\nenv:\n  velocity_limit: 12.0\n")
+    drawn = {}
+
+    def keep(fig, directory, name):  # the figure, instead of its files
+        drawn[name] = fig
+        return []
+
+    monkeypatch.setattr(figures, "_save", keep)
+    results = Results.load(out, ["cpg-actor", "mlp"])
+    assert figures.cpg_actor_training_over_time(results, out) == ([], [])
+    fig = drawn["cpg_actor_training_over_time"]
+    heights, hfe, kfe = fig.axes
+    assert [t.get_text() for t in hfe.get_legend().get_texts()] == ["0 steps", "4.1k steps"]
+    assert [t.get_text() for t in heights.get_legend().get_texts()] == [
+        "hip, 0 steps", "hip, 4.1k steps"]  # fmt: skip
+    titles = [fig._suptitle.get_text()] + [axis.get_title() for axis in fig.axes]
+    assert "progressively" not in " ".join(titles)
+    assert titles[0] == (
+        "CPG-Actor seed 0 on the hopper: eval episode 0 after 0, 4.1k training steps"
+    )
+    assert titles[1:] == ["The hopper's hip and foot height at each snapshot",
+                          "Desired HFE position at each snapshot",
+                          "Desired KFE position at each snapshot"]  # fmt: skip
+
+    figures.des_output(results, out)
+    for axis in drawn["des_vel"].axes:
+        limits = sorted(line.get_ydata()[0] for line in axis.get_lines()
+                        if line.get_linestyle() == "--")  # fmt: skip
+        assert limits == [-12.0, 12.0]
+
+
+def test_the_tables_of_means_say_that_fewer_seeds_show_the_mean_alone(tmp_path):
+    out = tmp_path / "out"
+    _fake_run(out, "cpg-actor", 0, responsive=True)
+    report = write_report(out).read_text()
+    assert _interval_free(report) == []
+    assert report.count("(n < 3 seeds: the mean alone, no interval)") == 3
+
+
+def test_a_sweep_of_one_seed_shows_the_value_alone_marked_n_1():
+    from cpg_actor.experiments.sweep import _mean_std
+
+    assert _mean_std([0.51234], 3) == "0.512 (n=1)"
+    assert _mean_std([1.0, float("nan")], 1) == "1.0 (n=1)"
+    assert _mean_std([1.0, 3.0], 1) == "2.0 ± 1.0"
+    assert _mean_std([], 1) == "-"

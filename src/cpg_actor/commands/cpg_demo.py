@@ -82,12 +82,67 @@ def _umask() -> int:
     return mask
 
 
+def demo_figure(t, x, theta_dot, r_ddot, values, dt, phase0, xi_values, kappa_values):
+    """The figure of the integrated CPG: the output x, theta_dot and r_ddot of each oscillator
+    (rows ``t``), the preset's ``values`` in the title."""
+    import numpy as np
+    from matplotlib.figure import Figure  # no pyplot: no global state, Agg canvas
+
+    from cpg_actor.cpg import HOPPER_JOINTS, HOPPER_NOMINAL_POSE
+
+    fig = Figure(figsize=(9.0, 7.5), layout="constrained")
+    axes = fig.subplots(3, 1, sharex=True)
+    # a colour and a line style per oscillator: the KFE's, dashed and thinner, drawn over the
+    # HFE's, so that where they coincide (phase-locked: one phase velocity) both still show
+    styles = ({"color": "tab:blue", "lw": 2.6}, {"color": "tab:orange", "lw": 1.3, "ls": "--"})
+    colours = tuple(style["color"] for style in styles)
+    for i, joint in enumerate(HOPPER_JOINTS):
+        label = f"{joint}\n(nominal {HOPPER_NOMINAL_POSE[i]:+.2f} rad)"
+        axes[0].plot(t, x[:, i], label=label, **styles[i])
+        axes[1].plot(t, theta_dot[:, i], label=joint, **styles[i])
+        axes[2].plot(t, r_ddot[:, i], label=joint, **styles[i])
+        axes[0].axhline(values["amplitude"][i], color=colours[i], lw=0.6, ls=":")
+        axes[0].axhline(-values["amplitude"][i], color=colours[i], lw=0.6, ls=":")
+    axes[0].plot([], [], color="grey", lw=0.6, ls=":", label=r"$\pm\rho$")
+    intrinsic = 2 * math.pi * values["frequency"]
+    axes[1].axhline(intrinsic[0], color="grey", lw=0.8, ls="--", label=r"$2\pi\nu$")
+    if np.allclose(theta_dot[:, 0], theta_dot[:, 1], rtol=1e-5, atol=1e-4):
+        axes[1].set_title("HFE and KFE phase velocities are equal: the lines overlap",
+                          fontsize="small", loc="left")  # fmt: skip
+    axes[0].set_ylabel("output $x$: offset from\nthe nominal pose (rad)")
+    axes[1].set_ylabel("phase velocity\n" r"$\dot\theta$ (rad/s)")
+    axes[2].set_ylabel("amplitude acceleration\n" r"$\ddot r$ (rad/s$^2$)")
+    axes[2].set_xlabel("time (s)")
+    for axis, minimum_span in zip(axes, (0.1, 2.0, 2.0), strict=True):
+        # a flat trace must look flat, not like float32 round-off magnified by autoscaling
+        axis.ticklabel_format(axis="y", useOffset=False)
+        low, high = axis.get_ylim()
+        if high - low < minimum_span:
+            middle = 0.5 * (low + high)
+            axis.set_ylim(middle - minimum_span / 2, middle + minimum_span / 2)
+        axis.grid(alpha=0.3)
+        axis.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
+    phi = values["phase_bias"][0, 1]
+    feedback = any(v != 0 for v in xi_values + kappa_values)
+    mode = "constant feedback" if feedback else "open loop (no feedback)"
+    fig.suptitle(
+        f"Hopper CPG, {mode}: nu = {values['frequency'][0]:.2f} Hz, "
+        f"rho = ({values['amplitude'][0]:.2f}, {values['amplitude'][1]:.2f}) rad, "
+        f"a = {values['convergence'][0]:.0f} 1/s, w = {values['coupling_weight'][0, 1]:.0f}, "
+        f"phi = {phi:.2f} rad\n"
+        f"dt = {dt} s, theta(0) = ({phase0[0]:.2f}, {phase0[1]:.2f}) rad, "
+        f"xi = {xi_values} rad/s, "
+        f"kappa = {kappa_values} rad/s$^2$",
+        fontsize="medium",
+    )
+    return fig
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
-    from matplotlib.figure import Figure  # no pyplot: no global state, Agg canvas
 
-    from cpg_actor.cpg import HOPPER_JOINTS, HOPPER_NOMINAL_POSE, hopper_cpg
+    from cpg_actor.cpg import HOPPER_JOINTS, hopper_cpg
 
     out = Path(args.out)
     if out.suffix.lower() != ".png":
@@ -129,45 +184,8 @@ def run(args: argparse.Namespace) -> int:
     values = {k: v.detach().numpy() for k, v in net.parametrisation.values().items()}
 
     # -- plot -----------------------------------------------------------------------------
-    fig = Figure(figsize=(9.0, 7.5), layout="constrained")
-    axes = fig.subplots(3, 1, sharex=True)
-    colours = ("tab:blue", "tab:orange")
-    for i, joint in enumerate(HOPPER_JOINTS):
-        label = f"{joint}\n(nominal {HOPPER_NOMINAL_POSE[i]:+.2f} rad)"
-        axes[0].plot(t, x[:, i], color=colours[i], label=label)
-        axes[1].plot(t, theta_dot[:, i], color=colours[i], label=joint)
-        axes[2].plot(t, r_ddot[:, i], color=colours[i], label=joint)
-        axes[0].axhline(values["amplitude"][i], color=colours[i], lw=0.6, ls=":")
-        axes[0].axhline(-values["amplitude"][i], color=colours[i], lw=0.6, ls=":")
-    axes[0].plot([], [], color="grey", lw=0.6, ls=":", label=r"$\pm\rho$")
-    intrinsic = 2 * math.pi * values["frequency"]
-    axes[1].axhline(intrinsic[0], color="grey", lw=0.8, ls="--", label=r"$2\pi\nu$")
-    axes[0].set_ylabel("$x$ (rad)\noffset from nominal")
-    axes[1].set_ylabel(r"$\dot\theta$ (rad/s)")
-    axes[2].set_ylabel(r"$\ddot r$ (rad/s$^2$)")
-    axes[2].set_xlabel("time (s)")
-    for axis, minimum_span in zip(axes, (0.1, 2.0, 2.0), strict=True):
-        # a flat trace must look flat, not like float32 round-off magnified by autoscaling
-        axis.ticklabel_format(axis="y", useOffset=False)
-        low, high = axis.get_ylim()
-        if high - low < minimum_span:
-            middle = 0.5 * (low + high)
-            axis.set_ylim(middle - minimum_span / 2, middle + minimum_span / 2)
-        axis.grid(alpha=0.3)
-        axis.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")
-    phi = values["phase_bias"][0, 1]
-    feedback = any(v != 0 for v in xi_values + kappa_values)
-    mode = "constant feedback" if feedback else "open loop (no feedback)"
-    fig.suptitle(
-        f"Hopper CPG, {mode}: nu = {values['frequency'][0]:.2f} Hz, "
-        f"rho = ({values['amplitude'][0]:.2f}, {values['amplitude'][1]:.2f}) rad, "
-        f"a = {values['convergence'][0]:.0f} 1/s, w = {values['coupling_weight'][0, 1]:.0f}, "
-        f"phi = {phi:.2f} rad\n"
-        f"dt = {args.dt} s, theta(0) = ({float(state0.phase[0, 0]):.2f}, "
-        f"{float(state0.phase[0, 1]):.2f}) rad, xi = {xi_values} rad/s, "
-        f"kappa = {kappa_values} rad/s$^2$",
-        fontsize="medium",
-    )
+    phase0 = (float(state0.phase[0, 0]), float(state0.phase[0, 1]))
+    fig = demo_figure(t, x, theta_dot, r_ddot, values, args.dt, phase0, xi_values, kappa_values)
 
     # -- write atomically -----------------------------------------------------------------
     out.parent.mkdir(parents=True, exist_ok=True)

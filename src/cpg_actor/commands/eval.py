@@ -1,11 +1,12 @@
 """`cpg-actor eval`: deterministic evaluation of a trained run; traces, figures (and a video) on
 disk.
 
-Next to the traces: ``training_curves.png`` and ``traces.png`` for every run, and the figures of
-what the env reports (its step ``info``): with foot contacts, a gait diagram
-(``gait_diagram.png``); with a forward-speed command, commanded vs measured forward speed
-(``forward_speed.png``). The video shows one episode of the agent's own env, drawn by the env's
-``render_frame``.
+Next to the traces: ``training_curves.png`` (the return and the env's own episode metrics
+against training steps) and ``traces.png`` (episode 0's joints, CPG and heights, per limb)
+for every run, and the figures of what the env reports (its step ``info``): with foot
+contacts, a gait diagram (``gait_diagram.png``); with a forward-speed command, commanded vs
+measured forward speed (``forward_speed.png``). The video shows one episode of the agent's
+own env, drawn by the env's ``render_frame``.
 """
 
 from __future__ import annotations
@@ -17,8 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from cpg_actor.envs.config import SIMULATORS
-from cpg_actor.plots import draw_gait_diagram, save_figure
-from cpg_actor.progress import metrics_text
+from cpg_actor.plots import GAIT_WINDOW, draw_gait_diagram, save_figure
 
 HELP = "evaluate a trained run deterministically; save per-step traces, figures (and a video)"
 # the figures drawn where the traces have what they need (the quadruped's), next to the traces
@@ -67,7 +67,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import TrainConfig, apply_dict, parse_override
-    from cpg_actor.evaluation import finite_mean
     from cpg_actor.policy import load_policy
 
     run_dir = Path(args.run_dir)
@@ -120,22 +119,15 @@ def run(args: argparse.Namespace) -> int:
         os.replace(tmp, output)
     finally:
         tmp.unlink(missing_ok=True)
-    names = [str(name) for name in traces["metric_names"]]  # the env's (hop_height)
-    for i in range(args.episodes):
-        metrics = metrics_text({name: traces[name][i] for name in names})
-        print(
-            f"episode {i}: return {traces['episode_return'][i]:.3f}, "
-            f"{metrics + ', ' if metrics else ''}{traces['length'][i]} steps"
-        )
-    means = metrics_text({f"mean {name}": finite_mean(traces[name]) for name in names})
-    print(
-        f"mean return {traces['episode_return'].mean():.3f}{', ' + means if means else ''} "
-        f"over {args.episodes} episodes; traces in {output}"
-    )
+    for line in episode_lines(traces):
+        print(line)
+    print(f"traces in {output}")
+    title = f"{run_dir.name}: {config.agent} on the {config.robot}"
     figures = plot_training_curves(
-        run_dir / "metrics.jsonl", output.parent / "training_curves.png", traces["metric_names"]
-    )
-    figures += plot_traces(traces, output.parent / "traces.png")
+        run_dir / "metrics.jsonl", output.parent / "training_curves.png", traces["metric_names"],
+        title,
+    )  # fmt: skip
+    figures += plot_traces(traces, output.parent / "traces.png", title)
     figures += plot_gait(traces, output.parent / GAIT_FIGURE)  # [] where the env has no feet
     figures += plot_speed(traces, output.parent / SPEED_FIGURE)
     for figure in figures:
@@ -167,7 +159,47 @@ def evaluate(policy, config, episodes: int, seed: int) -> dict[str, np.ndarray]:
     finally:
         env.close()
     traces["agent"] = np.array(config.agent)
+    # the motor's no-load speed (rad/s), drawn on the velocity panels of traces.png
+    traces["velocity_limit"] = np.array(float(config.env.velocity_limit))
+    cpg = getattr(policy.agent, "cpg", None)  # a CPG in the agent: its oscillators' names
+    if cpg is not None and "theta_dot" in traces:
+        traces["oscillator_names"] = np.array(cpg.topology.names, dtype=str)
     return traces
+
+
+def episode_lines(traces: dict[str, np.ndarray]) -> list[str]:
+    """The printed result of an evaluation: a line per episode (return, the env's metrics,
+    steps), the means, and a footnote where a metric was undefined (NaN) for an episode: it
+    prints as "—" and the mean is over the episodes that define it (how many is said)."""
+    from cpg_actor.evaluation import finite_mean
+    from cpg_actor.plots import METRICS
+
+    names = [str(name) for name in traces["metric_names"]]  # the env's (hop_height)
+    episodes = len(traces["episode_return"])
+
+    def value(x: float) -> str:
+        return f"{x:.3f}" if np.isfinite(x) else "—"
+
+    lines = []
+    for i in range(episodes):
+        metrics = ", ".join(f"{name} {value(traces[name][i])}" for name in names)
+        lines.append(f"episode {i}: return {traces['episode_return'][i]:.3f}, "
+                     f"{metrics + ', ' if metrics else ''}{traces['length'][i]} steps")  # fmt: skip
+    means, undefined = [], []
+    for name in names:
+        defined = int(np.isfinite(np.asarray(traces[name], dtype=float)).sum())
+        text = f"mean {name} {value(finite_mean(traces[name]))}"
+        if defined < episodes:
+            text += f" (over the {defined} of {episodes} episodes that define it)"
+            undefined.append(name)
+        means.append(text)
+    lines.append(", ".join([f"mean return {traces['episode_return'].mean():.3f}", *means])
+                 + f" over {episodes} episodes")  # fmt: skip
+    for name in undefined:
+        reason = METRICS[name].undefined if name in METRICS else ""
+        where = f" where {reason}" if reason else ""
+        lines.append(f"—: {name} is undefined for an episode{where}; the mean leaves it out")
+    return lines
 
 
 def record_video(policy, config, path: Path, seed: int, overwrite: bool) -> None:
@@ -194,89 +226,229 @@ def record_video(policy, config, path: Path, seed: int, overwrite: bool) -> None
         env.close()
 
 
-def plot_training_curves(metrics: Path, path: Path, metric_names=()) -> list[Path]:
-    """Episode return and an episode metric against training steps, from ``metrics.jsonl``:
-    the hop height, the quadruped's speed error, else the first of the env's ``metric_names``
-    that was logged."""
+def plot_training_curves(
+    metrics: Path, path: Path, metric_names=(), title: str | None = None
+) -> list[Path]:
+    """The run's learning curves from ``metrics.jsonl`` (:func:`training_curves_figure`);
+    nothing where the run has no metrics file."""
     import json
 
     if not metrics.is_file():
         return []
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     rows = [json.loads(line) for line in metrics.read_text().splitlines() if line.strip()]
-    steps = np.array([r["global_step"] for r in rows], dtype=float)
-    labels = {"hop_height": "mean hop height (m)", "speed_error": "mean speed error (m/s)"}
-    logged = [name for name in (*labels, *map(str, metric_names))
-              if any(r.get(f"charts/{name}") is not None for r in rows)]  # fmt: skip
-    metric = logged[0] if logged else "hop_height"
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.5))
-    for ax, key, label in (
-        (axes[0], "charts/episode_return", "mean episode return"),
-        (axes[1], f"charts/{metric}", labels.get(metric, f"mean {metric}")),
-    ):
-        values = np.array([np.nan if r.get(key) is None else r[key] for r in rows], dtype=float)
-        ax.plot(steps, values)
-        ax.set_xlabel("control steps")
-        ax.set_ylabel(label)
-        ax.grid(alpha=0.3)
-    fig.suptitle(str(metrics.parent.name))
-    fig.tight_layout()
+    names = [str(name) for name in metric_names]
+    fig = training_curves_figure(rows, names, title or metrics.parent.name)
     save_figure(fig, path, dpi=120)
-    plt.close(fig)
     return [path]
 
 
-def plot_traces(traces: dict[str, np.ndarray], path: Path) -> list[Path]:
-    """Episode 0: desired vs measured positions, desired velocities, heights (paper Fig. 6-7)."""
-    import matplotlib
+def training_curves_figure(rows: list[dict], metric_names=(), title: str = ""):
+    """A panel per quantity the run logged against training steps: the episode return, then
+    each of the env's episode metrics (``metric_names``: the hopper's hop height, the
+    quadruped's speed error, forward speed, ...; without names, every ``eval/`` metric of the
+    env), each from the training episodes (``charts/NAME``) and the deterministic evaluations
+    (``eval/NAME``) where logged. A quantity never logged gets no panel."""
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from cpg_actor.plots import METRICS, metric_label
+    from cpg_actor.progress import NOT_ENV_METRICS
 
-    t = traces["time"]
-    panels = [
-        ("position (rad)", "desired_position", "measured_position"),
-        ("desired velocity (rad/s)", "desired_velocity", None),
-    ]
-    if "theta_dot" in traces:
-        panels += [("theta_dot (rad/s)", "theta_dot", None), ("r_ddot (rad/s^2)", "r_ddot", None)]
-    # the robot's first joints (traces saved before joint names were: the hopper's two)
-    joints = [str(j) for j in traces.get("joint_names", ("HFE", "KFE"))][:3]
-    heights = "hip_height" in traces
-    rows = len(panels) + int(heights)
-    fig, axes = plt.subplots(rows, 1, figsize=(9, 2.2 * rows), sharex=True)
-    for ax, (label, key, measured) in zip(axes, panels, strict=False):
+    names = list(metric_names) or sorted(
+        {key.removeprefix("eval/") for row in rows for key in row if key.startswith("eval/")}
+        - set(NOT_ENV_METRICS)
+    )
+    order = list(METRICS)  # the known metrics in the table's order (the task's first)
+    names.sort(key=lambda name: (order.index(name) if name in order else len(order), name))
+    steps = np.array([row.get("global_step", np.nan) for row in rows], dtype=float)
+
+    def series(key: str) -> tuple[np.ndarray, np.ndarray]:
+        values = np.array([np.nan if row.get(key) is None else row[key] for row in rows],
+                          dtype=float)  # fmt: skip
+        kept = np.isfinite(values) & np.isfinite(steps)
+        return steps[kept], values[kept]
+
+    panels = []  # (label, training series, evaluation series)
+    for label, training, evaluation in (
+        ("episode return", "charts/episode_return", "eval/return"),
+        *((metric_label(name), f"charts/{name}", f"eval/{name}") for name in names),
+    ):
+        curves = series(training), series(evaluation)
+        if any(len(x) for x, _ in curves):
+            panels.append((label, *curves))
+    columns = min(4, max(1, len(panels)))
+    rows_of_panels = -(-max(1, len(panels)) // columns)
+    fig = Figure(figsize=(3.6 * columns + 0.6, 2.9 * rows_of_panels + 0.8), layout="constrained")
+    axes = np.atleast_1d(fig.subplots(rows_of_panels, columns, squeeze=False)).ravel()
+    for axis in axes[len(panels) :]:
+        axis.set_visible(False)
+    if not panels:
+        axes[0].set_visible(True)
+        axes[0].text(0.5, 0.5, "no finished episode and no evaluation logged yet",
+                     ha="center", va="center", transform=axes[0].transAxes)  # fmt: skip
+        axes[0].set_axis_off()
+    for axis, (label, training, evaluation) in zip(axes, panels, strict=False):
+        if len(training[0]):
+            axis.plot(*training, color="tab:blue", label="training episodes (exploring)")
+        if len(evaluation[0]):
+            axis.plot(*evaluation, "o-", color="tab:orange", ms=3,
+                      label="deterministic evaluation")  # fmt: skip
+        axis.set_title(label, fontsize="medium")  # the quantity and its unit
+        axis.set_xlabel("control steps")
+        axis.grid(alpha=0.3)
+    legend: dict[str, object] = {}  # every panel's lines by label
+    for axis in axes:
+        for handle, name in zip(*axis.get_legend_handles_labels(), strict=True):
+            legend.setdefault(name, handle)
+    if legend:  # one legend for the figure, under the panels: none covers data
+        fig.legend(list(legend.values()), list(legend), loc="outside lower center",
+                   ncols=len(legend), fontsize="small")  # fmt: skip
+    fig.suptitle(f"{title}: training curves" if title else "training curves")
+    return fig
+
+
+TRACE_WHOLE_EPISODE = 5.0  # s: an episode up to this long is shown whole in traces.png
+TRACE_WINDOW = GAIT_WINDOW  # s: the last seconds of a longer one (the gait diagram's too)
+
+
+def _joint_groups(joints: list[str]) -> dict[str, list[int]]:
+    """Joints by the limb their name starts with (``LF_HFE``: ``LF``), in order; one group
+    ``""`` for a robot whose joint names have no limb prefix (the hopper's HFE, KFE)."""
+    groups: dict[str, list[int]] = {}
+    for index, joint in enumerate(joints):
+        groups.setdefault(joint.rsplit("_", 1)[0] if "_" in joint else "", []).append(index)
+    return groups
+
+
+def _short(name: str, group: str) -> str:
+    return name.removeprefix(f"{group}_") if group else name
+
+
+def _oscillator_groups(traces, joints, groups) -> dict[str, list[tuple[int, str]]]:
+    """The CPG's oscillators by limb (as :func:`_joint_groups`), with their names: the saved
+    ``oscillator_names``, else the joints' (one oscillator per joint), else the limbs' (one
+    per limb), else ``osc i``."""
+    count = traces["theta_dot"].shape[-1]
+    if "oscillator_names" in traces:
+        names = [str(name) for name in traces["oscillator_names"]]
+    elif count == len(joints):
+        names = list(joints)
+    elif count == len(groups):
+        names = list(groups)
+    else:
+        names = [f"osc {i}" for i in range(count)]
+    placed: dict[str, list[tuple[int, str]]] = {group: [] for group in groups}
+    for index, name in enumerate(names):
+        group = next((g for g in groups if g and (name == g or name.startswith(f"{g}_"))), None)
+        if group is None:
+            group = next(iter(groups)) if len(groups) == 1 else ""
+        placed.setdefault(group, []).append((index, name))
+    return placed
+
+
+def plot_traces(traces: dict[str, np.ndarray], path: Path, title: str = "") -> list[Path]:
+    """Episode 0's traces (:func:`traces_figure`) as ``path``."""
+    save_figure(traces_figure(traces, title), path)
+    return [path]
+
+
+def traces_figure(traces: dict[str, np.ndarray], title: str = ""):
+    """Episode 0 (paper Fig. 6-7): desired (solid) vs measured (dashed) joint positions and
+    velocities, with the motor's speed limit (``velocity_limit``) dashed on the velocities; a
+    CPG's phase velocity and amplitude acceleration; the hip and foot heights where the robot
+    has them. An episode up to ``TRACE_WHOLE_EPISODE`` s is shown whole, a longer one its last
+    ``TRACE_WINDOW`` s. A column per limb (the quadruped's legs), its joints in one colour
+    each."""
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+
+    from cpg_actor.plots import draw_velocity_limits
+
+    length = int(traces["length"][0])
+    time = _episode(traces, "time")
+    dt = float(traces["control_dt"]) if "control_dt" in traces else float(time[1] - time[0])
+    duration = length * dt
+    shown = slice(None) if duration <= TRACE_WHOLE_EPISODE else slice(
+        max(0, length - round(TRACE_WINDOW / dt)), None)  # fmt: skip
+    time = time[shown]
+    # the robot's joints (traces saved before joint names were: the hopper's two)
+    joints = [str(j) for j in traces.get("joint_names", ("HFE", "KFE"))]
+    groups = _joint_groups(joints)
+    kinds = list(dict.fromkeys(_short(joints[i], g) for g, idx in groups.items() for i in idx))
+    colour = {kind: f"C{k}" for k, kind in enumerate(kinds)}
+    limit = float(traces["velocity_limit"]) if "velocity_limit" in traces else None
+
+    def episode(key: str) -> np.ndarray:
+        return _episode(traces, key)[shown]
+
+    rows = []  # (axis label, draw(axis, group), the line styles to explain)
+
+    def joint_row(desired: str, measured: str, label: str, limits: bool) -> None:
+        if desired not in traces:
+            return
+
+        def draw(axis, group: str) -> None:
+            for i in groups[group]:
+                kind = _short(joints[i], group)
+                axis.plot(time, episode(desired)[:, i], color=colour[kind], lw=1.3, label=kind)
+                if measured in traces:
+                    axis.plot(time, episode(measured)[:, i], "--", color=colour[kind], lw=1.0)
+            if limits:
+                draw_velocity_limits(axis, limit)
+
+        rows.append((label, draw, measured in traces))
+
+    joint_row("desired_position", "measured_position", "joint position (rad)", False)
+    joint_row("desired_velocity", "measured_velocity", "joint velocity (rad/s)", True)
+    oscillators = _oscillator_groups(traces, joints, groups) if "theta_dot" in traces else {}
+    for key, label in (("theta_dot", "oscillator phase\nvelocity $\\dot\\theta$ (rad/s)"),
+                       ("r_ddot", "oscillator amplitude\nacceleration $\\ddot r$ (rad/s$^2$)"),
+                       ):  # fmt: skip
         if key not in traces:
             continue
-        for j, joint in enumerate(joints):
-            ax.plot(
-                t, traces[key][:, 0, j], label=joint if measured is None else f"{joint} desired"
-            )
-            if measured is not None and measured in traces:
-                ax.plot(t, traces[measured][:, 0, j], "--", label=f"{joint} measured")
-        ax.set_ylabel(label)
-        ax.legend(fontsize=7, loc="upper right")
-        ax.grid(alpha=0.3)
-    if not heights:  # a robot without a hip height (the quadruped)
-        axes[-1].set_xlabel("time (s)")
-        fig.tight_layout()
-        save_figure(fig, path)
-        plt.close(fig)
-        return [path]
-    axes[-1].plot(t, traces["hip_height"][:, 0], label="hip")
-    axes[-1].plot(t, traces["foot_height"][:, 0], ":", label="foot")
-    axes[-1].set_ylabel("height (m)")
-    axes[-1].set_xlabel("time (s)")
-    axes[-1].legend(fontsize=7, loc="upper right")
-    axes[-1].grid(alpha=0.3)
-    fig.tight_layout()
-    save_figure(fig, path)
-    plt.close(fig)
-    return [path]
+
+        def draw(axis, group: str, key=key) -> None:
+            for index, name in oscillators.get(group, []):
+                kind = _short(name, group) if name != group else "leg oscillator"
+                axis.plot(time, episode(key)[:, index], color=colour.get(kind, "0.3"),
+                          label=kind)  # fmt: skip
+
+        rows.append((label, draw, False))
+    if "hip_height" in traces:
+
+        def heights(axis, group: str) -> None:
+            axis.plot(time, episode("hip_height"), color="C4", label="hip")
+            axis.plot(time, episode("foot_height"), ":", color="C5", label="foot")
+
+        rows.append(("height (m)", heights, False))
+
+    columns = list(groups)
+    fig = Figure(figsize=(2.6 + 3.4 * len(columns) if len(columns) > 1 else 11.0,
+                          1.9 * len(rows) + 1.0), layout="constrained")  # fmt: skip
+    axes = np.asarray(fig.subplots(len(rows), len(columns), sharex=True, sharey="row",
+                                   squeeze=False))  # fmt: skip
+    for r, (label, draw, styles) in enumerate(rows):
+        legend: dict[str, object] = {}  # the row's lines by label, over its columns
+        for c, group in enumerate(columns):
+            axis = axes[r, c]
+            draw(axis, group)
+            axis.grid(alpha=0.3)
+            if r == 0 and group:
+                axis.set_title(group)
+            for handle, name in zip(*axis.get_legend_handles_labels(), strict=True):
+                legend.setdefault(name, handle)
+        axes[r, 0].set_ylabel(label)
+        if styles:  # what solid and dashed mean
+            legend["desired (sent)"] = Line2D([], [], color="0.3")
+            legend["measured"] = Line2D([], [], color="0.3", ls="--")
+        # outside the last column: no data covered
+        axes[r, -1].legend(list(legend.values()), list(legend), fontsize=7, loc="upper left",
+                           bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)  # fmt: skip
+    for axis in axes[-1]:
+        axis.set_xlabel("time (s)")
+    window = (f"whole episode ({duration:g} s)" if shown == slice(None)
+              else f"last {time[-1] - time[0] + dt:g} s of {duration:g} s")  # fmt: skip
+    fig.suptitle(f"{title + ': ' if title else ''}evaluation episode 0, {window}")
+    return fig
 
 
 def _episode(traces: dict[str, np.ndarray], key: str, episode: int = 0) -> np.ndarray:
@@ -301,8 +473,9 @@ def plot_gait(traces: dict[str, np.ndarray], path: Path) -> list[Path]:
     draw_gait_diagram(axis, contact, dt, feet, first_time=float(time[0]))
     duty = ", ".join(f"{foot} {share:.2f}" for foot, share in zip(feet, contact.mean(0),
                                                                    strict=True))  # fmt: skip
-    axis.set_title(f"episode 0 ({len(contact) * dt:g} s): duty factor {duty}",
-                   fontsize="medium", loc="left")  # fmt: skip
+    shown = min(GAIT_WINDOW, len(contact) * dt)
+    axis.set_title(f"Foot contacts, episode 0, last {shown:g} s of {len(contact) * dt:g} s: "
+                   f"duty factor {duty}", fontsize="medium", loc="left")  # fmt: skip
     axis.set_xlabel("time (s); bars: foot on the ground")
     save_figure(fig, path)
     return [path]
@@ -317,7 +490,7 @@ def plot_speed(traces: dict[str, np.ndarray], path: Path) -> list[Path]:
     from matplotlib.figure import Figure
 
     dt = float(traces["control_dt"])
-    fig = Figure(figsize=(9.0, 3.6), layout="constrained")
+    fig = Figure(figsize=(11.0, 3.6), layout="constrained")
     axis = fig.subplots()
     for episode in range(len(traces["length"])):
         time = _episode(traces, "time", episode)
@@ -337,8 +510,9 @@ def plot_speed(traces: dict[str, np.ndarray], path: Path) -> list[Path]:
     axis.set_xlabel("time (s)")
     axis.set_ylabel("forward speed (m/s)")
     axis.grid(alpha=0.3)
-    axis.legend(fontsize=7, loc="upper left", ncols=2)
-    axis.set_title("commanded vs measured forward speed (episode 0 raw, faint)",
+    # outside the axes: no data covered
+    axis.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
+    axis.set_title("Commanded vs measured forward speed, every episode (episode 0 raw, faint)",
                    fontsize="medium", loc="left")  # fmt: skip
     save_figure(fig, path)
     return [path]

@@ -4,7 +4,8 @@ Each gait preset (``cpg_actor.cpg.gaits.GAITS``) drives ``--robots`` robots for 
 with no learning and no feedback (the untrained ``cpg-actor-open-loop``'s mean action), its
 drive d (eq. 3) set by the forward command ``--command``. It
 writes a gait diagram (which foot is on the ground, per leg, over the last seconds of robot 0,
-one panel per gait, with the measured forward speed) as a PNG, and a JSON summary per gait:
+one panel per gait, with the measured forward speed; next to it one cycle of the gait's
+reference footfall pattern over robot 0's) as a PNG, and a JSON summary per gait:
 falls, mean forward speed, the duty factor of each leg (share of time on the ground) and each
 leg's touchdown phase relative to LF (fraction of a cycle: the gait's table, if the robot
 keeps it).
@@ -59,10 +60,69 @@ def touchdown_phases(contact, dt: float, frequency: float) -> list[float]:
     return phases
 
 
+REFERENCE_DUTY = 0.5  # share of a cycle a foot is drawn on the ground in the reference pattern
+
+
+def draw_reference(axis, gait: str, summary: dict | None = None) -> None:
+    """One cycle of ``gait``'s intended footfall pattern on ``axis``: per leg a grey bar from
+    its touchdown at the gait's phase offset (``GAITS``, a fraction of a cycle after LF) for
+    ``REFERENCE_DUTY`` of the cycle; under it, from ``summary`` (the robot's measured
+    ``touchdown_phase`` and ``duty_factor``), the CPG's result in blue."""
+    from cpg_actor.cpg.gaits import GAITS, LEGS
+
+    def cycle(start: float, duty: float) -> list[tuple[float, float]]:
+        """The bar from ``start`` for ``duty`` of a cycle, split where it wraps past 1."""
+        start %= 1.0
+        return [(start, min(duty, 1.0 - start))] + ([(0.0, start + duty - 1.0)]
+                                                      if start + duty > 1.0 else [])  # fmt: skip
+
+    n = len(LEGS)
+    for leg, (name, offset) in enumerate(zip(LEGS, GAITS[gait], strict=True)):
+        row = n - 1 - leg
+        axis.broken_barh(cycle(offset, REFERENCE_DUTY), (row + 0.02, 0.38), color="0.6",
+                         label=f"reference {gait}" if leg == 0 else None)  # fmt: skip
+        phase = (summary or {}).get("touchdown_phase", {}).get(name)
+        duty = (summary or {}).get("duty_factor", {}).get(name)
+        if phase is not None and duty is not None and math.isfinite(phase):
+            axis.broken_barh(cycle(phase, duty), (row - 0.4, 0.38), color="tab:blue",
+                             label="CPG (robot 0)" if leg == 0 else None)  # fmt: skip
+    axis.set_yticks(range(n), list(LEGS)[::-1])
+    axis.set_ylim(-0.6, n - 0.4)
+    axis.set_xlim(0.0, 1.0)
+    axis.set_xticks([0, 0.25, 0.5, 0.75, 1.0])
+    axis.grid(axis="x", alpha=0.3)
+
+
+def gaits_figure(traces: dict, summary: dict, command: float):
+    """Per gait a row: the gait diagram of robot 0 over its last seconds (left) and, next to
+    it, one cycle of the gait's reference footfall pattern over the CPG's measured one
+    (right: :func:`draw_reference`)."""
+    import numpy as np
+    from matplotlib.figure import Figure
+
+    from cpg_actor.envs.quadruped import description as robot
+    from cpg_actor.plots import draw_gait_diagram
+
+    fig = Figure(figsize=(12.0, 1.7 * len(traces) + 1.0), layout="constrained")
+    axes = np.atleast_2d(fig.subplots(len(traces), 2, width_ratios=(3, 1), squeeze=False))
+    for (diagram, reference), (gait, (contact, dt)) in zip(axes, traces.items(), strict=True):
+        draw_gait_diagram(diagram, contact, dt, robot.LEGS)
+        s = summary[gait]
+        diagram.set_title(f"{gait}: {s['fell']} of {s['robots']} fell, forward speed "
+                          f"{s['forward_speed']:.2f} m/s (command {command} m/s)",
+                          fontsize="medium", loc="left")  # fmt: skip
+        draw_reference(reference, gait, s)
+        reference.set_title(f"one cycle: {gait} reference (grey) vs CPG (blue)",
+                            fontsize="small", loc="left")  # fmt: skip
+    axes[-1, 0].set_xlabel("time (s); bars: foot on the ground (robot 0)")
+    axes[-1, 1].set_xlabel("cycles after LF touches down\n"
+                           f"(reference: on the ground {REFERENCE_DUTY:g} of a cycle)")  # fmt: skip
+    return fig
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
-    from matplotlib.figure import Figure
 
     from cpg_actor.checkpoint import atomic_write_text
     from cpg_actor.cpg.foot_space import FootSpaceMap
@@ -70,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
     from cpg_actor.envs.quadruped import description as robot
     from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
     from cpg_actor.evaluation import finite_mean
-    from cpg_actor.plots import draw_gait_diagram, save_figure
+    from cpg_actor.plots import save_figure
 
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         raise ValueError(f"--seconds must be a positive number, got {args.seconds}")
@@ -130,15 +190,7 @@ def run(args: argparse.Namespace) -> int:
         }
         print(f"{gait}: {summary[gait]}")
 
-    fig = Figure(figsize=(9.0, 1.6 * len(traces) + 0.6), layout="constrained")
-    axes = np.atleast_1d(fig.subplots(len(traces), 1))
-    for axis, (gait, (contact, dt)) in zip(axes, traces.items(), strict=True):
-        draw_gait_diagram(axis, contact, dt, robot.LEGS)
-        s = summary[gait]
-        axis.set_title(f"{gait}: {s['fell']} of {s['robots']} fell, forward speed "
-                       f"{s['forward_speed']:.2f} m/s (command {args.command} m/s)",
-                       fontsize="medium", loc="left")  # fmt: skip
-    axes[-1].set_xlabel("time (s); bars: foot on the ground (robot 0)")
+    fig = gaits_figure(traces, summary, args.command)
     fig.suptitle(f"Open-loop CPG gaits on ANYmal B ({args.layout} layout, {args.seconds:g} s, "
                  f"seed {args.seed})")  # fmt: skip
     save_figure(fig, paths[0])

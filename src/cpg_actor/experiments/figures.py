@@ -15,7 +15,7 @@ import numpy as np
 
 from cpg_actor.experiments.metrics import VELOCITY_LIMIT
 from cpg_actor.experiments.results import Results, Run, color, label, sent_velocity
-from cpg_actor.plots import step_axis, steps_text
+from cpg_actor.plots import step_axis, step_labels, steps_text
 
 JOINTS = ("HFE", "KFE")
 TRACE_WINDOW_S = 3.0  # seconds of an episode shown in the trace figures
@@ -201,13 +201,19 @@ def cpg_r_dot_dot(results: Results, directory: Path) -> Output:
 
 # -- fig:des_output (des_pos, des_vel) ---------------------------------------------------------
 def des_output(results: Results, directory: Path) -> Output:
-    """Desired positions and velocities of the MLP actor vs the CPG-Actor, +-15 rad/s lines;
+    """Desired positions and velocities of the MLP actor vs the CPG-Actor, lines at +- the
+    motor's speed limit (the runs' ``env.velocity_limit``, else 15 rad/s);
     the velocities of both the finite difference of the desired positions sent."""
     paths, notes = [], []
     variants = ("mlp", "cpg-actor")
+    # the motor's speed limit the runs were trained with (their env config), else the paper's
+    runs = [run for run in map(results.first, variants) if run is not None]
+    velocity_limit = next((float(run.config["env"]["velocity_limit"]) for run in runs
+                           if "velocity_limit" in (run.config.get("env") or {})),
+                          VELOCITY_LIMIT)  # fmt: skip
     for key, name, ylabel, limit in (
         ("desired_position", "des_pos", "desired position (rad)", None),
-        ("desired_velocity", "des_vel", "desired velocity (rad/s)", VELOCITY_LIMIT),
+        ("desired_velocity", "des_vel", "desired velocity (rad/s)", velocity_limit),
     ):
         title = "Desired " + ("positions" if limit is None else "velocities (red: motor limits)")
         written, more = _joint_panels(results, directory, variants, key, name, ylabel, title, limit)
@@ -363,14 +369,26 @@ def cpg_actor_training_over_time(results: Results, directory: Path) -> Output:
     if not stages:
         return [], [f"{name}: cpg-actor seed {run.seed} has no stage evaluations"]
     per_iteration = steps_per_iteration(run)
+    # stages evaluated at one checkpoint (a budget too short for them) are one snapshot: drawn
+    # once, so that each line is a different policy with a label of its own
+    stages = list({stage["iteration"]: (stage, traces) for stage, traces in stages}.values())
+    counts = [stage["iteration"] * (per_iteration or 1) for stage, _ in stages]
+    texts = step_labels(counts) if per_iteration else [str(count) for count in counts]
+    names = [f"{text} steps" if per_iteration else f"iteration {text}" for text in texts]
+    labels = {stage["iteration"]: name for (stage, _), name in zip(stages, names, strict=True)}
+    snapshots = f"{', '.join(texts)} {'training steps' if per_iteration else 'iterations'}"
     cmap = plt.get_cmap("viridis")
+    robot = run.config.get("robot", "hopper")
+    joints = _named_joints(stages[0][1])
 
     def stage_label(stage: dict) -> str:
-        if per_iteration:
-            return f"{steps_text(stage['iteration'] * per_iteration)} steps"
-        return f"iteration {stage['iteration']}"
+        return labels[stage["iteration"]]
 
     def draw_heights(ax) -> None:
+        if "hip_height" not in stages[0][1]:
+            ax.text(0.5, 0.5, f"the {robot}'s traces have no hip height", ha="center",
+                    transform=ax.transAxes)  # fmt: skip
+            return
         for i, (stage, traces) in enumerate(stages):
             shade = cmap(i / max(1, len(stages) - 1) * 0.85)
             t = traces["time"]
@@ -383,21 +401,24 @@ def cpg_actor_training_over_time(results: Results, directory: Path) -> Output:
             )
             ax.plot(t[window], traces["foot_height"][window, 0], ":", color=shade)
         ax.set_ylabel("height (m); hip solid, foot dotted")
-        ax.set_title("The hopper progressively learns to jump", fontsize=9)
+        ax.set_title(f"The {robot}'s hip and foot height at each snapshot", fontsize=9)
 
     def draw_joint(ax, j: int) -> None:
+        if j >= len(joints):
+            return
+        index, joint = joints[j]
         for i, (stage, traces) in enumerate(stages):
             shade = cmap(i / max(1, len(stages) - 1) * 0.85)
             t = traces["time"]
             window = t <= t[0] + TRACE_WINDOW_S
             ax.plot(
                 t[window],
-                traces["desired_position"][window, 0, j],
+                traces["desired_position"][window, 0, index],
                 color=shade,
                 label=stage_label(stage),
             )
-        ax.set_ylabel(f"desired {JOINTS[j]} position (rad)")
-        ax.set_title(f"Desired {JOINTS[j]} positions across training", fontsize=9)
+        ax.set_ylabel(f"desired {joint} position (rad)")
+        ax.set_title(f"Desired {joint} position at each snapshot", fontsize=9)
 
     drawers: list[tuple[str, Callable]] = [
         ("hopper_hip_foot_pos", draw_heights),
@@ -410,8 +431,8 @@ def cpg_actor_training_over_time(results: Results, directory: Path) -> Output:
         drawer(ax)
         ax.set_xlabel("time (s)")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
-    fig.suptitle(f"CPG-Actor seed {run.seed} at the stages of training (eval episode 0)")
+        ax.legend(fontsize=7, loc="best")
+    fig.suptitle(f"CPG-Actor seed {run.seed} on the {robot}: eval episode 0 after {snapshots}")
     fig.tight_layout()
     paths += _save(fig, directory, name)
     for sub, drawer in drawers:
@@ -419,10 +440,23 @@ def cpg_actor_training_over_time(results: Results, directory: Path) -> Output:
         drawer(ax)
         ax.set_xlabel("time (s)")
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=7, loc="best")
         fig.tight_layout()
         paths += _save(fig, directory, sub)
     return paths, []
+
+
+def _named_joints(traces: dict) -> list[tuple[int, str]]:
+    """``(column, name)`` of the joints ``JOINTS`` names in the traces: the hopper's HFE and
+    KFE, a legged robot's first leg's (``LF_HFE``, ``LF_KFE``)."""
+    names = [str(j) for j in traces.get("joint_names", JOINTS)]
+    found = []
+    for joint in JOINTS:
+        index = next((i for i, n in enumerate(names) if n == joint or n.endswith(f"_{joint}")),
+                     None)  # fmt: skip
+        if index is not None:
+            found.append((index, names[index]))
+    return found
 
 
 def steps_per_iteration(run: Run) -> int | None:

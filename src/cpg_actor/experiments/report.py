@@ -536,6 +536,10 @@ def _trained_commits(results: Results) -> str:
     return ", ".join(commits) if commits else "-"
 
 
+# how the tables of means read: a variant of fewer seeds shows its mean, no spread (never "+- 0")
+SPREAD = f"mean +- std over seeds (n < {m.MIN_SEEDS} seeds: the mean alone, no interval)"
+
+
 def _pm(value: tuple[float, float], digits: int = 3) -> str:
     """Mean +- std; the mean alone where the std is not given (fewer than 3 seeds)."""
     mean, std = value
@@ -699,7 +703,7 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
         lines += [
             "## CPG signals and feedback",
             "",
-            "From the final evaluation traces, mean +- std over seeds: the standard deviation "
+            f"From the final evaluation traces, {SPREAD}: the standard deviation "
             "over an episode (after 50 steps) of theta_dot and r_ddot (how much the CPG "
             "responds), and for bounded feedback the share of xi and kappa values at 95 % or "
             "more of their bound (near 100 %: bang-bang feedback).",
@@ -721,7 +725,7 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
         "Paper eq. 4: r1 pays upward hip speed, r2..r5 penalise tracking error, joint speed, "
         "torque and foot slip. Each is the sum over an episode, the mean of the last training "
         "episodes (exploration noise on, the last 10 logged values of the 100-episode means), "
-        "mean +- std over seeds; *r1 share* is r1 over the sum of the terms' magnitudes.",
+        f"{SPREAD}; *r1 share* is r1 over the sum of the terms' magnitudes.",
         "",
         "| variant | training return | " + " | ".join(REWARD_TERMS) + " | r1 share |",
         "| --- | --- | " + " | ".join("---" for _ in REWARD_TERMS) + " | --- |",
@@ -740,7 +744,7 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
         "## Stages of training",
         "",
         "Deterministic evaluation at the checkpoints nearest to 1/60, 1/3 and 1 of the budget "
-        "(the paper: 1M, 20M, 60M of 60M steps); mean +- std over seeds.",
+        f"(the paper: 1M, 20M, 60M of 60M steps); {SPREAD}.",
         "",
         "| variant | stage | steps | eval return | hop height (m) |",
         "| --- | --- | --- | --- | --- |",

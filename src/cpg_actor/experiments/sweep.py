@@ -126,8 +126,12 @@ def summarize(
 
 
 def _mean_std(values: list[float], digits: int) -> str:
+    """Mean ± std over the seeds with a value; one seed's value alone, marked n=1 (its spread
+    is unknown, not 0)."""
     a = np.array(values, dtype=float)
     a = a[np.isfinite(a)]
+    if a.size == 1:
+        return f"{a[0]:.{digits}f} (n=1)"
     return f"{a.mean():.{digits}f} ± {a.std():.{digits}f}" if a.size else "-"
 
 
@@ -143,9 +147,10 @@ def write_summary(out: Path, summary: dict[str, Any], command: str, seeds: int) 
         "",
         f"Score of a run: the mean of its last {summary['final_evals']} deterministic "
         f"evaluations (`eval/return`, `eval/hop_height`, 5 episodes each); mean ± std over "
-        f"{seeds} seeds; *steps*: the fewest env steps any seed's run reached (less than the "
-        "budget for runs that did not finish). The first row is the defaults; every other row "
-        "changes only the values it names.",
+        f"{seeds} seeds (one seed: its value alone, n=1, no interval); *steps*: the fewest "
+        "env steps any seed's run reached (less than the budget for runs that did not "
+        "finish). The first row is the defaults; every other row changes only the values it "
+        "names.",
         "",
         "| setting | "
         + " | ".join(f"{v} return | {v} hop (m) | {v} steps" for v in variants)
