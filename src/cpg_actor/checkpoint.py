@@ -82,6 +82,23 @@ def load_checkpoint(path: Path) -> dict[str, Any]:
     return data
 
 
+def check_checkpoint_run(
+    path: Path, data: dict[str, Any], agent: str, robot: str | None = None
+) -> None:
+    """ValueError unless checkpoint ``data`` (read from ``path``) was trained with ``agent``
+    (and on ``robot``, where given): a checkpoint of another run. Resume, ``cpg-actor eval``
+    and ``cpg-actor export`` check the run's checkpoint with it."""
+    if data["agent"] != agent:
+        raise ValueError(
+            f"checkpoint {path} was trained with agent '{data['agent']}', this run uses '{agent}'"
+        )
+    trained_on = data.get("config", {}).get("robot", "hopper")
+    if robot is not None and trained_on != robot:
+        raise ValueError(
+            f"checkpoint {path} was trained on robot '{trained_on}', this run uses '{robot}'"
+        )
+
+
 def resume_checkpoint(run_dir: Path) -> tuple[Path, dict[str, Any], list[str]]:
     """The checkpoint a run resumes from: ``last.pt`` or, if it is missing or unreadable, the
     newest readable ``iter_*.pt`` (``last.pt`` is a copy of the newest one, so nothing is lost

@@ -50,6 +50,7 @@ from cpg_actor.checkpoint import (
     CHECKPOINT_FORMAT,
     CHECKPOINT_VERSION,
     atomic_save,
+    check_checkpoint_run,
     load_checkpoint,
     rng_state,
     set_rng_state,
@@ -383,11 +384,7 @@ class ESRunner:
         """Continue the search from ``path`` (the agent, CMA-ES, the best candidate, counters,
         RNG streams). To act with the agent, see :func:`cpg_actor.policy.load_policy`."""
         data = load_checkpoint(path)
-        if data["agent"] != self.config.agent:
-            raise ValueError(
-                f"checkpoint {path} was trained with agent '{data['agent']}', "
-                f"this run uses '{self.config.agent}'"
-            )
+        check_checkpoint_run(path, data, self.config.agent)
         if "es" not in data:
             raise ValueError(f"checkpoint {path} holds no search state")
         try:

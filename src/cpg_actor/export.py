@@ -7,26 +7,45 @@ The exported function is the deterministic control step of :class:`cpg_actor.pol
 * ``observation``: ``(B, obs_dim)`` float32, the env's raw observation (for the hopper, in the
   order of ``cpg_actor.envs.OBS_NAMES``: measured HFE, KFE positions (rad) and velocities
   (rad/s), the desired positions being tracked (rad), hip height (m), hip velocity (m/s));
-  the observation normaliser is inside.
+  the observation normaliser is inside. A non-finite entry (NaN, +-inf) is replaced by the
+  normaliser's mean (0 where the run does not normalise) before anything else, so the policy
+  acts as if that sensor read its average; the action stays finite. A deployment should not
+  rely on it: it should refuse a non-finite observation before the call (as
+  ``examples/deploy_onnx.py`` does), the model's replacement being the fallback.
 * ``state``: ``(B, *state_shape)`` float32, the agent's recurrent state: for the CPG-Actor the
   CPG state ``(B, 5, N)`` (rows: phase theta, theta_dot, amplitude r, r_dot, r_ddot; columns:
   oscillators; on a robot with a drive, the quadruped, a sixth row: the drive d, set from the
   observation inside the step), for the MLP an empty ``(B, 0)``. Start from
-  :func:`initial_state` (saved next to the policy as ``*.initial_state.npy``) and feed
-  ``next_state`` back at the next step; restart it when an episode restarts.
+  :func:`initial_state` (saved next to the policy as ``*.initial_state.npy``, and in the
+  metadata) and feed ``next_state`` back at the next step; restart it when an episode
+  restarts.
 * ``action``: ``(B, A)`` float32, desired joint positions (rad), the mean of the Gaussian,
   clipped to the joint limits.
 
 The feedback network, the CPG step (eq. 1-2) and the joint map are inside; the batch size is
 fixed at export (``batch``, default 1: one robot).
+
+Next to the policy file ``PATH``: ``PATH.initial_state.npy`` and ``PATH.robot.xml``, the MJCF of
+the model the run's MuJoCo env simulates (actuators, timestep and friction as configured).
+The file carries :func:`export_metadata` (what a robot's control loop needs to run it: joints,
+nominal pose, control period, observation layout, action bounds, actuator law, state layout;
+``docs/training.md``, "Export"): as the ONNX model's ``metadata_props``, and in the TorchScript
+archive as the extra file ``metadata.json`` (the same mapping, one JSON object). Values are
+strings; lists, mappings and numbers JSON-encoded (``METADATA_TEXT_KEYS`` are plain text).
 """
 
 from __future__ import annotations
 
+import contextlib
 import copy
+import dataclasses
+import json
 import logging
 import os
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -46,10 +65,32 @@ EXPORTABLE = (
     "cpg-actor-open-loop",
     "open-loop-es",
 )
+TORCHSCRIPT_METADATA = "metadata.json"  # the extra file of a TorchScript export
+# where an observation entry comes from in the MuJoCo data of the exported MJCF, after a
+# control step (each entry of the metadata's observation_sources names one, with "index" and
+# an optional "offset" added to the value):
+OBSERVATION_SOURCES = {
+    "qpos": "data.qpos[index]",
+    "qvel": "data.qvel[index]",
+    "sensor": "data.sensordata at the named sensor's address + index, as the control step's "
+    "last mj_step left it",
+    "projected_gravity": "component index of the world's unit gravity (0, 0, -1) in the base "
+    "frame, from the unit quaternion (w, x, y, z) at data.qpos[quaternion:quaternion + 4]",
+    "desired": "the desired joint positions being tracked: the last action as clipped, "
+    "the env's reset value before the first",
+    "command": "the episode's velocity command (forward, lateral m/s, yaw rad/s)",
+}
+NONFINITE_OBSERVATIONS = (
+    "replaced inside the model by observation_normalization.mean (0 when not normalising): a "
+    "fallback; refuse non-finite observations before the call (examples/deploy_onnx.py does)"
+)
+METADATA_TEXT_KEYS = ("cpg_actor_version", "robot", "robot_model", "agent", "simulator",
+                      "mjcf_file", "nonfinite_observations", "state_usage")  # fmt: skip
 
 
 class ControlStep(nn.Module):
-    """``(observation, state) -> (action, next_state)``: normalise, act (mean), clip."""
+    """``(observation, state) -> (action, next_state)``: replace non-finite observation
+    entries, normalise, act (mean), clip."""
 
     def __init__(self, policy: Policy) -> None:
         super().__init__()
@@ -59,11 +100,15 @@ class ControlStep(nn.Module):
         self.normalize = policy.normalize_observations
         self.register_buffer("mean", normalizer.mean.to(torch.float32))
         self.register_buffer("std", torch.sqrt(normalizer.var + normalizer.epsilon).float())
+        # what a non-finite entry becomes: the mean, normalised to 0
+        fill = self.mean if self.normalize else torch.zeros_like(self.mean)
+        self.register_buffer("fill", fill.clone())
         self.clip = float(normalizer.clip)
         self.register_buffer("low", torch.as_tensor(policy.action_low, dtype=torch.float32))
         self.register_buffer("high", torch.as_tensor(policy.action_high, dtype=torch.float32))
 
     def forward(self, observation: Tensor, state: Tensor) -> tuple[Tensor, Tensor]:
+        observation = torch.where(torch.isfinite(observation), observation, self.fill)
         state = self.agent.observe(observation, state)  # e.g. the CPG's drive (raw obs)
         if self.normalize:
             observation = ((observation - self.mean) / self.std).clamp(-self.clip, self.clip)
@@ -77,12 +122,114 @@ def initial_state(policy: Policy, batch: int = 1) -> np.ndarray:
     return policy.agent.initial_state(batch).cpu().numpy().astype(np.float32)
 
 
+def sidecar_paths(path: Path) -> dict[str, Path]:
+    """The files written next to the policy file ``path``."""
+    return {
+        "initial_state": path.with_name(path.name + ".initial_state.npy"),
+        "mjcf": path.with_name(path.name + ".robot.xml"),
+    }
+
+
+def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict[str, str]:
+    """What a control loop needs to run the exported step of ``policy`` (one loaded by
+    :func:`cpg_actor.policy.load_policy`, which knows its run and robot), key -> string
+    (``docs/training.md``, "Export", has the table)."""
+    from cpg_actor import __version__
+    from cpg_actor.envs.actuator import Actuator
+    from cpg_actor.envs.robots import robot_env
+
+    config, robot = policy.config, policy.robot
+    if config is None or robot is None:
+        raise ValueError(
+            "the policy knows no run or robot; load it with cpg_actor.policy.load_policy"
+        )
+    env = config.env
+    actuator = Actuator.from_config(env)
+    normalizer = policy.normalizer
+    std = torch.sqrt(normalizer.var + normalizer.epsilon)
+    state = initial_state(policy, batch)
+    sources = robot_env(config.robot).observation_sources
+    values: dict[str, Any] = {
+        "cpg_actor_version": __version__,
+        "robot": config.robot,
+        "robot_model": robot.name,
+        "agent": config.agent,
+        "simulator": env.sim,
+        "input_names": INPUT_NAMES,
+        "output_names": OUTPUT_NAMES,
+        "batch": batch,
+        "joint_names": list(robot.joint_names),
+        "default_joint_positions": [float(v) for v in robot.nominal_pose],
+        "action_low": [float(v) for v in robot.action_low],
+        "action_high": [float(v) for v in robot.action_high],
+        "control_dt": float(robot.control_dt),
+        "physics_dt": float(env.physics_dt),
+        "decimation": int(env.decimation),
+        "observation_names": list(robot.observation_names),
+        "observation_sources": [
+            {"name": name, **source}
+            for name, source in zip(robot.observation_names, sources, strict=True)
+        ],  # fmt: skip
+        "observation_normalization": {
+            "inside": bool(policy.normalize_observations),
+            "mean": normalizer.mean.double().cpu().tolist(),
+            "std": std.double().cpu().tolist(),
+            "clip": float(normalizer.clip),
+        },
+        "nonfinite_observations": NONFINITE_OBSERVATIONS,
+        "drive_observation": robot.drive_observation,
+        "state_shape": list(state.shape),
+        "state_rows": list(policy.agent.state_rows),
+        "initial_state": state.astype(np.float64).tolist(),
+        "state_usage": "feed next_state back as state at the next step; start every episode "
+        "from initial_state",
+        "actuator": {
+            "law": actuator.law,
+            "kp": actuator.kp,
+            "kd": actuator.kd,
+            "torque_limit": actuator.torque_limit,
+            "velocity_limit": actuator.velocity_limit,
+            "saturation_torque": actuator.saturation_torque,
+        },
+        "mjcf_file": mjcf_file,
+        "env_config": dataclasses.asdict(env),
+    }
+    return {
+        key: value if key in METADATA_TEXT_KEYS else json.dumps(value, allow_nan=False)
+        for key, value in values.items()
+    }
+
+
+@contextlib.contextmanager
+def quiet_export() -> Iterator[None]:
+    """Silence what the exporters print about themselves (and nothing else, nowhere else):
+    the tracer's warnings about the agents' shape checks (constant at a fixed batch), torch's
+    deprecation of a pytree class its ONNX exporter still uses and of TorchScript itself
+    (shown only where deprecation warnings are; ``docs/training.md`` says it), and the ONNX
+    optimiser's notes on the operators it leaves unfolded."""
+    loggers = [logging.getLogger(name) for name in
+               ("torch.onnx", "onnxscript.optimizer._constant_folding")]  # fmt: skip
+    levels = [logger.level for logger in loggers]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", torch.jit.TracerWarning)
+        warnings.filterwarnings("ignore", r".*isinstance\(treespec, LeafSpec\)", FutureWarning)
+        warnings.filterwarnings("ignore", r"`torch\.jit\.\w+` is deprecated", DeprecationWarning)
+        for logger in loggers:
+            logger.setLevel(logging.ERROR)
+        try:
+            yield
+        finally:
+            for logger, level in zip(loggers, levels, strict=True):
+                logger.setLevel(level)
+
+
 def export_policy(
     policy: Policy, path: str | os.PathLike, fmt: str, batch: int = 1, overwrite: bool = False
 ) -> Path:
-    """Write ``policy``'s control step to ``path`` in ``fmt`` (torchscript | onnx), and the
-    initial state next to it (``PATH.initial_state.npy``). Atomic; refuses to replace an
-    existing file unless ``overwrite``. Returns the path."""
+    """Write ``policy``'s control step to ``path`` in ``fmt`` (torchscript | onnx) with its
+    metadata (:func:`export_metadata`), and next to it the initial state
+    (``PATH.initial_state.npy``) and the robot's MJCF (``PATH.robot.xml``). Atomic; refuses
+    to replace an existing file unless ``overwrite``. Returns the path."""
     if fmt not in FORMATS:
         raise ValueError(f"unknown export format {fmt!r}; accepted: {', '.join(FORMATS)}")
     agent_name = getattr(policy.config, "agent", None)
@@ -93,23 +240,30 @@ def export_policy(
         )
     if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
         raise ValueError(f"batch must be a positive integer, got {batch!r}")
+    from cpg_actor.envs.robots import robot_env
+
     path = Path(path)
-    state_path = path.with_name(path.name + ".initial_state.npy")
-    for target in (path, state_path):
+    sidecars = sidecar_paths(path)
+    for target in (path, *sidecars.values()):
         if target.exists() and not overwrite:
             raise FileExistsError(f"{target} exists; pass --overwrite to replace it")
+    metadata = export_metadata(policy, batch, sidecars["mjcf"].name)
+    mjcf = robot_env(policy.config.robot).mjcf(policy.config.env)
     module = ControlStep(policy).cpu().eval()  # exported for the CPU, wherever it trained
     obs_dim = int(policy.normalizer.mean.shape[0])
     example = (torch.zeros(batch, obs_dim), torch.as_tensor(initial_state(policy, batch)))
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    temporary = {target: target.with_name(f".{target.name}.tmp{os.getpid()}")
+                 for target in (path, *sidecars.values())}  # fmt: skip
     try:
-        with torch.no_grad():
+        with torch.no_grad(), quiet_export():
             if fmt == "torchscript":
-                torch.jit.save(torch.jit.trace(module, example), str(tmp))
+                torch.jit.save(
+                    torch.jit.trace(module, example),
+                    str(temporary[path]),
+                    _extra_files={TORCHSCRIPT_METADATA: json.dumps(metadata, indent=1)},
+                )
             else:
-                # the exporter logs a warning per torchvision operator it cannot register
-                logging.getLogger("torch.onnx").setLevel(logging.ERROR)
                 program = torch.onnx.export(
                     module,
                     example,
@@ -118,13 +272,36 @@ def export_policy(
                     dynamo=True,
                     verbose=False,
                 )
-                program.save(str(tmp))
-        state_tmp = state_path.with_name(f".{state_path.name}.tmp{os.getpid()}")
-        with open(state_tmp, "wb") as f:
+                program.model.metadata_props.update(metadata)
+                program.model.doc_string = (
+                    f"cpg-actor {metadata['agent']} policy for {metadata['robot_model']}: "
+                    "(observation, state) -> (action, next_state); see metadata_props"
+                )
+                program.save(str(temporary[path]))
+        with open(temporary[sidecars["initial_state"]], "wb") as f:
             np.save(f, initial_state(policy, batch))
-        os.replace(state_tmp, state_path)
-        os.replace(tmp, path)
+        temporary[sidecars["mjcf"]].write_text(mjcf)
+        for target in (*sidecars.values(), path):  # the policy last: complete when it is there
+            os.replace(temporary[target], target)
     finally:
-        tmp.unlink(missing_ok=True)
-        state_path.with_name(f".{state_path.name}.tmp{os.getpid()}").unlink(missing_ok=True)
+        for tmp in temporary.values():
+            tmp.unlink(missing_ok=True)
     return path
+
+
+def read_metadata(path: str | os.PathLike) -> dict[str, Any]:
+    """The metadata of an exported policy file (ONNX or TorchScript), JSON values decoded."""
+    path = Path(path)
+    if path.suffix == ".onnx":
+        import onnx
+
+        raw = {p.key: p.value for p in onnx.load(str(path), load_external_data=False)
+               .metadata_props}  # fmt: skip
+    else:
+        files = {TORCHSCRIPT_METADATA: ""}
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", r"`torch\.jit\.load`", DeprecationWarning)
+            torch.jit.load(str(path), _extra_files=files)
+        raw = json.loads(files[TORCHSCRIPT_METADATA]) if files[TORCHSCRIPT_METADATA] else {}
+    return {key: value if key in METADATA_TEXT_KEYS else json.loads(value)
+            for key, value in raw.items()}  # fmt: skip

@@ -64,6 +64,7 @@ class Policy:
         self.state: Tensor | None = None
         self._initial: Tensor | None = None  # every env's state at an episode start
         self.config: Any = None  # the run's TrainConfig when built by load_policy
+        self.robot: Any = None  # the env's RobotSpec when built by load_policy
         self._compiled_step: Any = None  # the training step, once compile() is called
 
     @property
@@ -183,23 +184,32 @@ class Policy:
 
 
 def load_policy(
-    path: str | Path, env_config: Any = None, device: torch.device | str = "cpu"
+    path: str | Path,
+    env_config: Any = None,
+    device: torch.device | str = "cpu",
+    run_config: Any = None,
 ) -> Policy:
     """The policy of a run directory (``checkpoints/last.pt``) or of a checkpoint file.
 
     The agent is rebuilt from the config saved in the checkpoint; the action bounds and
     observation size come from that agent's environment (built once, then closed).
     ``env_config`` replaces the run's env config (e.g. another simulator); ``device`` is where
-    the agent runs (default the CPU, wherever it was trained). Call
-    :meth:`Policy.reset` with the number of envs before acting.
+    the agent runs (default the CPU, wherever it was trained). ``run_config``: the
+    ``TrainConfig`` of the run the checkpoint belongs to (``cpg-actor eval`` and ``export``):
+    a ValueError when the checkpoint was trained with another agent or on another robot
+    (:func:`cpg_actor.checkpoint.check_checkpoint_run`), and its env config is used unless
+    ``env_config`` is given. Call :meth:`Policy.reset` with the number of envs before acting.
     """
     from cpg_actor.agents import get_agent_spec
-    from cpg_actor.checkpoint import load_checkpoint
+    from cpg_actor.checkpoint import check_checkpoint_run, load_checkpoint
     from cpg_actor.config import TrainConfig
 
     path = Path(path)
     checkpoint = path / "checkpoints" / "last.pt" if path.is_dir() else path
     data = load_checkpoint(checkpoint)
+    if run_config is not None:
+        check_checkpoint_run(checkpoint, data, run_config.agent, run_config.robot)
+        env_config = run_config.env if env_config is None else env_config
     config = TrainConfig.from_dict(data["config"])
     if env_config is not None:
         config.env = env_config
@@ -210,6 +220,7 @@ def load_policy(
         high = np.asarray(env.single_action_space.high, dtype=np.float32)
         obs_dim = int(env.single_observation_space.shape[0])
         agent = spec.build(config.agent_config, env)
+        robot = getattr(env, "robot", None)
     finally:
         env.close()
     normalizer = RunningNormalizer(obs_dim)
@@ -225,4 +236,5 @@ def load_policy(
     normalizer.to(device)
     policy = Policy(agent, normalizer, low, high, config.ppo.normalize_observations)
     policy.config = config  # the run's resolved config, as saved in the checkpoint
+    policy.robot = robot
     return policy

@@ -41,6 +41,7 @@ from cpg_actor.checkpoint import (
     CHECKPOINT_VERSION,
     atomic_save,
     atomic_write_text,
+    check_checkpoint_run,
     load_checkpoint,
     rng_state,
     set_rng_state,
@@ -572,11 +573,7 @@ class Runner:
         counters and the episodes in progress). To act with a trained agent, see
         :func:`cpg_actor.policy.load_policy`."""
         data = load_checkpoint(path)
-        if data["agent"] != self.config.agent:
-            raise ValueError(
-                f"checkpoint {path} was trained with agent '{data['agent']}', "
-                f"this run uses '{self.config.agent}'"
-            )
+        check_checkpoint_run(path, data, self.config.agent)
         try:
             self.agent.load_state_dict(data["agent_state"])
             self.normalizer.load_state_dict(data["normalizer"])

@@ -210,6 +210,9 @@ class Agent(nn.Module):
     :meth:`initial_state`, and set ``state_shape``."""
 
     state_shape: tuple[int, ...] = (0,)
+    # what the first axis of the state holds, one name per row (the exported policy's
+    # metadata, cpg_actor.export); none for a stateless agent
+    state_rows: tuple[str, ...] = ()
 
     def __init__(
         self,

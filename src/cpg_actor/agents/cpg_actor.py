@@ -29,6 +29,7 @@ from cpg_actor.agents.start_gait import start_parameters
 from cpg_actor.cpg import CPGNetwork, CPGState, JointMap, hopper_cpg
 from cpg_actor.cpg.foot_space import FootSpaceMap
 from cpg_actor.cpg.gaits import OSCILLATOR_JOINTS, quadruped_cpg, quadruped_leg_cpg
+from cpg_actor.cpg.hopf import STATE_FIELDS
 from cpg_actor.robot import RobotSpec
 
 # robot name -> its CPG layouts (``agent_config.cpg_layout``; the first is the default), each
@@ -184,6 +185,7 @@ class CPGActorAgent(Agent):
         # the observation that sets the drive d (None: d = 0)
         self.drive_index = robot.drive_index if config.cpg_drive else None
         self.state_shape = (5, n) if self.drive_index is None else (6, n)
+        self.state_rows = STATE_FIELDS + (() if self.drive_index is None else ("drive",))
         self.xi_scale = config.xi_scale
         self.kappa_scale = config.kappa_scale
         self.kappa_bound = config.kappa_bound if config.output_bound else None

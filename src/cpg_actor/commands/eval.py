@@ -100,12 +100,7 @@ def run(args: argparse.Namespace) -> int:
         if path.exists() and not args.overwrite:
             raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
 
-    policy = load_policy(checkpoint, env_config=config.env)
-    if policy.config.agent != config.agent:
-        raise ValueError(
-            f"checkpoint {checkpoint} was trained with agent '{policy.config.agent}', "
-            f"this run uses '{config.agent}'"
-        )
+    policy = load_policy(checkpoint, run_config=config)  # the run's agent, robot and env
     if args.video_only:
         record_video(policy, config, Path(args.video), args.seed, args.overwrite)
         print(f"video in {args.video}")

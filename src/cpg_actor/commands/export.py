@@ -24,12 +24,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cpg_actor.export import SUFFIXES, export_policy
+    from cpg_actor.config import TrainConfig
+    from cpg_actor.export import SUFFIXES, export_policy, sidecar_paths
     from cpg_actor.policy import load_policy
 
     run_dir = Path(args.run_dir)
     if not run_dir.is_dir():
         raise FileNotFoundError(f"run directory {run_dir} does not exist")
+    config_path = run_dir / "config.yaml"
+    if not config_path.is_file():
+        raise FileNotFoundError(
+            f"{config_path} does not exist; is {run_dir} a training run directory?"
+        )
     checkpoint = Path(args.checkpoint) if args.checkpoint else run_dir / "checkpoints" / "last.pt"
     out = Path(args.out) if args.out else run_dir / "export" / f"policy{SUFFIXES[args.format]}"
     if args.format == "onnx":
@@ -40,13 +46,17 @@ def run(args: argparse.Namespace) -> int:
                 "ONNX export needs the onnx and onnxscript packages: "
                 "pip install 'cpg-actor[export]' (or use --format torchscript)"
             ) from None
-    policy = load_policy(checkpoint)
+    # the run's agent, robot and env (as `cpg-actor eval`): the metadata describes that env
+    policy = load_policy(checkpoint, run_config=TrainConfig.load(config_path))
     path = export_policy(policy, out, args.format, batch=args.batch, overwrite=args.overwrite)
     state = policy.agent.state_shape
+    sidecars = sidecar_paths(path)
+    where = "metadata_props" if args.format == "onnx" else "extra file metadata.json"
     print(
         f"exported {policy.config.agent} ({args.format}) to {path}: inputs observation "
         f"({args.batch}, {policy.normalizer.mean.shape[0]}) and state ({args.batch}, "
-        f"{', '.join(map(str, state))}), outputs action and next_state; initial state in "
-        f"{path.name}.initial_state.npy"
+        f"{', '.join(map(str, state))}), outputs action and next_state; metadata (joints, "
+        f"control period, observation layout, actuator law) in its {where}; initial state in "
+        f"{sidecars['initial_state'].name}, the robot's MJCF in {sidecars['mjcf'].name}"
     )
     return 0

@@ -18,19 +18,28 @@ class RobotEnv:
     config_class: Callable[[], Any]  # the env config dataclass (with from_dict)
     make: Callable[..., Any]  # (num_envs, config, num_threads) -> vector env
     spec_name: str  # the name of its RobotSpec (the CPG presets' and start gaits' key)
+    # for a policy deployed outside the project (cpg_actor.export): the MJCF of the model its
+    # MuJoCo env simulates under a config, and where each observation entry comes from in
+    # that model's data (one mapping per entry; cpg_actor.export.OBSERVATION_SOURCES)
+    mjcf: Callable[[Any], str]
+    observation_sources: tuple[dict[str, Any], ...]
 
 
 def _hopper() -> RobotEnv:
     from cpg_actor.envs import HopperConfig, make_vector_env
+    from cpg_actor.envs.robot.mjcf import simulated_mjcf
+    from cpg_actor.envs.simulation import OBS_SOURCES
 
     def make(num_envs: int, config: Any, num_threads: int | None = None) -> Any:
         return make_vector_env(num_envs, config=config, num_threads=num_threads)
 
-    return RobotEnv(HopperConfig, make, "anymal-hopper")
+    return RobotEnv(HopperConfig, make, "anymal-hopper", simulated_mjcf, OBS_SOURCES)
 
 
 def _anymal() -> RobotEnv:
     from cpg_actor.envs.quadruped import QuadrupedConfig
+    from cpg_actor.envs.quadruped.mjcf import simulated_mjcf
+    from cpg_actor.envs.quadruped.task import OBS_SOURCES
     from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
 
     def make(num_envs: int, config: Any, num_threads: int | None = None) -> Any:
@@ -40,7 +49,7 @@ def _anymal() -> RobotEnv:
             return MjxAnymalVectorEnv(num_envs, config, num_threads)
         return AnymalVectorEnv(num_envs, config, num_threads)
 
-    return RobotEnv(QuadrupedConfig, make, "anymal-b")
+    return RobotEnv(QuadrupedConfig, make, "anymal-b", simulated_mjcf, OBS_SOURCES)
 
 
 ROBOTS: dict[str, Callable[[], RobotEnv]] = {"hopper": _hopper, "anymal": _anymal}

@@ -26,6 +26,17 @@ OBS_NAMES = (
     "hip_height",  # m, height of the hip (HFE axis) above the ground
     "hip_velocity",  # m/s, vertical, positive up
 )
+# where each entry comes from in the MuJoCo model's data (cpg_actor.export.OBSERVATION_SOURCES)
+OBS_SOURCES = (
+    {"source": "qpos", "index": 1},
+    {"source": "qpos", "index": 2},
+    {"source": "qvel", "index": 1},
+    {"source": "qvel", "index": 2},
+    {"source": "desired", "index": 0},
+    {"source": "desired", "index": 1},
+    {"source": "qpos", "index": 0},  # the rail joint's position is the hip height
+    {"source": "qvel", "index": 0},
+)
 NOMINAL_POSE = np.array(robot.NOMINAL_POSE)
 ACTION_LOW = np.array([robot.JOINT_LIMITS[j][0] for j in robot.JOINT_NAMES])
 ACTION_HIGH = np.array([robot.JOINT_LIMITS[j][1] for j in robot.JOINT_NAMES])

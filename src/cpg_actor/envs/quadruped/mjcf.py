@@ -5,14 +5,15 @@ with ``impratio`` 100 (a standing foot sticks instead of creeping), the feet's s
 (``solref`` 0.005), and on every joint a ``dcmotor`` actuator that is the actuator law of
 :mod:`cpg_actor.envs.actuator` (PD on the desired position, the 15 rad/s torque-speed line,
 the 40 N m clip), so MuJoCo runs it at every substep. The base is a free body; its box and the
-four foot spheres are the only collision shapes. The timestep written here is a placeholder:
-the env sets ``opt.timestep`` from its config.
+four foot spheres are the only collision shapes. The shipped file's timestep and friction are
+the defaults: the env sets ``opt.timestep`` and the friction from its config
+(:func:`simulated_mjcf` writes them in).
 """
 
 from __future__ import annotations
 
 from cpg_actor.envs.quadruped import description as robot
-from cpg_actor.envs.robot.mjcf import actuator_xml, preamble
+from cpg_actor.envs.robot.mjcf import actuator_xml, exact, preamble
 
 
 def _v(values) -> str:
@@ -75,8 +76,14 @@ def _task_sensors() -> list[str]:
     ]  # fmt: skip
 
 
-def mjcf_text(actuator=None, torque_control: bool = False) -> str:
-    """The complete MJCF document (``actuator``: the law's constants, default the hopper's)."""
+def mjcf_text(
+    actuator=None,
+    torque_control: bool = False,
+    timestep: float = 0.002,
+    foot_friction: float = robot.FOOT_FRICTION,
+) -> str:
+    """The complete MJCF document (``actuator``: the law's constants, default the hopper's;
+    the physics ``timestep``; ``foot_friction``: the feet's and the ground's)."""
     notice = robot.LICENSE_NOTICE.replace("--", "- -").rstrip("\n").splitlines()
     centre, half = robot.BASE_BOX
     legs = [line for leg in robot.LEGS for line in _leg(leg, "      ")]
@@ -87,11 +94,11 @@ def mjcf_text(actuator=None, torque_control: bool = False) -> str:
             "",
             *(f"     {line}" if line else "" for line in notice),
             "-->",
-            *preamble(robot.ROBOT_NAME, 0.002, texrepeat=40),
+            *preamble(robot.ROBOT_NAME, timestep, texrepeat=40, foot_friction=foot_friction),
             "  <worldbody>",
             '    <light pos="0 -3 4" dir="0 0.6 -1" diffuse="0.8 0.8 0.8"/>',
             '    <geom name="ground" type="plane" size="50 50 0.05" material="grid" '
-            f'contype="1" conaffinity="1" condim="3" friction="{robot.FOOT_FRICTION:.6g} 0 0"/>',
+            f'contype="1" conaffinity="1" condim="3" friction="{exact(foot_friction)} 0 0"/>',
             '    <body name="base" pos="0 0 0.6">',
             '      <freejoint name="base"/>',
             "      " + _inertial(robot.BASE),
@@ -111,3 +118,15 @@ def mjcf_text(actuator=None, torque_control: bool = False) -> str:
             "",
         ]
     )
+
+
+def simulated_mjcf(config) -> str:
+    """The MJCF of the model :class:`~cpg_actor.envs.quadruped.vector.AnymalVectorEnv`
+    simulates under ``config`` (a :class:`~cpg_actor.envs.quadruped.QuadrupedConfig`): its
+    actuators, timestep and foot-ground friction written in. Loaded, it is the env's model
+    field for field (``tests/test_export.py``); ``cpg-actor export`` writes it next to the
+    policy."""
+    from cpg_actor.envs.actuator import Actuator
+
+    return mjcf_text(Actuator.from_config(config), timestep=config.physics_dt,
+                     foot_friction=config.foot_friction)  # fmt: skip

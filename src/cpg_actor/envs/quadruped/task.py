@@ -27,6 +27,16 @@ OBS_NAMES = (
     *(f"{j}_last_action" for j in robot.JOINT_NAMES),
 )  # fmt: skip
 NOMINAL = np.asarray(robot.NOMINAL_POSE)
+# where each entry comes from in the MuJoCo model's data (cpg_actor.export.OBSERVATION_SOURCES):
+# qpos 0-6 and qvel 0-5 are the free base's, the joints follow in JOINT_NAMES order
+OBS_SOURCES = (
+    *({"source": "sensor", "sensor": "base_ang_vel", "index": i} for i in range(3)),
+    *({"source": "projected_gravity", "quaternion": 3, "index": i} for i in range(3)),
+    *({"source": "command", "index": i} for i in range(3)),
+    *({"source": "qpos", "index": 7 + j, "offset": 0.0 - float(p)} for j, p in enumerate(NOMINAL)),
+    *({"source": "qvel", "index": 6 + j} for j in range(len(NOMINAL))),
+    *({"source": "desired", "index": j, "offset": 0.0 - float(p)} for j, p in enumerate(NOMINAL)),
+)  # fmt: skip
 
 
 def projected_gravity(quat: np.ndarray) -> np.ndarray:

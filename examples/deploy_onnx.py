@@ -1,0 +1,365 @@
+"""Run a policy exported by ``cpg-actor export`` on its robot in MuJoCo, with nothing of the
+project: numpy, onnxruntime and mujoco only.
+
+    cpg-actor export runs/my-run                      # runs/my-run/export/policy.onnx
+    python examples/deploy_onnx.py runs/my-run/export/policy.onnx --seed 1000
+
+Everything comes from the policy file's metadata and the MJCF the export wrote next to it
+(``policy.onnx.robot.xml``, whose ``dcmotor`` actuators run the actuator law at every physics
+substep): the control period, the joints, how each observation entry is read from MuJoCo's
+data (``observation_sources``), the initial CPG state, the episode's settings
+(``env_config``). One control step is what the project's MuJoCo env does: the solver's warm
+start cleared, the desired joint positions held for ``decimation`` substeps of ``mj_step``,
+then the observation read from the state (and the sensors) the last substep left.
+
+The printed return is that of ``cpg-actor eval RUN --episodes 1 --seed SEED`` (episode i of
+``--seed S`` is this script's ``--seed S+i``): the start is drawn as the env draws it and
+the reward is the env's, written out below for the two robots of the project (the hopper's
+eq. 4 with its default ``hop_reward``, the quadruped's legged_gym terms). The library's
+evaluation acting with this same file scores it to float64 rounding; ``cpg-actor eval``'s
+PyTorch policy rounds float32 differently from ONNX Runtime, which moves a legged robot's
+return a little (``docs/training.md``, "Export"). On a real robot, ``Simulation`` is the
+robot's driver and the reward goes; the loop stays as it is.
+
+A non-finite observation (a failed sensor) is refused before the model sees it: the model
+would replace it by the normaliser's mean (its metadata's ``nonfinite_observations``), a
+fallback a robot should not run on.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from pathlib import Path
+
+# nothing is rendered here: without a display, keep mujoco from looking for an OpenGL library
+if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+    os.environ.setdefault("MUJOCO_GL", "disable")
+
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+import onnxruntime as ort  # noqa: E402
+
+TEXT_KEYS = ("cpg_actor_version", "robot", "robot_model", "agent", "simulator", "mjcf_file",
+             "nonfinite_observations", "state_usage")  # fmt: skip
+
+
+def read_metadata(session: ort.InferenceSession) -> dict:
+    """The exported policy's metadata, JSON values decoded."""
+    raw = session.get_modelmeta().custom_metadata_map
+    return {key: value if key in TEXT_KEYS else json.loads(value) for key, value in raw.items()}
+
+
+class Policy:
+    """The exported control step, its recurrent (CPG) state kept here."""
+
+    def __init__(self, path: Path) -> None:
+        self.session = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+        self.meta = read_metadata(self.session)
+        self.names = self.meta["observation_names"]
+        self.reset()
+
+    def reset(self) -> None:
+        """An episode starts: the state goes back to the initial one."""
+        self.state = np.asarray(self.meta["initial_state"], dtype=np.float32)
+
+    def __call__(self, observation: np.ndarray) -> np.ndarray:
+        """Desired joint positions (rad) for one observation (float64 or float32)."""
+        bad = [name for name, value in zip(self.names, observation, strict=True)
+               if not np.isfinite(value)]  # fmt: skip
+        if bad:
+            raise ValueError(f"non-finite observation entries {bad}: refused (check the sensors)")
+        obs = np.asarray(observation, dtype=np.float32)[None]
+        action, self.state = self.session.run(None, {"observation": obs, "state": self.state})
+        return action[0].astype(np.float64)
+
+
+def actuator_torque(law: dict, desired, position, velocity) -> np.ndarray:
+    """The actuator law of the metadata's ``actuator``: PD on the desired position, clipped to
+    what the motor gives at this speed (its torque-speed line), and to the torque limit. The
+    MJCF's ``dcmotor`` actuators compute the ``dc-motor`` law inside MuJoCo; this is run where
+    the MJCF has them switched off, for ``coast`` (no torque along the motion beyond the
+    speed limit, never braking)."""
+    torque = law["kp"] * (desired - position) - law["kd"] * velocity
+    limit, stall = law["torque_limit"], law["saturation_torque"]
+    drop = velocity * (stall / law["velocity_limit"])
+    floor, ceiling = (0.0, 0.0) if law["law"] == "coast" else (-limit, limit)
+    upper = np.minimum(np.maximum(stall - drop, floor), limit)
+    lower = np.maximum(np.minimum(-stall - drop, ceiling), -limit)
+    return np.minimum(np.maximum(torque, lower), upper)
+
+
+def projected_gravity(quat: np.ndarray) -> np.ndarray:
+    """The world's unit gravity (0, 0, -1) in the frame of the unit quaternion (w, x, y, z)."""
+    w, x, y, z = quat
+    return -np.array([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)])
+
+
+def standing_hip_height(model: mujoco.MjModel, joints: np.ndarray) -> float:
+    """The hopper's hip height at which its foot sphere touches the ground in the pose
+    ``joints`` (HFE, KFE), worked out along its planar chain (hip, thigh, shank, adapter,
+    foot; rotations about y) as the env does it, to the last bit: the foot starts at
+    distance 0 from the ground, where the last bit decides whether MuJoCo counts a contact
+    at the first substep (mj_kinematics' own arithmetic differs there for 2 seeds in 5)."""
+    hfe, knee = model.body("thigh").pos, model.body("shank").pos
+    adapter, foot = model.body("adapter").pos, model.site("foot").pos
+    kx, kz = knee[0], knee[2]
+    fx, fz = adapter[0] + foot[0], adapter[2] + foot[2]
+    q = np.asarray(joints, dtype=np.float64)[None]  # a batch of one, as the env's
+    thigh, shank = q[:, 0], q[:, 0] + q[:, 1]
+    knee_z = hfe[2] + (-kx * np.sin(thigh) + kz * np.cos(thigh))
+    foot_z = knee_z + (-fx * np.sin(shank) + fz * np.cos(shank))
+    return float((model.geom("foot").size[0] - foot_z)[0])
+
+
+class Simulation:
+    """The robot of the MJCF, stepped as the project's MuJoCo env steps it."""
+
+    def __init__(self, meta: dict, mjcf: Path) -> None:
+        self.meta, self.env = meta, meta["env_config"]
+        self.model = mujoco.MjModel.from_xml_path(str(mjcf))
+        self.data = mujoco.MjData(self.model)
+        self.query = mujoco.MjData(self.model)  # for what the reward reads between steps
+        self.decimation = int(meta["decimation"])
+        if abs(self.model.opt.timestep * self.decimation - meta["control_dt"]) > 1e-12:
+            raise ValueError(f"{mjcf}: timestep {self.model.opt.timestep} s x "
+                             f"{self.decimation} is not the control period "
+                             f"{meta['control_dt']} s")  # fmt: skip
+        joints = [self.model.joint(name) for name in meta["joint_names"]]
+        self.qpos_index = np.array([j.qposadr[0] for j in joints])
+        self.dof_index = np.array([j.dofadr[0] for j in joints])
+        self.ctrl_index = np.array([self.model.actuator(name).id for name in meta["joint_names"]])
+        self.torque_sensors = [self.sensor_slice(f"{name}_torque") for name in meta["joint_names"]]
+        self.low = np.asarray(meta["action_low"])
+        self.high = np.asarray(meta["action_high"])
+        self.nominal = np.asarray(meta["default_joint_positions"])
+        self.law = meta["actuator"]
+        # the MJCF's actuators switched off (the coast law): the law is applied here, as torques
+        actuation_off = mujoco.mjtDisableBit.mjDSBL_ACTUATION.value
+        self.torque_law = bool(self.model.opt.disableflags & actuation_off)
+        self.hopper = meta["robot_model"] == "anymal-hopper"
+        if self.hopper and self.env["hop_reward"] != "hip-velocity":
+            raise ValueError(f"hop_reward {self.env['hop_reward']!r}: this example computes "
+                             "the hopper's default reward only, 'hip-velocity'")  # fmt: skip
+        if meta["robot_model"] not in ("anymal-hopper", "anymal-b"):
+            raise ValueError(f"robot {meta['robot_model']!r}: this example knows the reset and "
+                             "reward of anymal-hopper and anymal-b")  # fmt: skip
+
+    def sensor_slice(self, name: str) -> slice:
+        sensor = self.model.sensor(name)
+        return slice(sensor.adr[0], sensor.adr[0] + sensor.dim[0])
+
+    # -- an episode ------------------------------------------------------------------------
+    def reset(self, seed: int) -> None:
+        """The env's start for seed ``seed``: the nominal pose plus uniform joint noise (and
+        the quadruped's command), feet on the ground, at rest."""
+        model, data, env = self.model, self.data, self.env
+        rng = np.random.default_rng(seed)
+        mujoco.mj_resetData(model, data)
+        if self.hopper:
+            joints = self.nominal + rng.uniform(-env["reset_noise"], env["reset_noise"], 2)
+            data.qpos[self.qpos_index] = joints
+            data.qpos[0] = standing_hip_height(model, joints) + env["reset_clearance"]
+            self.desired = self.nominal.copy()
+            self.command = np.zeros(3)
+            data.time = 1000.0  # MuJoCo restarts a diverging simulation at time 0
+        else:
+            noise = rng.uniform(-env["reset_noise"], env["reset_noise"], len(self.nominal))
+            joints = np.clip(self.nominal + noise, self.low, self.high)
+            self.command = np.array([rng.uniform(*env["command_range"]), 0.0, 0.0])
+            for column, name in ((1, "lateral_range"), (2, "yaw_range")):
+                low, high = env[name]
+                self.command[column] = rng.uniform(low, high) if high > low else low
+            data.qpos[self.qpos_index] = joints
+            mujoco.mj_kinematics(model, data)
+            lowest = min(data.site(f"{leg}_foot").xpos[2] for leg in ("LF", "RF", "LH", "RH"))
+            data.qpos[2] += model.geom("LF_foot").size[0] - lowest
+            self.desired = joints.copy()  # the env's last action at a start
+            self.joint_vel_before = np.zeros(len(joints))
+            self.air_time = np.zeros(4)
+            self.in_contact = np.ones(4, dtype=bool)
+        mujoco.mj_forward(model, data)  # the sensors of the start
+        self.steps = 0
+
+    def observation(self) -> np.ndarray:
+        """The observation, built entry by entry from the metadata's ``observation_sources``."""
+        data, values = self.data, []
+        for entry in self.meta["observation_sources"]:
+            source, index = entry["source"], entry["index"]
+            if source == "qpos":
+                value = data.qpos[index]
+            elif source == "qvel":
+                value = data.qvel[index]
+            elif source == "sensor":
+                value = data.sensordata[self.sensor_slice(entry["sensor"])][index]
+            elif source == "projected_gravity":
+                start = entry["quaternion"]
+                value = projected_gravity(data.qpos[start : start + 4])[index]
+            elif source == "desired":
+                value = self.desired[index]
+            elif source == "command":
+                value = self.command[index]
+            else:
+                raise ValueError(f"observation source {source!r} unknown to this example")
+            values.append(value + entry.get("offset", 0.0))
+        return np.array(values)
+
+    def step(self, action: np.ndarray) -> tuple[float, bool, bool]:
+        """Hold ``action`` for one control step; ``(reward, terminated, truncated)``."""
+        model, data = self.model, self.data
+        desired = np.clip(action, self.low, self.high)
+        last_desired, feet_before = self.desired, None if self.hopper else self.feet()[:, :2]
+        self.desired = desired
+        torque_sum = np.zeros(len(desired))
+        data.ctrl[:] = 0.0
+        data.ctrl[self.ctrl_index] = desired
+        data.qacc_warmstart[:] = 0.0  # each control step starts the solver afresh, as the env
+        for _ in range(self.decimation):
+            if self.torque_law:  # the law in numpy at every substep, as joint torques
+                torque = actuator_torque(self.law, desired, data.qpos[self.qpos_index],
+                                         data.qvel[self.dof_index])  # fmt: skip
+                data.qfrc_applied[self.dof_index] = torque
+                data.qacc_warmstart[:] = 0.0  # the env steps this law one substep per call
+                mujoco.mj_step(model, data)
+            else:
+                mujoco.mj_step(model, data)
+                torque = np.array([data.sensordata[s][0] for s in self.torque_sensors])
+            torque_sum += torque
+        self.steps += 1
+        if self.hopper:  # its torque penalty: the mean over the substeps
+            reward, terminated = self.hopper_reward(desired, torque_sum / self.decimation)
+        else:  # the last substep's torques
+            reward, terminated = self.quadruped_reward(desired, last_desired, torque, feet_before)
+        if self.hopper:
+            episode_steps = self.env["episode_steps"]
+        else:
+            episode_steps = round(self.env["episode_seconds"] / self.meta["control_dt"])
+        return reward, terminated, bool(self.steps >= episode_steps and not terminated)
+
+    def feet(self) -> np.ndarray:
+        """(4, 3) the quadruped's feet (world, m), as the last substep's sensors read them."""
+        data = self.data
+        return np.stack([data.sensordata[self.sensor_slice(f"{leg}_foot_pos")]
+                         for leg in ("LF", "RF", "LH", "RH")])  # fmt: skip
+
+    # -- the reward (the env's) --------------------------------------------------------------
+    def hopper_reward(self, desired, torque) -> tuple[float, bool]:
+        """Paper eq. 4: hop (upward hip speed), track, and spare the joints and the foot."""
+        env, qpos, qvel = self.env, self.data.qpos, self.data.qvel
+        joint_vel = qvel[self.dof_index]
+        terminated = bool(
+            not (np.isfinite(qpos).all() and np.isfinite(qvel).all())
+            or np.abs(joint_vel).max() > env["blowup_joint_velocity"]
+            or abs(qvel[0]) > env["blowup_hip_velocity"]
+            or self.data.time < 1000.0  # MuJoCo found it unstable and restarted it
+        )
+        if terminated:
+            return 0.0, True
+        query = self.query
+        query.qpos[:], query.qvel[:] = qpos, qvel
+        mujoco.mj_forward(self.model, query)
+        velocity = np.zeros(6)  # the foot's (angular, linear), world frame
+        site = self.model.site("foot").id
+        mujoco.mj_objectVelocity(self.model, query, mujoco.mjtObj.mjOBJ_SITE, site, velocity, 0)
+        terms = (
+            (env["c1"] * max(qvel[0], 0.0)) ** 2,
+            env["c2"] * np.sum((desired - qpos[self.qpos_index]) ** 2),
+            env["c3"] * np.sum(joint_vel**2),
+            env["c4"] * np.sum(torque**2),
+            env["c5"] * abs(velocity[3]),  # the foot slides along x only (the rail holds y)
+        )
+        return float(sum(terms)), False
+
+    def quadruped_reward(self, desired, last_desired, torque, feet_xy_before):
+        """legged_gym's terms, each times its scale and the control period."""
+        env, data, dt = self.env, self.data, self.meta["control_dt"]
+        lin_vel = data.sensordata[self.sensor_slice("base_lin_vel")]
+        ang_vel = data.sensordata[self.sensor_slice("base_ang_vel")]
+        gravity = projected_gravity(data.qpos[3:7])
+        height = data.qpos[2]
+        joint_vel = data.qvel[self.dof_index].copy()
+        feet = self.feet()
+        contact = feet[:, 2] < self.model.geom("LF_foot").size[0] + 0.005
+        planted = contact & self.in_contact
+        speed = np.sqrt(np.sum((feet[:, :2] - feet_xy_before) ** 2, axis=-1)) / dt
+        slip = np.where(planted, speed, 0.0)
+        touchdown = contact & ~self.in_contact
+        self.air_time += dt
+        moving = np.linalg.norm(self.command[:2]) > 0.1
+        air_paid = np.sum((self.air_time - 0.5) * touchdown) * moving
+        self.air_time[contact] = 0.0
+        self.in_contact = contact
+        command, sigma = self.command, env["tracking_sigma"]
+        terms = {
+            "tracking_lin_vel": np.exp(-np.sum((command[:2] - lin_vel[:2]) ** 2) / sigma),
+            "tracking_ang_vel": np.exp(-((command[2] - ang_vel[2]) ** 2) / sigma),
+            "lin_vel_z": lin_vel[2] ** 2,
+            "ang_vel_xy": np.sum(ang_vel[:2] ** 2),
+            "orientation": np.sum(gravity[:2] ** 2),
+            "base_height": (height - env["base_height_target"]) ** 2,
+            "torques": np.sum(torque**2),
+            "joint_acc": np.sum(((joint_vel - self.joint_vel_before) / dt) ** 2),
+            "action_rate": np.sum((desired - last_desired) ** 2),
+            "feet_air_time": air_paid,
+            "feet_slip": np.sum(slip**2),
+        }
+        reward = sum(value * env["reward_scales"][name] * dt for name, value in terms.items())
+        self.joint_vel_before = joint_vel
+        tilt = np.arccos(np.clip(-gravity[2], -1.0, 1.0))
+        terminated = bool(
+            height < env["fall_height"]
+            or tilt > env["fall_tilt"]
+            or data.sensordata[self.sensor_slice("base_touch")][0] > 0
+            or not (np.isfinite(data.qpos).all() and np.isfinite(data.qvel).all())
+        )
+        return float(reward), terminated
+
+
+def run_episode(policy: Policy, sim: Simulation, seed: int, max_steps: int | None):
+    """One episode from the env's start for ``seed``: ``(return, steps, how it ended)``."""
+    sim.reset(seed)
+    policy.reset()
+    total, steps, ended = 0.0, 0, "step limit"
+    while max_steps is None or steps < max_steps:
+        action = policy(sim.observation())
+        reward, terminated, truncated = sim.step(action)
+        total += reward
+        steps += 1
+        if terminated or truncated:
+            ended = "terminated" if terminated else "truncated"
+            break
+    return total, steps, ended
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("policy", type=Path, help="an ONNX file written by `cpg-actor export`")
+    parser.add_argument("--mjcf", type=Path, default=None,
+                        help="the robot's MJCF (default: the one named in the metadata, next "
+                        "to the policy)")  # fmt: skip
+    parser.add_argument("--seed", type=int, default=1000, help="the start's seed (default 1000)")
+    parser.add_argument("--steps", type=int, default=None, help="stop after this many steps")
+    args = parser.parse_args(argv)
+    try:
+        if not args.policy.is_file():
+            raise ValueError(f"{args.policy} does not exist (an ONNX file from cpg-actor export)")
+        policy = Policy(args.policy)
+        if "mjcf_file" not in policy.meta:
+            raise ValueError(f"{args.policy} has no cpg-actor metadata; export it again")
+        mjcf = args.mjcf or args.policy.with_name(policy.meta["mjcf_file"])
+        if not mjcf.is_file():
+            raise ValueError(f"the robot's MJCF {mjcf} does not exist; pass --mjcf PATH")
+        sim = Simulation(policy.meta, mjcf)
+        total, steps, ended = run_episode(policy, sim, args.seed, args.steps)
+    except ValueError as error:
+        print(f"deploy_onnx.py: error: {error}", file=sys.stderr)
+        return 2
+    print(f"{policy.meta['agent']} on {policy.meta['robot_model']}, seed {args.seed}: "
+          f"return {total:.10g} over {steps} steps ({ended})")  # fmt: skip
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,134 @@
+"""examples/deploy_onnx.py: the exported ONNX policy run on its robot in MuJoCo with numpy,
+onnxruntime and mujoco alone (no torch, no cpg_actor) scores `cpg-actor eval`'s return, on
+the hopper and the quadruped.
+
+Two comparisons per robot: against the library's deterministic evaluation acting with the
+same ONNX file (the example's simulation, observation and reward mirror the env's: equal to
+float64 rounding), and against `cpg-actor eval`'s own PyTorch policy (within 1 %: ONNX Runtime
+and PyTorch round float32 differently, by up to a few 1e-6 rad per action, and a legged
+robot's contacts carry such differences into the return; the library's own evaluation changes
+as much with the number of episodes run in one batch)."""
+
+import re
+import runpy
+import subprocess
+import sys
+from pathlib import Path
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from cpg_actor.agents import get_agent_spec
+from cpg_actor.commands.eval import evaluate as eval_command_evaluate
+from cpg_actor.config import TrainConfig, apply_dict
+from cpg_actor.evaluation import evaluate
+from cpg_actor.export import export_policy
+from cpg_actor.policy import load_policy
+from cpg_actor.runner import Runner
+from tiny import tiny_config  # tests/tiny.py
+
+ort = pytest.importorskip("onnxruntime")
+pytest.importorskip("onnxscript")
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "deploy_onnx.py"
+SEED = 1000
+
+
+def exported_run(path: Path, agent: str, robot: str, **changes) -> tuple[TrainConfig, Path]:
+    """A tiny training run (its config.yaml as `cpg-actor train` writes it), exported."""
+    config = tiny_config(agent)
+    apply_dict(config, {"robot": robot, **changes}, "")
+    runner = Runner(config, run_dir=path, tensorboard=False)
+    runner.learn()
+    runner.close()
+    config.save(path / "config.yaml")
+    policy = load_policy(path, run_config=config)
+    return config, export_policy(policy, path / "export" / "policy.onnx", "onnx")
+
+
+def run_example(policy: Path, seed: int) -> tuple[float, int, str]:
+    """The example in a fresh interpreter: (return, steps, how it ended); it must import
+    neither torch nor cpg_actor."""
+    code = "\n".join([
+        "import runpy, sys",
+        f"sys.argv = ['deploy_onnx.py', {str(policy)!r}, '--seed', '{seed}']",
+        f"code = runpy.run_path({str(EXAMPLE)!r})['main']()",
+        "loaded = sorted({n.split('.')[0] for n in sys.modules} & {'torch', 'cpg_actor'})",
+        "print('imported:', loaded)",
+        "sys.exit(code)",
+    ])  # fmt: skip
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert "imported: []" in result.stdout, result.stdout
+    found = re.search(r"return (\S+) over (\d+) steps \((\w+)\)", result.stdout)
+    assert found, result.stdout
+    return float(found[1]), int(found[2]), found[3]
+
+
+class OnnxPolicy:
+    """The exported file behind the library's evaluation (``reset``, ``act``)."""
+
+    def __init__(self, path: Path) -> None:
+        self.session = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+        self.initial = np.load(path.with_name(path.name + ".initial_state.npy"))
+
+    def reset(self, num_envs: int) -> None:
+        self.state = self.initial.copy()
+
+    def act(self, obs, deterministic: bool = True):
+        obs = np.asarray(obs, dtype=np.float32)
+        action, self.state = self.session.run(None, {"observation": obs, "state": self.state})
+        return SimpleNamespace(action=action)
+
+
+@pytest.mark.parametrize(
+    ("robot", "agent", "changes"),
+    [
+        ("hopper", "cpg-actor", {}),
+        ("anymal", "cpg-actor", {}),
+        # the stateless MLP, and the actuator law run in numpy (the MJCF's actuators off)
+        ("hopper", "mlp", {"env": {"actuator_law": "coast"}}),
+    ],
+)
+def test_the_example_scores_the_evaluations_return(tmp_path, robot, agent, changes):
+    config, policy_path = exported_run(tmp_path / "run", agent, robot, **changes)
+    total, steps, ended = run_example(policy_path, SEED)
+
+    env = get_agent_spec(agent).make_env(1, config.env, 1, config.agent_config)
+    try:
+        same_file = evaluate(OnnxPolicy(policy_path), env, seed=SEED,
+                             control_dt=float(config.env.control_dt),
+                             max_steps=int(config.env.episode_steps), traces=False)  # fmt: skip
+    finally:
+        env.close()
+    assert steps == same_file["length"][0]
+    assert ended == ("truncated" if steps == config.env.episode_steps else "terminated")
+    expected = same_file["episode_return"][0]
+    assert total == pytest.approx(expected, rel=1e-6, abs=1e-9 * steps)
+
+    # `cpg-actor eval RUN --episodes 1 --seed SEED`, the PyTorch policy
+    policy = load_policy(policy_path.parents[1], run_config=config)
+    pytorch = eval_command_evaluate(policy, config, 1, seed=SEED)["episode_return"][0]
+    assert total == pytest.approx(pytorch, rel=1e-2)
+
+
+def test_the_example_refuses_a_nonfinite_observation_and_a_missing_file(tmp_path, capsys):
+    _, policy_path = exported_run(tmp_path / "run", "cpg-actor", "hopper")
+    example = runpy.run_path(str(EXAMPLE))
+    policy = example["Policy"](policy_path)
+    observation = np.array([0.4, -0.8, 0.0, 0.0, 0.4, -0.8, 0.47, 0.0])
+    assert np.isfinite(policy(observation)).all()
+    observation[[1, 6]] = [np.nan, np.inf]
+    with pytest.raises(ValueError, match=r"non-finite observation entries \['p_m_KFE', "
+                                         r"'hip_height'\]: refused"):  # fmt: skip
+        policy(observation)
+    assert example["main"]([str(tmp_path / "missing.onnx")]) == 2
+    err = capsys.readouterr().err
+    assert "missing.onnx does not exist" in err and len(err.splitlines()) == 1
+    (policy_path.with_name("policy.onnx.robot.xml")).rename(tmp_path / "robot.xml")
+    assert example["main"]([str(policy_path)]) == 2
+    assert "pass --mjcf PATH" in capsys.readouterr().err
+    assert example["main"]([str(policy_path), "--mjcf", str(tmp_path / "robot.xml"),
+                            "--steps", "3"]) == 0  # fmt: skip
+    assert "over 3 steps (step limit)" in capsys.readouterr().out
