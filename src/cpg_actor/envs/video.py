@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import itertools
+import math
 import os
 import uuid
 from collections.abc import Iterable
@@ -21,6 +22,7 @@ def write_video(
     frames: Iterable[np.ndarray], path: str | os.PathLike, fps: float, overwrite: bool = False
 ) -> Path:
     """Write RGB frames (H, W, 3) uint8 to ``path`` (``.mp4`` or ``.gif``) and return the path.
+    A GIF keeps at most 50 frames per second (browsers slow down faster ones).
 
     The file appears atomically (written next to it under a temporary name, then renamed).
     An existing file is an error unless ``overwrite=True``. MP4 frames are padded to even
@@ -65,7 +67,10 @@ def write_video(
                         np.pad(frame, pad, mode="edge") if any(pad[0] + pad[1]) else frame
                     )
         else:
-            imageio.mimsave(tmp, gif_frames, format="GIF", duration=1000.0 / fps, loop=0)
+            # browsers draw a frame shorter than 20 ms for 100 ms: above 50 fps keep every
+            # k-th frame, each shown k times as long, so the GIF plays in real time
+            k = math.ceil(fps / 50)
+            imageio.mimsave(tmp, gif_frames[::k], format="GIF", duration=1000.0 * k / fps, loop=0)
         tmp.replace(path)
     except BaseException:
         tmp.unlink(missing_ok=True)
