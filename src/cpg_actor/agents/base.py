@@ -39,7 +39,7 @@ class AgentConfig:
     # The feedback is bounded: xi = xi_scale * tanh(out[:N]) (rad/s), kappa = kappa_scale *
     # tanh(out[N:]) (rad/s^2). Unbounded feedback (feedback_tanh=False: scale * out) learned a
     # period-2 chatter of theta_dot through the observation loop and unstable returns; see
-    # docs/training.md, "Bounded feedback".
+    # docs/results/training-measurements.md, "Bounded feedback".
     xi_scale: float = 4.0
     kappa_scale: float = 25.0
     feedback_tanh: bool = True

@@ -9,8 +9,8 @@ compiles the whole step, ``torch.func.grad`` of the PPO loss (:func:`ppo_loss`) 
 the Adam update, into one ``torch.compile``d function that writes the new parameters, the Adam
 moments and the rate in place. On a 2-core CPU the paper preset's update (64-sample
 minibatches) is about 1.5x faster than with the compiled loss, autograd, the lean clip and the
-fused Adam kernel, the throughput preset's (2,048 samples) about 1.3x (``docs/training.md``,
-"Throughput").
+fused Adam kernel, the throughput preset's (2,048 samples) about 1.3x
+(``docs/results/throughput-measurements.md``, "The whole gradient step compiled").
 
 It computes the same algorithm with the same Adam state (``optimizer.state``: ``step``,
 ``exp_avg``, ``exp_avg_sq``, so checkpoints and resume are unchanged), but not the same bits
