@@ -54,13 +54,7 @@ def broken_links(path):
 
 
 def _param(path):
-    name = path.relative_to(ROOT).as_posix()
-    marks = []
-    if name == "README.md":
-        # README.md is being rewritten separately; its links to moved docs sections and removed
-        # benchmark files are fixed there. Remove this mark once it passes.
-        marks.append(pytest.mark.xfail(reason="README.md rewrite pending", strict=False))
-    return pytest.param(path, id=name, marks=marks)
+    return pytest.param(path, id=path.relative_to(ROOT).as_posix())
 
 
 @pytest.mark.parametrize("path", [_param(p) for p in markdown_files()])

@@ -237,8 +237,8 @@ class MujocoBackend(Backend):
             self._renderer = offscreen_renderer(self.model, width, height)
             camera = mujoco.MjvCamera()
             camera.type = mujoco.mjtCamera.mjCAMERA_FREE
-            camera.lookat[:] = (0.12, 0.0, 0.38)
-            camera.distance = 1.5
+            camera.lookat[:] = (0.12, 0.0, 0.6)  # the rail up to a 0.6 m hop
+            camera.distance = 2.3
             camera.azimuth = 90.0  # look along +y: the leg's sagittal plane, side view
             camera.elevation = -8.0
             self._camera = camera

@@ -1,0 +1,17 @@
+"""The README's Python example runs as written and prints what it says."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+
+
+def test_readme_python_example_runs(capsys):
+    blocks = re.findall(r"```python\n(.*?)```", README.read_text(encoding="utf-8"), flags=re.S)
+    assert len(blocks) == 1, "the README should hold exactly one Python example"
+    exec(compile(blocks[0], str(README), "exec"), {"__name__": "readme_example"})
+    printed = capsys.readouterr().out.splitlines()
+    assert printed[0] == "torch.Size([4, 2])"
+    assert printed[1] == "(8,) (2,)"  # the hopper's observation and action
