@@ -32,6 +32,7 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
+from cpg_actor.files import naming, temporary_path
 from cpg_actor.policy import Policy
 
 FORMATS = ("torchscript", "onnx")
@@ -96,15 +97,22 @@ def export_policy(
     path = Path(path)
     state_path = path.with_name(path.name + ".initial_state.npy")
     for target in (path, state_path):
+        if target.is_dir():  # not replaced even with --overwrite: a directory is no export
+            raise FileExistsError(
+                f"{target} is a directory; give the export a file name (e.g. "
+                f"{target / ('policy' + SUFFIXES[fmt])})"
+            )
         if target.exists() and not overwrite:
             raise FileExistsError(f"{target} exists; pass --overwrite to replace it")
+    state_existed = state_path.exists()
     module = ControlStep(policy).cpu().eval()  # exported for the CPU, wherever it trained
     obs_dim = int(policy.normalizer.mean.shape[0])
     example = (torch.zeros(batch, obs_dim), torch.as_tensor(initial_state(policy, batch)))
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    tmp = temporary_path(path)
+    state_tmp = temporary_path(state_path)
     try:
-        with torch.no_grad():
+        with torch.no_grad(), naming(path):
             if fmt == "torchscript":
                 torch.jit.save(torch.jit.trace(module, example), str(tmp))
             else:
@@ -119,12 +127,16 @@ def export_policy(
                     verbose=False,
                 )
                 program.save(str(tmp))
-        state_tmp = state_path.with_name(f".{state_path.name}.tmp{os.getpid()}")
-        with open(state_tmp, "wb") as f:
+        with naming(state_path), open(state_tmp, "wb") as f:
             np.save(f, initial_state(policy, batch))
         os.replace(state_tmp, state_path)
-        os.replace(tmp, path)
+        try:
+            os.replace(tmp, path)
+        except BaseException:  # no initial state left behind without its policy
+            if not state_existed:
+                state_path.unlink(missing_ok=True)
+            raise
     finally:
         tmp.unlink(missing_ok=True)
-        state_path.with_name(f".{state_path.name}.tmp{os.getpid()}").unlink(missing_ok=True)
+        state_tmp.unlink(missing_ok=True)
     return path

@@ -600,6 +600,7 @@ class Runner:
         self._resumed = True
         self.iteration = data["iteration"]
         self.global_step = data["global_step"]
+        self.run_log.purge_step = self.global_step + 1  # TensorBoard points logged after it
         self.episodes.load_recent(data["recent"])
         set_rng_state(data["rng"])
         self.env_seed = data.get("env_seed")

@@ -65,9 +65,12 @@ def test_reproduce_runs_variants_and_seeds_then_skips_and_resumes(tmp_path, caps
     assert text.count("skipped (finished earlier)") == 4
     assert _checkpoint_times(out) == before
 
-    # an interrupted run: no marker, last.pt at iteration 0 -> resumed, the others skipped
+    # an interrupted run: no marker, checkpoints up to iteration 0 -> resumed, the others skipped
     run = out / "runs" / "mlp" / "seed1"
     (run / "reproduce_run.json").unlink()
+    for later in (run / "checkpoints").glob("iter_*.pt"):
+        if later.name != "iter_000000.pt":
+            later.unlink()
     shutil.copyfile(run / "checkpoints" / "iter_000000.pt", run / "checkpoints" / "last.pt")
     assert main(argv) == 0
     text = capsys.readouterr().out
