@@ -67,7 +67,9 @@ def test_actuator_law_on_jax_arrays_equals_numpy():
         actuator = Actuator.from_config(HopperConfig(actuator_law=law))
         expected = actuator(desired, position, velocity)
         got = actuator(*(jnp.asarray(x, jnp.float32) for x in (desired, position, velocity)))
-        np.testing.assert_allclose(np.asarray(got), expected, atol=1e-4)
+        # float32 against float64: within a few float32 roundings of the torques' magnitude
+        scale = np.abs(expected).max()
+        np.testing.assert_allclose(np.asarray(got), expected, rtol=1e-5, atol=2.5e-6 * scale)
 
 
 def test_free_fall_matches_the_hand_calculation():
