@@ -218,6 +218,27 @@ def test_a_full_disk_during_a_checkpoint_is_one_line_naming_the_file(
     assert load_checkpoint(run_dir / "checkpoints" / "last.pt")["iteration"] == 2
 
 
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full (Linux)")
+def test_a_disk_that_fills_inside_torch_save_names_the_file_not_torch(tmp_path, monkeypatch):
+    """torch's zip writer turns the failed write of a large tensor into a RuntimeError
+    ("unexpected pos ..."); the write is reported as the OSError it was."""
+    import cpg_actor.files as files
+    from cpg_actor.checkpoint import atomic_save
+
+    def full(path, mode="r", *args, **kwargs):  # every write of this file hits a full disk
+        return open("/dev/full", mode, *args, **kwargs)
+
+    monkeypatch.setattr(files, "open", full, raising=False)
+    target = tmp_path / "checkpoints" / "last.pt"
+    with pytest.raises(OSError) as raised:
+        atomic_save({"weights": torch.zeros(1_000_000)}, target)
+    assert raised.value.errno == errno.ENOSPC and raised.value.filename == str(target)
+    assert files.describe_os_error(raised.value) == (
+        f"no space left on device while writing {target}"
+    )
+    assert list(target.parent.iterdir()) == []
+
+
 # -- resume ------------------------------------------------------------------------------------
 def test_resume_takes_the_newest_complete_checkpoint(tmp_path, capsys, trained):
     """A run killed between writing iter_000002.pt and last.pt: last.pt is iteration 1."""

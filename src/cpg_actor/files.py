@@ -95,17 +95,42 @@ def naming(path: Path) -> Iterator[None]:
         raise OSError(error.errno, error.strerror, str(path)) from None
 
 
+class _Writes:
+    """A file's ``write`` that keeps the OSError it raised: a writer that turns it into
+    another error (torch's zip writer raises a RuntimeError on a full disk) loses the cause."""
+
+    def __init__(self, file: IO[bytes]) -> None:
+        self.file = file
+        self.error: OSError | None = None
+
+    def write(self, data) -> int:
+        try:
+            return self.file.write(data)
+        except OSError as error:
+            self.error = error
+            raise
+
+    def flush(self) -> None:
+        self.file.flush()
+
+
 def atomic_write(path: Path, write: Callable[[IO[bytes]], None], fsync: bool = False) -> None:
     """``write(file)`` into a temporary file next to ``path`` (flushed, fsync'ed if asked),
     then renamed over ``path``: ``path`` is replaced whole or not at all, and the temporary
-    file is removed if anything fails."""
+    file is removed if anything fails. A failed write raises its OSError, naming ``path``."""
     path = Path(path)
     tmp = temporary_path(path)
     with naming(path):
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             with open(tmp, "wb") as f:
-                write(f)
+                writes = _Writes(f)
+                try:
+                    write(writes)  # type: ignore[arg-type]
+                except Exception:
+                    if writes.error is not None:
+                        raise writes.error from None
+                    raise
                 f.flush()
                 if fsync:
                     os.fsync(f.fileno())
