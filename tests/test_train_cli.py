@@ -102,6 +102,7 @@ def test_existing_run_dir_is_never_overwritten_without_overwrite(tmp_path, capsy
     assert (other / "notes.txt").read_text() == "keep"
 
 
+@pytest.mark.slow
 def test_train_resume_equals_straight_run_and_eval_writes_traces(tmp_path, capsys):
     """Extending a run (--resume with a larger --total-steps) equals training that long in
     one go under a fixed learning rate (a linear schedule is stretched by an extension).

@@ -23,6 +23,7 @@ def _checkpoint_times(out):
     return {str(path): path.stat().st_mtime_ns for path in (out / "runs").rglob("checkpoints/*.pt")}
 
 
+@pytest.mark.slow
 def test_reproduce_runs_variants_and_seeds_then_skips_and_resumes(tmp_path, capsys):
     out = tmp_path / "results"
     argv = ["reproduce", *TINY, "--seeds", "2", "--variants", "cpg-actor,mlp"]
