@@ -3,13 +3,14 @@ from, RNG streams, and the config keys that differ between two runs."""
 
 from __future__ import annotations
 
-import os
 import random
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import torch
+
+from cpg_actor.files import atomic_write, atomic_write_text  # noqa: F401 (re-exported)
 
 CHECKPOINT_FORMAT = "cpg-actor-checkpoint"
 CHECKPOINT_VERSION = 1
@@ -36,29 +37,9 @@ def set_rng_state(state: dict[str, Any]) -> None:
 
 
 def atomic_save(obj: Any, path: Path) -> None:
-    """``torch.save`` to a temporary file in the same directory, fsync, then ``os.replace``."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    try:
-        with open(tmp, "wb") as f:
-            torch.save(obj, f)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
-
-
-def atomic_write_text(text: str, path: Path) -> None:
-    """Write ``text`` to a temporary file in the same directory, then ``os.replace``."""
-    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
-    try:
-        tmp.write_text(text)
-        os.replace(tmp, path)
-    finally:
-        if tmp.exists():
-            tmp.unlink()
+    """``torch.save`` to a temporary file in the same directory, fsync, then ``os.replace``
+    (see :func:`cpg_actor.files.atomic_write`)."""
+    atomic_write(Path(path), lambda f: torch.save(obj, f), fsync=True)
 
 
 def load_checkpoint(path: Path) -> dict[str, Any]:
@@ -100,23 +81,42 @@ def check_checkpoint_run(
 
 
 def resume_checkpoint(run_dir: Path) -> tuple[Path, dict[str, Any], list[str]]:
-    """The checkpoint a run resumes from: ``last.pt`` or, if it is missing or unreadable, the
-    newest readable ``iter_*.pt`` (``last.pt`` is a copy of the newest one, so nothing is lost
-    when that one is readable). Returns ``(path, data, notes)``, the notes saying what was
+    """The checkpoint a run resumes from: the readable one of the highest iteration (stored in
+    it), ``last.pt`` or an ``iter_*.pt``. ``last.pt`` is written after the ``iter_*.pt`` of the
+    same iteration, so a run killed between the two has a newer ``iter_*.pt``; an unreadable
+    file is skipped for the next. Returns ``(path, data, notes)``, the notes saying what was
     skipped; FileNotFoundError / ValueError naming every file tried if none is usable."""
     folder = Path(run_dir) / "checkpoints"
-    candidates = [folder / "last.pt", *sorted(folder.glob("iter_*.pt"), reverse=True)]
-    candidates = [path for path in candidates if path.is_file()]
-    if not candidates:
+    numbered = sorted(
+        (int(path.stem[len("iter_") :]), path)
+        for path in folder.glob("iter_*.pt")
+        if path.stem[len("iter_") :].isdigit() and path.is_file()
+    )
+    last = folder / "last.pt"
+    if not numbered and not last.is_file():
         raise FileNotFoundError(
             f"{folder} holds no checkpoint (last.pt, iter_*.pt); nothing to resume"
         )
     notes: list[str] = []
-    for path in candidates:
+    best: tuple[Path, dict[str, Any]] | None = None
+    if last.is_file():
         try:
-            return path, load_checkpoint(path), notes
+            best = last, load_checkpoint(last)
+        except ValueError as error:
+            notes.append(f"skipped {last.name}: {error}")
+    newest = best[1].get("iteration", -1) if best else -1
+    for number, path in reversed(numbered):  # the newest first; only those newer than last.pt
+        if number <= newest:
+            break
+        try:
+            data = load_checkpoint(path)
         except ValueError as error:
             notes.append(f"skipped {path.name}: {error}")
+            continue
+        if data.get("iteration", -1) > newest:
+            return path, data, notes
+    if best is not None:
+        return best[0], best[1], notes
     raise ValueError(
         f"no usable checkpoint in {folder}: " + "; ".join(notes) + ". Start a new run."
     )

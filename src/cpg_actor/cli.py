@@ -1,7 +1,10 @@
 """The `cpg-actor` command line: one sub-command per module in `cpg_actor.commands`.
 
 Each command module defines `HELP` (one line), `add_arguments(parser)` and `run(args) -> int`.
-Modules are imported only when their command runs, so `cpg-actor --help` stays fast.
+Only the module of the command being run is imported (its arguments are added to that
+command's parser alone), so `cpg-actor --help` and `--version` import neither torch nor a
+simulator; `COMMANDS` repeats each module's `HELP` for the list of commands (a test checks
+they agree).
 """
 
 from __future__ import annotations
@@ -15,27 +18,66 @@ from cpg_actor.machine import brief_openmp_spinning
 
 brief_openmp_spinning(os.environ)  # before anything imports torch
 
-from cpg_actor.envs.mjx.runtime import MjxUnavailable  # noqa: E402
-from cpg_actor.envs.video import RenderingUnavailable  # noqa: E402
+from cpg_actor.errors import MjxUnavailable, RenderingUnavailable  # noqa: E402
+from cpg_actor.files import describe_os_error  # noqa: E402
 
-# command name -> module in cpg_actor.commands
-COMMANDS: dict[str, str] = {
-    "cpg-demo": "cpg_demo",
-    "gaits": "gaits",
-    "train": "train",
-    "eval": "eval",
-    "export": "export",
-    "cho2019-reference": "cho2019_reference",
-    "reproduce": "reproduce",
-    "sweep": "sweep",
-    "figures": "figures",
-    "curves": "curves",
-    "gradient": "gradient",
-    "transfer": "transfer",
+# command name -> (module in cpg_actor.commands, its HELP)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "cpg-demo": (
+        "cpg_demo",
+        "integrate the hopper CPG for a few seconds and plot x, theta_dot and r_ddot to a PNG",
+    ),
+    "gaits": (
+        "gaits",
+        "run the quadruped's CPG gait presets open loop; write a gait diagram and a summary",
+    ),
+    "train": (
+        "train",
+        "train an agent (cpg-actor, cpg-actor-paper, mlp, mlp-warm, cho2019-warm, ...) with "
+        "PPO, or search one (open-loop-es: CMA-ES)",
+    ),
+    "eval": (
+        "eval",
+        "evaluate a trained run deterministically; save per-step traces, figures (and a video)",
+    ),
+    "export": (
+        "export",
+        "export a trained policy (normaliser, networks, CPG step) as TorchScript or ONNX",
+    ),
+    "cho2019-reference": (
+        "cho2019_reference",
+        "grid-search the reference hopping CPG parameters that warm-start the cho2019 baseline",
+    ),
+    "reproduce": (
+        "reproduce",
+        "reproduce the paper: train variants x seeds in parallel (or on Ray), figures and a report",
+    ),
+    "sweep": (
+        "sweep",
+        "sensitivity study: train variants x seeds for the defaults and each --vary setting",
+    ),
+    "figures": (
+        "figures",
+        "redraw the paper's figures and report.md from a `cpg-actor reproduce` results directory",
+    ),
+    "curves": (
+        "curves",
+        "draw the learning curves of several runs (grouped by agent) in one figure",
+    ),
+    "gradient": (
+        "gradient",
+        "measure the k-step (truncated) CPG gradient against the full-trajectory one",
+    ),
+    "transfer": (
+        "transfer",
+        "evaluate a reproduction's final policies in both simulators (cross-simulator transfer)",
+    ),
 }
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser: every command listed with its help; ``command``'s module imported and its
+    arguments added (the others are not parsed in this run)."""
     parser = argparse.ArgumentParser(
         prog="cpg-actor",
         description="Train Central Pattern Generator controllers with deep RL (CPG-Actor).",
@@ -44,16 +86,24 @@ def build_parser() -> argparse.ArgumentParser:
 
     parser.add_argument("--version", action="version", version=f"cpg-actor {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name, module_name in COMMANDS.items():
-        module = importlib.import_module(f"cpg_actor.commands.{module_name}")
-        command_parser = sub.add_parser(name, help=module.HELP, description=module.HELP)
-        module.add_arguments(command_parser)
-        command_parser.set_defaults(_run=module.run)
+    for name, (module_name, help_text) in COMMANDS.items():
+        command_parser = sub.add_parser(name, help=help_text, description=help_text)
+        if name == command:
+            module = importlib.import_module(f"cpg_actor.commands.{module_name}")
+            module.add_arguments(command_parser)
+            command_parser.set_defaults(_run=module.run)
     return parser
 
 
+def _command(argv: list[str]) -> str | None:
+    """The command named in ``argv``: its first word that is not an option (the only
+    options before it, -h and --version, take no value)."""
+    return next((word for word in argv if not word.startswith("-")), None)
+
+
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser(_command(argv)).parse_args(argv)
     try:
         return int(args._run(args) or 0)
     except (
@@ -63,7 +113,8 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     # unwritable or full disk, read-only file system, no OpenGL to render with...: one line
     except (OSError, RenderingUnavailable) as error:
-        print(f"cpg-actor {args.command}: error: {error}", file=sys.stderr)
+        text = describe_os_error(error) if isinstance(error, OSError) else str(error)
+        print(f"cpg-actor {args.command}: error: {text}", file=sys.stderr)
         return 1
 
 

@@ -21,7 +21,18 @@ from cpg_actor.agents.base import AgentConfig
 from cpg_actor.agents.open_loop_es import ESConfig
 from cpg_actor.agents.warm_start import WarmStartConfig
 from cpg_actor.device import check_device_name
+from cpg_actor.files import atomic_write_text
 from cpg_actor.ppo.config import PPOConfig
+
+# the largest seed: torch takes seeds below 2**64, but seeds pass through int64 tensors and
+# arrays (checkpoints, env seeds), so the accepted range is that of an int64
+MAX_SEED = 2**63 - 1
+
+
+def check_seed(seed: Any, name: str = "--seed") -> None:
+    """ValueError unless ``seed`` is an integer from 0 to :data:`MAX_SEED`."""
+    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
+        raise ValueError(f"{name} must be an integer from 0 to 2**63-1 ({MAX_SEED}), got {seed!r}")
 
 
 def _default_env_config() -> Any:
@@ -112,8 +123,7 @@ class TrainConfig:
                 f"search_steps ({steps:,}) must be below total_steps ({self.total_steps:,}): "
                 "the start gait's search would use the whole budget"
             )
-        if not isinstance(self.seed, int) or self.seed < 0:
-            raise ValueError(f"seed must be a non-negative integer, got {self.seed!r}")
+        check_seed(self.seed, "seed")
         threads = self.update_threads
         if threads is not None and (
             not isinstance(threads, int) or isinstance(threads, bool) or threads < 1
@@ -175,7 +185,7 @@ class TrainConfig:
         return config
 
     def save(self, path: Path) -> None:
-        path.write_text(yaml.safe_dump(self.to_dict(), sort_keys=False))
+        atomic_write_text(yaml.safe_dump(self.to_dict(), sort_keys=False), Path(path))
 
     @classmethod
     def load(cls, path: Path) -> TrainConfig:
@@ -232,7 +242,12 @@ def compose_config(
 def read_config_file(path: Path) -> dict[str, Any]:
     """The mapping of config keys in a YAML file; a clear ValueError if it is not one."""
     try:
-        data = yaml.safe_load(Path(path).read_text()) or {}
+        data = yaml.safe_load(Path(path).read_text(encoding="utf-8")) or {}
+    except UnicodeDecodeError as error:  # a binary file: a checkpoint, an image, ...
+        raise ValueError(
+            f"{path} is not a YAML text file (byte {error.start} is not UTF-8 text); give a "
+            "YAML file of config keys, e.g. a run's config.yaml"
+        ) from None
     except yaml.YAMLError as error:
         raise ValueError(f"{path} is not valid YAML: {error}") from None
     if not isinstance(data, dict):

@@ -400,6 +400,7 @@ class ESRunner:
         self.start_vector = state["start_vector"].to(self.device).clone()
         self.iteration = int(data["iteration"])
         self.global_step = int(data["global_step"])
+        self.run_log.purge_step = self.global_step + 1  # TensorBoard points logged after it
         self.train_wall = float(data.get("train_wall", 0.0))
         set_rng_state(data["rng"])
         self._resumed = True

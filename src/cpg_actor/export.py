@@ -51,6 +51,7 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
+from cpg_actor.files import naming, temporary_path
 from cpg_actor.policy import Policy
 
 FORMATS = ("torchscript", "onnx")
@@ -245,18 +246,23 @@ def export_policy(
     path = Path(path)
     sidecars = sidecar_paths(path)
     for target in (path, *sidecars.values()):
+        if target.is_dir():  # not replaced even with --overwrite: a directory is no export
+            raise FileExistsError(
+                f"{target} is a directory; give the export a file name (e.g. "
+                f"{target / ('policy' + SUFFIXES[fmt])})"
+            )
         if target.exists() and not overwrite:
             raise FileExistsError(f"{target} exists; pass --overwrite to replace it")
+    existed = {target for target in sidecars.values() if target.exists()}
     metadata = export_metadata(policy, batch, sidecars["mjcf"].name)
     mjcf = robot_env(policy.config.robot).mjcf(policy.config.env)
     module = ControlStep(policy).cpu().eval()  # exported for the CPU, wherever it trained
     obs_dim = int(policy.normalizer.mean.shape[0])
     example = (torch.zeros(batch, obs_dim), torch.as_tensor(initial_state(policy, batch)))
     path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = {target: target.with_name(f".{target.name}.tmp{os.getpid()}")
-                 for target in (path, *sidecars.values())}  # fmt: skip
+    temporary = {target: temporary_path(target) for target in (path, *sidecars.values())}
     try:
-        with torch.no_grad(), quiet_export():
+        with torch.no_grad(), quiet_export(), naming(path):
             if fmt == "torchscript":
                 torch.jit.save(
                     torch.jit.trace(module, example),
@@ -278,11 +284,19 @@ def export_policy(
                     "(observation, state) -> (action, next_state); see metadata_props"
                 )
                 program.save(str(temporary[path]))
-        with open(temporary[sidecars["initial_state"]], "wb") as f:
+        state = sidecars["initial_state"]
+        with naming(state), open(temporary[state], "wb") as f:
             np.save(f, initial_state(policy, batch))
-        temporary[sidecars["mjcf"]].write_text(mjcf)
-        for target in (*sidecars.values(), path):  # the policy last: complete when it is there
-            os.replace(temporary[target], target)
+        with naming(sidecars["mjcf"]):
+            temporary[sidecars["mjcf"]].write_text(mjcf)
+        try:
+            for target in (*sidecars.values(), path):  # the policy last: complete when there
+                os.replace(temporary[target], target)
+        except BaseException:  # no sidecar left behind without its policy
+            for target in sidecars.values():
+                if target not in existed:
+                    target.unlink(missing_ok=True)
+            raise
     finally:
         for tmp in temporary.values():
             tmp.unlink(missing_ok=True)

@@ -14,13 +14,17 @@ from pathlib import Path
 
 from torch import Tensor
 
+from cpg_actor.files import naming
+
 
 class RunLog:
     def __init__(self, run_dir: Path | None, tensorboard: bool = True) -> None:
         self.run_dir = run_dir
         self.use_tensorboard = tensorboard and run_dir is not None
-        self.purge_step: int | None = None  # a resumed run's first step after its checkpoint
         self._writer = None
+        # a resumed run's first step after its checkpoint: TensorBoard drops the points an
+        # earlier process logged from there on (they are logged again), as metrics.jsonl is cut
+        self.purge_step: int | None = None
 
     @property
     def writer(self):
@@ -39,7 +43,8 @@ class RunLog:
         self.run_dir.mkdir(parents=True, exist_ok=True)
         record = {"iteration": iteration, "global_step": global_step}
         record.update({k: (None if not math.isfinite(v) else v) for k, v in row.items()})
-        with open(self.run_dir / "metrics.jsonl", "a") as f:
+        path = self.run_dir / "metrics.jsonl"
+        with naming(path), open(path, "a") as f:
             f.write(json.dumps(record) + "\n")
         if self.writer is not None:
             for key, value in row.items():

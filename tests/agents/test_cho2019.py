@@ -197,6 +197,7 @@ def test_with_a_start_gait_cho_is_warm_started_toward_its_parameters_and_runs_it
     assert compose_config(values={"agent": "cho2019-paper"}).agent_config.start_gait == ""
 
 
+@pytest.mark.slow
 def test_mlp_warm_clones_the_start_gait_and_hops_with_it(tmp_path):
     """mlp-warm: behaviour cloning of the start gait's joint commands (with the executed
     commands perturbed, so that the clone recovers from its own errors); the cloned MLP, run

@@ -45,11 +45,13 @@ def test_replaying_stored_state_reproduces_rollout_log_probs(agent):
             assert torch.equal(log_prob, s.log_probs[t])
             assert torch.equal(value, s.values[t])
             assert torch.equal(mean, s.action_mean[t])
-        # the update's flattened minibatches agree to float precision
+        # the update's flattened minibatches agree to float32 rounding of the log-probabilities'
+        # magnitude (another batch shape, another summation order)
         log_prob, *_ = runner.agent.evaluate(
             s.observations.flatten(0, 1), s.states.flatten(0, 1), s.actions.flatten(0, 1)
         )
-    torch.testing.assert_close(log_prob, s.log_probs.flatten(), rtol=0, atol=1e-5)
+    scale = s.log_probs.abs().max().item()
+    torch.testing.assert_close(log_prob, s.log_probs.flatten(), rtol=1e-5, atol=1e-5 * scale)
 
 
 def test_cpg_state_is_reset_for_the_env_that_ended_only():

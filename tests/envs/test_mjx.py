@@ -67,9 +67,12 @@ def test_actuator_law_on_jax_arrays_equals_numpy():
         actuator = Actuator.from_config(HopperConfig(actuator_law=law))
         expected = actuator(desired, position, velocity)
         got = actuator(*(jnp.asarray(x, jnp.float32) for x in (desired, position, velocity)))
-        np.testing.assert_allclose(np.asarray(got), expected, atol=1e-4)
+        # float32 against float64: within a few float32 roundings of the torques' magnitude
+        scale = np.abs(expected).max()
+        np.testing.assert_allclose(np.asarray(got), expected, rtol=1e-5, atol=2.5e-6 * scale)
 
 
+@pytest.mark.slow
 def test_free_fall_matches_the_hand_calculation():
     """Dropped 10 cm with the joints held: semi-implicit Euler free fall, x_n = x_0 - g dt^2
     n (n + 1) / 2 per substep, until the foot lands (after ~0.14 s)."""
@@ -120,6 +123,7 @@ def test_open_loop_hopping_trajectory_and_reward_terms_agree():
         assert mjx_sum == pytest.approx(cpu_sum, rel=0.02), name
 
 
+@pytest.mark.slow
 def test_apex_reward_pays_the_same_hops():
     env, cpu = pair(reset_noise=0.0, episode_steps=1000, hop_reward="apex")
     paid = np.zeros(2)
@@ -141,6 +145,7 @@ def env():
     env.close()
 
 
+@pytest.mark.slow
 def test_gymnasium_face(env):
     obs, info = env.reset(seed=7)
     assert obs.shape == (3, 8) and obs.dtype == np.float32

@@ -50,6 +50,7 @@ def trot_actions(steps: int) -> list[np.ndarray]:
     return actions
 
 
+@pytest.mark.slow
 def test_an_open_loop_trot_agrees_with_the_mujoco_env(envs):
     """Same first observation; then 100 steps (2 s, one episode) of the trot: the per-step
     reward within 5 % of the MuJoCo env's mean reward (the return within 1 %), base height
@@ -83,6 +84,7 @@ def test_an_open_loop_trot_agrees_with_the_mujoco_env(envs):
     assert np.abs(a[0] - b[0]).max() < 1e-5
 
 
+@pytest.mark.slow
 def test_reset_draws_commands_and_noise_per_env_and_seed():
     env = MjxAnymalVectorEnv(N, {"sim": "mjx", "episode_seconds": 2.0})
     obs, info = env.reset(seed=3)
@@ -146,6 +148,7 @@ def test_bad_input_gets_a_clear_error(envs):
         AnymalVectorEnv(N, {"sim": "mjx"})
 
 
+@pytest.mark.slow
 def test_cpg_actor_trains_on_the_mjx_quadruped_from_the_cli(tmp_path, capsys):
     run = tmp_path / "run"
     # CONFIG through the flags: the step JAX compiled for the other tests serves this one

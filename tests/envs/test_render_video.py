@@ -119,6 +119,7 @@ def test_headless_gl_backend_falls_back_to_none_without_opengl_libraries():
     assert headless_gl(lambda name: None) == "disable"
 
 
+@pytest.mark.slow
 def test_eval_video_only_adds_a_video_to_an_evaluated_run(tmp_path, capsys):
     """`cpg-actor eval --video PATH --video-only` records the video without touching (or
     needing --overwrite for) the traces of an earlier evaluation."""

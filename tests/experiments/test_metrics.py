@@ -340,9 +340,13 @@ def test_out_dir_with_other_settings_is_refused(tmp_path):
     ):
         with pytest.raises(FileExistsError, match="other settings"):
             prepare_out_dir(out, fewer, overwrite=False)
-    (out / "keep").write_text("x")
+    (out / "keep").write_text("x")  # not written by reproduce: --overwrite deletes nothing
+    with pytest.raises(FileExistsError, match="did not write \\(keep\\)"):
+        prepare_out_dir(out, other, overwrite=True)
+    assert (out / "keep").read_text() == "x" and (out / "reproduce.yaml").is_file()
+    (out / "keep").unlink()
     assert prepare_out_dir(out, other, overwrite=True) == "overwrite"
-    assert not (out / "keep").exists()
+    assert not (out / "reproduce.yaml").exists()
     foreign = tmp_path / "foreign"
     foreign.mkdir()
     (foreign / "data.txt").write_text("x")

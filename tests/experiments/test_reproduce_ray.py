@@ -10,6 +10,7 @@ from cpg_actor.cli import main
 pytest.importorskip("ray")
 
 
+@pytest.mark.slow
 def test_reproduce_on_a_local_ray_instance(tmp_path, capsys):
     out = tmp_path / "results"
     argv = [
@@ -29,6 +30,7 @@ def test_reproduce_on_a_local_ray_instance(tmp_path, capsys):
     assert "ray: local" in (out / "reproduce.yaml").read_text()
 
 
+@pytest.mark.slow
 def test_each_run_asks_ray_for_its_share_of_a_gpu(tmp_path, capsys, monkeypatch):
     """Two runs of half a GPU each on a local Ray instance that declares 2 (fake) GPUs, each
     trained in a temporary directory and returned to OUT as its task's result."""

@@ -26,6 +26,7 @@ def test_vary_makes_one_setting_per_value_and_groups_keys():
         build_settings(["ppo.gamma=0.9", "ppo.gamma=0.9"])
 
 
+@pytest.mark.slow
 def test_sweep_trains_each_setting_and_summarises_the_evaluations(tmp_path, capsys):
     out = tmp_path / "sweep"
     argv = [

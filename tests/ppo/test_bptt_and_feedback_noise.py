@@ -38,15 +38,20 @@ def window_batch(storage, k):
 
 @pytest.mark.parametrize("feedback_noise", [0.0, 0.2])
 def test_replayed_states_equal_the_stored_ones_across_episode_starts(feedback_noise):
-    """Before any update, replaying k - 1 steps from the state k - 1 steps earlier gives
-    exactly the stored state, episode starts (every 5 steps, falls at random) included."""
+    """Before any update, replaying k - 1 steps from the state k - 1 steps earlier gives the
+    stored state, episode starts (every 5 steps, falls at random) included: to float32
+    rounding (the replay batches the steps otherwise, and another CPU rounds otherwise), so
+    within 1e-5 of each state field's magnitude (the phase grows to about 30 rad)."""
     runner = collected(feedback_noise=feedback_noise, episode_steps=5, fall_probability=0.1)
     storage = runner.storage
     assert (storage.truncated + storage.terminated).sum() > 0
+    stored = storage.states.flatten(0, 1)  # (samples, fields, oscillators)
+    scale = stored.abs().amax(dim=(0, 2), keepdim=True)
     for k in (2, 4, 7):
         with torch.no_grad():
             replayed = replay_states(runner.agent, window_batch(storage, k))
-        torch.testing.assert_close(replayed, storage.states.flatten(0, 1), rtol=0, atol=1e-6)
+        error = (replayed - stored).abs()
+        assert (error <= 1e-5 * scale).all(), (error / scale).max()
 
 
 def test_the_k_step_gradient_is_backpropagation_through_k_cpg_steps():

@@ -66,7 +66,10 @@ def same_state(a, b) -> bool:
         ("mlp", "mujoco"),
         pytest.param(
             "cpg-actor", "mjx",
-            marks=pytest.mark.skipif(not mjx_available(), reason='needs pip install -e ".[mjx]"'),
+            marks=[
+                pytest.mark.skipif(not mjx_available(), reason='needs pip install -e ".[mjx]"'),
+                pytest.mark.slow,
+            ],
         ),
     ],
 )  # fmt: skip

@@ -60,6 +60,7 @@ def test_same_seed_gives_identical_numbers_and_other_seed_differs():
     assert not torch.equal(runs[0][0]["log_std"], runs[2][0]["log_std"])
 
 
+@pytest.mark.slow
 def test_update_on_several_threads_is_reproducible():
     """Large minibatches update on every usable core (the simulator is idle then), compiled:
     the same seed still gives the same numbers, and the rollout is back on torch_threads."""

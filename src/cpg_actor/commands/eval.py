@@ -66,9 +66,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cpg_actor.config import TrainConfig, apply_dict, parse_override
+    from cpg_actor.config import TrainConfig, apply_dict, check_seed, parse_override
     from cpg_actor.policy import load_policy
 
+    check_seed(args.seed)
     run_dir = Path(args.run_dir)
     config_path = run_dir / "config.yaml"
     if not config_path.is_file():

@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import shlex
-import shutil
 import sys
 from pathlib import Path
 
@@ -17,6 +16,16 @@ from cpg_actor.config import (
 )
 from cpg_actor.envs.config import SIMULATORS
 from cpg_actor.envs.robots import ROBOTS, robot_env
+from cpg_actor.files import (
+    MARKER,
+    RUN,
+    atomic_write_text,
+    check_overwritable,
+    check_run_dir_length,
+    clear_project_dir,
+    remove_stale_temporaries,
+    write_marker,
+)
 from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.presets import PRESETS
 from cpg_actor.progress import evaluation_text, metrics_text
@@ -146,32 +155,34 @@ def without_compile_if_no_compiler(config: TrainConfig) -> TrainConfig:
 
 
 def _has_content(run_dir: Path) -> bool:
-    """``run_dir`` holds something besides its lock file."""
-    return run_dir.is_dir() and any(p.name != LOCK_NAME for p in run_dir.iterdir())
+    """``run_dir`` holds something besides its lock file and marker."""
+    return run_dir.is_dir() and any(p.name not in (LOCK_NAME, MARKER) for p in run_dir.iterdir())
+
+
+def check_run_dir_path(run_dir: Path) -> None:
+    """One clear error, before anything starts, for a ``--run-dir`` that cannot be one: a
+    file, a path through a file, or a path too long for the files written in it."""
+    for path in (run_dir, *run_dir.parents):
+        if path.exists() and not path.is_dir():
+            where = "is a file" if path == run_dir else f"is inside {path}, a file"
+            raise NotADirectoryError(
+                f"run directory {run_dir} {where}, not a directory; give a directory path"
+            )
+    check_run_dir_length(run_dir)
 
 
 def prepare_run_dir(run_dir: Path, overwrite: bool) -> None:
-    """Create ``run_dir``; an existing non-empty one is replaced only with ``overwrite`` and only
-    if it looks like a run directory (holds a config.yaml). Its lock file is kept (the caller
-    holds the lock)."""
+    """Create ``run_dir``; an existing non-empty one is cleared only with ``overwrite``, only
+    if it carries the project's marker and only of what the project wrote (a directory
+    holding anything else is refused, see :func:`cpg_actor.files.clear_project_dir`). Its lock
+    file is kept (the caller holds the lock)."""
     if _has_content(run_dir):
         if not overwrite:
             raise FileExistsError(
                 f"run directory {run_dir} already exists; pass --resume to continue it or "
                 "--overwrite to replace it"
             )
-        if not (run_dir / "config.yaml").is_file():
-            raise FileExistsError(
-                f"{run_dir} is not empty and is not a run directory (no config.yaml); "
-                "refusing to delete it"
-            )
-        for path in run_dir.iterdir():
-            if path.name == LOCK_NAME:
-                continue
-            if path.is_dir() and not path.is_symlink():
-                shutil.rmtree(path)
-            else:
-                path.unlink()
+        clear_project_dir(run_dir, RUN, keep=(LOCK_NAME, MARKER))
     run_dir.mkdir(parents=True, exist_ok=True)
 
 
@@ -235,9 +246,16 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         if args.overwrite:
             raise ValueError("--resume and --overwrite exclude each other")
         run_dir = Path(args.run_dir)
+        check_run_dir_path(run_dir)
         if not run_dir.is_dir():
             raise FileNotFoundError(f"run directory {run_dir} does not exist; nothing to resume")
+        if not any((run_dir / "checkpoints").glob("*.pt")):  # refused before the lock is made
+            raise FileNotFoundError(
+                f"{run_dir / 'checkpoints'} holds no checkpoint (last.pt, iter_*.pt); "
+                "nothing to resume"
+            )
         _lock(run_dir, locks)
+        remove_stale_temporaries(run_dir)  # of writes a killed run left unfinished
         checkpoint, config = _resume_config(run_dir)
         config_path = run_dir / "config.yaml"
         if args.total_steps is not None:
@@ -271,12 +289,16 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
             args.run_dir
             or DEFAULT_RUN_DIR.format(agent=config.agent, sim=simulator(config), seed=config.seed)
         )
-        if _has_content(run_dir) and not args.overwrite:
-            prepare_run_dir(run_dir, overwrite=False)  # raises before anything is built
+        check_run_dir_path(run_dir)
+        if _has_content(run_dir):  # refused before anything is built or written
+            if not args.overwrite:
+                prepare_run_dir(run_dir, overwrite=False)
+            check_overwritable(run_dir, RUN)
         runner = _runner(config, run_dir, args)
         try:
             _lock(run_dir, locks)  # before --overwrite deletes anything
-            prepare_run_dir(run_dir, args.overwrite)
+            prepare_run_dir(run_dir, args.overwrite)  # checked again, under the lock
+            write_marker(run_dir, RUN)
         except BaseException:
             runner.close()
             raise
@@ -443,4 +465,4 @@ def _truncate_metrics(path: Path, iteration: int) -> None:
     lines = [line for line in path.read_text().splitlines() if line.strip()]
     kept = [line for line in lines if json.loads(line).get("iteration", 0) <= iteration]
     if len(kept) != len(lines):
-        path.write_text("".join(line + "\n" for line in kept))
+        atomic_write_text("".join(line + "\n" for line in kept), path)

@@ -16,9 +16,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    from cpg_actor.config import check_seed
     from cpg_actor.experiments.report import write_report
     from cpg_actor.experiments.transfer import TRANSFER_FILE, write_transfer
 
+    check_seed(args.seed)
     out = Path(args.out)
     if not (out / "runs").is_dir():
         raise FileNotFoundError(f"{out} is not a reproduce results directory (no runs/)")

@@ -48,6 +48,7 @@ from gymnasium.vector.utils import batch_space
 
 from cpg_actor.cpg import CPGState, OscillatorParameters, hopf_step, hopper_cpg
 from cpg_actor.envs.config import HopperConfig
+from cpg_actor.envs.hopper import check_real_tensor, real_actions
 from cpg_actor.envs.simulation import OBS_BOUND, OBS_NAMES
 from cpg_actor.envs.torch_env import EnvStep
 from cpg_actor.envs.vector import make_vector_env
@@ -246,6 +247,7 @@ class CPGParameterVectorEnv(VectorEnv):
             )
 
     def _check_actions(self, actions: torch.Tensor) -> None:
+        check_real_tensor(actions)
         if tuple(actions.shape) != (self.num_envs, self.action_dim):
             raise ValueError(
                 f"actions must have shape ({self.num_envs}, {self.action_dim}) (CPG parameters "
@@ -276,12 +278,7 @@ class CPGParameterVectorEnv(VectorEnv):
         self, actions: Any
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         self._check_open("step")
-        try:
-            array = np.asarray(actions, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"actions must be numbers of shape ({self.num_envs}, {self.action_dim})"
-            ) from None
+        array = real_actions(actions, f"of shape ({self.num_envs}, {self.action_dim})")
         self._check_actions(torch.from_numpy(array))
         parameters, output, next_state = self._cpg_step(torch.from_numpy(array))
         desired = (output.position + self._offset).cpu().numpy()

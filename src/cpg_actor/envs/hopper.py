@@ -113,14 +113,33 @@ def observation_space() -> spaces.Box:
     return spaces.Box(low=-OBS_BOUND, high=OBS_BOUND, shape=(len(OBS_NAMES),), dtype=np.float32)
 
 
+def real_actions(actions: Any, expected: str, dtype: Any = np.float64) -> np.ndarray:
+    """``actions`` as a real ``dtype`` array; ValueError for what is not numbers, and for
+    complex numbers (numpy would drop their imaginary part with only a warning)."""
+    try:
+        raw = np.asarray(actions)
+        is_complex = np.iscomplexobj(raw)
+        array = None if is_complex else raw.astype(dtype)
+    except (TypeError, ValueError):
+        raise ValueError(f"actions must be numbers {expected}, got {actions!r}") from None
+    if is_complex:
+        raise ValueError(
+            f"actions must be real numbers {expected}, got complex values (dtype {raw.dtype})"
+        )
+    return array
+
+
+def check_real_tensor(actions: Any) -> None:
+    """ValueError for a complex tensor of actions (as :func:`real_actions`)."""
+    if actions.is_complex():
+        raise ValueError(f"actions must be real numbers, got complex values ({actions.dtype})")
+
+
 def check_actions(actions: Any, shape: tuple[int, ...], normalized: bool = False) -> np.ndarray:
     """Desired positions (rad, float64) clipped to the joint limits; ValueError on a bad shape
     or NaN/inf. ``normalized``: the actions are in [-1, 1], -1 the lower and +1 the upper joint
     limit (clipped to [-1, 1] first)."""
-    try:
-        array = np.asarray(actions, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise ValueError(f"actions must be numbers of shape {shape}, got {actions!r}") from None
+    array = real_actions(actions, f"of shape {shape}")
     if array.shape != shape:
         raise ValueError(
             f"actions must have shape {shape} (desired [HFE, KFE] positions, rad), "

@@ -11,11 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
+from cpg_actor.errors import RenderingUnavailable  # noqa: F401 (the CLI catches it from there)
+
 VIDEO_SUFFIXES = (".mp4", ".gif")
-
-
-class RenderingUnavailable(RuntimeError):
-    """No OpenGL context can be made for MuJoCo's offscreen renderer (no EGL or OSMesa)."""
 
 
 def write_video(

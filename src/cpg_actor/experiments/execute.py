@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Any
 
 from cpg_actor.experiments.plan import RunTask
+from cpg_actor.files import LOCK, RUN, clear_project_dir
 from cpg_actor.machine import git_commit
 from cpg_actor.run_lock import LOCK_NAME
 
@@ -95,14 +96,13 @@ def select_stage_checkpoints(
 
 
 def trained_iteration(run_dir: Path) -> int | None:
-    """The iteration of ``checkpoints/last.pt`` (None when there is none or it is unreadable)."""
-    path = Path(run_dir) / "checkpoints" / "last.pt"
-    if not path.is_file():
-        return None
-    from cpg_actor.checkpoint import load_checkpoint
+    """The iteration ``train --resume`` would start from: that of the newest readable
+    checkpoint (:func:`cpg_actor.checkpoint.resume_checkpoint`); None when there is none."""
+    from cpg_actor.checkpoint import resume_checkpoint
 
     try:
-        return int(load_checkpoint(path)["iteration"])
+        _, data, _ = resume_checkpoint(Path(run_dir))
+        return int(data["iteration"])
     except (ValueError, FileNotFoundError, KeyError):
         return None
 
@@ -143,8 +143,13 @@ def run_one(
         else:
             action, code = "evaluated (training was finished)", 0
     else:
-        if run_dir.exists():  # started but no usable checkpoint: start again
-            shutil.rmtree(run_dir)
+        started = run_dir.is_dir() and any(p.name != LOCK for p in run_dir.iterdir())
+        if started:  # but no usable checkpoint: start again
+            try:  # what train wrote there, only if it holds nothing else (its lock stays)
+                clear_project_dir(run_dir, RUN, keep=(LOCK,))
+            except FileExistsError as error:
+                report(task.name, "failed")
+                return {**result, "status": "failed", "action": "not started", "error": str(error)}
         action = "trained"
         report(task.name, "training")
         code = _cli(["train", *task.train_args], log)

@@ -10,13 +10,13 @@ How the runs are executed (workers, Ray address) may change between invocations.
 from __future__ import annotations
 
 import math
-import shutil
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from cpg_actor.files import MARKER, RESULTS, atomic_write_text, clear_project_dir, write_marker
 from cpg_actor.machine import usable_cores
 
 # the paper's progressive-hopping figure: 1M, 20M and 60M of 60M steps
@@ -201,8 +201,10 @@ def checkpoint_interval(config) -> int:
 def validate(settings: ReproduceSettings) -> None:
     if not isinstance(settings.seeds, int) or settings.seeds < 1:
         raise ValueError(f"--seeds must be >= 1, got {settings.seeds}")
-    if not isinstance(settings.first_seed, int) or settings.first_seed < 0:
-        raise ValueError(f"--first-seed must be >= 0, got {settings.first_seed}")
+    from cpg_actor.config import check_seed
+
+    check_seed(settings.first_seed, "--first-seed")
+    check_seed(settings.first_seed + settings.seeds - 1, "--first-seed + --seeds - 1")
     if settings.total_steps <= 0:
         raise ValueError(f"--total-steps must be > 0, got {settings.total_steps}")
     if settings.num_envs is not None and settings.num_envs < 1:
@@ -334,7 +336,11 @@ def prepare_out_dir(out: Path, settings: ReproduceSettings, overwrite: bool) -> 
     """Create ``out`` or check that it holds the same reproduction; returns "new", "resume",
     "extend" (the same reproduction with more variants or seeds: finished runs are kept) or
     "overwrite". Refuses an existing directory made with other settings (or not made by
-    ``cpg-actor reproduce``) unless ``overwrite`` (which deletes it, only if it is ours)."""
+    ``cpg-actor reproduce``) unless ``overwrite``, which clears it only if it carries the
+    project's marker and holds nothing but what the project wrote
+    (:func:`cpg_actor.files.clear_project_dir`)."""
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"--out {out} is a file, not a directory")
     saved = load_settings_file(out)
     if out.exists() and any(out.iterdir()):
         if saved is None:
@@ -342,11 +348,7 @@ def prepare_out_dir(out: Path, settings: ReproduceSettings, overwrite: bool) -> 
                 f"{out} is not empty and was not written by `cpg-actor reproduce` "
                 f"(no {SETTINGS_FILE}); choose another --out"
             )
-        if saved.get("settings") == settings.identity():
-            if overwrite:
-                shutil.rmtree(out)
-                out.mkdir(parents=True)
-                return "overwrite"
+        if saved.get("settings") == settings.identity() and not overwrite:
             return "resume"
         if not overwrite and _extends(saved.get("settings", {}), settings.identity()):
             return "extend"
@@ -361,10 +363,10 @@ def prepare_out_dir(out: Path, settings: ReproduceSettings, overwrite: bool) -> 
                 "only more variants or seeds may be added to it; pass --overwrite to replace "
                 "it or choose another --out"
             )
-        shutil.rmtree(out)
-        out.mkdir(parents=True)
+        clear_project_dir(out, RESULTS, keep=(MARKER,))
         return "overwrite"
     out.mkdir(parents=True, exist_ok=True)
+    write_marker(out, RESULTS)
     return "new"
 
 
@@ -376,4 +378,4 @@ def write_settings_file(
         "settings": settings.identity(),
         "execution": execution,  # may differ between invocations (workers, Ray address)
     }
-    (out / SETTINGS_FILE).write_text(yaml.safe_dump(data, sort_keys=False))
+    atomic_write_text(yaml.safe_dump(data, sort_keys=False), out / SETTINGS_FILE)

@@ -16,14 +16,12 @@ import contextlib
 import io
 import os
 
+from cpg_actor.errors import MjxUnavailable  # noqa: F401 (defined there: the CLI catches it)
+
 INSTALL_HINT = (
     'sim="mjx" needs JAX and MuJoCo XLA: pip install -e ".[mjx]" (CPU), and JAX\'s CUDA '
     "build for a GPU (docs/gpu.md)"
 )
-
-
-class MjxUnavailable(ImportError):
-    """JAX or MuJoCo XLA is not installed (the message says how to install them)."""
 
 
 def load():

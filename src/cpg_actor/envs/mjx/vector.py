@@ -22,7 +22,7 @@ import torch
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 from cpg_actor.envs.config import HopperConfig
-from cpg_actor.envs.hopper import check_actions, init_vector_env
+from cpg_actor.envs.hopper import check_actions, check_real_tensor, init_vector_env
 from cpg_actor.envs.mjx.dynamics import (
     STATE_FIELDS,
     EnvState,
@@ -110,6 +110,7 @@ class MjxHopperVectorEnv(VectorEnv):
                 f"actions must have shape {(self.num_envs, 2)} (desired [HFE, KFE] positions, "
                 f"rad), got {tuple(actions.shape)}"
             )
+        check_real_tensor(actions)
         if not bool(torch.isfinite(actions).all()):
             raise ValueError("actions must be finite, got NaN or inf")
         return self._advance(self._to_jax(actions))

@@ -34,6 +34,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 
 from cpg_actor.envs.actuator import Actuator
 from cpg_actor.envs.backends.mujoco_backend import mujoco
+from cpg_actor.envs.hopper import check_real_tensor, real_actions
 from cpg_actor.envs.mjx.dynamics import reset_keys
 from cpg_actor.envs.mjx.runtime import load
 from cpg_actor.envs.mjx.vector import _numpy, torch_device
@@ -357,6 +358,7 @@ class MjxAnymalVectorEnv(VectorEnv):
             raise ValueError(f"actions must have shape {(self.num_envs, 12)} (desired joint "
                              f"positions, rad, joints {robot.JOINT_NAMES}), got "
                              f"{tuple(actions.shape)}")  # fmt: skip
+        check_real_tensor(actions)
         if not bool(torch.isfinite(actions).all()):
             raise ValueError("actions must be finite, got NaN or inf")
         if actions.device != self.device:
@@ -389,7 +391,7 @@ class MjxAnymalVectorEnv(VectorEnv):
 
     def step(self, actions: Any):
         self._check_started("step")
-        actions = np.asarray(actions, dtype=np.float32)
+        actions = real_actions(actions, f"of shape {(self.num_envs, 12)}", np.float32)
         if actions.shape != (self.num_envs, 12):
             raise ValueError(f"actions must have shape {(self.num_envs, 12)} (desired joint "
                              f"positions, rad, joints {robot.JOINT_NAMES}), got "

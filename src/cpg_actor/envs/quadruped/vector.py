@@ -51,7 +51,7 @@ from cpg_actor.envs.backends.mujoco_backend import (
     offscreen_renderer,
 )
 from cpg_actor.envs.backends.threaded_rollout import ThreadedRollout
-from cpg_actor.envs.hopper import env_seeds
+from cpg_actor.envs.hopper import env_seeds, real_actions
 from cpg_actor.envs.quadruped import description as robot
 from cpg_actor.envs.quadruped import task
 from cpg_actor.envs.quadruped.config import QuadrupedConfig
@@ -290,7 +290,7 @@ class AnymalVectorEnv(VectorEnv):
         self._check_open("step")
         if self._needs_reset:
             raise RuntimeError("call reset() before step()")
-        actions = np.asarray(actions, dtype=np.float64)
+        actions = real_actions(actions, f"of shape {(self.num_envs, 12)}")
         if actions.shape != (self.num_envs, 12):
             raise ValueError(f"actions must have shape {(self.num_envs, 12)} (desired joint "
                              f"positions, rad, joints {robot.JOINT_NAMES}), got "

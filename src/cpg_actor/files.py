@@ -1,0 +1,302 @@
+"""Files the project writes, and the directories it makes (no torch: the CLI imports this).
+
+* Atomic writes: a hidden temporary name next to the target (``.NAME.tmpPID``), then
+  ``os.replace``; a write that fails says which file it was writing.
+* The marker ``.cpg-actor-run``, written when the project creates a run directory (``train``)
+  or a results directory (``reproduce``, ``sweep``), names what made it. ``--overwrite``
+  deletes only in a directory carrying the marker of its kind, and only files whose names the
+  project writes there; a directory holding anything else (a user's file, a link, a folder
+  of unknown name) is refused whole, so a refused command deletes and writes nothing.
+"""
+
+from __future__ import annotations
+
+import errno
+import json
+import os
+import re
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import IO
+
+MARKER = ".cpg-actor-run"
+MARKER_FORMAT = "cpg-actor-directory"
+RUN = "run"  # a `cpg-actor train` run directory
+RESULTS = "results"  # a `cpg-actor reproduce` (or one `sweep` setting's) results directory
+LOCK = ".lock"  # cpg_actor.run_lock.LOCK_NAME (kept here too: no import cycle)
+
+# a temporary file of an atomic write: ".NAME.tmpPID" (this module, checkpoints) and the
+# names plots, videos and eval traces use (".STEM.PID.HEX.tmpSUFFIX", ".STEM.tmpPID.npz")
+_TEMPORARY = r"\.[^/]+\.tmp\d+(\.npz)?|\.[^/]+\.\d+\.[0-9a-f]{8}\.tmp\.[a-z0-9]+"
+TEMPORARY = re.compile(r"^\.(?P<name>.+)\.tmp(?P<pid>\d+)$")
+
+# what the project writes in each kind of directory: file names relative to it, and the
+# folders it makes (regular expressions matched against the whole relative path)
+_RUN_FILES = (
+    MARKER,
+    LOCK,
+    r"config\.yaml",
+    r"metrics\.jsonl",
+    r"warm_start\.json",
+    r"gait\.yaml",
+    r"reproduce_run\.json",
+    r"checkpoints/(iter_\d+|last)\.pt",
+    r"tensorboard/events\.out\.tfevents\.[^/]+",
+    r"eval/(traces\.npz|training_curves\.png|traces\.png|gait_diagram\.png|forward_speed\.png"
+    r"|stages\.json)",
+    r"eval/stage\d+/traces\.npz",
+    r"export/policy\.(onnx|pt)(\.initial_state\.npy)?",
+    rf"({_TEMPORARY})",
+    rf"(checkpoints|eval|eval/stage\d+|export)/({_TEMPORARY})",
+)
+_RUN_FOLDERS = (r"checkpoints", r"tensorboard", r"eval", r"eval/stage\d+", r"export")
+_RESULTS_FILES = (
+    MARKER,
+    r"reproduce\.yaml",
+    r"summary\.json",
+    r"report\.md",
+    r"open_loop_floor\.json",
+    r"transfer\.json",
+    r"logs/[^/]+\.log",
+    r"figures/[^/]+\.(png|pdf)",
+    rf"({_TEMPORARY})",
+)
+_RESULTS_FOLDERS = (r"logs", r"figures", r"runs", r"runs/[^/]+")
+_RESULTS_RUNS = re.compile(r"runs/[^/]+/seed\d+")  # run directories, each checked as a run
+KINDS = {
+    RUN: (re.compile("|".join(f"({p})" for p in _RUN_FILES)),
+          re.compile("|".join(f"({p})" for p in _RUN_FOLDERS))),
+    RESULTS: (re.compile("|".join(f"({p})" for p in _RESULTS_FILES)),
+              re.compile("|".join(f"({p})" for p in _RESULTS_FOLDERS))),
+}  # fmt: skip
+_NAMES = {RUN: "run directory", RESULTS: "results directory"}
+_MADE_BY = {RUN: "`cpg-actor train`", RESULTS: "`cpg-actor reproduce` or `sweep`"}
+# the files `train` writes while it runs: their temporaries are removed at the next start
+_TRAIN_WRITES = re.compile(r"config\.yaml|metrics\.jsonl|warm_start\.json|gait\.yaml")
+_CHECKPOINT_WRITES = re.compile(r"(iter_\d+|last)\.pt")
+
+
+# -- atomic writes ------------------------------------------------------------------------------
+def temporary_path(path: Path) -> Path:
+    """The hidden name an atomic write of ``path`` goes through first."""
+    return path.with_name(f".{path.name}.tmp{os.getpid()}")
+
+
+@contextmanager
+def naming(path: Path) -> Iterator[None]:
+    """An OSError raised inside that names no file, or a temporary one, names ``path``."""
+    try:
+        yield
+    except OSError as error:
+        named = error.filename is not None and not TEMPORARY.match(Path(str(error.filename)).name)
+        if named or error.errno is None:
+            raise
+        raise OSError(error.errno, error.strerror, str(path)) from None
+
+
+class _Writes:
+    """A file's ``write`` that keeps the OSError it raised: a writer that turns it into
+    another error (torch's zip writer raises a RuntimeError on a full disk) loses the cause."""
+
+    def __init__(self, file: IO[bytes]) -> None:
+        self.file = file
+        self.error: OSError | None = None
+
+    def write(self, data) -> int:
+        try:
+            return self.file.write(data)
+        except OSError as error:
+            self.error = error
+            raise
+
+    def flush(self) -> None:
+        self.file.flush()
+
+
+def atomic_write(path: Path, write: Callable[[IO[bytes]], None], fsync: bool = False) -> None:
+    """``write(file)`` into a temporary file next to ``path`` (flushed, fsync'ed if asked),
+    then renamed over ``path``: ``path`` is replaced whole or not at all, and the temporary
+    file is removed if anything fails. A failed write raises its OSError, naming ``path``."""
+    path = Path(path)
+    tmp = temporary_path(path)
+    with naming(path):
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with open(tmp, "wb") as f:
+                writes = _Writes(f)
+                try:
+                    write(writes)  # type: ignore[arg-type]
+                except Exception:
+                    if writes.error is not None:
+                        raise writes.error from None
+                    raise
+                f.flush()
+                if fsync:
+                    os.fsync(f.fileno())
+            os.replace(tmp, path)
+        finally:
+            tmp.unlink(missing_ok=True)
+
+
+def atomic_write_text(text: str, path: Path) -> None:
+    """Write ``text`` (UTF-8) to ``path`` atomically (see :func:`atomic_write`)."""
+    atomic_write(Path(path), lambda f: f.write(text.encode("utf-8")))
+
+
+def describe_os_error(error: OSError) -> str:
+    """One line for a file-system error: what failed and on which file."""
+    where = f" while writing {error.filename}" if error.filename else ""
+    if error.errno == errno.ENOSPC:
+        return f"no space left on device{where}"
+    if error.errno == errno.EDQUOT:
+        return f"disk quota exceeded{where}"
+    if error.errno == errno.ENAMETOOLONG:
+        return f"file name too long{f': {error.filename}' if error.filename else ''}"
+    return str(error)
+
+
+# -- path limits --------------------------------------------------------------------------------
+# the longest name `train` writes under its run directory, a TensorBoard event file:
+# "tensorboard/events.out.tfevents.<10-digit time>.<host>.<pid>.<n>" (host added by the caller)
+_LONGEST_RUN_NAME = len("tensorboard/events.out.tfevents.1234567890..4194304.99")
+
+
+def check_run_dir_length(run_dir: Path) -> None:
+    """ValueError if the files ``train`` writes in ``run_dir`` would pass the file system's
+    limits on a path (PATH_MAX) or a name (NAME_MAX), so nothing starts that cannot finish."""
+    import socket
+
+    absolute = Path(os.path.abspath(run_dir))
+    existing = next(p for p in (absolute, *absolute.parents) if p.exists())
+    try:
+        path_max = os.pathconf(existing, "PC_PATH_MAX")
+        name_max = os.pathconf(existing, "PC_NAME_MAX")
+    except (OSError, ValueError):
+        path_max, name_max = 4096, 255
+    for part in absolute.parts[1:]:
+        if len(os.fsencode(part)) > name_max:
+            raise ValueError(
+                f"run directory {run_dir}: the name {part[:40]}... has {len(os.fsencode(part))} "
+                f"bytes, above this file system's limit of {name_max}; choose a shorter --run-dir"
+            )
+    longest = len(os.fsencode(str(absolute))) + 1 + _LONGEST_RUN_NAME
+    longest += len(os.fsencode(socket.gethostname()))
+    if longest >= path_max:
+        raise ValueError(
+            f"run directory {str(run_dir)[:60]}... is too long: the files written in it would "
+            f"have paths of up to {longest} bytes, above this file system's limit of "
+            f"{path_max - 1}; choose a --run-dir shorter by {longest - path_max + 1} characters"
+        )
+
+
+# -- the marker and --overwrite ------------------------------------------------------------------
+def write_marker(directory: Path, kind: str) -> None:
+    """Mark ``directory`` as made by the project, of ``kind`` (RUN or RESULTS)."""
+    data = {"format": MARKER_FORMAT, "kind": kind}
+    atomic_write_text(json.dumps(data) + "\n", Path(directory) / MARKER)
+
+
+def marker_kind(directory: Path) -> str | None:
+    """The kind ``directory``'s marker names; None without a readable marker."""
+    path = Path(directory) / MARKER
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(data, dict) or data.get("format") != MARKER_FORMAT:
+        return None
+    return data.get("kind")
+
+
+def _entries(directory: Path, kind: str, prefix: str = "") -> tuple[list[Path], list[Path]]:
+    """``(ours, foreign)``: the files and folders under ``directory`` the project writes in a
+    directory of ``kind`` (folders after their contents), and everything else. A link is
+    always foreign (the project makes none); a results directory's runs are checked as runs."""
+    files, folders = KINDS[kind]
+    ours: list[Path] = []
+    foreign: list[Path] = []
+    for path in sorted(directory.iterdir()):
+        relative = prefix + path.name
+        if path.is_symlink():
+            foreign.append(path)
+        elif path.is_dir():
+            if kind == RESULTS and _RESULTS_RUNS.fullmatch(relative):
+                if marker_kind(path) != RUN:
+                    foreign.append(path)
+                    continue
+                run_ours, run_foreign = _entries(path, RUN)
+                ours += run_ours + [path]
+                foreign += run_foreign
+            elif folders.fullmatch(relative):
+                inner_ours, inner_foreign = _entries(path, kind, relative + "/")
+                ours += inner_ours + [path]
+                foreign += inner_foreign
+            else:
+                foreign.append(path)
+        elif path.is_file() and files.fullmatch(relative):
+            ours.append(path)
+        else:
+            foreign.append(path)
+    return ours, foreign
+
+
+def check_overwritable(directory: Path, kind: str, flag: str = "--overwrite") -> None:
+    """FileExistsError (one line, saying what to do) unless ``--overwrite`` may clear the
+    existing, non-empty ``directory``: it carries the marker of ``kind`` and holds only files
+    the project writes there."""
+    directory = Path(directory)
+    name = _NAMES[kind]
+    found = marker_kind(directory)
+    if found != kind:
+        if found is not None:
+            why = f"it is a {_NAMES.get(found, found)}, not a {name}; choose another directory"
+        elif (directory / ("config.yaml" if kind == RUN else "reproduce.yaml")).is_file():
+            why = (
+                f"it has no {MARKER} marker, so it may be a folder of yours (or a {name} made "
+                "before cpg-actor marked its directories); if nothing in it is yours, delete "
+                "it yourself, or choose another directory"
+            )
+        else:
+            why = f"it was not made by {_MADE_BY[kind]} (no {MARKER}); choose another directory"
+        raise FileExistsError(f"{flag}: refusing to delete anything in {directory}: {why}")
+    _, foreign = _entries(directory, kind)
+    if foreign:
+        shown = ", ".join(str(path.relative_to(directory)) for path in foreign[:5])
+        more = f" and {len(foreign) - 5} more" if len(foreign) > 5 else ""
+        raise FileExistsError(
+            f"{flag}: refusing to delete anything in {directory}: it holds files cpg-actor did "
+            f"not write ({shown}{more}); move them out, or choose another directory"
+        )
+
+
+def clear_project_dir(directory: Path, kind: str, keep: tuple[str, ...] = ()) -> None:
+    """Delete what the project wrote in ``directory`` (see :func:`check_overwritable`, which
+    this calls first), except the top-level names in ``keep``; the directory itself stays."""
+    directory = Path(directory)
+    check_overwritable(directory, kind)
+    ours, _ = _entries(directory, kind)
+    for path in ours:
+        if path.parent == directory and path.name in keep:
+            continue
+        if path.is_dir():
+            path.rmdir()  # its contents are gone: they came before it
+        else:
+            path.unlink()
+
+
+def remove_stale_temporaries(run_dir: Path) -> list[Path]:
+    """Remove the temporary files of writes `train` left unfinished (a killed process) in
+    ``run_dir`` and its ``checkpoints``; the caller holds the run's lock. Returns them."""
+    removed = []
+    for folder, names in ((Path(run_dir), _TRAIN_WRITES),
+                          (Path(run_dir) / "checkpoints", _CHECKPOINT_WRITES)):  # fmt: skip
+        if not folder.is_dir():
+            continue
+        for path in folder.iterdir():
+            match = TEMPORARY.match(path.name)
+            if match and names.fullmatch(match["name"]) and path.is_file():
+                if not path.is_symlink():
+                    path.unlink()
+                    removed.append(path)
+    return removed
