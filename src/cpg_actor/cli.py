@@ -62,7 +62,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "curves": (
         "curves",
-        "draw the learning curves of several runs (grouped by agent) in one figure",
+        "draw the learning curves of several runs (grouped by agent and settings) in one figure",
     ),
     "gradient": (
         "gradient",

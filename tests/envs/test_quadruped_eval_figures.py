@@ -12,8 +12,11 @@ from cpg_actor.cli import main
 from cpg_actor.envs import write_video
 from cpg_actor.envs.backends import mujoco_backend
 from cpg_actor.envs.backends.mujoco_backend import mujoco  # MUJOCO_GL chosen on import
-from cpg_actor.envs.quadruped.vector import RENDER_SIZE, AnymalVectorEnv
+from cpg_actor.envs.quadruped import QuadrupedConfig
+from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
 from cpg_actor.envs.video import RenderingUnavailable
+
+FRAME = (QuadrupedConfig().render_height, QuadrupedConfig().render_width, 3)
 
 TINY = ["--num-envs", "2", "--set", "ppo.num_steps=8", "--set", "ppo.num_minibatches=2",
         "--set", "ppo.num_epochs=1", "--set", "eval_interval=0",
@@ -54,7 +57,7 @@ def test_render_frame_follows_the_base_and_streams_into_a_video(tmp_path):
         with pytest.raises(ValueError, match="index"):
             env.render_frame(2)
         here = env.render_frame(1)
-        assert here.shape == (RENDER_SIZE[1], RENDER_SIZE[0], 3) and here.dtype == np.uint8
+        assert here.shape == FRAME and here.dtype == np.uint8
         assert here.std() > 10  # a picture, not a blank
         env.qpos[1, 0] += 20.0  # 20 m on: the camera and the light follow it, the ground moves
         there = env.render_frame(1)
@@ -155,7 +158,7 @@ def test_eval_video_of_the_quadruped_has_one_frame_per_step(anymal_run, tmp_path
     assert video.stat().st_size > 0
     frames = imageio.mimread(video)
     assert len(frames) == length
-    assert frames[0].shape == (RENDER_SIZE[1], RENDER_SIZE[0], 3)
+    assert frames[0].shape == FRAME
     assert main(["eval", str(anymal_run), "--video", str(video), "--video-only"]) == 2  # exists
 
 

@@ -69,6 +69,8 @@ class QuadrupedConfig:
     fall_height: float = 0.25  # m: a base lower than this has fallen (standing: 0.48)
     fall_tilt: float = 1.0  # rad: a base tilted more than this has fallen
     normalized_actions: bool = False  # actions in [-1, 1] mapped onto the joint ranges
+    render_width: int = 640  # pixels of render_frame's images (videos)
+    render_height: int = 480
 
     @property
     def control_dt(self) -> float:
@@ -93,7 +95,8 @@ class QuadrupedConfig:
         if self.sim not in SIMULATORS:
             raise ValueError(f"sim must be one of {', '.join(SIMULATORS)} for the quadruped, "
                              f"got {self.sim!r}")  # fmt: skip
-        for name in ("decimation", "mjx_iterations", "mjx_ls_iterations"):
+        for name in ("decimation", "mjx_iterations", "mjx_ls_iterations", "render_width",
+                     "render_height"):  # fmt: skip
             value = getattr(self, name)
             if isinstance(value, bool) or not (isinstance(value, int) and value >= 1):
                 raise ValueError(f"{name} must be an integer >= 1, got {value!r}")

@@ -63,7 +63,6 @@ HIGH = np.array([robot.JOINT_LIMITS[j][1] for j in robot.JOINT_NAMES])
 EPISODE_METRICS = ("speed_error", "forward_speed", "fell", "episode_seconds", "cost_of_transport",
                    "foot_slip")  # fmt: skip
 MIN_DISTANCE = 0.1  # m: below this the cost of transport is not defined (NaN)
-RENDER_SIZE = (640, 480)  # width, height of render_frame's images (unless the config has its own)
 # render_frame's camera: it follows the base's subtree centre of mass, from the left front
 CAMERA = {"distance": 2.5, "azimuth": 120.0, "elevation": -20.0}
 
@@ -433,8 +432,8 @@ class AnymalVectorEnv(VectorEnv):
     def render_frame(self, index: int = 0) -> np.ndarray:
         """An RGB frame ``(H, W, 3)`` uint8 of env ``index`` in its current state: MuJoCo's
         offscreen renderer, a camera tracking the base from the left front (``CAMERA``), the
-        checkered ground showing the forward motion. ``RENDER_SIZE`` (or the config's
-        ``render_width`` and ``render_height`` where it has them). Raises
+        checkered ground showing the forward motion. The config's ``render_width`` by
+        ``render_height`` pixels. Raises
         :class:`~cpg_actor.envs.video.RenderingUnavailable` without an OpenGL backend."""
         self._check_open("render_frame")
         if self._needs_reset:
@@ -456,8 +455,7 @@ class AnymalVectorEnv(VectorEnv):
             # the light would be in the dark
             model = copy.copy(self.model)
             model.light_mode[:] = mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM
-            width = int(getattr(self.config, "render_width", RENDER_SIZE[0]))
-            height = int(getattr(self.config, "render_height", RENDER_SIZE[1]))
+            width, height = int(self.config.render_width), int(self.config.render_height)
             self._renderer = offscreen_renderer(model, width, height)
             camera = mujoco.MjvCamera()
             camera.type = mujoco.mjtCamera.mjCAMERA_TRACKING
