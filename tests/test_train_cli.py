@@ -148,8 +148,17 @@ def test_train_resume_equals_straight_run_and_eval_writes_traces(tmp_path, capsy
     ):
         assert key in traces, key
     assert traces["desired_position"].shape[1:] == (2, 2)
-    assert main(["eval", str(split), "--episodes", "2"]) == 2  # refuses to overwrite
-    assert "--overwrite" in capsys.readouterr().err
+    # RUN/eval/ holds eval's own outputs: a second evaluation replaces them; a file the user
+    # named is replaced only with --overwrite
+    traces_file = split / "eval" / "traces.npz"
+    traces_file.write_bytes(b"stale")
+    assert main(["eval", str(split), "--episodes", "2"]) == 0
+    assert np.load(traces_file)["episode_return"].shape == (2,)
+    named = tmp_path / "mine.npz"
+    named.write_bytes(b"mine")
+    capsys.readouterr()
+    assert main(["eval", str(split), "--episodes", "2", "--output", str(named)]) == 2
+    assert "--overwrite" in capsys.readouterr().err and named.read_bytes() == b"mine"
 
     # a checkpoint of another agent is rejected by eval
     assert (

@@ -56,7 +56,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--output", default=None, help="traces file (default RUN_DIR/eval/traces.npz)"
     )
     parser.add_argument(
-        "--overwrite", action="store_true", help="replace existing traces / figures / video"
+        "--overwrite",
+        action="store_true",
+        help="replace an existing --output (its figures) or --video; RUN_DIR/eval/'s traces and "
+        "figures are always replaced",
     )
     parser.add_argument(
         "--video-only",
@@ -96,7 +99,10 @@ def run(args: argparse.Namespace) -> int:
         apply_dict(config, override, "")
     if args.set:
         config.validate()
-    kept = [] if args.video_only else [output, *(output.parent / name for name in FIGURES)]
+    # the traces and figures in RUN_DIR/eval/ are eval's own derived data: a new evaluation
+    # replaces them; a file the user named (--output, --video) needs --overwrite
+    kept = [] if args.video_only or args.output is None else [
+        output, *(output.parent / name for name in FIGURES)]  # fmt: skip
     for path in [*kept, *([Path(args.video)] if args.video else [])]:
         if path.exists() and not args.overwrite:
             raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
