@@ -38,7 +38,8 @@ def main() -> None:
     parser.add_argument("--output", default="benchmarks/results/mjx_eval_cpu.md")
     args = parser.parse_args()
 
-    config = TrainConfig(agent=args.agent, num_envs=args.episodes, eval_interval=0)
+    # the policy where the env is (CUDA when torch sees it), as the gpu preset's
+    config = TrainConfig(agent=args.agent, num_envs=args.episodes, eval_interval=0, device="auto")
     apply_dict(config, {"robot": args.robot}, "")
     apply_dict(config, {"env": {"sim": "mjx"}}, "")
     if args.robot == "hopper":
