@@ -10,8 +10,9 @@
 # The machine's image holds CUDA PyTorch and JAX; mujoco, mujoco-mjx, gymnasium and the
 # project's other missing packages travel as wheels in .whl/ (installed to /tmp/site).
 # Each part has a time limit (seconds) and writes as it goes: a part cut short keeps its output.
-# PARTS picks the parts to run, in this order: tests bench train split scaling share (default:
-# tests bench train scaling; split and share run only when named), e.g. PARTS="train split".
+# PARTS picks the parts to run, in this order: tests bench train split scaling eval share
+# (default: tests bench train scaling; split, eval and share run only when named), e.g.
+# PARTS="train split".
 set -o pipefail
 OUT="${OUT:-gpu-check}"
 mkdir -p "$OUT"
@@ -55,6 +56,10 @@ part split && cat /tmp/gpu-run-mujoco/config.yaml >>"$OUT/train.log" \
 # SCALING_ENVS="64 256 1024" adds the throughput preset's own 256 envs (the 2-core 50 % target)
 part scaling && timeout "${SCALING_S:-80}" python3 benchmarks/train_scaling.py --cores 2 8 all \
     --num-envs ${SCALING_ENVS:-64 1024} --output "$OUT/train_scaling.md" 2>&1 | tee -a "$OUT/bench.log"
+# the evaluation during training on the device against the numpy loop it replaced (docs/gpu.md,
+# "Train"): its table goes to bench.log
+part eval && timeout "${EVAL_S:-150}" python3 benchmarks/mjx_eval.py --rounds 3 \
+    --output /tmp/mjx_eval.md 2>&1 | tee -a "$OUT/bench.log"
 # runs sharing the GPU: 1, 2 and 4 `--preset gpu` trainings at once (about SHARE_SECONDS each)
 part share && timeout "${SHARE_S:-420}" python3 benchmarks/shared_device.py --runs 1 2 4 \
     --seconds "${SHARE_SECONDS:-120}" --output "$OUT/shared_device.md" 2>&1 | tee -a "$OUT/bench.log"

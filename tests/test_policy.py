@@ -100,3 +100,23 @@ def test_compiled_training_step_acts_as_the_eager_one(trained):
     assert a.count.item() == b.count.item() > 0
     torch.testing.assert_close(b.mean, a.mean)
     torch.testing.assert_close(b.var, a.var)
+
+
+@pytest.mark.parametrize("dtype", [torch.float32, torch.float64])
+@pytest.mark.parametrize("rows", [3, 4096])  # below and above torch's vectorised fill (16)
+def test_the_sampling_off_the_cpu_draws_torch_normals_numbers(dtype, rows):
+    """gaussian_sample on a GPU skips torch.normal's check of std (a wait for the device per
+    step) and computes what it computes: the same numbers and RNG state, bit for bit (the
+    computation checked here on the CPU, where torch.normal itself is used)."""
+    from cpg_actor.agents.base import gaussian_sample, scaled_noise
+
+    mean = torch.randn(rows, 13, dtype=dtype)
+    std = torch.rand(13, dtype=dtype).expand(rows, 13) + 0.1
+    draws, states = [], []
+    for draw in (torch.normal, scaled_noise, gaussian_sample):
+        torch.manual_seed(7)
+        draws.append(draw(mean, std))
+        states.append(torch.get_rng_state())
+    for got, state in zip(draws[1:], states[1:], strict=True):
+        assert got.dtype == dtype and torch.equal(got, draws[0])
+        assert torch.equal(state, states[0])

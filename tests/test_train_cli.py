@@ -292,6 +292,8 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
     assert fast.preset == "throughput" and fast.num_envs == 256 and fast.ppo.num_minibatches == 4
     gpu = build_config(parser.parse_args(["--preset", "gpu"]))
     assert (gpu.env.sim, gpu.device, gpu.num_envs * gpu.ppo.num_steps) == ("mjx", "auto", 98_304)
+    # the CPG at the anymal preset's fixed rate, outside the adaptive schedule
+    assert (gpu.ppo.lr_schedule, gpu.ppo.cpg_learning_rate) == ("adaptive", 3e-4)
     assert (fast.ppo.lr_schedule, fast.ppo.learning_rate) == ("adaptive", 1e-3)
     # the quadruped's: the throughput recipe plus the CPG-Actor settings of its results
     anymal = build_config(parser.parse_args(["--preset", "anymal"]))
@@ -301,6 +303,7 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
          "--set", "ppo.cpg_learning_rate=3e-4"]))  # fmt: skip
     assert anymal.robot == "anymal" and type(anymal.env).__name__ == "QuadrupedConfig"
     assert {**anymal.to_dict(), "preset": "throughput"} == spelled.to_dict()
+    assert anymal.ppo.cpg_learning_rate == gpu.ppo.cpg_learning_rate
     fast.save(tmp_path / "fast.yaml")
     # the flags and --set win over the preset; a config file brings its preset along
     mixed = build_config(

@@ -5,6 +5,12 @@ Used by ``cpg-actor eval`` (traces, figures) and by the runner's evaluation duri
 envs, never updates the observation normaliser and draws no random numbers (the mean action
 is taken and the envs are reset with their own seed), so training is the same with or
 without it.
+
+On an env with a tensor face (MJX: ``reset_tensors`` / ``step_tensors``) an evaluation
+without traces stays on the env's device: the policy's tensors go to the env and its
+returns, lengths and episode metrics are summed there, with a look at the host only every
+:data:`CHECK_EVERY` steps (whether every episode has ended) instead of copying each step's
+outputs to numpy. The numbers are those of the numpy loop (tested).
 """
 
 from __future__ import annotations
@@ -39,6 +45,11 @@ def observation_columns(robot) -> dict[str, list[int]]:
     return columns
 
 
+# control steps between the device loop's looks at the host (has every episode ended?): a
+# divisor of the usual episode lengths (500 hopper steps, 1,000 quadruped steps), so that
+# the loop stops at the step the last episode ends
+CHECK_EVERY = 50
+
 # the step info an env may report -> its trace: feet on the ground (E, feet) as 1 or 0, the
 # base's forward speed (m/s) and the velocity command (E, 3: forward, lateral, yaw)
 TRACED_INFO = {"contact": "foot_contact", "forward_speed": "base_forward_speed",
@@ -53,6 +64,7 @@ def evaluate(
     control_dt: float,
     max_steps: int,
     traces: bool = True,
+    on_device: bool | None = None,
 ) -> dict[str, np.ndarray]:
     """Run every env of ``env`` to the end of its first episode with the mean action.
 
@@ -68,7 +80,17 @@ def evaluate(
     ``desired_velocity`` its finite difference over ``control_dt``, for every agent alike
     (NaN at the first step); a CPG's output ``x`` and analytic ``x_dot`` are ``cpg_position``
     and ``cpg_velocity``.
+
+    ``on_device``: run on the env's tensor face without per-step copies to the host (module
+    docstring); None: when the env has one and no traces are asked for.
     """
+    if on_device is None:
+        on_device = not traces and hasattr(env, "step_tensors")
+    if on_device:
+        if traces:
+            raise ValueError("traces are recorded on the host: evaluate(on_device=False)")
+        length, returns, metrics, standing = _run_on_device(policy, env, seed, max_steps)
+        return _result(env, {}, length, returns, metrics, standing, control_dt, traces)
     num_envs = env.num_envs
     columns = observation_columns(env.robot)
     obs, _ = env.reset(seed=seed)
@@ -112,6 +134,52 @@ def evaluate(
         obs = np.asarray(next_obs, dtype=np.float32)
         if not active.any():
             break
+    return _result(env, records, length, returns, metrics, standing, control_dt, traces)
+
+
+def _run_on_device(policy, env, seed: int, max_steps: int):
+    """The loop of :func:`evaluate` on the env's tensor face: ``(length, episode_return,
+    metrics, standing hip height)`` as numpy, the same numbers as the numpy loop's."""
+    columns = observation_columns(env.robot)
+    obs, _ = env.reset_tensors(seed)
+    device, num_envs = obs.device, env.num_envs
+    hip = columns.get("hip_height")
+    standing = obs[:, hip[0]].clone() if hip else None  # averaged as the numpy loop does
+    policy.reset(num_envs)
+    active = torch.ones(num_envs, dtype=torch.bool, device=device)
+    length = torch.zeros(num_envs, dtype=torch.int64, device=device)
+    returns = torch.zeros(num_envs, dtype=torch.float64, device=device)
+    finite = torch.ones((), dtype=torch.bool, device=device)
+    metrics: dict[str, torch.Tensor] = {}
+    for step in range(max_steps + 1):
+        action = policy.act(obs, deterministic=True, tensor_action=True).action
+        finite &= torch.isfinite(action).all()  # checked at the end: no wait per step
+        out = env.step_tensors(action, check_finite=False)
+        done = out.terminated | out.truncated
+        returns += torch.where(active, out.reward.to(torch.float64), 0.0)
+        ended = active & done
+        for name, values in out.episode_metrics.items():
+            metric = metrics.get(name)
+            if metric is None:
+                metric = torch.full((num_envs,), torch.nan, dtype=torch.float64, device=device)
+            metrics[name] = torch.where(ended, values.to(torch.float64), metric)
+        length += active
+        active &= ~done
+        obs = out.obs
+        if (step + 1) % CHECK_EVERY == 0 and not bool(active.any()):
+            break
+    if not bool(finite):
+        raise ValueError("the policy's actions became NaN or inf: actions must be finite")
+    return (
+        length.cpu().numpy(),
+        returns.cpu().numpy(),
+        {name: value.cpu().numpy() for name, value in metrics.items()},
+        float(standing.cpu().numpy().mean()) if standing is not None else float("nan"),
+    )
+
+
+def _result(env, records, length, returns, metrics, standing, control_dt, traces):
+    """:func:`evaluate`'s result from its loop's numbers (the traces ``records``)."""
     result = {key: np.stack(values) for key, values in records.items()}
     if traces:
         result["time"] = control_dt * np.arange(1, len(records["reward"]) + 1)

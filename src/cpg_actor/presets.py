@@ -17,7 +17,10 @@ saved in the run's ``config.yaml`` (``preset``).
   less per sample; what it reaches and when: ``docs/training.md``, "Presets".
 * ``gpu``: the same recipe at GPU scale on the MJX simulator (``docs/gpu.md``): 4,096 envs x 24
   steps = 98,304 samples per iteration (legged_gym's rollout length for 4,096 envs), 5 epochs
-  of 4 minibatches of 24,576, learning rate 1e-3 adapted to KL 0.01, ``device`` auto (CUDA if
+  of 4 minibatches of 24,576, learning rate 1e-3 adapted to KL 0.01, and, as ``anymal``, the
+  CPG and its feedback at a fixed 3e-4 outside that schedule (``ppo.cpg_learning_rate``: the
+  KL the schedule follows hardly sees them, so its rate, up to 1e-2, would drive them; no
+  effect on agents whose policy holds no CPG: ``mlp``, ``cho2019*``); ``device`` auto (CUDA if
   torch sees it). It runs on a CPU too (JAX's CPU backend), slowly.
 * ``anymal``: the ANYmal B quadruped (``robot: anymal``) with the ``throughput`` recipe and the
   CPG-Actor settings its results were trained with (``docs/quadruped.md``, "Training"): one
@@ -30,6 +33,9 @@ saved in the run's ``config.yaml`` (``preset``).
 from __future__ import annotations
 
 from typing import Any
+
+# the fixed learning rate of what acts through the CPG (ppo.cpg_learning_rate): the paper's
+CPG_LEARNING_RATE = 3e-4
 
 THROUGHPUT: dict[str, Any] = {
     "num_envs": 256,
@@ -58,6 +64,7 @@ PRESETS: dict[str, dict[str, Any]] = {
             "num_minibatches": 4,
             "lr_schedule": "adaptive",
             "learning_rate": 1e-3,
+            "cpg_learning_rate": CPG_LEARNING_RATE,
             "compile": True,
         },
     },
@@ -65,7 +72,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         **THROUGHPUT,
         "robot": "anymal",
         "agent_config": {"cpg_layout": "leg", "init_std": 0.1, "feedback_noise": 0.2},
-        "ppo": {**THROUGHPUT["ppo"], "cpg_learning_rate": 3e-4},
+        "ppo": {**THROUGHPUT["ppo"], "cpg_learning_rate": CPG_LEARNING_RATE},
     },
 }
 

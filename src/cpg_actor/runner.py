@@ -172,7 +172,11 @@ class Runner:
         self.global_step = config.search_steps
         self.train_wall = 0.0  # seconds of collection + update, over the whole run
         self.env_seed: int | None = None
-        self.episodes = EpisodeLog(config.num_envs)
+        # the rollout never waits for the device (no host sync per control step) when the env
+        # hands over device tensors itself (MJX) or torch runs on an accelerator: the episode
+        # log and the check of the actions then sync once per rollout
+        self.sync_free = self.device.type != "cpu" or hasattr(self.env.unwrapped, "step_tensors")
+        self.episodes = EpisodeLog(config.num_envs, deferred=self.sync_free)
         self._episodes_started = False
         self._resumed = False  # loaded from a checkpoint: no warm start, no "before" again
         # compile_generation() when this runner's compiled functions were last all built and
@@ -248,40 +252,57 @@ class Runner:
     def _collect(self) -> dict[str, float]:
         cfg = self.config
         self.storage.clear()
-        sim_time = 0.0
+        self._sim_time = 0.0
+        # sync-free: whether every action so far was finite, on the device, checked once below
+        self._finite_actions = torch.ones((), dtype=torch.bool, device=self.device)
         for _ in range(cfg.ppo.num_steps):
-            acted = self.policy.act(
-                self.obs, deterministic=False, update_normalizer=True, tensor_action=True
-            )
-            step = acted.agent
-            start = time.perf_counter()
-            out = self.env.step(acted.action)
-            sim_time += time.perf_counter() - start
-
-            done = out.terminated | out.truncated
-            final_values = torch.zeros(cfg.num_envs, device=self.device)
-            bootstrap = out.truncated & ~out.terminated
-            if self.device.type != "cpu":  # no sync with the host: every env's, kept where cut
-                final_obs = self.normalize(out.final_obs, update=False)
-                cut_values = self.agent.value(final_obs, step.next_state)
-                final_values = torch.where(bootstrap, cut_values, final_values)
-            elif bootstrap.any():  # the value of a cut episode's last state
-                rows = bootstrap.nonzero().squeeze(-1)
-                final_obs = self.normalize(out.final_obs[rows], update=False)
-                final_values[rows] = self.agent.value(final_obs, step.next_state[rows])
-            rewards = out.reward.to(torch.float32)
-            if cfg.ppo.normalize_rewards:
-                rewards = self.reward_normalizer(rewards, done)
-            self.storage.add_policy_step(
-                acted, rewards, out.terminated, out.truncated, final_values
-            )
-            self.policy.end_episodes(done)
-            self.obs = out.obs
-            self.episodes.track(out, done)
+            self.collect_step()
+        if self.sync_free:  # the rollout's one wait for the device, with the episode log's
+            self.episodes.flush()
+            if not bool(self._finite_actions):
+                raise TrainingDiverged(
+                    f"iteration {self.iteration + 1}: the policy's actions became NaN or inf "
+                    f"during the rollout. Last good checkpoint: {self.last_checkpoint_path()}"
+                )
 
         last_values = self.agent.value(self.normalize(self.obs, update=False), self.agent_state)
         self.storage.compute_returns(last_values, cfg.ppo.gamma, cfg.ppo.gae_lambda)
-        return {"simulation_time": sim_time}
+        return {"simulation_time": self._sim_time}
+
+    def collect_step(self) -> None:
+        """One control step of the rollout in every env: act, step, store, track episodes.
+        With :attr:`sync_free` it never waits for the device (tested on JAX's CPU backend)."""
+        cfg = self.config
+        acted = self.policy.act(
+            self.obs, deterministic=False, update_normalizer=True, tensor_action=True
+        )
+        step = acted.agent
+        start = time.perf_counter()
+        if self.sync_free:  # the env's check of the actions would wait: checked per rollout
+            self._finite_actions &= torch.isfinite(acted.action).all()
+            out = self.env.step(acted.action, check_finite=False)
+        else:
+            out = self.env.step(acted.action)
+        self._sim_time += time.perf_counter() - start
+
+        done = out.terminated | out.truncated
+        final_values = torch.zeros(cfg.num_envs, device=self.device)
+        bootstrap = out.truncated & ~out.terminated
+        if self.sync_free:  # no sync with the host: every env's, kept where cut
+            final_obs = self.normalize(out.final_obs, update=False)
+            cut_values = self.agent.value(final_obs, step.next_state)
+            final_values = torch.where(bootstrap, cut_values, final_values)
+        elif bootstrap.any():  # the value of a cut episode's last state
+            rows = bootstrap.nonzero().squeeze(-1)
+            final_obs = self.normalize(out.final_obs[rows], update=False)
+            final_values[rows] = self.agent.value(final_obs, step.next_state[rows])
+        rewards = out.reward.to(torch.float32)
+        if cfg.ppo.normalize_rewards:
+            rewards = self.reward_normalizer(rewards, done)
+        self.storage.add_policy_step(acted, rewards, out.terminated, out.truncated, final_values)
+        self.policy.end_episodes(done)
+        self.obs = out.obs
+        self.episodes.track(out, done)
 
     # -- training ----------------------------------------------------------------------------
     def learn(self, stop_when: Callable[[dict[str, float]], bool] | None = None) -> None:

@@ -249,6 +249,12 @@ def test_bad_input_gets_a_clear_error(env):
         env.step_tensors(torch.full((3, 2), float("inf")))
     with pytest.raises(ValueError, match=r"shape \(3, 2\)"):
         env.step_tensors(torch.zeros(3))
+    # unchecked (the trainer checks its actions once per rollout): the robot blows up, is
+    # terminated with finite numbers and starts afresh
+    nan = torch.tensor([[float("nan")] * 2, HOLD.tolist(), HOLD.tolist()], dtype=torch.float32)
+    out = env.step_tensors(nan, check_finite=False)
+    assert out.terminated.tolist() == [True, False, False]
+    assert torch.isfinite(out.obs).all() and torch.isfinite(out.reward).all()
     with pytest.raises(ValueError, match="num_envs"):
         MjxHopperVectorEnv(0)
     with pytest.raises(ValueError, match="make_vector_env"):

@@ -181,6 +181,26 @@ def gaussian_log_prob(value: Tensor, mean: Tensor, std: Tensor) -> Tensor:
     return -((value - mean) ** 2) / (2.0 * std**2) - torch.log(std) - LOG_SQRT_2PI
 
 
+def gaussian_sample(mean: Tensor, std: Tensor) -> Tensor:
+    """One draw of N(mean, std^2): the numbers of ``torch.normal(mean, std)`` from the same
+    draw of the RNG. On the CPU it is ``torch.normal``; elsewhere it is computed the way
+    ``torch.normal`` computes it (:func:`scaled_noise`), without ``torch.normal``'s check
+    that std >= 0, which reads std's minimum on the host: on a GPU, a wait for the device at
+    every control step."""
+    if mean.device.type == "cpu":
+        return torch.normal(mean, std)
+    return scaled_noise(mean, std)
+
+
+def scaled_noise(mean: Tensor, std: Tensor) -> Tensor:
+    """N(0, 1) drawn in the broadcast shape, times ``std``, plus ``mean``: what
+    ``torch.normal(mean, std)`` computes, bit for bit (tested), with no look at the values."""
+    noise = torch.randn(
+        torch.broadcast_shapes(mean.shape, std.shape), dtype=mean.dtype, device=mean.device
+    )
+    return noise.mul_(std).add_(mean)
+
+
 def gaussian_entropy(std: Tensor) -> Tensor:
     """Elementwise entropy of N(., std^2): 1/2 + log(sqrt(2 pi) std)."""
     return 0.5 + LOG_SQRT_2PI + torch.log(std)
@@ -278,7 +298,7 @@ class Agent(nn.Module):
             action = out.mean
         else:  # as torch.distributions.Normal.sample: mean + std * N(0, 1), one RNG draw
             with torch.no_grad():
-                action = torch.normal(out.mean.expand(out.std.shape), out.std)
+                action = gaussian_sample(out.mean.expand(out.std.shape), out.std)
         log_prob = gaussian_log_prob(action, out.mean, out.std).sum(-1)
         return ActStep(
             action, log_prob, self.value(obs, state), out.mean, out.std, out.next_state, out.extras

@@ -22,6 +22,7 @@ from cpg_actor.agents.base import (
     AgentConfig,
     gaussian_entropy,
     gaussian_log_prob,
+    gaussian_sample,
     mlp,
     tanh,
 )
@@ -413,7 +414,7 @@ class CPGActorAgent(Agent):
     def _act_cpg(self, obs: Tensor, state: Tensor, deterministic: bool) -> ActStep:
         mean, std = self._cpg_distribution(obs)
         with torch.no_grad():
-            sampled = mean if deterministic else torch.normal(mean, std)
+            sampled = mean if deterministic else gaussian_sample(mean, std)
         out = self._cpg_step(obs, state, sampled)
         log_prob = gaussian_log_prob(sampled, mean, std).sum(-1)
         sample = torch.cat([out.mean, sampled], dim=-1)
@@ -430,11 +431,15 @@ class CPGActorAgent(Agent):
         feedback_mean = self.feedback_mean(obs, state)
         feedback_std = self.feedback_log_std.exp().expand_as(feedback_mean)
         with torch.no_grad():
-            feedback = feedback_mean if deterministic else torch.normal(feedback_mean, feedback_std)
+            feedback = (
+                feedback_mean if deterministic else gaussian_sample(feedback_mean, feedback_std)
+            )
         out = self.actor(obs, state, feedback)
         with torch.no_grad():
             action = (
-                out.mean if deterministic else torch.normal(out.mean.expand(out.std.shape), out.std)
+                out.mean
+                if deterministic
+                else gaussian_sample(out.mean.expand(out.std.shape), out.std)
             )
         sample = torch.cat([action, feedback], dim=-1)
         mean = torch.cat([out.mean, feedback_mean], dim=-1)

@@ -28,9 +28,11 @@ class HopperConfig:
     episode_steps: int = 500  # control steps per episode: 5 s, then truncated
     foot_friction: float = 0.8  # Coulomb friction between foot and ground
     # sim="mjx" only: the constraint solver's iteration caps. MJX solves the batch together until
-    # its slowest robot converges (in float32 it rarely meets MuJoCo's 1e-8 tolerance), so
-    # these caps set its cost; MuJoCo's defaults are 100 and 50. 15 and 15 give the same
-    # trajectories and returns as 100 and 50, 3-4x faster (docs/gpu.md); 10 and 10 do not
+    # its slowest robot converges, and runs every line-search iteration batched, so these caps
+    # set its cost; MuJoCo's defaults are 100 and 50. 15 and 15 give the same
+    # trajectories and returns as 100 and 50, 1.3-4x faster (docs/gpu.md); 10 and 10 do not.
+    # 4 and 15 give the hopper's too but cost about as much (the cap seldom binds) and break
+    # the quadruped's trot; 15 and 4 break both (benchmarks/mjx_solver_iterations.py)
     mjx_iterations: int = 15
     mjx_ls_iterations: int = 15
     # -- actuator (PD on the desired position, torque-speed limited; see actuator.py) ---------

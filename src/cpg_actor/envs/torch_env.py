@@ -73,9 +73,12 @@ class TorchVectorEnv:
             obs, info = self.unwrapped.reset(seed=seed)
         return self._tensor(obs, torch.float32), info
 
-    def step(self, actions: Tensor | np.ndarray) -> EnvStep:
+    def step(self, actions: Tensor | np.ndarray, check_finite: bool = True) -> EnvStep:
+        """One step. ``check_finite=False`` lets an env with a tensor face skip its check of
+        NaN or inf actions, a wait for the device at every step (the caller checks them);
+        an env that takes numpy always checks them (they are on the host anyway)."""
         if hasattr(self.unwrapped, "step_tensors"):
-            out = self.unwrapped.step_tensors(torch.as_tensor(actions))
+            out = self.unwrapped.step_tensors(torch.as_tensor(actions), check_finite=check_finite)
             if out.obs.device == self.device:
                 return out
             return EnvStep(*(_to(value, self.device) for value in out[:-1]), out.info)

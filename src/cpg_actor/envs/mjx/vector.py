@@ -102,8 +102,12 @@ class MjxHopperVectorEnv(VectorEnv):
         }
         return self._to_torch(obs), info
 
-    def step_tensors(self, actions: torch.Tensor) -> EnvStep:
-        """One control step from desired joint positions ``(N, 2)`` (a tensor on any device)."""
+    def step_tensors(self, actions: torch.Tensor, check_finite: bool = True) -> EnvStep:
+        """One control step from desired joint positions ``(N, 2)`` (a tensor on any device).
+
+        ``check_finite``: ValueError for NaN or inf actions, which costs a wait for the device
+        at every step. False leaves the check to the caller (the trainer checks its actions
+        once per rollout); a robot given NaN blows up and is terminated and reset."""
         self._check_started("step")
         if tuple(actions.shape) != (self.num_envs, 2):
             raise ValueError(
@@ -111,7 +115,7 @@ class MjxHopperVectorEnv(VectorEnv):
                 f"rad), got {tuple(actions.shape)}"
             )
         check_real_tensor(actions)
-        if not bool(torch.isfinite(actions).all()):
+        if check_finite and not bool(torch.isfinite(actions).all()):
             raise ValueError("actions must be finite, got NaN or inf")
         return self._advance(self._to_jax(actions))
 

@@ -38,7 +38,8 @@ class QuadrupedConfig:
     # "mujoco" (MuJoCo on the CPU, the default) or "mjx" (MuJoCo XLA: JAX on a GPU where it
     # has one; docs/quadruped.md, "Backends")
     sim: str = "mujoco"
-    # sim="mjx" only: the Newton solver's iteration caps (the MJX hopper's; HopperConfig)
+    # sim="mjx" only: the Newton solver's iteration caps (the MJX hopper's; HopperConfig). The
+    # trot needs more than 4 iterations: at 4 it leaves MuJoCo's by 18 cm (docs/gpu.md)
     mjx_iterations: int = 15
     mjx_ls_iterations: int = 15
     physics_dt: float = 0.002  # s: 500 Hz, stable for this robot's contacts (legged_gym: 5 ms)
