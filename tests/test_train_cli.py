@@ -39,6 +39,11 @@ def test_step_counts_accept_suffixes_and_reject_bad_values():
     for bad in ("-5", "0", "abc", "1.5", "2.5k3"):
         with pytest.raises(ValueError):
             parse_steps(bad)
+    config = TrainConfig()  # --set and config files take the same suffixes as --total-steps
+    apply_dict(config, parse_override("total_steps=2M"), "")
+    assert config.total_steps == 2_000_000
+    with pytest.raises(ValueError, match="500k or 20M"):
+        apply_dict(config, parse_override("total_steps=many"), "")
 
 
 def test_overrides_are_typed_and_unknown_keys_list_valid_ones():

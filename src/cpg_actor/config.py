@@ -356,6 +356,8 @@ def apply_dict(obj: Any, data: dict[str, Any], prefix: str) -> None:
                     raise ValueError(f"invalid env config: {error}") from None
             else:
                 apply_dict(current, value, prefix=f"{path}.")
+        elif key in STEP_KEYS and isinstance(value, str):  # "500k" as in --total-steps
+            setattr(obj, key, parse_steps(value))
         else:
             setattr(obj, key, _coerce(value, hints.get(key, Any), path))
 
@@ -384,6 +386,8 @@ def parse_override(text: str) -> dict[str, Any]:
     return nested
 
 
+# step counts a config file or --set may also write with a suffix (500k, 20M)
+STEP_KEYS = ("total_steps",)
 _SUFFIXES = {"k": 1_000, "m": 1_000_000, "g": 1_000_000_000, "b": 1_000_000_000}
 
 
