@@ -111,7 +111,7 @@ class ESRunner:
         self.generation_steps = generation_steps(config)
         num_envs = es.popsize * es.episodes
         if env is None:
-            env = self.spec.make_env(num_envs, config.env, config.env_threads)
+            env = self.spec.make_env(num_envs, config.env, config.env_threads, config.agent_config)
         self.env = TorchVectorEnv(env, self.device)
         if self.env.num_envs != num_envs:
             raise ValueError(
@@ -281,7 +281,9 @@ class ESRunner:
         cfg = self.config
         start = time.perf_counter()
         if self.eval_env is None:
-            self.eval_env = self.spec.make_env(cfg.eval_episodes, cfg.env, cfg.env_threads)
+            self.eval_env = self.spec.make_env(
+                cfg.eval_episodes, cfg.env, cfg.env_threads, cfg.agent_config
+            )
         policy = Policy(
             self.agent,
             self.normalizer,
