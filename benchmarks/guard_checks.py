@@ -27,7 +27,7 @@ import torch  # noqa: E402
 
 from bench_report import measured, write  # noqa: E402
 from cpg_actor.machine import cpu_model, load_average, usable_cores  # noqa: E402
-from cpg_actor.runner import Runner  # noqa: E402
+from cpg_actor.training.runner import Runner  # noqa: E402
 from train_throughput import make_config  # noqa: E402
 
 
@@ -58,7 +58,7 @@ def main() -> None:
         runner.start_episodes()
         runner.collect()  # the warm-up: every compiled function built, its guards checked
         runner.update()
-        if not runner.skips_guard_checks:
+        if not runner.compile_stance.skips_guard_checks:
             raise SystemExit("the runner does not skip guard checks (not compiled on the CPU?)")
         skipped, checked = [], []
         for pair in range(args.pairs):

@@ -29,8 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from cpg_actor.config.presets import PRESETS
 from cpg_actor.machine import git_commit
-from cpg_actor.presets import PRESETS
 
 HERE = Path(__file__).resolve().parent
 

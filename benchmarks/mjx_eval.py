@@ -1,4 +1,4 @@
-"""The evaluation during training on MJX: the device loop of ``cpg_actor.evaluation`` (the
+"""The evaluation during training on MJX: the device loop of ``cpg_actor.training.evaluation`` (the
 env's tensor face, no per-step copies to the host) against the numpy loop it replaced (the
 env's Gymnasium face, every output copied to numpy at every step), in the same run, taking
 turns. Both evaluate the same untrained policy on the same envs (``eval_episodes`` envs of
@@ -22,10 +22,10 @@ import numpy as np
 from bench_report import measured, write
 from cpg_actor.config import TrainConfig, apply_dict
 from cpg_actor.envs.mjx.dynamics import jax
-from cpg_actor.evaluation import evaluate
 from cpg_actor.host_reads import host_reads
-from cpg_actor.policy import Policy
-from cpg_actor.runner import Runner
+from cpg_actor.training.evaluation import evaluate
+from cpg_actor.training.policy import Policy
+from cpg_actor.training.runner import Runner
 
 
 def main() -> None:
@@ -48,7 +48,8 @@ def main() -> None:
         config.env.episode_seconds = args.steps * config.env.control_dt
     runner = Runner(config, tensorboard=False)  # its env: the eval env's batch, one compile
     env = runner.spec.make_env(args.episodes, config.env, 1, config.agent_config)
-    policy = Policy(runner.agent, runner.normalizer, runner.action_low, runner.action_high)
+    bounds = runner.policy.action_low, runner.policy.action_high
+    policy = Policy(runner.agent, runner.normalizer, *bounds)
     control_dt = float(config.env.control_dt)
 
     def run(on_device: bool) -> dict:

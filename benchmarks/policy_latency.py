@@ -21,11 +21,11 @@ import numpy as np
 import torch
 
 from cpg_actor.config import TrainConfig
-from cpg_actor.export import export_policy
+from cpg_actor.deploy import load_policy
+from cpg_actor.deploy.export import export_policy
 from cpg_actor.machine import cpu_model, load_average
-from cpg_actor.policy import load_policy
 from cpg_actor.ppo import PPOConfig
-from cpg_actor.runner import Runner
+from cpg_actor.training.runner import Runner
 
 
 def latencies(step, steps: int) -> np.ndarray:

@@ -26,8 +26,8 @@ from torch.profiler import ProfilerActivity, profile
 
 from bench_report import measured, write
 from cpg_actor.config import TrainConfig, apply_dict
-from cpg_actor.presets import preset_values
-from cpg_actor.runner import Runner
+from cpg_actor.config.presets import preset_values
+from cpg_actor.training.runner import Runner
 
 HOST_CALLS = ("cudaLaunchKernel", "cuLaunchKernel", "cudaStreamSynchronize",
               "cudaDeviceSynchronize", "cudaMemcpyAsync", "cudaEventSynchronize")  # fmt: skip
@@ -64,10 +64,10 @@ def main() -> None:
         runner.start_episodes()
         runner.collect()
         runner.update()
-        acted = runner.policy.act(runner.obs, deterministic=False, tensor_action=True)
+        acted = runner.policy.act(runner.rollout.obs, deterministic=False, tensor_action=True)
         env_ms = timed(lambda: runner.env.step(acted.action), steps, sync)
         act_ms = timed(
-            lambda: runner.policy.act(runner.obs, deterministic=False, tensor_action=True),
+            lambda: runner.policy.act(runner.rollout.obs, deterministic=False, tensor_action=True),
             steps,
             sync,
         )

@@ -51,10 +51,10 @@ import torch
 
 from bench_report import measured, write
 from cpg_actor.config import TrainConfig, apply_dict
+from cpg_actor.config.presets import preset_values
 from cpg_actor.envs.backends import threaded_rollout
 from cpg_actor.machine import cpu_model, cpu_times, load_average, stolen_share, usable_cores
-from cpg_actor.presets import preset_values
-from cpg_actor.runner import Runner
+from cpg_actor.training.runner import Runner
 
 SYSFS = {
     "idle driver": "/sys/devices/system/cpu/cpuidle/current_driver",

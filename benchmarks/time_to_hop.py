@@ -5,13 +5,13 @@ best hop height and Stable-Baselines3's PPO (defaults), measured in the same run
     python benchmarks/time_to_hop.py [--seeds 3] [--output benchmarks/results/time_to_hop.md]
 
 What a user waits for is a good policy, not steps per second. Every method is evaluated the
-same way (:func:`cpg_actor.evaluation.evaluate`: the mean action, 5 episodes on envs of their
-own, the same reset seed) before its first update and every ``EVAL_EVERY`` env steps. The
-targets are those of the issue "The CPG-Actor at its best": ``cpg-actor`` reaches its threshold
-when one evaluation has a mean hop height >= 0.45 m (any return) and stops there, within
-500k PPO steps; ``mlp`` (and SB3) have no threshold: they train to their budget (500k steps)
-and are measured to their own best hop height (the first evaluation at it, and at 95 % of
-it), and to when they first met the other agents' thresholds. Time is training wall time,
+same way (:func:`cpg_actor.training.evaluation.evaluate`: the mean action, 5 episodes on envs
+of their own, the same reset seed) before its first update and every ``EVAL_EVERY`` env steps.
+The targets are those of the issue "The CPG-Actor at its best": ``cpg-actor`` reaches its
+threshold when one evaluation has a mean hop height >= 0.45 m (any return) and stops there,
+within 500k PPO steps; ``mlp`` (and SB3) have no threshold: they train to their budget (500k
+steps) and are measured to their own best hop height (the first evaluation at it, and at 95 %
+of it), and to when they first met the other agents' thresholds. Time is training wall time,
 evaluations excluded. Runs go one at a time (no two measurements share the CPU).
 
 The search is charged. The default ``cpg-actor`` starts from a packaged gait
@@ -107,13 +107,25 @@ class RunSpec(NamedTuple):
     threshold: tuple[float | None, float] | None
 
 
+def from_tree(module: str, name: str):
+    """``name`` from ``cpg_actor.<module>``, or from its flat path in a tree from before the
+    package's folders (``training.runner`` was ``runner``, ``config.presets`` ``presets``)."""
+    import importlib
+
+    try:
+        return getattr(importlib.import_module(f"cpg_actor.{module}"), name)
+    except ImportError:
+        flat = module.rsplit(".", 1)[-1]
+        return getattr(importlib.import_module(f"cpg_actor.{flat}"), name)
+
+
 def compose(agent: str, preset: str, values: list[dict]):
     """The run's :class:`TrainConfig` as ``cpg-actor train`` composes it: the agent's tuned
     settings (trees without per-agent defaults have none), the preset, then ``values``."""
     from cpg_actor.agents import get_agent_spec
     from cpg_actor.config import TrainConfig, apply_dict
-    from cpg_actor.presets import preset_values
 
+    preset_values = from_tree("config.presets", "preset_values")
     config = TrainConfig()
     config.agent = agent
     spec = get_agent_spec(agent)
@@ -129,13 +141,12 @@ def project_run(spec: RunSpec) -> dict:
     evaluation is recorded, the one before the first iteration too (an agent that starts
     from a searched gait may hop before any PPO step; it is recorded at 0 s)."""
     agent, preset, seed, values, budget, threshold = spec
-    from cpg_actor.runner import Runner
+    Runner = from_tree("training.runner", "Runner")
 
     config = compose(agent, preset, values)
     config.agent, config.seed, config.total_steps = agent, seed, budget
     config.eval_interval = max(1, round(EVAL_EVERY / config.steps_per_iteration))
     config.eval_episodes = EVAL_EPISODES
-    runner = Runner(config, run_dir=None, tensorboard=False)
     history: list[tuple[int, float, float, float]] = []
 
     def record(evaluation: dict[str, float]) -> None:
@@ -152,15 +163,31 @@ def project_run(spec: RunSpec) -> dict:
         record(evaluation)
         return any(reached(evaluation_of(h), threshold) for h in history)
 
-    first_evaluation = getattr(runner, "log_evaluation", None)  # the agent before training
+    try:
+        from cpg_actor.training.hooks import Hook
+    except ImportError:  # a tree before the loop's hooks
+        Hook = None
+    if Hook is not None:
 
-    def log_evaluation() -> dict[str, float]:
-        evaluation = first_evaluation()
-        record(evaluation)
-        return evaluation
+        class RecordFirst(Hook):
+            """The evaluation before the first update (the evaluation hook's, before it)."""
 
-    if first_evaluation is not None:  # trees that evaluate before the first update
-        runner.log_evaluation = log_evaluation
+            def start(self, runner, fresh):
+                if runner.last_evaluation is not None:
+                    record(runner.last_evaluation)
+
+        runner = Runner(config, run_dir=None, tensorboard=False, hooks=[RecordFirst()])
+    else:
+        runner = Runner(config, run_dir=None, tensorboard=False)
+        first_evaluation = getattr(runner, "log_evaluation", None)  # the agent before training
+
+        def log_evaluation() -> dict[str, float]:
+            evaluation = first_evaluation()
+            record(evaluation)
+            return evaluation
+
+        if first_evaluation is not None:  # trees that evaluate before the first update
+            runner.log_evaluation = log_evaluation
     try:
         runner.learn(stop_when=stop)
     finally:
@@ -220,7 +247,7 @@ def search_runs(spec: SearchSpec) -> dict:
         if source not in by_file:  # (trees without start gaits never get here)
             from cpg_actor.agents.gait_file import load_gait, write_gait
             from cpg_actor.config import compose_config
-            from cpg_actor.es_runner import ESRunner
+            from cpg_actor.training.es_runner import ESRunner
 
             gait = load_gait(source)
             budget = spec.budget or int(gait.get("steps_searched", gait["steps"]))
@@ -361,7 +388,8 @@ def tree_search(src: Path, spec: SearchSpec) -> dict:
 
 
 class SB3Policy:
-    """An SB3 model behind the :class:`cpg_actor.policy.Policy` calls :func:`evaluate` makes."""
+    """An SB3 model behind the :class:`cpg_actor.training.policy.Policy` calls
+    :func:`evaluate` makes."""
 
     def __init__(self, model, low: np.ndarray, high: np.ndarray) -> None:
         self.model, self.low, self.high = model, low, high
@@ -372,7 +400,7 @@ class SB3Policy:
     def act(self, obs: np.ndarray, deterministic: bool = True):
         import torch
 
-        from cpg_actor.policy import PolicyStep
+        from cpg_actor.training.policy import PolicyStep
 
         action, _ = self.model.predict(np.asarray(obs), deterministic=True)  # in [-1, 1]
         desired = self.low + (np.asarray(action) + 1.0) * (self.high - self.low) / 2.0
@@ -388,8 +416,8 @@ def sb3_run(
     from stable_baselines3.common.callbacks import BaseCallback
 
     from cpg_actor.envs import ENV_ID, HopperConfig, HopperVectorEnv
-    from cpg_actor.evaluation import evaluate
-    from cpg_actor.runner import EVAL_SEED_KEY, derived_seed
+    from cpg_actor.training.evaluation import evaluate
+    from cpg_actor.training.seeding import EVAL_SEED_KEY, derived_seed
 
     env_values = {}  # --set env.KEY=VALUE reaches SB3's env too
     for mapping in values:
@@ -617,6 +645,7 @@ def main(argv: list[str] | None = None) -> int:
     import torch
 
     from cpg_actor.config import TrainConfig, parse_override
+    from cpg_actor.config.presets import preset_values
     from cpg_actor.machine import (
         cpu_model,
         cpu_times,
@@ -625,7 +654,6 @@ def main(argv: list[str] | None = None) -> int:
         stolen_share,
         usable_cores,
     )
-    from cpg_actor.presets import preset_values
 
     agents = args.agents.split(",")
     presets = args.presets.split(",")

@@ -40,8 +40,8 @@ brief_openmp_spinning(os.environ)  # as the cpg-actor command runs (before torch
 import torch  # noqa: E402
 
 from cpg_actor.config import TrainConfig, apply_dict  # noqa: E402
-from cpg_actor.presets import preset_values  # noqa: E402
-from cpg_actor.runner import Runner  # noqa: E402
+from cpg_actor.config.presets import preset_values  # noqa: E402
+from cpg_actor.training.runner import Runner  # noqa: E402
 
 AGENTS = ("mlp", "cpg-actor", "cpg-actor-open-loop")
 

@@ -6,10 +6,10 @@ import torch
 
 from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig
+from cpg_actor.deploy import load_policy
 from cpg_actor.device import check_device_name, resolve_device
-from cpg_actor.policy import load_policy
 from cpg_actor.ppo import PPOConfig
-from cpg_actor.runner import Runner
+from cpg_actor.training.runner import Runner
 
 CUDA = torch.cuda.is_available()
 

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 import torch
 
-from cpg_actor.checkpoint import load_checkpoint, resume_checkpoint
 from cpg_actor.cli import main
 from cpg_actor.files import MARKER
+from cpg_actor.training.checkpoint import load_checkpoint, resume_checkpoint
 
 TINY = [
     "--set", "ppo.compile=false", "--num-envs", "2", "--set", "ppo.num_steps=8",
@@ -223,7 +223,7 @@ def test_a_disk_that_fills_inside_torch_save_names_the_file_not_torch(tmp_path, 
     """torch's zip writer turns the failed write of a large tensor into a RuntimeError
     ("unexpected pos ..."); the write is reported as the OSError it was."""
     import cpg_actor.files as files
-    from cpg_actor.checkpoint import atomic_save
+    from cpg_actor.training.checkpoint import atomic_save
 
     def full(path, mode="r", *args, **kwargs):  # every write of this file hits a full disk
         return open("/dev/full", mode, *args, **kwargs)
@@ -308,8 +308,8 @@ def test_export_onto_a_directory_is_one_line_and_leaves_nothing(tmp_path, capsys
 def test_an_export_that_fails_at_its_last_rename_leaves_no_initial_state(
     tmp_path, monkeypatch, trained
 ):
-    import cpg_actor.export as export
-    from cpg_actor.policy import load_policy
+    import cpg_actor.deploy.export as export
+    from cpg_actor.deploy import load_policy
 
     policy = load_policy(trained / "checkpoints" / "last.pt")
     target = tmp_path / "policy.pt"

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import torch
 
-from cpg_actor.checkpoint import load_checkpoint
 from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig, apply_dict, compose_config, parse_override, parse_steps
+from cpg_actor.training.checkpoint import load_checkpoint
 
 # tiny runs: 2 envs x 8 steps per iteration, eager (compiling costs seconds per run; the
 # compiled path: test_train_resume_equals_straight_run_and_eval_writes_traces)
@@ -347,7 +347,7 @@ def test_presets_compile_the_loss_unless_no_cpp_compiler_is_found(monkeypatch, c
     assert not train_command.build_config(
         parser.parse_args(["--set", "ppo.compile=false"])
     ).ppo.compile
-    monkeypatch.setattr(train_command, "cpp_compiler", lambda: None)
+    monkeypatch.setattr("cpg_actor.config.train_config.cpp_compiler", lambda: None)
     assert not train_command.build_config(parser.parse_args([])).ppo.compile
     assert "no C++ compiler found" in capsys.readouterr().err
     monkeypatch.setattr("cpg_actor.ppo.algorithm.cpp_compiler", lambda: None)
@@ -370,7 +370,7 @@ def test_a_second_writer_is_refused_naming_the_holder_and_a_dead_holder_leaves_n
     import subprocess
     import sys
 
-    from cpg_actor.run_lock import RunLock
+    from cpg_actor.training.run_lock import RunLock
 
     run_dir = tmp_path / "run"
     assert main(["train", "--run-dir", str(run_dir), "--total-steps", "32", *TINY]) == 0
@@ -383,7 +383,7 @@ def test_a_second_writer_is_refused_naming_the_holder_and_a_dead_holder_leaves_n
         assert (run_dir / "checkpoints" / "last.pt").is_file()  # --overwrite deleted nothing
     # a holder killed without any clean-up: the operating system drops its lock
     holder = subprocess.Popen(
-        [sys.executable, "-c", "import sys, time; from cpg_actor.run_lock import RunLock; "
+        [sys.executable, "-c", "import sys, time; from cpg_actor.training.run_lock import RunLock; "
          f"lock = RunLock({str(run_dir)!r}).acquire(); print('held', flush=True); time.sleep(60)"],
         stdout=subprocess.PIPE, text=True,
     )  # fmt: skip
@@ -453,7 +453,7 @@ def test_the_rounding_note_is_for_a_budget_the_user_asked_and_the_logs_are_named
 ):
     """The default budget (500,000) is not a whole number of iterations either: it trains the
     same rounded-up steps without a note. The start names metrics.jsonl and TensorBoard."""
-    from cpg_actor.runner import Runner
+    from cpg_actor.training.runner import Runner
 
     monkeypatch.setattr(Runner, "learn", lambda self, stop_when=None: None)  # only the start
     run_dir = tmp_path / "run"
@@ -525,7 +525,7 @@ def test_a_full_disk_or_a_read_only_run_is_one_line_and_keeps_what_was_saved(
     def full_disk(*args, **kwargs):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr("cpg_actor.runner.atomic_save", full_disk)
+    monkeypatch.setattr("cpg_actor.training.checkpoint.atomic_save", full_disk)
     code = main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64"])
     err = capsys.readouterr().err
     assert code == 1 and err.count("\n") == 1 and "no space left on device" in err, err

@@ -24,7 +24,7 @@ MARKER = ".cpg-actor-run"
 MARKER_FORMAT = "cpg-actor-directory"
 RUN = "run"  # a `cpg-actor train` run directory
 RESULTS = "results"  # a `cpg-actor reproduce` (or one `sweep` setting's) results directory
-LOCK = ".lock"  # cpg_actor.run_lock.LOCK_NAME (kept here too: no import cycle)
+LOCK = ".lock"  # cpg_actor.training.run_lock.LOCK_NAME (kept here too: no import cycle)
 
 # a temporary file of an atomic write: ".NAME.tmpPID" (this module, checkpoints) and the
 # names plots, videos and eval traces use (".STEM.PID.HEX.tmpSUFFIX", ".STEM.tmpPID.npz")

@@ -10,7 +10,7 @@ loop that records nothing on the CPU does not wait for a GPU either (apart from 
 libraries do inside their C++ code, such as MJX's solver loops on a GPU)::
 
     with host_reads() as reads:
-        runner.collect_step()
+        runner.rollout.step()
     assert reads == []
 
 A tool for tests and benchmarks: it patches the classes of torch and JAX for the duration of

@@ -13,7 +13,7 @@ from cpg_actor.envs import HopperConfig
 from cpg_actor.envs.cho2019 import action_to_parameters
 from cpg_actor.envs.cho2019_reference import REFERENCE_PARAMETERS
 from cpg_actor.ppo import PPOConfig
-from cpg_actor.runner import Runner
+from cpg_actor.training.runner import Runner
 
 
 def config(agent, iterations=2, **warm):
@@ -31,7 +31,7 @@ def config(agent, iterations=2, **warm):
 
 def mean_action(runner, obs):
     with torch.no_grad():
-        obs_n = runner.normalize(torch.as_tensor(obs), update=False)
+        obs_n = runner.policy.normalize(torch.as_tensor(obs), update=False)
         return runner.agent.actor(obs_n, runner.agent.initial_state(len(obs))).mean.numpy()
 
 
@@ -89,10 +89,10 @@ def test_warm_start_runs_only_for_a_new_run(tmp_path, monkeypatch):
 
 
 def test_eval_traces_of_cho2019_hold_the_cpg_signals():
-    from cpg_actor.commands.eval import evaluate
+    from cpg_actor.training.evaluation import evaluate_policy
 
     runner = Runner(config("cho2019"), None, tensorboard=False)
-    traces = evaluate(runner.policy, runner.config, 4, seed=5)
+    traces = evaluate_policy(runner.policy, runner.config, 4, seed=5)
     runner.close()
     steps = traces["time"].shape[0]
     assert steps == 100

@@ -9,7 +9,7 @@ from cpg_actor.cpg import CPGState
 from cpg_actor.envs import HopperConfig
 from cpg_actor.envs.hopper import robot_spec
 from cpg_actor.ppo import PPOConfig
-from cpg_actor.runner import Runner
+from cpg_actor.training.runner import Runner
 
 # tests/ppo/fake_env.py: pytest puts tests/ on sys.path (tests/ is not a package)
 from ppo.fake_env import FakeConfig, FakeHopperVectorEnv  # noqa: I001

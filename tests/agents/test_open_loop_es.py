@@ -11,13 +11,13 @@ import torch
 from cpg_actor.agents import get_agent_spec
 from cpg_actor.agents.gait_file import load_gait, write_gait
 from cpg_actor.agents.open_loop_es import CMASearch, ESConfig, Rollouts, episode_seeds
-from cpg_actor.checkpoint import load_checkpoint
 from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig, compose_config
+from cpg_actor.deploy import Policy, load_policy
 from cpg_actor.envs import HopperConfig
-from cpg_actor.es_runner import ESRunner
-from cpg_actor.evaluation import evaluate
-from cpg_actor.policy import Policy, load_policy
+from cpg_actor.training.checkpoint import load_checkpoint
+from cpg_actor.training.es_runner import ESRunner
+from cpg_actor.training.evaluation import evaluate
 
 # tests/ppo/fake_env.py: pytest puts tests/ on sys.path (tests/ is not a package)
 from ppo.fake_env import FakeHopperVectorEnv  # noqa: I001

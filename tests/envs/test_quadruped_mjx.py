@@ -167,13 +167,13 @@ def test_cpg_actor_trains_on_the_mjx_quadruped_from_the_cli(tmp_path, capsys):
 
 def test_a_rollout_step_on_the_mjx_quadruped_never_waits_for_the_device():
     """The quadruped's tensor face in the trainer's control step: nothing read on the host,
-    nothing copied from it (the hopper's test, tests/ppo/test_mjx_training.py, also crosses
+    nothing copied from it (the hopper's test, tests/training/test_mjx_training.py, also crosses
     episode ends)."""
     import jax
 
     from cpg_actor.config import apply_dict
     from cpg_actor.host_reads import host_reads
-    from cpg_actor.runner import Runner
+    from cpg_actor.training.runner import Runner
     from tiny import tiny_config
 
     config = tiny_config("cpg-actor")
@@ -181,13 +181,13 @@ def test_a_rollout_step_on_the_mjx_quadruped_never_waits_for_the_device():
     apply_dict(config, {"robot": "anymal", "env": {**CONFIG, "sim": "mjx"}}, "")
     runner = Runner(config, tensorboard=False)  # the step JAX compiled for the tests above
     try:
-        assert runner.sync_free
+        assert runner.rollout.sync_free
         runner.start_episodes()
         runner.collect()
         runner.storage.clear()
         with host_reads() as reads, jax.transfer_guard("disallow"):
             for _ in range(3):
-                runner.collect_step()
+                runner.rollout.step()
         assert reads == []
     finally:
         runner.close()

@@ -7,7 +7,7 @@ import pytest
 
 from cpg_actor.agents.start_gait import search_steps
 from cpg_actor.experiments.plan import ReproduceSettings, build_tasks, resolve_config
-from cpg_actor.runner import Runner
+from cpg_actor.training.runner import Runner
 from tiny import tiny_config
 
 

@@ -8,7 +8,7 @@ import pytest
 from cpg_actor.cli import main
 from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.transfer import kept, transfer_lines
-from cpg_actor.runner import Runner
+from cpg_actor.training.runner import Runner
 from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
 
 

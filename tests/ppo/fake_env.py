@@ -127,7 +127,7 @@ def fake_runner(agent: str = "mlp", **ppo):
     minibatches, unless ``ppo`` (any ``PPOConfig`` field) says otherwise."""
     from cpg_actor.config import TrainConfig
     from cpg_actor.ppo import PPOConfig
-    from cpg_actor.runner import Runner
+    from cpg_actor.training.runner import Runner
 
     settings = {"num_steps": 16, "num_epochs": 3, "num_minibatches": 2, **ppo}
     config = TrainConfig(

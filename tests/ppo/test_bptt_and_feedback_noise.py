@@ -8,7 +8,7 @@ from cpg_actor.agents.base import gaussian_log_prob
 from cpg_actor.config import TrainConfig
 from cpg_actor.ppo import PPOConfig
 from cpg_actor.ppo.algorithm import replay_states
-from cpg_actor.runner import Runner
+from cpg_actor.training.runner import Runner
 
 from .fake_env import FakeConfig, FakeHopperVectorEnv
 
@@ -115,7 +115,7 @@ def test_sampled_feedback_is_stored_after_the_action_and_scored_with_it():
     # the feedback was really sampled (not the MLP's mean) and the env got only the action
     assert (feedback - agent.feedback_mean(obs)).abs().mean() > 0.05
     runner.policy.reset(3)
-    step = runner.policy.act(runner.obs, deterministic=True)
+    step = runner.policy.act(runner.rollout.obs, deterministic=True)
     assert step.action.shape == (3, agent.action_dim)
     torch.testing.assert_close(step.agent.action[:, agent.action_dim :], step.agent.mean[:, 2:])
 

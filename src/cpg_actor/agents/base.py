@@ -231,7 +231,7 @@ class Agent(nn.Module):
 
     state_shape: tuple[int, ...] = (0,)
     # what the first axis of the state holds, one name per row (the exported policy's
-    # metadata, cpg_actor.export); none for a stateless agent
+    # metadata, cpg_actor.deploy.export); none for a stateless agent
     state_rows: tuple[str, ...] = ()
 
     def __init__(
@@ -277,8 +277,8 @@ class Agent(nn.Module):
 
     def observe(self, obs: Tensor, state: Tensor) -> Tensor:
         """The state to act from, given the *raw* (unnormalised) observation ``obs``: called
-        before each step (by :class:`cpg_actor.policy.Policy` and the exported control step),
-        so that the rollout storage keeps it. Default: the state as it is. The CPG-Actor
+        before each step (by :class:`cpg_actor.training.policy.Policy` and the exported control
+        step), so that the rollout storage keeps it. Default: the state as it is. The CPG-Actor
         writes its drive d here."""
         return state
 

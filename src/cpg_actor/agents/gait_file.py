@@ -70,7 +70,7 @@ def gait_text(gait: dict[str, Any]) -> str:
 def write_gait(path: str | Path, gait: dict[str, Any]) -> Path:
     """Write ``gait`` (a mapping of :data:`REQUIRED_KEYS` and more) to ``path`` atomically,
     after checking it as :func:`load_gait` would."""
-    from cpg_actor.checkpoint import atomic_write_text
+    from cpg_actor.files import atomic_write_text
 
     path = Path(path)
     gait = {"format": GAIT_FORMAT, **gait}

@@ -269,7 +269,7 @@ class Rollouts(NamedTuple):
 
 class _ControlStep(nn.Module):
     """The agent's deterministic control step without clipping: ``(obs, state) -> (mean
-    action, next state)``, as :class:`cpg_actor.policy.Policy` takes it (the open-loop CPG
+    action, next state)``, as :class:`cpg_actor.training.policy.Policy` takes it (the open-loop CPG
     ignores the observation but for the drive, which :meth:`observe` reads raw)."""
 
     def __init__(self, agent: nn.Module) -> None:

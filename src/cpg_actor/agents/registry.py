@@ -71,8 +71,8 @@ class AgentSpec:
     # it starts from agent_config.start_gait where one is set (the CPG agents, cho2019-warm,
     # mlp-warm): a comparison that counts the gait's search charges it its steps
     uses_start_gait: bool = False
-    # what trains it: "ppo" (cpg_actor.runner.Runner) or "es", the open-loop CMA-ES search
-    # (cpg_actor.es_runner.ESRunner)
+    # what trains it: "ppo" (cpg_actor.training.runner.Runner) or "es", the open-loop CMA-ES search
+    # (cpg_actor.training.es_runner.ESRunner)
     trainer: str = "ppo"
 
     def make_env(

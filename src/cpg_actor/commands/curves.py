@@ -180,8 +180,8 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     from matplotlib.figure import Figure
 
-    from cpg_actor.checkpoint import atomic_write_text
     from cpg_actor.config import parse_steps
+    from cpg_actor.files import atomic_write_text
     from cpg_actor.plots import save_figure, step_axis
 
     metrics = args.metric or ["eval/return"]

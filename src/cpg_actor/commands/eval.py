@@ -70,7 +70,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import TrainConfig, apply_dict, check_seed, parse_override
-    from cpg_actor.policy import load_policy
+    from cpg_actor.deploy import load_policy
+    from cpg_actor.training.evaluation import evaluate_policy
 
     check_seed(args.seed)
     run_dir = Path(args.run_dir)
@@ -112,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
         record_video(policy, config, Path(args.video), args.seed, args.overwrite)
         print(f"video in {args.video}")
         return 0
-    traces = evaluate(policy, config, args.episodes, seed=args.seed)
+    traces = evaluate_policy(policy, config, args.episodes, seed=args.seed)
 
     output.parent.mkdir(parents=True, exist_ok=True)
     tmp = output.with_name(f".{output.stem}.tmp{os.getpid()}.npz")
@@ -140,41 +141,12 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def evaluate(policy, config, episodes: int, seed: int) -> dict[str, np.ndarray]:
-    """Run ``episodes`` envs of the agent's own environment to the end of their first episode
-    with the mean action; return traces ``(T, E, ...)`` (rows after an env's episode ended are
-    NaN)."""
-    from cpg_actor.agents import get_agent_spec
-    from cpg_actor.evaluation import evaluate as run_episodes
-
-    env = get_agent_spec(config.agent).make_env(
-        episodes, config.env, config.env_threads, config.agent_config
-    )
-    try:
-        traces = run_episodes(
-            policy,
-            env,
-            seed=seed,
-            control_dt=float(config.env.control_dt),
-            max_steps=int(getattr(config.env, "episode_steps", 10_000)),
-        )
-    finally:
-        env.close()
-    traces["agent"] = np.array(config.agent)
-    # the motor's no-load speed (rad/s), drawn on the velocity panels of traces.png
-    traces["velocity_limit"] = np.array(float(config.env.velocity_limit))
-    cpg = getattr(policy.agent, "cpg", None)  # a CPG in the agent: its oscillators' names
-    if cpg is not None and "theta_dot" in traces:
-        traces["oscillator_names"] = np.array(cpg.topology.names, dtype=str)
-    return traces
-
-
 def episode_lines(traces: dict[str, np.ndarray]) -> list[str]:
     """The printed result of an evaluation: a line per episode (return, the env's metrics,
     steps), the means, and a footnote where a metric was undefined (NaN) for an episode: it
     prints as "—" and the mean is over the episodes that define it (how many is said)."""
-    from cpg_actor.evaluation import finite_mean
     from cpg_actor.plots import METRICS
+    from cpg_actor.training.evaluation import finite_mean
 
     names = [str(name) for name in traces["metric_names"]]  # the env's (hop_height)
     episodes = len(traces["episode_return"])
@@ -253,7 +225,7 @@ def training_curves_figure(rows: list[dict], metric_names=(), title: str = ""):
     from matplotlib.figure import Figure
 
     from cpg_actor.plots import METRICS, metric_label
-    from cpg_actor.progress import NOT_ENV_METRICS
+    from cpg_actor.training.progress import NOT_ENV_METRICS
 
     names = list(metric_names) or sorted(
         {key.removeprefix("eval/") for row in rows for key in row if key.startswith("eval/")}

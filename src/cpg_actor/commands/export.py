@@ -1,4 +1,4 @@
-"""`cpg-actor export`: a trained policy as one TorchScript or ONNX file (see cpg_actor.export)."""
+"""`cpg-actor export`: a trained policy as one TorchScript or ONNX file (`cpg_actor.deploy`)."""
 
 from __future__ import annotations
 
@@ -25,8 +25,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import TrainConfig
-    from cpg_actor.export import SUFFIXES, export_policy, sidecar_paths
-    from cpg_actor.policy import load_policy
+    from cpg_actor.deploy import load_policy
+    from cpg_actor.deploy.export import SUFFIXES, export_policy, sidecar_paths
 
     run_dir = Path(args.run_dir)
     if not run_dir.is_dir():

@@ -124,13 +124,13 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
 
-    from cpg_actor.checkpoint import atomic_write_text
     from cpg_actor.cpg.foot_space import FootSpaceMap
     from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map, quadruped_leg_cpg
     from cpg_actor.envs.quadruped import description as robot
     from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
-    from cpg_actor.evaluation import finite_mean
+    from cpg_actor.files import atomic_write_text
     from cpg_actor.plots import save_figure
+    from cpg_actor.training.evaluation import finite_mean
 
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         raise ValueError(f"--seconds must be a positive number, got {args.seconds}")

@@ -47,7 +47,7 @@ def build_policy(run: str | None, seed: int):
     from cpg_actor.agents import get_agent_spec
     from cpg_actor.agents.cpg_actor import CPGActorAgent
     from cpg_actor.config import TrainConfig
-    from cpg_actor.policy import Policy, load_policy
+    from cpg_actor.deploy import Policy, load_policy
     from cpg_actor.ppo.normalizer import RunningNormalizer
 
     if run is not None:
@@ -101,13 +101,13 @@ def markdown(result: dict, share: float | None, title: str) -> str:
 
 def run(args: argparse.Namespace) -> int:
 
-    from cpg_actor.checkpoint import atomic_write_text
     from cpg_actor.envs.torch_env import TorchVectorEnv
     from cpg_actor.experiments.gradient import (
         collect_rollout,
         feedback_score_share,
         truncation_study,
     )
+    from cpg_actor.files import atomic_write_text
 
     if args.envs < 1 or args.steps < 2:
         raise ValueError(f"--envs must be >= 1 and --steps >= 2, got {args.envs}, {args.steps}")

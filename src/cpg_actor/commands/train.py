@@ -13,7 +13,9 @@ from cpg_actor.config import (
     TrainConfig,
     compose_config,
     parse_steps,
+    without_compile_if_no_compiler,
 )
+from cpg_actor.config.presets import PRESETS
 from cpg_actor.envs.config import SIMULATORS
 from cpg_actor.envs.robots import ROBOTS, robot_env
 from cpg_actor.files import (
@@ -26,10 +28,8 @@ from cpg_actor.files import (
     remove_stale_temporaries,
     write_marker,
 )
-from cpg_actor.ppo.algorithm import cpp_compiler
-from cpg_actor.presets import PRESETS
-from cpg_actor.progress import evaluation_text, metrics_text
-from cpg_actor.run_lock import LOCK_NAME, RunLock
+from cpg_actor.training.progress import evaluation_text, metrics_text
+from cpg_actor.training.run_lock import LOCK_NAME, RunLock
 
 HELP = (
     "train an agent (cpg-actor, cpg-actor-paper, mlp, mlp-warm, cho2019-warm, ...) with PPO, "
@@ -142,18 +142,6 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
     return without_compile_if_no_compiler(config)
 
 
-def without_compile_if_no_compiler(config: TrainConfig) -> TrainConfig:
-    """``ppo.compile`` off, with a note, where no C++ compiler is installed."""
-    if config.ppo.compile and cpp_compiler() is None:
-        print(
-            "note: no C++ compiler found (g++, c++, clang++), so ppo.compile is off: the same "
-            "training with slower updates; install one (e.g. apt install g++) to compile",
-            file=sys.stderr,
-        )
-        config.ppo.compile = False
-    return config
-
-
 def _has_content(run_dir: Path) -> bool:
     """``run_dir`` holds something besides its lock file and marker."""
     return run_dir.is_dir() and any(p.name not in (LOCK_NAME, MARKER) for p in run_dir.iterdir())
@@ -209,9 +197,9 @@ def _searches(config: TrainConfig) -> bool:
 
 def _runner(config: TrainConfig, run_dir: Path, args: argparse.Namespace):
     if _searches(config):
-        from cpg_actor.es_runner import ESRunner as Runner
+        from cpg_actor.training.es_runner import ESRunner as Runner
     else:
-        from cpg_actor.runner import Runner
+        from cpg_actor.training.runner import Runner
 
     return Runner(
         config, run_dir, progress=not args.no_progress, progress_interval=args.progress_interval
@@ -219,7 +207,7 @@ def _runner(config: TrainConfig, run_dir: Path, args: argparse.Namespace):
 
 
 def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
-    from cpg_actor.runner import TrainingDiverged
+    from cpg_actor.training.runner import TrainingDiverged
 
     if args.resume:
         if args.run_dir is None:
@@ -350,7 +338,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         " ".join(
             [
                 f"mean episode return {episode_return:.3f}",
-                metrics_text(runner.episodes.env_metrics()),
+                metrics_text(runner.rollout.episodes.env_metrics()),
             ]
         ).rstrip()
         if episode_return == episode_return
@@ -384,7 +372,7 @@ def _logs_text(run_dir: Path) -> str:
 
 
 def _search_start_text(runner, run_dir: Path, args: argparse.Namespace) -> str:
-    """What a new open-loop search will do (cpg_actor.es_runner)."""
+    """What a new open-loop search will do (cpg_actor.training.es_runner)."""
     config, es = runner.config, runner.config.es
     lines = []
     if args.num_envs is not None:
@@ -433,7 +421,7 @@ def _resume_config(run_dir: Path) -> tuple[Path, TrainConfig]:
     """The checkpoint to resume from and the run's config, checked against each other: a
     missing ``config.yaml`` is rebuilt from the checkpoint; one edited since (any key but
     ``total_steps``) is refused, since the resumed run would not continue the same run."""
-    from cpg_actor.checkpoint import config_differences, resume_checkpoint
+    from cpg_actor.training.checkpoint import config_differences, resume_checkpoint
 
     checkpoint, data, notes = resume_checkpoint(run_dir)
     for note in notes:

@@ -50,7 +50,7 @@ from cpg_actor.cpg import CPGState, OscillatorParameters, hopf_step, hopper_cpg
 from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.hopper import check_real_tensor, real_actions
 from cpg_actor.envs.simulation import OBS_BOUND, OBS_NAMES
-from cpg_actor.envs.torch_env import EnvStep
+from cpg_actor.envs.torch_env import EnvStep, TensorEnv
 from cpg_actor.envs.vector import make_vector_env
 
 PARAMETER_NAMES = ("nu_HFE", "nu_KFE", "rho_HFE", "rho_KFE", "phi_HFE_KFE")
@@ -179,7 +179,7 @@ class CPGParameterVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.metadata = {**self.metadata, "render_fps": self.env.metadata["render_fps"]}
         self.state = self._initial_state(self.num_envs)
-        if hasattr(self.env, "step_tensors"):  # a device env: tensors in and out, no host copy
+        if isinstance(self.env, TensorEnv):  # a device env: tensors in and out, no host copy
             self.reset_tensors, self.step_tensors = self._reset_tensors, self._step_tensors
 
     # -- CPG (torch, on self.device) -------------------------------------------------------------

@@ -12,15 +12,20 @@ hopper's :class:`~cpg_actor.envs.HopperVectorEnv`, the Cho et al. CPG wrapper, a
 * ``robot`` (:class:`cpg_actor.robot.RobotSpec`), ``num_envs``, the single-env spaces,
   ``get_state`` / ``set_state`` (episodes in checkpoints) and ``close`` pass through.
 
-A simulator that runs on the CPU and speaks numpy pays one copy per step here. An env with a
-tensor face of its own (``reset_tensors`` / ``step_tensors``, as the MJX hopper,
-:class:`cpg_actor.envs.mjx.MjxHopperVectorEnv`) is called through it instead: its tensors come
-as they are (``torch.as_tensor`` does not copy a tensor already of the right type and device).
+What an env can do beyond that it declares by implementing a protocol, and the trainer reads it
+from :attr:`TorchVectorEnv.has_tensor_face` and :attr:`TorchVectorEnv.saves_state`:
+
+* :class:`TensorEnv`: a tensor face of its own (``reset_tensors`` / ``step_tensors``, as the
+  MJX hopper, :class:`cpg_actor.envs.mjx.MjxHopperVectorEnv`). It is called through it: its
+  tensors come as they are (``torch.as_tensor`` does not copy a tensor already of the right
+  type and device). A simulator that runs on the CPU and speaks numpy pays one copy per step.
+* :class:`SavableEnv`: it saves and restores its episodes in progress, so that a checkpoint
+  neither resets nor cuts them.
 """
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 import numpy as np
 import torch
@@ -38,6 +43,24 @@ class EnvStep(NamedTuple):
     episode_metrics: dict[str, Tensor]  # (N,) float64 each, NaN where no episode ended
     reward_terms: dict[str, Tensor]  # (N,) float64 each
     info: dict[str, Any]  # the wrapped env's info, as it gave it
+
+
+@runtime_checkable
+class TensorEnv(Protocol):
+    """An env whose own face takes and returns torch tensors on its device (module doc)."""
+
+    def reset_tensors(self, seed: int | list[int] | None = None) -> tuple[Tensor, dict]: ...
+
+    def step_tensors(self, actions: Tensor, check_finite: bool = True) -> EnvStep: ...
+
+
+@runtime_checkable
+class SavableEnv(Protocol):
+    """An env that saves and restores its episodes in progress (physics, clocks, RNGs)."""
+
+    def get_state(self) -> dict[str, Any]: ...
+
+    def set_state(self, state: dict[str, Any]) -> None: ...
 
 
 def _is_double(value: Any) -> bool:
@@ -60,6 +83,8 @@ class TorchVectorEnv:
         self.single_observation_space = env.single_observation_space
         self.single_action_space = env.single_action_space
         self.robot = env.robot
+        self.has_tensor_face = isinstance(env, TensorEnv)  # called through it (module doc)
+        self.saves_state = isinstance(env, SavableEnv)  # its episodes go into checkpoints
 
     def _tensor(self, value: Any, dtype: torch.dtype) -> Tensor:
         if not isinstance(value, Tensor):
@@ -67,7 +92,7 @@ class TorchVectorEnv:
         return torch.as_tensor(value, device=self.device).to(dtype)
 
     def reset(self, seed: int | None = None) -> tuple[Tensor, dict[str, Any]]:
-        if hasattr(self.unwrapped, "reset_tensors"):
+        if self.has_tensor_face:
             obs, info = self.unwrapped.reset_tensors(seed)
         else:
             obs, info = self.unwrapped.reset(seed=seed)
@@ -77,7 +102,7 @@ class TorchVectorEnv:
         """One step. ``check_finite=False`` lets an env with a tensor face skip its check of
         NaN or inf actions, a wait for the device at every step (the caller checks them);
         an env that takes numpy always checks them (they are on the host anyway)."""
-        if hasattr(self.unwrapped, "step_tensors"):
+        if self.has_tensor_face:
             out = self.unwrapped.step_tensors(torch.as_tensor(actions), check_finite=check_finite)
             if out.obs.device == self.device:
                 return out

@@ -37,7 +37,7 @@ from typing import Any
 from cpg_actor.experiments.plan import RunTask
 from cpg_actor.files import LOCK, RUN, clear_project_dir
 from cpg_actor.machine import git_commit
-from cpg_actor.run_lock import LOCK_NAME
+from cpg_actor.training.run_lock import LOCK_NAME
 
 MARKER = "reproduce_run.json"
 STAGES_FILE = "stages.json"
@@ -97,8 +97,9 @@ def select_stage_checkpoints(
 
 def trained_iteration(run_dir: Path) -> int | None:
     """The iteration ``train --resume`` would start from: that of the newest readable
-    checkpoint (:func:`cpg_actor.checkpoint.resume_checkpoint`); None when there is none."""
-    from cpg_actor.checkpoint import resume_checkpoint
+    checkpoint (:func:`cpg_actor.training.checkpoint.resume_checkpoint`); None when there is
+    none."""
+    from cpg_actor.training.checkpoint import resume_checkpoint
 
     try:
         _, data, _ = resume_checkpoint(Path(run_dir))

@@ -236,7 +236,7 @@ def _kde(values: np.ndarray, grid: np.ndarray) -> np.ndarray:
 def _history(run: Run, keys: tuple[str, ...]) -> list[tuple[int, int, dict[str, np.ndarray]]]:
     """``[(iteration, global_step, {key: values})]`` for up to ``MAX_HISTORY`` checkpoints,
     evenly spread over the run."""
-    from cpg_actor.checkpoint import load_checkpoint
+    from cpg_actor.training.checkpoint import load_checkpoint
 
     checkpoints = run.checkpoints()
     iterations = sorted(checkpoints)
@@ -265,7 +265,7 @@ PARAMETER_PANELS = (
 
 def _feedback_keys(run: Run) -> dict[str, str]:
     """The state_dict keys of the feedback MLP's last linear layer (``feedback.K.weight``)."""
-    from cpg_actor.checkpoint import load_checkpoint
+    from cpg_actor.training.checkpoint import load_checkpoint
 
     checkpoints = run.checkpoints()
     if not checkpoints:

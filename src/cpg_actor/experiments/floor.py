@@ -39,7 +39,7 @@ def open_loop_floor(env_config: Any, grid: dict | None = None) -> dict[str, Any]
 
 def write_floor(out: Path, env_config: Any) -> dict[str, Any]:
     """Compute the floor for ``env_config`` and save it in ``out`` (atomically)."""
-    from cpg_actor.checkpoint import atomic_write_text
+    from cpg_actor.files import atomic_write_text
 
     floor = open_loop_floor(env_config)
     floor["env"] = env_config.to_dict()

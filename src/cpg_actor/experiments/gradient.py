@@ -30,9 +30,9 @@ from torch import Tensor
 
 from cpg_actor.agents.base import gaussian_log_prob
 from cpg_actor.agents.cpg_actor import CPGActorAgent
-from cpg_actor.policy import Policy
 from cpg_actor.ppo.algorithm import replay_states
 from cpg_actor.ppo.storage import RolloutStorage
+from cpg_actor.training.policy import Policy
 
 # parameter group -> CPG field; "feedback" is the feedback network
 CPG_GROUPS = {

@@ -10,7 +10,7 @@ Definitions (also in ``docs/reproduction.md`` and in each report):
 * **desired position**: the joint position command the env actually tracked, i.e. the
   agent's command after the env clipped it to the action space (the joint limits); for Cho
   et al. ``nominal pose + x`` after that clip. Every agent's traces hold it as
-  ``desired_position`` (:func:`cpg_actor.evaluation.evaluate`);
+  ``desired_position`` (:func:`cpg_actor.training.evaluation.evaluate`);
 * **desired velocity** (every agent alike): the finite difference of the desired positions
   over the control period, ``(p[t] - p[t-1]) / dt`` (:func:`desired_velocity`). The first
   step of an episode has no previous command of the agent's (the env's reset pose is not

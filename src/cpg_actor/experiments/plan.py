@@ -148,8 +148,7 @@ def _override_keys(overrides: list[str]) -> set[str]:
 def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
     """The :class:`TrainConfig` ``cpg-actor train`` will build for one run (validates it)."""
     from cpg_actor.agents.start_gait import search_steps
-    from cpg_actor.commands.train import without_compile_if_no_compiler
-    from cpg_actor.config import compose_config
+    from cpg_actor.config import compose_config, without_compile_if_no_compiler
 
     agent, variant_overrides = variant_agent(variant)
     values = {"agent": agent, "seed": seed, "total_steps": settings.total_steps}

@@ -86,8 +86,8 @@ def trace_control_dt(traces: dict[str, np.ndarray]) -> float | None:
 
 def trace_joint_limits(traces: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray] | None:
     """The action space's bounds (rad, per joint) the traces' desired positions were clipped
-    to: ``action_low`` / ``action_high`` as :func:`cpg_actor.evaluation.evaluate` saves them;
-    for traces saved before it did, the hopper's joint limits when the traces are the
+    to: ``action_low`` / ``action_high`` as :func:`cpg_actor.training.evaluation.evaluate` saves
+    them; for traces saved before it did, the hopper's joint limits when the traces are the
     hopper's (joints HFE, KFE, or no joint names); None otherwise."""
     if "action_low" in traces and "action_high" in traces:
         return np.asarray(traces["action_low"], float), np.asarray(traces["action_high"], float)

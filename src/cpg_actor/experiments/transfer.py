@@ -22,16 +22,16 @@ SIMULATORS = ("mujoco", "pybullet")
 
 def evaluate_run(run_dir: Path, episodes: int, seed: int) -> dict[str, dict[str, float]]:
     """``{sim: {"return": mean, "hop_height": mean}}`` of a run's last checkpoint."""
-    from cpg_actor.commands.eval import evaluate
     from cpg_actor.config import TrainConfig
-    from cpg_actor.policy import load_policy
+    from cpg_actor.deploy import load_policy
+    from cpg_actor.training.evaluation import evaluate_policy
 
     config = TrainConfig.load(run_dir / "config.yaml")
     out: dict[str, Any] = {"trained_in": config.env.sim}
     for sim in SIMULATORS:
         config.env = config.env.replace(sim=sim)
         policy = load_policy(run_dir / "checkpoints" / "last.pt", env_config=config.env)
-        traces = evaluate(policy, config, episodes, seed=seed)
+        traces = evaluate_policy(policy, config, episodes, seed=seed)
         out[sim] = {
             "return": float(np.mean(traces["episode_return"])),
             "hop_height": float(np.nanmean(traces["hop_height"])),
@@ -41,8 +41,8 @@ def evaluate_run(run_dir: Path, episodes: int, seed: int) -> dict[str, dict[str,
 
 def write_transfer(out: Path, episodes: int = 5, seed: int = 1000, progress=print) -> Path:
     """Evaluate every run of ``out`` that has a last checkpoint; write ``TRANSFER_FILE``."""
-    from cpg_actor.checkpoint import atomic_write_text
     from cpg_actor.experiments.results import Results
+    from cpg_actor.files import atomic_write_text
 
     results = Results.load(Path(out))
     runs: dict[str, dict[str, Any]] = {}

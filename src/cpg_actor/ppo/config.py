@@ -74,7 +74,7 @@ class PPOConfig:
     # (``torch.compiler.set_stance(skip_guard_eval_unsafe=True)``; Runner.compiled_calls):
     # 0.1-0.4 ms per call: the throughput preset trains about 1.06x as fast on 2 cores
     # (benchmarks/guard_checks.py). The same compiled code runs, so the same numbers
-    # (tests/ppo/test_runner.py); false: checked at every call, as torch.compile does
+    # (tests/training/test_runner.py); false: checked at every call, as torch.compile does
     skip_guard_checks: bool = True
     # the gradient through the CPG (beyond the paper): the PPO loss replays each step's CPG
     # state from the state stored k - 1 steps earlier, so the gradient reaches the CPG and

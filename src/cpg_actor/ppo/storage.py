@@ -114,8 +114,8 @@ class RolloutStorage:
     def add_policy_step(
         self, acted, rewards: Tensor, terminated: Tensor, truncated: Tensor, final_values: Tensor
     ) -> None:
-        """Store one :class:`cpg_actor.policy.PolicyStep` (what the agent saw and drew) with
-        the env's outcome of it."""
+        """Store one :class:`cpg_actor.training.policy.PolicyStep` (what the agent saw and
+        drew) with the env's outcome of it."""
         step = acted.agent
         self.add(
             observations=acted.observation,

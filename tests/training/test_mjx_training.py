@@ -2,7 +2,7 @@
 kind of agent trains, the env's tensors reach PPO without numpy, a control step of the rollout
 never reads a value on the host, the evaluation runs on MJX envs on the device with the
 numbers of the numpy loop and changes nothing that is trained (resume on MJX:
-tests/ppo/test_checkpoint_episodes.py)."""
+tests/training/test_checkpoint_episodes.py)."""
 
 import numpy as np
 import pytest
@@ -17,10 +17,10 @@ import jax  # noqa: E402
 
 from cpg_actor.envs import make_vector_env  # noqa: E402
 from cpg_actor.envs.mjx.vector import MjxHopperVectorEnv  # noqa: E402
-from cpg_actor.evaluation import CHECK_EVERY, evaluate  # noqa: E402
 from cpg_actor.host_reads import host_reads  # noqa: E402
-from cpg_actor.policy import Policy  # noqa: E402
-from cpg_actor.runner import Runner  # noqa: E402
+from cpg_actor.training.evaluation import CHECK_EVERY, evaluate  # noqa: E402
+from cpg_actor.training.policy import Policy  # noqa: E402
+from cpg_actor.training.runner import Runner  # noqa: E402
 from tiny import tiny_config  # noqa: E402  (tests/tiny.py)
 
 
@@ -80,25 +80,26 @@ def test_a_rollout_step_never_waits_for_the_device(agent):
     config.env.episode_steps = 3
     runner = Runner(config, tensorboard=False)
     try:
-        assert runner.sync_free and runner.episodes.deferred
+        assert runner.rollout.sync_free and runner.rollout.episodes.deferred
         runner.start_episodes()
         runner.collect()  # compiles, and makes what the first step makes once
         runner.storage.clear()
-        logged = len(runner.episodes.recent["length"])
+        logged = len(runner.rollout.episodes.recent["length"])
         with host_reads() as reads, jax.transfer_guard("disallow"):
             for _ in range(7):
-                runner.collect_step()
+                runner.rollout.step()
         assert reads == []
-        assert len(runner.episodes.recent["length"]) == logged  # waiting on the device
-        runner.episodes.flush()
-        lengths = list(runner.episodes.recent["length"])
-        assert lengths[logged:] == [3.0] * 6 and np.isfinite(runner.episodes.recent["return"]).all()
+        assert len(runner.rollout.episodes.recent["length"]) == logged  # waiting on the device
+        episodes = runner.rollout.episodes
+        episodes.flush()
+        lengths = list(episodes.recent["length"])
+        assert lengths[logged:] == [3.0] * 6 and np.isfinite(episodes.recent["return"]).all()
     finally:
         runner.close()
 
 
 def test_nan_actions_on_mjx_stop_the_run_at_the_end_of_the_rollout():
-    from cpg_actor.runner import TrainingDiverged
+    from cpg_actor.training.runner import TrainingDiverged
 
     runner = Runner(mjx_config("mlp"), tensorboard=False)
     try:
@@ -117,7 +118,8 @@ def test_evaluation_on_the_device_equals_the_numpy_loop():
     """evaluate() without traces on an MJX env runs on the device: the numbers of the numpy
     loop exactly, and a fixed number of host reads, whatever the episode's length."""
     runner = Runner(mjx_config("cpg-actor"), tensorboard=False)
-    policy = Policy(runner.agent, runner.normalizer, runner.action_low, runner.action_high)
+    bounds = runner.policy.action_low, runner.policy.action_high
+    policy = Policy(runner.agent, runner.normalizer, *bounds)
     reads = {}
     try:
         for steps in (12, 24):  # one compilation: the episode length is a value
@@ -147,7 +149,7 @@ def test_evaluation_during_training_on_mjx_changes_nothing_that_is_trained():
                         tensorboard=False)  # fmt: skip
         try:
             runner.learn()
-            runs[interval] = (params(runner), list(runner.episodes.recent["return"]))
+            runs[interval] = (params(runner), list(runner.rollout.episodes.recent["return"]))
         finally:
             runner.close()
     for key, value in runs[1][0].items():
@@ -172,7 +174,7 @@ def test_training_on_the_gpu_keeps_every_tensor_there():
     try:
         assert runner.env.unwrapped.device.type == "cuda"
         runner.learn()
-        assert runner.obs.is_cuda and runner.agent_state.is_cuda
+        assert runner.rollout.obs.is_cuda and runner.policy.state.is_cuda
         assert all(p.is_cuda and torch.isfinite(p).all() for p in runner.agent.parameters())
         hold = torch.tensor([[0.4, -0.8]] * 2, device="cuda")
         out = runner.env.step(hold)  # DLPack both ways: every tensor stays on the GPU

@@ -20,18 +20,17 @@ import numpy as np
 import pytest
 
 from cpg_actor.agents import get_agent_spec
-from cpg_actor.commands.eval import evaluate as eval_command_evaluate
 from cpg_actor.config import TrainConfig, apply_dict
-from cpg_actor.evaluation import evaluate
-from cpg_actor.export import export_policy
-from cpg_actor.policy import load_policy
-from cpg_actor.runner import Runner
+from cpg_actor.deploy import load_policy
+from cpg_actor.deploy.export import export_policy
+from cpg_actor.training.evaluation import evaluate, evaluate_policy
+from cpg_actor.training.runner import Runner
 from tiny import tiny_config  # tests/tiny.py
 
 ort = pytest.importorskip("onnxruntime")
 pytest.importorskip("onnxscript")
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "deploy_onnx.py"
+EXAMPLE = Path(__file__).resolve().parents[2] / "examples" / "deploy_onnx.py"
 SEED = 1000
 
 
@@ -117,7 +116,7 @@ def test_the_example_scores_the_evaluations_return(
         return
     # `cpg-actor eval RUN --episodes 1 --seed SEED`, the PyTorch policy
     policy = load_policy(policy_path.parents[1], run_config=config)
-    pytorch = eval_command_evaluate(policy, config, 1, seed=SEED)["episode_return"][0]
+    pytorch = evaluate_policy(policy, config, 1, seed=SEED)["episode_return"][0]
     assert total == pytest.approx(pytorch, rel=1e-2)
 
 

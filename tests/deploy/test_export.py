@@ -15,13 +15,13 @@ import torch
 import cpg_actor
 from cpg_actor.cli import main
 from cpg_actor.config import apply_dict
+from cpg_actor.deploy import load_policy
+from cpg_actor.deploy.export import OBSERVATION_SOURCES, export_policy, read_metadata, sidecar_paths
 from cpg_actor.envs import HopperConfig, HopperVectorEnv
 from cpg_actor.envs.actuator import Actuator
 from cpg_actor.envs.quadruped import QuadrupedConfig
 from cpg_actor.envs.robots import robot_env
-from cpg_actor.export import OBSERVATION_SOURCES, export_policy, read_metadata, sidecar_paths
-from cpg_actor.policy import load_policy
-from cpg_actor.runner import Runner
+from cpg_actor.training.runner import Runner
 from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
 
 

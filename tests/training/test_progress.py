@@ -3,8 +3,8 @@ finished, the ETA from those iterations only, and no ``nan`` return before an ep
 
 import math
 
-from cpg_actor import progress
-from cpg_actor.progress import PlainProgress, return_text
+from cpg_actor.training import progress
+from cpg_actor.training.progress import PlainProgress, return_text
 
 
 class Clock:

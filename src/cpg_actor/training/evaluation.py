@@ -6,7 +6,7 @@ envs, never updates the observation normaliser and draws no random numbers (the 
 is taken and the envs are reset with their own seed), so training is the same with or
 without it.
 
-On an env with a tensor face (MJX: ``reset_tensors`` / ``step_tensors``) an evaluation
+On an env with a tensor face (MJX: :class:`cpg_actor.envs.torch_env.TensorEnv`) an evaluation
 without traces stays on the env's device: the policy's tensors go to the env and its
 returns, lengths and episode metrics are summed there, with a look at the host only every
 :data:`CHECK_EVERY` steps (whether every episode has ended) instead of copying each step's
@@ -15,10 +15,14 @@ outputs to numpy. The numbers are those of the numpy loop (tested).
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 import numpy as np
 import torch
+
+from cpg_actor.envs.torch_env import TensorEnv
+from cpg_actor.training.seeding import EVAL_SEED_KEY, derived_seed
 
 
 def finite_mean(values) -> float:
@@ -68,7 +72,7 @@ def evaluate(
 ) -> dict[str, np.ndarray]:
     """Run every env of ``env`` to the end of its first episode with the mean action.
 
-    ``policy`` is a :class:`cpg_actor.policy.Policy` (or anything with its ``reset`` and
+    ``policy`` is a :class:`cpg_actor.training.policy.Policy` (or anything with its ``reset`` and
     ``act``); its recurrent state is reset here, its normaliser is not updated. Returns
     ``episode_return`` and ``length`` per env, the env's episode metrics (its
     ``info["episode_metrics"]``: ``hop_height`` for the hopper) per env, their names in
@@ -85,7 +89,7 @@ def evaluate(
     docstring); None: when the env has one and no traces are asked for.
     """
     if on_device is None:
-        on_device = not traces and hasattr(env, "step_tensors")
+        on_device = not traces and isinstance(env, TensorEnv)
     if on_device:
         if traces:
             raise ValueError("traces are recorded on the host: evaluate(on_device=False)")
@@ -135,6 +139,35 @@ def evaluate(
         if not active.any():
             break
     return _result(env, records, length, returns, metrics, standing, control_dt, traces)
+
+
+def evaluate_policy(policy, config, episodes: int, seed: int) -> dict[str, np.ndarray]:
+    """:func:`evaluate` on ``episodes`` envs of the agent's own environment, built from the
+    run's ``config`` (``cpg-actor eval``, the transfer study): traces ``(T, E, ...)`` (rows
+    after an env's episode ended are NaN), with the agent's name, the motor's speed limit and
+    the CPG's oscillator names."""
+    from cpg_actor.agents import get_agent_spec
+
+    env = get_agent_spec(config.agent).make_env(
+        episodes, config.env, config.env_threads, config.agent_config
+    )
+    try:
+        traces = evaluate(
+            policy,
+            env,
+            seed=seed,
+            control_dt=float(config.env.control_dt),
+            max_steps=int(getattr(config.env, "episode_steps", 10_000)),
+        )
+    finally:
+        env.close()
+    traces["agent"] = np.array(config.agent)
+    # the motor's no-load speed (rad/s), drawn on the velocity panels of traces.png
+    traces["velocity_limit"] = np.array(float(config.env.velocity_limit))
+    cpg = getattr(policy.agent, "cpg", None)  # a CPG in the agent: its oscillators' names
+    if cpg is not None and "theta_dot" in traces:
+        traces["oscillator_names"] = np.array(cpg.topology.names, dtype=str)
+    return traces
 
 
 def _run_on_device(policy, env, seed: int, max_steps: int):
@@ -254,3 +287,42 @@ def evaluation_row(policy, env, seed: int, control_dt: float, max_steps: int) ->
     for name in result["metric_names"]:  # the env's own (the hopper's hop height)
         row[f"eval/{name}"] = finite_mean(result[str(name)])
     return row
+
+
+class TrainingEvaluation:
+    """The evaluation during training, of both runners: one episode with the mean action on
+    each of ``config.eval_episodes`` envs of its own (built at the first evaluation; ``env``
+    replaces them), always reset with the run's evaluation seed, by a policy of its own
+    around the agent and the normaliser (the training envs' CPG states stay untouched)."""
+
+    def __init__(self, config: Any, spec: Any, env: Any = None) -> None:
+        self.config = config
+        self.spec = spec
+        self.env = env
+
+    def __call__(self, agent, normalizer, action_low, action_high) -> dict[str, float]:
+        """``eval/return``, ``eval/return_min``, ``eval/length``, ``eval/<metric>`` and the
+        seconds it took, ``time/eval``."""
+        from cpg_actor.training.policy import Policy
+
+        cfg = self.config
+        start = time.perf_counter()
+        if self.env is None:
+            self.env = self.spec.make_env(
+                cfg.eval_episodes, cfg.env, cfg.env_threads, cfg.agent_config
+            )
+        policy = Policy(agent, normalizer, action_low, action_high, cfg.ppo.normalize_observations)
+        row = evaluation_row(
+            policy,
+            self.env,
+            seed=derived_seed(cfg.seed, EVAL_SEED_KEY),
+            control_dt=float(cfg.env.control_dt),
+            max_steps=int(getattr(cfg.env, "episode_steps", 10_000)),
+        )
+        row["time/eval"] = time.perf_counter() - start
+        return row
+
+    def close(self) -> None:
+        if self.env is not None:
+            self.env.close()
+            self.env = None

@@ -1,6 +1,7 @@
 """A trained policy as one self-contained file for a robot's control loop: TorchScript or ONNX.
 
-The exported function is the deterministic control step of :class:`cpg_actor.policy.Policy`:
+The exported function is the deterministic control step of
+:class:`cpg_actor.training.policy.Policy`:
 
     (observation, state) -> (action, next_state)
 
@@ -52,7 +53,7 @@ import torch
 from torch import Tensor, nn
 
 from cpg_actor.files import naming, temporary_path
-from cpg_actor.policy import Policy
+from cpg_actor.training.policy import Policy
 
 FORMATS = ("torchscript", "onnx")
 SUFFIXES = {"torchscript": ".pt", "onnx": ".onnx"}
@@ -133,7 +134,7 @@ def sidecar_paths(path: Path) -> dict[str, Path]:
 
 def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict[str, str]:
     """What a control loop needs to run the exported step of ``policy`` (one loaded by
-    :func:`cpg_actor.policy.load_policy`, which knows its run and robot), key -> string
+    :func:`cpg_actor.training.policy.load_policy`, which knows its run and robot), key -> string
     (``docs/training.md``, "Export", has the table)."""
     from cpg_actor import __version__
     from cpg_actor.envs.actuator import Actuator
@@ -142,7 +143,7 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
     config, robot = policy.config, policy.robot
     if config is None or robot is None:
         raise ValueError(
-            "the policy knows no run or robot; load it with cpg_actor.policy.load_policy"
+            "the policy knows no run or robot; load it with cpg_actor.training.policy.load_policy"
         )
     env = config.env
     actuator = Actuator.from_config(env)

@@ -5,12 +5,12 @@ import json
 import pytest
 import torch
 
-from cpg_actor.checkpoint import load_checkpoint
 from cpg_actor.config import TrainConfig
 from cpg_actor.ppo import PPO, PPOConfig
-from cpg_actor.runner import Runner, TrainingDiverged
-
-from .fake_env import FakeConfig, FakeHopperVectorEnv
+from cpg_actor.training.checkpoint import load_checkpoint
+from cpg_actor.training.runner import Runner, TrainingDiverged
+from cpg_actor.training.threads import update_threads
+from ppo.fake_env import FakeConfig, FakeHopperVectorEnv
 
 NUM_ENVS, NUM_STEPS = 4, 16
 
@@ -72,13 +72,13 @@ def test_update_on_several_threads_is_reproducible():
             env=FakeConfig(episode_steps=40, fall_probability=0.02), update_threads=2,
         )  # fmt: skip
         r = runner(cfg)
-        assert r.update_threads() == 2
+        assert update_threads(r.config) == 2
         r.learn()
         assert torch.get_num_threads() == cfg.torch_threads
         runs.append(params(r))
     assert_same(runs[0], runs[1])
     auto = config(1)  # minibatches of 32 samples: the update stays on torch_threads
-    assert runner(auto).update_threads() == auto.torch_threads
+    assert update_threads(auto) == auto.torch_threads
     with pytest.raises(ValueError, match="update_threads must be a positive integer or null"):
         TrainConfig(update_threads=0).validate()
 
@@ -91,30 +91,30 @@ def test_compiled_calls_skip_their_guard_checks_once_built_and_train_the_same(tm
     process (dynamo forgets every compiled function) makes the runner build and check them
     again for one iteration; forgotten behind its back, the next call is a clear error."""
     fast = runner(config(4, eval_interval=2, compile=True), tmp_path / "fast")
-    assert not fast.skips_guard_checks  # nothing built yet
+    assert not fast.compile_stance.skips_guard_checks  # nothing built yet
     fast.learn()
-    assert fast.skips_guard_checks
+    assert fast.compile_stance.skips_guard_checks
     fast_params, fast_row = params(fast), fast.last_row
 
     checked = runner(config(4, eval_interval=2, compile=True, skip_guard_checks=False),
                      tmp_path / "checked")  # fmt: skip
-    assert not fast.skips_guard_checks  # its compiled functions were forgotten
+    assert not fast.compile_stance.skips_guard_checks  # its compiled functions were forgotten
     checked.learn()
-    assert not checked.skips_guard_checks
+    assert not checked.compile_stance.skips_guard_checks
     assert_same(fast_params, params(checked))
     assert fast_row["losses/policy_loss"] == checked.last_row["losses/policy_loss"]
 
     fast.collect()  # built again, guards checked
     fast.update()
-    assert fast.skips_guard_checks
+    assert fast.compile_stance.skips_guard_checks
     torch.compiler.reset()  # behind the runner's back: its next call finds nothing built
     with pytest.raises(RuntimeError, match="train with --set ppo.skip_guard_checks=false"):
         fast.collect()
     PPO(fast.agent, PPOConfig(compile=True))
-    assert not fast.skips_guard_checks
+    assert not fast.compile_stance.skips_guard_checks
     eager = runner(config(1))
     eager.learn()
-    assert not eager.skips_guard_checks  # nothing compiled
+    assert not eager.compile_stance.skips_guard_checks  # nothing compiled
 
 
 @pytest.mark.parametrize("agent", ["cpg-actor", "mlp"])

@@ -13,7 +13,7 @@ from cpg_actor.config import TrainConfig, apply_dict, parse_override
 from cpg_actor.envs.quadruped import QuadrupedConfig
 from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
 from cpg_actor.ppo import PPOConfig
-from cpg_actor.runner import Runner
+from cpg_actor.training.runner import Runner
 from tiny import tiny_config
 
 

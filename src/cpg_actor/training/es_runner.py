@@ -13,7 +13,7 @@ Written in the run directory as a PPO run writes it: ``metrics.jsonl`` and Tenso
 generation (``es/best_return``, ``es/mean_return``, ``es/sigma``, the population's episode
 statistics as ``charts/*`` and ``reward_terms/*``, the CPG's physical parameters ``cpg/*``),
 the deterministic evaluation every ``eval_interval`` generations (and before the first and
-after the last; :func:`cpg_actor.evaluation.evaluate` on envs of its own, seeded as the PPO
+after the last; :func:`cpg_actor.training.evaluation.evaluate` on envs of its own, seeded as the PPO
 runner's, changing nothing that is searched), atomic checkpoints every
 ``checkpoint_interval`` generations and at the end, and ``gait.yaml``
 (:mod:`cpg_actor.agents.gait_file`) with each checkpoint once a generation has run.
@@ -46,7 +46,11 @@ from cpg_actor.agents.open_loop_es import (
     generation_steps,
     num_generations,
 )
-from cpg_actor.checkpoint import (
+from cpg_actor.config import TrainConfig
+from cpg_actor.device import resolve_device
+from cpg_actor.envs.torch_env import TorchVectorEnv
+from cpg_actor.ppo import RunningNormalizer
+from cpg_actor.training.checkpoint import (
     CHECKPOINT_FORMAT,
     CHECKPOINT_VERSION,
     atomic_save,
@@ -55,15 +59,10 @@ from cpg_actor.checkpoint import (
     rng_state,
     set_rng_state,
 )
-from cpg_actor.config import TrainConfig
-from cpg_actor.device import resolve_device
-from cpg_actor.envs.torch_env import TorchVectorEnv
-from cpg_actor.evaluation import evaluation_row, finite_mean
-from cpg_actor.policy import Policy
-from cpg_actor.ppo import RunningNormalizer
-from cpg_actor.progress import evaluation_text, make_progress
-from cpg_actor.run_log import RunLog
-from cpg_actor.runner import EVAL_SEED_KEY, derived_seed, seed_everything
+from cpg_actor.training.evaluation import TrainingEvaluation, finite_mean
+from cpg_actor.training.progress import evaluation_text, make_progress
+from cpg_actor.training.run_log import RunLog
+from cpg_actor.training.seeding import seed_everything
 
 
 def search_seed(seed: int) -> int:
@@ -75,7 +74,7 @@ class ESRunner:
     """Builds the open-loop agent, the search envs and CMA-ES from a :class:`TrainConfig`
     whose agent trains by search (``AgentSpec.trainer == "es"``), and searches.
 
-    The same face as :class:`cpg_actor.runner.Runner` for ``cpg-actor train``: ``learn``,
+    The same face as :class:`cpg_actor.training.runner.Runner` for ``cpg-actor train``: ``learn``,
     ``load_checkpoint``, ``close``, ``iteration`` (generations done), ``global_step``,
     ``train_wall``, ``last_checkpoint_path``. ``env`` and ``eval_env`` replace the agent
     spec's environments (tests).
@@ -96,7 +95,7 @@ class ESRunner:
         if self.spec.trainer != "es":
             raise ValueError(
                 f"agent '{config.agent}' is trained by {self.spec.trainer}, not by the "
-                "open-loop search; use cpg_actor.runner.Runner"
+                "open-loop search; use cpg_actor.training.runner.Runner"
             )
         self.config = config
         self.run_dir = Path(run_dir) if run_dir is not None else None
@@ -144,7 +143,7 @@ class ESRunner:
             es.popsize,
             search_seed(config.seed),
         )
-        self.eval_env = eval_env  # None: built at the first evaluation
+        self.evaluation = TrainingEvaluation(config, self.spec, eval_env)
         self.iteration = 0  # generations done
         self.global_step = 0  # env steps the search took
         self.best_step = 0  # global_step when the best candidate was found
@@ -277,29 +276,8 @@ class ESRunner:
 
     def run_evaluation(self) -> dict[str, float]:
         """Deterministic episodes of the kept agent on the evaluation envs, seeded as the PPO
-        runner's (``cpg_actor.runner``, module docstring)."""
-        cfg = self.config
-        start = time.perf_counter()
-        if self.eval_env is None:
-            self.eval_env = self.spec.make_env(
-                cfg.eval_episodes, cfg.env, cfg.env_threads, cfg.agent_config
-            )
-        policy = Policy(
-            self.agent,
-            self.normalizer,
-            self.action_low,
-            self.action_high,
-            cfg.ppo.normalize_observations,
-        )
-        row = evaluation_row(
-            policy,
-            self.eval_env,
-            seed=derived_seed(cfg.seed, EVAL_SEED_KEY),
-            control_dt=float(cfg.env.control_dt),
-            max_steps=episode_steps(cfg.env),
-        )
-        row["time/eval"] = time.perf_counter() - start
-        return row
+        runner's (:class:`cpg_actor.training.evaluation.TrainingEvaluation`)."""
+        return self.evaluation(self.agent, self.normalizer, self.action_low, self.action_high)
 
     def log_evaluation(self) -> dict[str, float]:
         """Evaluate now and log it alone (a row of the current generation)."""
@@ -384,7 +362,7 @@ class ESRunner:
 
     def load_checkpoint(self, path: Path) -> None:
         """Continue the search from ``path`` (the agent, CMA-ES, the best candidate, counters,
-        RNG streams). To act with the agent, see :func:`cpg_actor.policy.load_policy`."""
+        RNG streams). To act with the agent, see :func:`cpg_actor.training.policy.load_policy`."""
         data = load_checkpoint(path)
         check_checkpoint_run(path, data, self.config.agent)
         if "es" not in data:
@@ -411,6 +389,4 @@ class ESRunner:
     def close(self) -> None:
         self.run_log.close()
         self.env.close()
-        if self.eval_env is not None:
-            self.eval_env.close()
-            self.eval_env = None
+        self.evaluation.close()

@@ -8,7 +8,7 @@ import torch
 
 from cpg_actor.config import TrainConfig
 from cpg_actor.envs import HopperVectorEnv
-from cpg_actor.runner import Runner
+from cpg_actor.training.runner import Runner
 from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
 
 EPISODE = 12  # control steps: several episodes end inside the 6 iterations of 8 steps
@@ -33,9 +33,10 @@ def test_checkpoint_every_iteration_changes_nothing_and_cuts_no_episode(tmp_path
     try:
         for key, value in params(saved).items():
             assert torch.equal(value, params(plain)[key]), key
-        assert list(saved.episodes.recent["return"]) == list(plain.episodes.recent["return"])
+        recent = saved.rollout.episodes.recent
+        assert list(recent["return"]) == list(plain.rollout.episodes.recent["return"])
         # every episode ran to its time limit: 6 iterations x 8 steps = 4 episodes of 12
-        assert list(saved.episodes.recent["length"]) == [EPISODE] * 8
+        assert list(recent["length"]) == [EPISODE] * 8
         assert len(list((tmp_path / "saved" / "checkpoints").glob("iter_*.pt"))) == 7
     finally:
         saved.close()
@@ -85,11 +86,12 @@ def test_resume_from_a_middle_checkpoint_equals_the_uninterrupted_run(tmp_path, 
     try:
         for key, value in params(straight).items():
             assert torch.equal(value, params(resumed)[key]), key
-        assert torch.equal(straight.obs, resumed.obs)
-        assert torch.equal(straight.agent_state, resumed.agent_state)
-        assert list(straight.episodes.recent["return"]) == list(resumed.episodes.recent["return"])
+        assert torch.equal(straight.rollout.obs, resumed.rollout.obs)
+        assert torch.equal(straight.policy.state, resumed.policy.state)
+        recent = straight.rollout.episodes.recent
+        assert list(recent["return"]) == list(resumed.rollout.episodes.recent["return"])
         # episodes ended in both halves (6 iterations x 8 steps cross the 12-step episodes)
-        assert list(straight.episodes.recent["length"]) == [EPISODE] * 8
+        assert list(recent["length"]) == [EPISODE] * 8
         assert same_state(straight.env.get_state(), resumed.env.get_state())
     finally:
         straight.close()

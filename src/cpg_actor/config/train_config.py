@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
+import sys
 import types
 import typing
 from dataclasses import dataclass, field
@@ -22,6 +23,7 @@ from cpg_actor.agents.open_loop_es import ESConfig
 from cpg_actor.agents.warm_start import WarmStartConfig
 from cpg_actor.device import check_device_name
 from cpg_actor.files import atomic_write_text
+from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.ppo.config import PPOConfig
 
 # the largest seed: torch takes seeds below 2**64, but seeds pass through int64 tensors and
@@ -47,7 +49,7 @@ class TrainConfig:
 
     agent: str = "cpg-actor"  # a name in cpg_actor.agents.AGENTS
     robot: str = "hopper"  # hopper | anymal (cpg_actor.envs.robots); env holds its config
-    preset: str = "paper"  # the preset the run started from (cpg_actor.presets.PRESETS)
+    preset: str = "paper"  # the preset the run started from (cpg_actor.config.presets.PRESETS)
     seed: int = 0
     num_envs: int = 16  # x ppo.num_steps = 2,048 samples per update, as Baselines' ppo2
     total_steps: int = 500_000  # the quick start
@@ -58,7 +60,7 @@ class TrainConfig:
     search_steps: int = 0
     checkpoint_interval: int = 50  # iterations between checkpoints (and one at the end)
     # deterministic evaluation during training: every eval_interval iterations (0: never),
-    # one episode on each of eval_episodes envs of its own (cpg_actor.evaluation)
+    # one episode on each of eval_episodes envs of its own (cpg_actor.training.evaluation)
     eval_interval: int = 10
     eval_episodes: int = 5
     log_interval: int = 1  # iterations between TensorBoard / metrics.csv rows
@@ -88,7 +90,7 @@ class TrainConfig:
         from cpg_actor.agents import get_agent_spec
 
         get_agent_spec(self.agent)
-        from cpg_actor.presets import PRESETS
+        from cpg_actor.config.presets import PRESETS
 
         if self.preset not in PRESETS:
             raise ValueError(
@@ -205,7 +207,7 @@ def compose_config(
     command-line flags), then each ``KEY=VALUE`` of ``overrides`` (``--set``). Validated; a
     clear ValueError (or FileNotFoundError) names what is wrong."""
     from cpg_actor.agents import get_agent_spec
-    from cpg_actor.presets import preset_values
+    from cpg_actor.config.presets import preset_values
 
     file_data: dict[str, Any] = {}
     if config_file is not None:
@@ -236,6 +238,18 @@ def compose_config(
     if defaults:
         config = compose(defaults)
     config.validate()
+    return config
+
+
+def without_compile_if_no_compiler(config: TrainConfig) -> TrainConfig:
+    """``ppo.compile`` off, with a note, where no C++ compiler is installed."""
+    if config.ppo.compile and cpp_compiler() is None:
+        print(
+            "note: no C++ compiler found (g++, c++, clang++), so ppo.compile is off: the same "
+            "training with slower updates; install one (e.g. apt install g++) to compile",
+            file=sys.stderr,
+        )
+        config.ppo.compile = False
     return config
 
 

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from cpg_actor.envs.config import HopperConfig
-from cpg_actor.evaluation import evaluate
 from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.results import sent_velocity
+from cpg_actor.training.evaluation import evaluate
 
 
 class ScriptedPolicy:
