@@ -1,5 +1,5 @@
 """Training with and without dynamo's guard checks before each compiled call
-(``ppo.skip_guard_checks``, ``Runner.compiled_calls``), taking turns in one process.
+(``ppo.skip_guard_checks``, ``cpg_actor.training.compile_stance``), taking turns in one process.
 
 One compiled runner (default: the throughput preset's ``cpg-actor``) makes a warm-up
 iteration, then ``--pairs`` pairs of blocks of ``--iterations`` iterations, one block with the

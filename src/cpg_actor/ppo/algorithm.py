@@ -126,7 +126,7 @@ def compile_generation() -> int:
     """A count that changes whenever a new :class:`PPO` with ``compile`` makes dynamo
     forget every compiled function (``torch.compiler.reset()``): a runner whose compiled
     functions were built before must build them again, with their guards checked
-    (``Runner.compiled_calls``)."""
+    (``cpg_actor.training.compile_stance``)."""
     return _compiles_forgotten
 
 

@@ -71,7 +71,7 @@ class PPOConfig:
     # with ``compile`` on the CPU: once a runner has made one iteration (every compiled
     # function built for the shapes and settings its loop uses), dynamo stops checking their
     # guards before each compiled call of the rollout and the update
-    # (``torch.compiler.set_stance(skip_guard_eval_unsafe=True)``; Runner.compiled_calls):
+    # (``torch.compiler.set_stance(skip_guard_eval_unsafe=True)``; training/compile_stance.py):
     # 0.1-0.4 ms per call: the throughput preset trains about 1.06x as fast on 2 cores
     # (benchmarks/guard_checks.py). The same compiled code runs, so the same numbers
     # (tests/training/test_runner.py); false: checked at every call, as torch.compile does

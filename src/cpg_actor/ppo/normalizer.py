@@ -60,8 +60,8 @@ class RewardNormalizer(nn.Module):
     ``r / sqrt(var(G) + eps)``, clipped to ``+-clip``. The mean is not subtracted, so the sign
     of a reward is kept. Used on the training rewards only (logged returns stay raw). The
     statistics are buffers and travel with checkpoints; the per-env returns (``discounted``)
-    travel with the episodes in progress (``Runner.episodes_state``) and are reset with new
-    episodes (:meth:`reset`).
+    travel with the episodes in progress (``cpg_actor.training.rollout.Rollout.state``) and
+    are reset with new episodes (:meth:`reset`).
     """
 
     def __init__(
