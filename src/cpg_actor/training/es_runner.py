@@ -50,17 +50,25 @@ from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
 from cpg_actor.envs.torch_env import TorchVectorEnv
 from cpg_actor.ppo import RunningNormalizer
+from cpg_actor.training import run_checkpoint
 from cpg_actor.training.checkpoint import (
     CHECKPOINT_FORMAT,
     CHECKPOINT_VERSION,
-    atomic_save,
     check_checkpoint_run,
     load_checkpoint,
     rng_state,
     set_rng_state,
 )
 from cpg_actor.training.evaluation import TrainingEvaluation, finite_mean
-from cpg_actor.training.progress import evaluation_text, make_progress
+from cpg_actor.training.hooks import (
+    Checkpoints,
+    Evaluation,
+    Hook,
+    Iteration,
+    Logging,
+    Progress,
+    run_loop,
+)
 from cpg_actor.training.run_log import RunLog
 from cpg_actor.training.seeding import seed_everything
 
@@ -99,8 +107,6 @@ class ESRunner:
             )
         self.config = config
         self.run_dir = Path(run_dir) if run_dir is not None else None
-        self.show_progress = progress
-        self.progress_interval = progress_interval
         self.run_log = RunLog(self.run_dir, tensorboard)
         torch.set_num_threads(config.torch_threads)
         self.device = resolve_device(config.device)
@@ -143,7 +149,15 @@ class ESRunner:
             es.popsize,
             search_seed(config.seed),
         )
-        self.evaluation = TrainingEvaluation(config, self.spec, eval_env)
+        self.evaluation = TrainingEvaluation(
+            config, self.spec, self.agent, self.normalizer, self.action_low, self.action_high,
+            eval_env,
+        )  # fmt: skip
+        self.hooks: list[Hook] = [
+            Evaluation(self.evaluation),
+            Logging(ESRunner.scalars),
+            *([Progress(progress_interval, ESRunner.progress_fields)] if progress else []),
+        ]
         self.iteration = 0  # generations done
         self.global_step = 0  # env steps the search took
         self.best_step = 0  # global_step when the best candidate was found
@@ -188,70 +202,28 @@ class ESRunner:
         return rollouts, fitness
 
     def learn(self) -> None:
-        """Search to the budget (``num_generations``) or until CMA-ES stops."""
-        cfg = self.config
+        """Search to the budget (``num_generations``) or until CMA-ES stops, calling the
+        hooks (:mod:`cpg_actor.training.hooks`)."""
         if self.run_dir is not None:
             self.run_dir.mkdir(parents=True, exist_ok=True)
         fresh = self.iteration == 0 and not self._resumed
-        if fresh and cfg.eval_interval > 0:
-            self.log_evaluation()  # the starting gait
-        if fresh and self.run_dir is not None:
-            self.save_checkpoint()  # the starting gait: a "before"
-        progress, task = self._make_progress()
-        try:
-            while not self.finished:
-                start = time.perf_counter()
-                rollouts, fitness = self.generation()
-                seconds = time.perf_counter() - start
-                self.train_wall += seconds
-                last = self.finished
-                evaluation = None
-                if cfg.eval_interval > 0 and (self.iteration % cfg.eval_interval == 0 or last):
-                    evaluation = self.run_evaluation()
-                    self.last_evaluation = evaluation
-                row = self.scalars(rollouts, fitness, seconds)
-                if evaluation is not None:
-                    row.update(evaluation)
-                self.last_row = row
-                if self.iteration % cfg.log_interval == 0 or last or evaluation is not None:
-                    self.run_log.write(self.iteration, self.global_step, row)
-                    if self.iteration % cfg.histogram_interval == 0:
-                        self.run_log.histograms(self.global_step, self.agent.log_histograms())
-                if progress is not None:
-                    progress.update(
-                        task,
-                        completed=self.global_step,
-                        sps=f"{row['charts/SPS']:,.0f}",
-                        ret=f"best {self.search.best_fitness:.2f} mean {fitness.mean():.2f}",
-                        metrics=f"generation {self.iteration}/{self.num_generations} "
-                        f"sigma {self.search.sigma:.3g}",
-                        evaluation=evaluation_text(self.last_evaluation)
-                        if self.last_evaluation
-                        else "",
-                    )
-                at_interval = self.iteration % cfg.checkpoint_interval == 0
-                if self.run_dir is not None and (at_interval or last):
-                    self.save_checkpoint()
-        finally:
-            if progress is not None:
-                progress.stop()
-            self.run_log.flush()
+        run_loop(self, [*self.hooks, Checkpoints()], fresh, lambda: not self.finished)
 
-    def _make_progress(self):
-        if not self.show_progress:
-            return None, None
-        text = evaluation_text(self.last_evaluation) if self.last_evaluation else ""
-        return make_progress(
-            self.config.agent,
-            self.planned_steps,
-            self.global_step,
-            self.progress_interval,
-            text,
-        )
+    def train_iteration(self) -> Iteration:
+        """One generation, timed; its episodes and fitness go to the rows."""
+        start = time.perf_counter()
+        rollouts, fitness = self.generation()
+        seconds = time.perf_counter() - start
+        self.train_wall += seconds
+        sps = rollouts.env_steps / seconds if seconds > 0 else math.nan
+        timing = {"SPS": sps, "generation": seconds}
+        extras = {"rollouts": rollouts, "fitness": fitness}
+        return Iteration(self.iteration, self.finished, {}, timing, extras=extras)
 
     # -- logging -----------------------------------------------------------------------------
-    def scalars(self, rollouts: Rollouts, fitness: np.ndarray, seconds: float) -> dict[str, float]:
+    def scalars(self, it: Iteration) -> dict[str, float]:
         """One generation's row: the search, the population's episodes, the CPG kept."""
+        rollouts, fitness = it.extras["rollouts"], it.extras["fitness"]
         row = {
             "es/best_return": self.search.best_fitness,
             "es/generation_best_return": float(np.max(fitness)),
@@ -265,8 +237,8 @@ class ESRunner:
             row[f"charts/{name}"] = finite_mean(values)
         for name, values in sorted(rollouts.reward_terms.items()):
             row[f"reward_terms/{name}"] = float(values.mean())
-        row["charts/SPS"] = rollouts.env_steps / seconds if seconds > 0 else math.nan
-        row["time/generation"] = seconds
+        row["charts/SPS"] = it.timing["SPS"]
+        row["time/generation"] = it.timing["generation"]
         row["time/train_wall"] = self.train_wall
         # the CPG's physical parameters; not the Gaussian's std, which the search never uses
         row.update(
@@ -277,29 +249,21 @@ class ESRunner:
     def run_evaluation(self) -> dict[str, float]:
         """Deterministic episodes of the kept agent on the evaluation envs, seeded as the PPO
         runner's (:class:`cpg_actor.training.evaluation.TrainingEvaluation`)."""
-        return self.evaluation(self.agent, self.normalizer, self.action_low, self.action_high)
+        return self.evaluation()
 
-    def log_evaluation(self) -> dict[str, float]:
-        """Evaluate now and log it alone (a row of the current generation)."""
-        evaluation = self.run_evaluation()
-        self.last_evaluation = evaluation
-        self.run_log.write(
-            self.iteration,
-            self.global_step,
-            dict(evaluation, **{"time/train_wall": self.train_wall}),
-        )
-        return evaluation
+    def progress_fields(self, it: Iteration) -> dict[str, str]:
+        """The progress display's fields of a generation."""
+        fitness = it.extras["fitness"]
+        return {
+            "sps": f"{it.timing['SPS']:,.0f}",
+            "ret": f"best {self.search.best_fitness:.2f} mean {fitness.mean():.2f}",
+            "metrics": f"generation {self.iteration}/{self.num_generations} "
+            f"sigma {self.search.sigma:.3g}",
+        }
 
     # -- checkpoints and the gait file -------------------------------------------------------
-    def checkpoint_dir(self) -> Path:
-        assert self.run_dir is not None
-        return self.run_dir / "checkpoints"
-
     def last_checkpoint_path(self) -> Path | None:
-        if self.run_dir is None:
-            return None
-        path = self.checkpoint_dir() / "last.pt"
-        return path if path.exists() else None
+        return run_checkpoint.last_path(self.run_dir)
 
     def gait_path(self) -> Path | None:
         return None if self.run_dir is None else self.run_dir / GAIT_FILE
@@ -326,10 +290,8 @@ class ESRunner:
     def save_checkpoint(self) -> Path:
         """``checkpoints/iter_<generation>.pt`` and ``last.pt``, then ``gait.yaml`` (once a
         candidate has been evaluated)."""
-        data = self.state_dict()
-        path = self.checkpoint_dir() / f"iter_{self.iteration:06d}.pt"
-        atomic_save(data, path)
-        atomic_save(data, self.checkpoint_dir() / "last.pt")
+        assert self.run_dir is not None
+        path = run_checkpoint.save(self.state_dict(), self.run_dir, self.iteration)
         self.write_gait()
         return path
 
@@ -389,4 +351,5 @@ class ESRunner:
     def close(self) -> None:
         self.run_log.close()
         self.env.close()
-        self.evaluation.close()
+        for hook in self.hooks:
+            hook.close()

@@ -293,14 +293,18 @@ class TrainingEvaluation:
     """The evaluation during training, of both runners: one episode with the mean action on
     each of ``config.eval_episodes`` envs of its own (built at the first evaluation; ``env``
     replaces them), always reset with the run's evaluation seed, by a policy of its own
-    around the agent and the normaliser (the training envs' CPG states stay untouched)."""
+    around the run's agent and normaliser (the training envs' CPG states stay untouched)."""
 
-    def __init__(self, config: Any, spec: Any, env: Any = None) -> None:
+    def __init__(
+        self, config: Any, spec: Any, agent, normalizer, action_low, action_high, env: Any = None
+    ) -> None:
         self.config = config
         self.spec = spec
+        self.agent, self.normalizer = agent, normalizer
+        self.action_low, self.action_high = action_low, action_high
         self.env = env
 
-    def __call__(self, agent, normalizer, action_low, action_high) -> dict[str, float]:
+    def __call__(self) -> dict[str, float]:
         """``eval/return``, ``eval/return_min``, ``eval/length``, ``eval/<metric>`` and the
         seconds it took, ``time/eval``."""
         from cpg_actor.training.policy import Policy
@@ -311,7 +315,13 @@ class TrainingEvaluation:
             self.env = self.spec.make_env(
                 cfg.eval_episodes, cfg.env, cfg.env_threads, cfg.agent_config
             )
-        policy = Policy(agent, normalizer, action_low, action_high, cfg.ppo.normalize_observations)
+        policy = Policy(
+            self.agent,
+            self.normalizer,
+            self.action_low,
+            self.action_high,
+            cfg.ppo.normalize_observations,
+        )
         row = evaluation_row(
             policy,
             self.env,

@@ -3,7 +3,8 @@
 The run is built from its config apart from the loop (:mod:`cpg_actor.training.build`); the
 rollout carries the CPG state per env (:mod:`cpg_actor.training.rollout`); PPO updates
 (:class:`cpg_actor.ppo.PPO`); evaluation, logging, the progress display and checkpoints are
-hooks (:mod:`cpg_actor.training.hooks`, :mod:`cpg_actor.training.run_checkpoint`).
+hooks (:mod:`cpg_actor.training.hooks`; the checkpoints' content in
+:mod:`cpg_actor.training.run_checkpoint`).
 
 Evaluation during training. Every ``eval_interval`` iterations (and before the first and
 after the last) the policy's mean action runs one episode on each of ``eval_episodes``
@@ -32,12 +33,23 @@ import torch
 from cpg_actor.config import TrainConfig
 from cpg_actor.files import atomic_write_text
 from cpg_actor.ppo import NonFiniteLossError
+from cpg_actor.training import run_checkpoint
 from cpg_actor.training.build import build_ppo_run
 from cpg_actor.training.compile_stance import CompileStance
 from cpg_actor.training.evaluation import TrainingEvaluation
-from cpg_actor.training.hooks import Evaluation, Hook, Iteration, Logging, Progress, StopWhen
+from cpg_actor.training.hooks import (
+    Checkpoints,
+    Evaluation,
+    Hook,
+    Iteration,
+    Logging,
+    Progress,
+    StopWhen,
+    ppo_progress,
+    ppo_row,
+    run_loop,
+)
 from cpg_actor.training.rollout import NonFiniteActionsError, Rollout
-from cpg_actor.training.run_checkpoint import Checkpoints
 from cpg_actor.training.run_log import RunLog
 from cpg_actor.training.seeding import WARM_START_SEED_KEY, derived_seed
 from cpg_actor.training.threads import update_threads
@@ -83,12 +95,14 @@ class Runner:
         self.reward_normalizer, self.ppo, self.storage = run.reward_normalizer, run.ppo, run.storage
         self.rollout = Rollout(config, run)
         self.compile_stance = CompileStance(config.ppo, self.device)
-        self.evaluation = Evaluation(TrainingEvaluation(config, self.spec, eval_env))
-        self.checkpoints = Checkpoints()
+        low, high = self.policy.action_low, self.policy.action_high
+        self.evaluation = TrainingEvaluation(
+            config, self.spec, self.agent, self.normalizer, low, high, eval_env
+        )
         self.hooks: list[Hook] = [
-            self.evaluation,
-            Logging(),
-            *([Progress(progress_interval)] if progress else []),
+            Evaluation(self.evaluation),
+            Logging(ppo_row),
+            *([Progress(progress_interval, ppo_progress)] if progress else []),
             *hooks,
         ]
         self.iteration = 0
@@ -115,19 +129,14 @@ class Runner:
         if not self.rollout.started:
             self.start_episodes()
         stop = [StopWhen(stop_when)] if stop_when is not None else []
-        hooks = [*self.hooks, *stop, self.checkpoints]  # checkpoints save what the rest decided
-        try:
-            for hook in hooks:
-                hook.start(self, fresh)
-            while self.iteration < self.config.num_iterations:
-                it = self.train_iteration()
-                for hook in hooks:
-                    hook.iteration(self, it)
-                if it.stop:
-                    break
-        finally:
-            for hook in hooks:
-                hook.end(self)
+        hooks = [*self.hooks, *stop, Checkpoints()]  # checkpoints save what the rest decided
+        run_loop(self, hooks, fresh, lambda: self.iteration < self.config.num_iterations)
+
+    @property
+    def planned_steps(self) -> int:
+        """The run's env steps at its end (its start gait's search counted)."""
+        cfg = self.config
+        return cfg.search_steps + cfg.num_iterations * cfg.steps_per_iteration
 
     def train_iteration(self) -> Iteration:
         """One rollout and one PPO update; the counters advance."""
@@ -211,26 +220,27 @@ class Runner:
 
     def run_evaluation(self) -> dict[str, float]:
         """Deterministic episodes on the evaluation envs, now (see the module docstring)."""
-        return self.evaluation.evaluate(self)
+        return self.evaluation()
 
     # -- checkpoints (cpg_actor.training.run_checkpoint) -----------------------------------
     def last_checkpoint_path(self) -> Path | None:
-        return self.checkpoints.last_path(self)
+        return run_checkpoint.last_path(self.run_dir)
 
     def state_dict(self) -> dict[str, Any]:
-        return self.checkpoints.state(self)
+        return run_checkpoint.ppo_state(self)
 
     def save_checkpoint(self) -> Path:
-        return self.checkpoints.save(self)
+        assert self.run_dir is not None
+        return run_checkpoint.save(self.state_dict(), self.run_dir, self.iteration)
 
     def load_checkpoint(self, path: Path) -> None:
         """Continue training from ``path``. To act with a trained agent, see
         :func:`cpg_actor.deploy.load_policy`."""
-        self.checkpoints.load(self, path)
+        run_checkpoint.load_ppo_state(self, path)
         self._resumed = True
 
     def close(self) -> None:
         self.run_log.close()
         self.env.close()
-        for hook in (*self.hooks, self.checkpoints):
+        for hook in self.hooks:
             hook.close()
