@@ -344,6 +344,7 @@ COMPARISONS = (
     ("cpg-actor-unbounded", "cpg-actor-paper", "the paper's unbounded feedback vs bounded"),
     ("mlp", "cpg-actor", "MLP vs CPG-Actor, eq. 4 reward"),
     ("mlp-apex", "cpg-actor-apex", "MLP vs CPG-Actor, apex (hop-height) reward"),
+    ("cpg-actor", "cho2019-warm", "CPG-Actor vs Cho et al. from the same start gait"),
     ("cpg-actor", "cho2019-paper", "CPG-Actor vs Cho et al. as the paper has it"),
     ("cho2019-warm", "cho2019-paper", "the stronger Cho et al. vs the paper's"),
     ("cpg-actor", "cpg-actor-paper", "CPG-Actor vs the CPG-Actor in the paper's form"),
