@@ -11,9 +11,6 @@ neighbour process, or woken late, does fewer). The chunks shrink towards the end
 
 The result does not depend on the threads: a robot's substeps depend on nothing but its own
 state and controls, whichever thread runs them (``tests/envs/test_threaded_rollout.py``).
-Measured inside training on 2 cores: the simulation 7 % faster at 256 robots and about a
-third faster at 16 (``docs/results/throughput-measurements.md``, "The calling thread steps
-robots too").
 """
 
 from __future__ import annotations
@@ -123,10 +120,8 @@ def guided_chunks(num_robots: int, num_threads: int, min_size: int = 4) -> list[
     """``(first row, rows)`` of each chunk of a guided schedule: each chunk ``1 / (2 n)`` of
     the robots not yet handed out, at least ``min_size`` (256 robots on 2 threads: 64, 48,
     36, 27, 21, 15, 12, 9, 6, 5, 4, 4, 4, 1). The large chunks first keep the calls few, the
-    small ones last let the threads finish together. Against 4 fixed chunks per thread, in
-    training at 256 robots on 2 threads, the calling thread waits a fifth as long for the
-    helper and the same calls take up to 17 % less time (``benchmarks/rollout_threads.py``;
-    ``docs/results/throughput-measurements.md``, "The simulator's threads inside training")."""
+    small ones last let the threads finish together, so the calling thread seldom waits for
+    a helper (``benchmarks/rollout_threads.py`` compares it with fixed chunks)."""
     if num_threads < 1 or min_size < 1:
         raise ValueError(f"num_threads and min_size must be >= 1, got {num_threads} and {min_size}")
     chunks, start = [], 0

@@ -10,8 +10,7 @@ Same robot, same physics and the same task as the CPU simulators:
 * ``decimation`` substeps of ``physics_dt`` per control step (``lax.scan``), Euler
   integrator, elliptic friction cone, the configured foot friction; the Newton solver capped
   at ``mjx_iterations`` and ``mjx_ls_iterations`` (``HopperConfig``: 15 and 15, which give
-  the trajectories of MuJoCo's 100 and 50 at a quarter to three quarters of the cost on the
-  CPU, docs/gpu.md);
+  the trajectories of MuJoCo's 100 and 50 at a lower cost, docs/gpu.md);
 * the observation of :data:`cpg_actor.envs.simulation.OBS_NAMES`, the reward of paper eq. 4
   (or the apex reward) through the same functions as the CPU envs
   (:mod:`cpg_actor.envs.reward`, :mod:`cpg_actor.envs.robot.kinematics`, which accept JAX
