@@ -112,8 +112,8 @@ def step_seconds(runs: dict, rounds: int) -> dict:
     for _ in range(rounds):
         for caps, run in runs.items():
             env = run["env"]
-            dynamics, state = env.dynamics, env._state
-            extra = (env._episode,) if hasattr(env, "_episode") else ()
+            dynamics, state = env.dynamics, env.jax_state
+            extra = (env.episode,) if hasattr(env, "episode") else ()  # the hopper's
             batch = [jax.device_put(np.asarray(a, np.float32)) for a in run["actions"]]
             jax.block_until_ready(batch)
             start = time.perf_counter()

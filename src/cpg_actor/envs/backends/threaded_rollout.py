@@ -55,9 +55,10 @@ class ThreadedRollout:
             if chunk_size is None
             else even_chunks(self.num_robots, int(chunk_size))
         )
+        self.model = model
         self._models = [model] * self.num_robots
         self._pid = os.getpid()  # a forked child has none of the helper threads
-        self._steppers = [_ChunkStepper(model, self._models) for _ in range(self.num_threads)]
+        self._steppers = [ChunkStepper(model, self._models) for _ in range(self.num_threads)]
         self._jobs = [queue.SimpleQueue() for _ in range(self.num_threads - 1)]
         self._done: queue.SimpleQueue = queue.SimpleQueue()
         self._threads = [
@@ -152,8 +153,9 @@ class _Job(NamedTuple):
     nstep: int
 
 
-class _ChunkStepper:
-    """One thread's ``Rollout(nthread=0)`` and ``MjData``, stepping chunks until none is left."""
+class ChunkStepper:
+    """One thread's ``Rollout(nthread=0)`` and ``MjData``, stepping chunks until none is left
+    (``benchmarks/rollout_threads.py`` times its calls)."""
 
     def __init__(self, model: mujoco.MjModel, models: list[mujoco.MjModel]) -> None:
         self.roller = mj_rollout.Rollout(nthread=0)
@@ -171,7 +173,7 @@ class _ChunkStepper:
             )  # fmt: skip
 
 
-def _serve(jobs: queue.SimpleQueue, done: queue.SimpleQueue, stepper: _ChunkStepper) -> None:
+def _serve(jobs: queue.SimpleQueue, done: queue.SimpleQueue, stepper: ChunkStepper) -> None:
     """A helper thread: step chunks of each job until told to stop (None)."""
     while (job := jobs.get()) is not None:
         try:

@@ -128,7 +128,7 @@ class HopperDynamics:
         qpos = jnp.concatenate([hip[None], joint]).astype(self._empty.qpos.dtype)
         return self._empty.replace(qpos=qpos), key
 
-    def _control(self, data, desired):
+    def control(self, data, desired):
         """One control step of one robot: the actuator law, then ``mjx.step``, per substep;
         returns the new data and the joint torque, mean over the substeps (N m)."""
 
@@ -196,7 +196,7 @@ class HopperDynamics:
         config = self.config
         desired = self.desired_positions(actions)
         before = state.data
-        data, torque = jax.vmap(self._control)(before, desired)
+        data, torque = jax.vmap(self.control)(before, desired)
         qpos, qvel = data.qpos, data.qvel
         elapsed = state.elapsed + 1
 
