@@ -255,7 +255,10 @@ def bench_size(sim: str, num_envs: int, repeats: int, budget: int) -> dict:
         ceiling.close()
         row.update(env=env_rate, loop=loop_rate, rollout=roll_rate)
     else:
-        clients = [world.client for world in backend._worlds]
+        from cpg_actor.envs.backends.pybullet_backend import ROBOTS_PER_WORLD
+
+        first_of_each_world = range(0, num_envs, ROBOTS_PER_WORLD)
+        clients = [backend.handle(i)[0] for i in first_of_each_world]
 
         def run_bare() -> None:
             for _ in range(steps * config.decimation):

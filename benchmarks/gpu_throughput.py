@@ -67,7 +67,7 @@ def physics_and_env(num_envs: int, repeats: int) -> dict[str, float]:
     try:
         env.reset_tensors(seed=0)
         dynamics = env.dynamics
-        control = jax.jit(jax.vmap(dynamics._control))
+        control = jax.jit(jax.vmap(dynamics.control))
         phase = np.random.default_rng(0).uniform(0, 2 * np.pi, (num_envs, 1))
         draws = [  # one 2 Hz period of 50 control steps
             np.array([0.4, -0.8]) + np.array([0.35, -0.7]) * np.sin(2 * np.pi * k / 50 + phase)
@@ -76,7 +76,7 @@ def physics_and_env(num_envs: int, repeats: int) -> dict[str, float]:
         draws = [d.astype(np.float32) for d in draws]
         desired = [jax.device_put(d, env.jax_device) for d in draws]
         actions = [torch.from_numpy(d).to(env.device) for d in draws]
-        data, count = [env._state.data], [0]
+        data, count = [env.jax_state.data], [0]
 
         def physics():
             count[0] += 1

@@ -83,7 +83,7 @@ class CallRecorder:
         self.inputs: list[tuple] = []
         self._caller = threading.get_ident()
         self._current: dict | None = None
-        stepper_call = threaded_rollout._ChunkStepper.__call__
+        stepper_call = threaded_rollout.ChunkStepper.__call__
         call = rollout.rollout
         recorder = self
 
@@ -107,11 +107,11 @@ class CallRecorder:
             self.calls.append(record)
 
         self._restore = stepper_call
-        threaded_rollout._ChunkStepper.__call__ = timed_stepper
+        threaded_rollout.ChunkStepper.__call__ = timed_stepper
         rollout.rollout = timed_call
 
     def stop(self) -> None:
-        threaded_rollout._ChunkStepper.__call__ = self._restore
+        threaded_rollout.ChunkStepper.__call__ = self._restore
         if "rollout" in vars(self.rollout):  # the instance attribute: the class's method again
             del self.rollout.rollout
 
@@ -171,15 +171,16 @@ def fixed_chunk_rollout(
 ) -> threaded_rollout.ThreadedRollout:
     """A rollout of the same robots and threads with 4 fixed chunks per thread (the schedule
     before the guided one)."""
-    model = rollout._steppers[0].models[0]
     size = max(1, -(-rollout.num_robots // (4 * rollout.num_threads)))
-    return threaded_rollout.ThreadedRollout(model, rollout.num_robots, rollout.num_threads, size)
+    return threaded_rollout.ThreadedRollout(
+        rollout.model, rollout.num_robots, rollout.num_threads, size
+    )
 
 
 def env_rollout(env) -> threaded_rollout.ThreadedRollout:
     """The ``ThreadedRollout`` of a MuJoCo env: the hopper's backend's or the quadruped's."""
     for holder in (getattr(getattr(env, "sim", None), "backend", None), env):
-        stepper = getattr(holder, "_rollout", None)
+        stepper = getattr(holder, "stepper", None)
         if isinstance(stepper, threaded_rollout.ThreadedRollout):
             return stepper
     raise SystemExit(f"{type(env).__name__} does not step with ThreadedRollout")

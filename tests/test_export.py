@@ -14,26 +14,13 @@ import torch
 
 import cpg_actor
 from cpg_actor.cli import main
-from cpg_actor.config import apply_dict
 from cpg_actor.envs import HopperConfig, HopperVectorEnv
 from cpg_actor.envs.actuator import Actuator
 from cpg_actor.envs.quadruped import QuadrupedConfig
 from cpg_actor.envs.robots import robot_env
 from cpg_actor.export import OBSERVATION_SOURCES, export_policy, read_metadata, sidecar_paths
 from cpg_actor.policy import load_policy
-from cpg_actor.runner import Runner
-from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
-
-
-def trained_run(path, agent, robot="hopper", **changes):
-    """A tiny training run, with its config.yaml as `cpg-actor train` writes it."""
-    config = tiny_config(agent)
-    apply_dict(config, {"robot": robot, **changes}, "")
-    runner = Runner(config, run_dir=path, tensorboard=False)
-    runner.learn()
-    runner.close()
-    config.save(path / "config.yaml")
-    return path
+from tiny import trained_run  # tests/tiny.py (pytest puts tests/ on sys.path)
 
 
 @pytest.fixture(scope="module")

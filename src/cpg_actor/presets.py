@@ -7,16 +7,16 @@ saved in the run's ``config.yaml`` (``preset``).
 * ``paper``: OpenAI Baselines' ppo2 settings for MuJoCo tasks, the framework the paper used
   (every number and its source: :class:`cpg_actor.ppo.PPOConfig`). These are the dataclass
   defaults; the preset only adds ``ppo.compile`` (the same algorithm, its gradient step,
-  the rollout's policy step and reward scaling compiled by ``torch.compile``: several times
-  faster updates, faster rollouts, ``benchmarks/train_throughput.py``).
+  the rollout's policy step and reward scaling compiled by ``torch.compile`` into fewer,
+  fused kernels).
 * ``throughput``: the massively parallel recipe of legged_gym / rsl_rl (Rudin et al. 2021):
   many envs, short rollouts, few large minibatches, a learning rate adapted to a target KL.
   256 envs x 32 steps = 8,192 samples per iteration, 5 epochs of 4 minibatches (20 gradient
   steps per 8,192 samples; paper: 320 per 2,048), learning rate 1e-3 adapted to KL 0.01, the
   CPG and its feedback at a fixed 3e-4 outside that schedule (``ppo.cpg_learning_rate``: the
   KL the schedule follows hardly sees them, so its rate, up to 1e-2, would drive them). It
-  keeps a 2-core CPU near the physics ceiling (``benchmarks/train_throughput.py``) and learns
-  less per sample; what it reaches and when: ``docs/training.md``, "Presets".
+  spends a small CPU's time on the physics rather than the update and learns less per
+  sample; what it reaches and when: ``docs/training.md``, "Presets".
 * ``gpu``: the same recipe at GPU scale on the MJX simulator (``docs/gpu.md``): 4,096 envs x 24
   steps = 98,304 samples per iteration (legged_gym's rollout length for 4,096 envs), 5 epochs
   of 4 minibatches of 24,576, learning rate 1e-3 adapted to KL 0.01 and the CPG's own 3e-4

@@ -212,20 +212,17 @@ class Runner:
     def compiled_calls(self) -> Iterator[None]:
         """The context of the rollout's and the update's compiled calls (``ppo.compile``).
 
-        Before every call of a compiled function dynamo checks its guards (the inputs'
-        shapes, dtypes and strides, the global settings, the module attributes the function
-        read): 0.1-0.4 ms per call on 2 cores, more right after the simulator has left the
-        caches cold. Once this runner has made one iteration, every compiled function of its
-        loop is built for the shapes and settings the loop uses, and they do not change
-        during a run; with ``ppo.skip_guard_checks`` (the default, CPU only) the calls then
-        skip the checks (``torch.compiler.set_stance(skip_guard_eval_unsafe=True)``: the
-        guards that told the cached variants of a function apart are still checked, a call
-        that matches no variant raises instead of compiling one, and the compiled code
-        asserts its inputs' sizes and strides). The same compiled code runs, so training
-        computes the same numbers (``tests/ppo/test_runner.py``); the throughput preset
-        trains about 1.06x as fast on 2 cores (``benchmarks/guard_checks.py``). After dynamo
-        has forgotten its compiled functions (a new compiled :class:`PPO` in this process)
-        the next iteration checks them again."""
+        Before every call of a compiled function dynamo checks its guards (the inputs' shapes,
+        dtypes and strides, the global settings, the module attributes the function read), a
+        cost paid at every call. Once this runner has made one iteration, every compiled
+        function of its loop is built for the shapes and settings the loop uses, and they do not
+        change during a run; with ``ppo.skip_guard_checks`` (the default, CPU only) the calls
+        then skip the checks (``torch.compiler.set_stance(skip_guard_eval_unsafe=True)``: the
+        guards that told the cached variants of a function apart are still checked, a call that
+        matches no variant raises instead of compiling one, and the compiled code asserts its
+        inputs' sizes and strides). The same compiled code runs, so training computes the same
+        numbers. After dynamo has forgotten its compiled functions (a new compiled :class:`PPO`
+        in this process) the next iteration checks them again."""
         if not self.skips_guard_checks:
             yield
             return

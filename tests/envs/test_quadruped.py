@@ -6,9 +6,8 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-import torch
 
-from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
+from cpg_actor.cpg.gaits import open_loop_positions
 from cpg_actor.envs.backends.mujoco_backend import mujoco
 from cpg_actor.envs.quadruped import description as robot
 from cpg_actor.envs.quadruped import task
@@ -209,18 +208,13 @@ def _open_loop_trot(command: float, n: int = 4) -> dict:
     forward ``command``: the metrics of one 20 s episode (asserting it never falls)."""
     env = AnymalVectorEnv(n, {"command_range": (command, command)})
     env.reset(seed=0)
-    cpg = quadruped_cpg(env.config.control_dt, "trot").double()
-    joint_map = quadruped_joint_map(robot.NOMINAL_POSE).double()
-    state = cpg.initial_state(n)
-    drive = torch.full((n, 8), command, dtype=torch.float64)
+    steps, dt = env.config.episode_steps, env.config.control_dt
     ended = None
-    with torch.no_grad():
-        for _ in range(env.config.episode_steps):
-            out, state = cpg(state, drive)
-            _, _, terminated, truncated, info = env.step(joint_map(out.position).numpy())
-            assert not terminated.any()
-            if truncated.any():
-                ended = info["episode_metrics"]
+    for action in open_loop_positions("trot", dt, robot.NOMINAL_POSE, n, steps, command).numpy():
+        _, _, terminated, truncated, info = env.step(action)
+        assert not terminated.any()
+        if truncated.any():
+            ended = info["episode_metrics"]
     env.close()
     assert ended is not None
     assert np.all(ended["fell"] == 0.0) and np.all(ended["episode_seconds"] == 20.0)

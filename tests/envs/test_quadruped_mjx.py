@@ -10,7 +10,7 @@ import pytest
 import torch
 
 from cpg_actor.cli import main
-from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
+from cpg_actor.cpg.gaits import open_loop_positions
 from cpg_actor.envs.mjx import runtime
 from cpg_actor.envs.quadruped import description as robot
 from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
@@ -37,17 +37,9 @@ def envs():
     mjx.close()
 
 
-def trot_actions(steps: int) -> list[np.ndarray]:
+def trot_actions(steps: int) -> np.ndarray:
     """The open-loop trot preset at the drive of a 1 m/s command (it walks, ~0.3-0.7 m/s)."""
-    cpg = quadruped_cpg(0.02, "trot").double()
-    joint_map = quadruped_joint_map(robot.NOMINAL_POSE).double()
-    state, drive = cpg.initial_state(N), torch.full((N, 8), 1.0, dtype=torch.float64)
-    actions = []
-    with torch.no_grad():
-        for _ in range(steps):
-            out, state = cpg(state, drive)
-            actions.append(joint_map(out.position).numpy())
-    return actions
+    return open_loop_positions("trot", 0.02, robot.NOMINAL_POSE, N, steps, drive=1.0).numpy()
 
 
 @pytest.mark.slow

@@ -37,9 +37,8 @@ class AgentConfig:
     init_std: float = 1.0
     output_gain: float = 0.01  # orthogonal gain of the actor's / feedback's last layer
     # The feedback is bounded: xi = xi_scale * tanh(out[:N]) (rad/s), kappa = kappa_scale *
-    # tanh(out[N:]) (rad/s^2). Unbounded feedback (feedback_tanh=False: scale * out) learned a
-    # period-2 chatter of theta_dot through the observation loop and unstable returns; see
-    # docs/results/training-measurements.md, "Bounded feedback".
+    # tanh(out[N:]) (rad/s^2). Unbounded feedback (feedback_tanh=False: scale * out) can learn
+    # a period-2 chatter of theta_dot through the observation loop, and unstable returns.
     xi_scale: float = 4.0
     kappa_scale: float = 25.0
     feedback_tanh: bool = True
@@ -143,9 +142,8 @@ EXPLORATIONS = ("position", "cpg")
 
 def tanh(x: Tensor) -> Tensor:
     """tanh(x), computed as ``2 sigmoid(2x) - 1`` (the same function; within 2e-7 of
-    ``torch.tanh`` in float32). On the project's CPU (torch 2.13, AVX512) float32 ``tanh`` is
-    8-10x slower than ``sigmoid``; this form makes two tanh layers' forward and backward
-    1.2-1.3x faster (``benchmarks/activation.py``; end to end within the machine's noise)."""
+    ``torch.tanh`` in float32): on the CPU torch's float32 ``tanh`` is much slower than its
+    ``sigmoid`` (``benchmarks/activation.py`` compares them)."""
     return torch.sigmoid(2.0 * x) * 2.0 - 1.0
 
 

@@ -3,8 +3,8 @@
 See :mod:`cpg_actor.experiments.gradient`. Example (a trained run, and the untrained default
 CPG-Actor)::
 
-    cpg-actor gradient --run runs/cpg0 --out docs/results/gradient/trained.md
-    cpg-actor gradient --out docs/results/gradient/untrained.md
+    cpg-actor gradient --run runs/cpg0 --out gradient/trained.md
+    cpg-actor gradient --out gradient/untrained.md
 """
 
 from __future__ import annotations

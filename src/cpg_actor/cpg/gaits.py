@@ -166,3 +166,21 @@ def _gait_network(topology, psi, defaults, dt, initial, frozen, check_inputs, dt
 def quadruped_joint_map(nominal_pose: Sequence[float]) -> JointMap:
     """HFE and KFE of every leg driven by their oscillators, HAA held at the nominal pose."""
     return JointMap(nominal_pose, joints=OSCILLATOR_JOINTS)
+
+
+def open_loop_positions(
+    gait: str, dt: float, nominal_pose: Sequence[float], num_robots: int, steps: int, drive: float
+) -> Tensor:
+    """The desired joint positions ``(steps, num_robots, 12)``, float64, of the ``gait``
+    preset run open loop from its initial state at the constant drive ``drive`` (the
+    commanded forward speed, m/s): no learning, no feedback, the same for every robot."""
+    cpg = quadruped_cpg(dt, gait).double()
+    joint_map = quadruped_joint_map(nominal_pose).double()
+    state = cpg.initial_state(num_robots)
+    drives = torch.full((num_robots, cpg.num_oscillators), float(drive), dtype=torch.float64)
+    positions = []
+    with torch.no_grad():
+        for _ in range(steps):
+            out, state = cpg(state, drives)
+            positions.append(joint_map(out.position))
+    return torch.stack(positions)

@@ -16,7 +16,7 @@ Beyond ``v_max`` the back-EMF exceeds the supply voltage and the motor brakes th
 whatever it is asked; braking torque is never limited below ``tau_max``. Gravity or an
 impact can still push a joint past ``v_max``, as on a robot.
 
-``actuator_law="coast"`` (the law before 26 Nov 2026) instead clips ``tau_sat (1 - v / v_max)``
+``actuator_law="coast"`` (this project's earlier law) instead clips ``tau_sat (1 - v / v_max)``
 at 0 from below (and ``tau_sat (-1 - v / v_max)`` at 0 from above): beyond ``v_max`` the drive
 gives no torque in the direction of motion but is not made to brake. A real DC motor cannot
 do that (its back-EMF then exceeds the supply and drives a braking current); the option keeps
@@ -63,7 +63,7 @@ class Actuator:
 
     def torque_bounds(self, velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(lower, upper) torque the drive can produce at joint velocity ``velocity``."""
-        # minimum / maximum rather than clip: same result, a third of numpy's overhead
+        # minimum / maximum rather than clip: same result, less of numpy's overhead
         xp = namespace(velocity)
         limit, drop = self.torque_limit, velocity * (self.saturation_torque / self.velocity_limit)
         coast = self.law == "coast"  # never forced to brake: the line is clipped at 0

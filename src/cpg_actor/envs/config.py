@@ -29,10 +29,9 @@ class HopperConfig:
     foot_friction: float = 0.8  # Coulomb friction between foot and ground
     # sim="mjx" only: the constraint solver's iteration caps. MJX solves the batch together until
     # its slowest robot converges, and runs every line-search iteration batched, so these caps
-    # set its cost; MuJoCo's defaults are 100 and 50. 15 and 15 give the same
-    # trajectories and returns as 100 and 50, 1.3-4x faster (docs/gpu.md); 10 and 10 do not.
-    # 4 and 15 give the hopper's too but cost about as much (the cap seldom binds) and break
-    # the quadruped's trot; 15 and 4 break both (benchmarks/mjx_solver_iterations.py)
+    # set its cost; MuJoCo's defaults are 100 and 50. 15 and 15 are the lowest caps that give
+    # the same trajectories and returns as 100 and 50 for the hopper and the quadruped's trot
+    # (docs/gpu.md)
     mjx_iterations: int = 15
     mjx_ls_iterations: int = 15
     # -- actuator (PD on the desired position, torque-speed limited; see actuator.py) ---------
@@ -42,7 +41,7 @@ class HopperConfig:
     velocity_limit: float = 15.0  # rad/s, no-load speed: only braking torque beyond it
     saturation_torque: float = 80.0  # N m, stall torque: line tau_sat (1 - v / v_max)
     # beyond v_max: "dc-motor" brakes (back-EMF; run inside MuJoCo), "coast" gives no torque in
-    # the direction of motion (the law before 26 Nov 2026; numpy at every substep, slower)
+    # the direction of motion (numpy at every substep, outside MuJoCo's own loop)
     actuator_law: str = "dc-motor"
     # -- reward, paper eq. 4 (c1 >= 0, c2..c5 <= 0) --------------------------------------------
     c1: float = 1.0  # r1 = (c1 * max(v_hip, 0))^2: upward hip velocity, (m/s)^2

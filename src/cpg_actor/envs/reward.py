@@ -72,10 +72,10 @@ def apex_reward(
     turns from up (``com_velocity_before > 0``) to down (``com_velocity <= 0``) with the foot
     in the air (its lowest point above ``AIRBORNE``). In flight the centre of mass follows a
     parabola whatever the joints do, so each flight has one apex and pays once; its height is
-    paid above the highest any standing pose lifts it, so only a real hop pays. (Two earlier
-    versions were gamed by the MLP: paying the hip's height above its standing height, it
-    chattered on a straightened leg; paying the foot's clearance at each turn of the hip's
-    velocity, it folded and swung the leg in flight to turn the hip many times per flight.)"""
+    paid above the highest any standing pose lifts it, so only a real hop pays. Simpler forms
+    are gamed: paying the hip's height above its standing height rewards chattering on a
+    straightened leg; paying the foot's clearance at each turn of the hip's velocity rewards
+    swinging the leg in flight to turn the hip many times per flight."""
     xp = namespace(com_velocity, com_height)
     apex = (com_velocity_before > 0.0) & (com_velocity <= 0.0) & (foot_height > AIRBORNE)
     return xp.where(apex, weight * xp.maximum(com_height - highest_standing_com, 0.0), 0.0)

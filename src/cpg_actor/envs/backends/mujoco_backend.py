@@ -118,8 +118,9 @@ class MujocoBackend(Backend):
         if self.num_threads < 1:
             raise ValueError(f"num_threads must be >= 1, got {num_threads}")
         self.num_threads = min(self.num_threads, self.num_robots)
-        # chunks taken in turn: a thread slowed by a busy neighbour process hands work to others
-        self._rollout = ThreadedRollout(self.model, self.num_robots, self.num_threads)
+        # the threads that step the robots, chunks taken in turn: a thread slowed by a busy
+        # neighbour process hands work to others
+        self.stepper = ThreadedRollout(self.model, self.num_robots, self.num_threads)
         self._data = mujoco.MjData(self.model)  # for the queries between control steps
         nq, nv = self.model.nq, self.model.nv
         self.nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
@@ -152,7 +153,7 @@ class MujocoBackend(Backend):
             self._torque = np.zeros((*shape, self.model.nsensordata))  # actuatorfrc sensors
             self._substeps = substeps
         self._control[:] = desired[:, None, :]
-        self._rollout.rollout(
+        self.stepper.rollout(
             self._state, self._control, self._next, self._torque, CONTROL_SPEC, substeps
         )
         np.copyto(self._state, self._next[:, -1])
@@ -168,7 +169,7 @@ class MujocoBackend(Backend):
         for _ in range(substeps):
             torque = self.actuator(desired, self.joint_pos, self.joint_vel)
             self._torque_control[:, 0, 1:3] = torque
-            self._rollout.rollout(
+            self.stepper.rollout(
                 self._state, self._torque_control, self._one_step, None, TORQUE_SPEC, 1
             )
             np.copyto(self._state, self._one_step[:, 0])
@@ -250,6 +251,6 @@ class MujocoBackend(Backend):
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
-        if getattr(self, "_rollout", None) is not None:
-            self._rollout.close()
-            self._rollout = None
+        if getattr(self, "stepper", None) is not None:
+            self.stepper.close()
+            self.stepper = None

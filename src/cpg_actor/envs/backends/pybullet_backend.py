@@ -4,9 +4,8 @@ The robots of a world (one DIRECT client) stand at the same place on one ground 
 collision filtering lets every foot touch the ground and nothing else, so they never interact
 and each one behaves exactly as a robot alone in its world (bit for bit). One ``stepSimulation``
 per world advances its robots. Bullet's cost per robot grows with the number of robots in one
-world (about 11 us per robot-substep up to 16, 23 us at 64, 80 us at 256 on the benchmark
-machine), hence several small worlds. PyBullet holds the GIL, so threads would not help: for
-more throughput use the MuJoCo backend (or several processes).
+world beyond about 16, hence several small worlds. PyBullet holds the GIL, so threads would
+not help: for more throughput use the MuJoCo backend (or several processes).
 
 Set-up that makes PyBullet match the robot description and the MuJoCo backend:
 ``URDF_USE_INERTIA_FROM_FILE`` (else PyBullet recomputes inertias from shapes), default

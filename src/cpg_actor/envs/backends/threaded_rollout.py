@@ -11,9 +11,6 @@ neighbour process, or woken late, does fewer). The chunks shrink towards the end
 
 The result does not depend on the threads: a robot's substeps depend on nothing but its own
 state and controls, whichever thread runs them (``tests/envs/test_threaded_rollout.py``).
-Measured inside training on 2 cores: the simulation 7 % faster at 256 robots and about a
-third faster at 16 (``docs/results/throughput-measurements.md``, "The calling thread steps
-robots too").
 """
 
 from __future__ import annotations
@@ -58,9 +55,10 @@ class ThreadedRollout:
             if chunk_size is None
             else even_chunks(self.num_robots, int(chunk_size))
         )
+        self.model = model
         self._models = [model] * self.num_robots
         self._pid = os.getpid()  # a forked child has none of the helper threads
-        self._steppers = [_ChunkStepper(model, self._models) for _ in range(self.num_threads)]
+        self._steppers = [ChunkStepper(model, self._models) for _ in range(self.num_threads)]
         self._jobs = [queue.SimpleQueue() for _ in range(self.num_threads - 1)]
         self._done: queue.SimpleQueue = queue.SimpleQueue()
         self._threads = [
@@ -123,10 +121,8 @@ def guided_chunks(num_robots: int, num_threads: int, min_size: int = 4) -> list[
     """``(first row, rows)`` of each chunk of a guided schedule: each chunk ``1 / (2 n)`` of
     the robots not yet handed out, at least ``min_size`` (256 robots on 2 threads: 64, 48,
     36, 27, 21, 15, 12, 9, 6, 5, 4, 4, 4, 1). The large chunks first keep the calls few, the
-    small ones last let the threads finish together. Against 4 fixed chunks per thread, in
-    training at 256 robots on 2 threads, the calling thread waits a fifth as long for the
-    helper and the same calls take up to 17 % less time (``benchmarks/rollout_threads.py``;
-    ``docs/results/throughput-measurements.md``, "The simulator's threads inside training")."""
+    small ones last let the threads finish together, so the calling thread seldom waits for
+    a helper (``benchmarks/rollout_threads.py`` compares it with fixed chunks)."""
     if num_threads < 1 or min_size < 1:
         raise ValueError(f"num_threads and min_size must be >= 1, got {num_threads} and {min_size}")
     chunks, start = [], 0
@@ -157,8 +153,9 @@ class _Job(NamedTuple):
     nstep: int
 
 
-class _ChunkStepper:
-    """One thread's ``Rollout(nthread=0)`` and ``MjData``, stepping chunks until none is left."""
+class ChunkStepper:
+    """One thread's ``Rollout(nthread=0)`` and ``MjData``, stepping chunks until none is left
+    (``benchmarks/rollout_threads.py`` times its calls)."""
 
     def __init__(self, model: mujoco.MjModel, models: list[mujoco.MjModel]) -> None:
         self.roller = mj_rollout.Rollout(nthread=0)
@@ -176,7 +173,7 @@ class _ChunkStepper:
             )  # fmt: skip
 
 
-def _serve(jobs: queue.SimpleQueue, done: queue.SimpleQueue, stepper: _ChunkStepper) -> None:
+def _serve(jobs: queue.SimpleQueue, done: queue.SimpleQueue, stepper: ChunkStepper) -> None:
     """A helper thread: step chunks of each job until told to stop (None)."""
     while (job := jobs.get()) is not None:
         try:

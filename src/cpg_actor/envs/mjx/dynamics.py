@@ -10,8 +10,7 @@ Same robot, same physics and the same task as the CPU simulators:
 * ``decimation`` substeps of ``physics_dt`` per control step (``lax.scan``), Euler
   integrator, elliptic friction cone, the configured foot friction; the Newton solver capped
   at ``mjx_iterations`` and ``mjx_ls_iterations`` (``HopperConfig``: 15 and 15, which give
-  the trajectories of MuJoCo's 100 and 50 at a quarter to three quarters of the cost on the
-  CPU, docs/gpu.md);
+  the trajectories of MuJoCo's 100 and 50 at a lower cost, docs/gpu.md);
 * the observation of :data:`cpg_actor.envs.simulation.OBS_NAMES`, the reward of paper eq. 4
   (or the apex reward) through the same functions as the CPU envs
   (:mod:`cpg_actor.envs.reward`, :mod:`cpg_actor.envs.robot.kinematics`, which accept JAX
@@ -129,7 +128,7 @@ class HopperDynamics:
         qpos = jnp.concatenate([hip[None], joint]).astype(self._empty.qpos.dtype)
         return self._empty.replace(qpos=qpos), key
 
-    def _control(self, data, desired):
+    def control(self, data, desired):
         """One control step of one robot: the actuator law, then ``mjx.step``, per substep;
         returns the new data and the joint torque, mean over the substeps (N m)."""
 
@@ -197,7 +196,7 @@ class HopperDynamics:
         config = self.config
         desired = self.desired_positions(actions)
         before = state.data
-        data, torque = jax.vmap(self._control)(before, desired)
+        data, torque = jax.vmap(self.control)(before, desired)
         qpos, qvel = data.qpos, data.qvel
         elapsed = state.elapsed + 1
 

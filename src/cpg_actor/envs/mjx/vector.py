@@ -61,7 +61,7 @@ class MjxHopperVectorEnv(VectorEnv):
             raise ValueError(f"MjxHopperVectorEnv simulates with MJX, got sim={self.config.sim!r}")
         self.dynamics = dynamics_for(self.config)
         self.jax_device = jax.devices()[0]
-        self._episode = Episode.of(self.config, self.jax_device)
+        self.episode = Episode.of(self.config, self.jax_device)
         self.device = torch_device(self.jax_device)
         self.num_threads = None
         self._state: EnvState | None = None
@@ -87,12 +87,17 @@ class MjxHopperVectorEnv(VectorEnv):
         if self._state is None:
             raise RuntimeError(f"call reset() before {what}()")
 
+    @property
+    def jax_state(self) -> EnvState | None:
+        """Every env's state as the dynamics step takes it; None before the first reset."""
+        return self._state
+
     # -- the tensor face ----------------------------------------------------------------------
     def reset_tensors(self, seed: int | list[int] | None = None) -> tuple[torch.Tensor, dict]:
         """Reset every env (seeds as :meth:`reset`): the first observations, on ``device``."""
         self._check_open("reset")
         keys = reset_keys(seed, self.num_envs, self.jax_device)
-        self._state, obs = self.dynamics.reset(keys, self._episode)
+        self._state, obs = self.dynamics.reset(keys, self.episode)
         data = self._state.data
         info = {
             "hip_height": self._to_torch(data.qpos[:, 0]),
@@ -120,7 +125,7 @@ class MjxHopperVectorEnv(VectorEnv):
         return self._advance(self._to_jax(actions))
 
     def _advance(self, actions) -> EnvStep:
-        self._state, out = self.dynamics.step(self._state, actions, self._episode)
+        self._state, out = self.dynamics.step(self._state, actions, self.episode)
         tensors = jax.tree.map(self._to_torch, out)
         info = {
             key: tensors[key]

@@ -39,12 +39,12 @@ class QuadrupedConfig:
     # has one; docs/quadruped.md, "Backends")
     sim: str = "mujoco"
     # sim="mjx" only: the Newton solver's iteration caps (the MJX hopper's; HopperConfig). The
-    # trot needs more than 4 iterations: at 4 it leaves MuJoCo's by 18 cm (docs/gpu.md)
+    # trot needs more than 4 iterations to stay on MuJoCo's trajectory (docs/gpu.md)
     mjx_iterations: int = 15
     mjx_ls_iterations: int = 15
     physics_dt: float = 0.002  # s: 500 Hz, stable for this robot's contacts (legged_gym: 5 ms)
     decimation: int = 10  # substeps per control step: control at 50 Hz (legged_gym's)
-    episode_seconds: float = 20.0  # s (the episode)
+    episode_seconds: float = 20.0  # s, then truncated
     foot_friction: float = 0.8  # the hopper's
     # the hopper's actuator law on all 12 joints (cpg_actor.envs.actuator)
     kp: float = 80.0  # N m / rad
@@ -60,9 +60,8 @@ class QuadrupedConfig:
     lateral_range: tuple[float, float] = (0.0, 0.0)  # m/s, positive to the left
     yaw_range: tuple[float, float] = (0.0, 0.0)  # rad/s, positive counter-clockwise
     # (m/s)^2 and (rad/s)^2 of the tracking kernels. legged_gym's 0.25 pays 96% of the term at
-    # 0.1 m/s of error, too little pull for the target: its CPG-Actor overshot 0.5 m/s
-    # by 0.1 on 2 of 3 seeds. 0.1 pays 90% there, and every seed met the target
-    # (docs/results/quadruped-5M)
+    # 0.1 m/s of error, too little pull to track a command within 0.1 m/s; 0.1 pays 90% there
+    # (docs/quadruped.md)
     tracking_sigma: float = 0.1
     base_height_target: float = 0.48  # m: where the nominal pose stands under its weight
     reward_scales: dict[str, float] = field(default_factory=_default_scales)

@@ -145,7 +145,7 @@ class AnymalDynamics:
         feet_xy = placed.site_xpos[self._feet, :2]  # the lift above moves no foot sideways
         return self._empty.replace(qpos=qpos), command, joints, feet_xy, key
 
-    def _control(self, data, desired):
+    def control(self, data, desired):
         """``decimation`` substeps of one robot: the actuator law, then ``mjx.step``. Returns
         the data after them, the data the last substep started from (the instant the MuJoCo
         env's sensors read), the last substep's torque and the joints' work (J)."""
@@ -198,7 +198,7 @@ class AnymalDynamics:
                 self._low + (jnp.clip(actions, -1.0, 1.0) + 1.0) * (self._high - self._low) / 2.0
             )
         desired = jnp.clip(actions, self._low, self._high)
-        data, before, torque, work = jax.vmap(self._control)(state.data, desired)
+        data, before, torque, work = jax.vmap(self.control)(state.data, desired)
         qpos, qvel = data.qpos, data.qvel
         elapsed = state.elapsed + 1
 
@@ -343,6 +343,11 @@ class MjxAnymalVectorEnv(VectorEnv):
             raise gym.error.ClosedEnvironmentError(f"{what}() on a closed environment")
         if self._state is None and what != "reset":
             raise RuntimeError(f"call reset() before {what}()")
+
+    @property
+    def jax_state(self) -> EnvState | None:
+        """Every env's state as the dynamics step takes it; None before the first reset."""
+        return self._state
 
     # -- the tensor face ----------------------------------------------------------------------
     def reset_tensors(self, seed: int | list[int] | None = None) -> tuple[torch.Tensor, dict]:

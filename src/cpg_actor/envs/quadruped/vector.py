@@ -165,7 +165,7 @@ class AnymalVectorEnv(VectorEnv):
         self.model = load_model(config)
         threads = default_threads(num_envs) if num_threads is None else int(num_threads)
         self.num_threads = max(1, min(threads, num_envs))
-        self._rollout = ThreadedRollout(self.model, num_envs, self.num_threads)
+        self.stepper = ThreadedRollout(self.model, num_envs, self.num_threads)  # its threads
         self._data = mujoco.MjData(self.model)  # for resets and queries between control steps
         nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
         self._state = np.zeros((num_envs, nstate))
@@ -302,7 +302,7 @@ class AnymalVectorEnv(VectorEnv):
         cfg, dt = self.config, self.config.control_dt
         self._control[:] = desired[:, None, :]
         feet_xy_before = self._feet()[:, :, :2].copy()  # the rollout overwrites the sensors
-        self._rollout.rollout(
+        self.stepper.rollout(
             self._state, self._control, self._next, self._sensors, CONTROL_SPEC, cfg.decimation
         )
         np.copyto(self._state, self._next[:, -1])
@@ -471,13 +471,13 @@ class AnymalVectorEnv(VectorEnv):
         return self._renderer.render().copy()
 
     def _check_open(self, what: str) -> None:
-        if getattr(self, "_rollout", None) is None:
+        if getattr(self, "stepper", None) is None:
             raise gym.error.ClosedEnvironmentError(f"{what}() on a closed environment")
 
     def close(self, **kwargs: Any) -> None:
         if getattr(self, "_renderer", None) is not None:
             self._renderer.close()
             self._renderer = None
-        if getattr(self, "_rollout", None) is not None:
-            self._rollout.close()
-            self._rollout = None
+        if getattr(self, "stepper", None) is not None:
+            self.stepper.close()
+            self.stepper = None
