@@ -44,7 +44,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cpg_actor.envs import HopperConfig, HopperVectorEnv
+from cpg_actor.envs.config import HopperConfig
+from cpg_actor.envs.vector import HopperVectorEnv
 from cpg_actor.machine import cpu_model, load_average, usable_cores
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "env_throughput.md"

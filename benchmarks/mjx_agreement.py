@@ -14,10 +14,10 @@ import numpy as np
 
 from bench_report import measured, write
 from cpg_actor.config import parse_override
-from cpg_actor.envs import make_vector_env
 from cpg_actor.envs.mjx.dynamics import jax
 from cpg_actor.envs.robot import description as robot
 from cpg_actor.envs.robot import kinematics
+from cpg_actor.envs.vector import make_vector_env
 
 HOLD = np.array(robot.NOMINAL_POSE)
 TERMS = ("r1", "r2", "r3", "r4", "r5")

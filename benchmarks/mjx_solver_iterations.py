@@ -25,11 +25,11 @@ import torch
 
 from bench_report import measured, write
 from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
-from cpg_actor.envs import make_vector_env
 from cpg_actor.envs.mjx.dynamics import jax
 from cpg_actor.envs.quadruped import description as quadruped
 from cpg_actor.envs.quadruped.mjx import MjxAnymalVectorEnv
 from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+from cpg_actor.envs.vector import make_vector_env
 
 HOPPER_STEPS = 300  # 3 s at 100 Hz
 ROBOTS = 4  # quadrupeds

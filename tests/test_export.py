@@ -15,12 +15,13 @@ import torch
 import cpg_actor
 from cpg_actor.cli import main
 from cpg_actor.config import apply_dict
-from cpg_actor.envs import HopperConfig, HopperVectorEnv
 from cpg_actor.envs.actuator import Actuator
+from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.quadruped import QuadrupedConfig
-from cpg_actor.envs.robots import robot_env
+from cpg_actor.envs.vector import HopperVectorEnv
 from cpg_actor.export import OBSERVATION_SOURCES, export_policy, read_metadata, sidecar_paths
 from cpg_actor.policy import load_policy
+from cpg_actor.robots.registry import get_robot
 from cpg_actor.runner import Runner
 from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
 
@@ -231,10 +232,10 @@ def test_the_exported_mjcf_is_the_model_the_env_simulates(config):
     """Loaded, the MJCF written next to an export equals the env's MjModel in every byte (the
     configured actuators, timestep, friction; the coast law's actuators switched off)."""
     name = "hopper" if isinstance(config, HopperConfig) else "anymal"
-    env = robot_env(name).make(1, config, 1)
+    env = get_robot(name).make(1, config, 1)
     try:
         simulated = env.sim.backend.model if name == "hopper" else env.model
-        loaded = mujoco.MjModel.from_xml_string(robot_env(name).mjcf(config))
+        loaded = mujoco.MjModel.from_xml_string(get_robot(name).mjcf(config))
         assert model_bytes(loaded) == model_bytes(simulated)
     finally:
         env.close()

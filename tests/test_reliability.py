@@ -332,7 +332,8 @@ COMPLEX = "actions must be real numbers"
 
 @pytest.mark.filterwarnings("error")  # numpy's ComplexWarning would fail the test
 def test_complex_actions_are_refused_by_the_hopper_envs():
-    from cpg_actor.envs import HopperEnv, HopperVectorEnv
+    from cpg_actor.envs.hopper import HopperEnv
+    from cpg_actor.envs.vector import HopperVectorEnv
 
     env = HopperEnv()
     env.reset(seed=0)

@@ -9,9 +9,9 @@ import torch
 from cpg_actor.agents.cho2019 import reference_action
 from cpg_actor.agents.warm_start import WarmStartConfig
 from cpg_actor.config import TrainConfig
-from cpg_actor.envs import HopperConfig
 from cpg_actor.envs.cho2019 import action_to_parameters
 from cpg_actor.envs.cho2019_reference import REFERENCE_PARAMETERS
+from cpg_actor.envs.config import HopperConfig
 from cpg_actor.ppo import PPOConfig
 from cpg_actor.runner import Runner
 
@@ -126,8 +126,8 @@ def test_a_run_resumed_at_iteration_0_is_not_warm_started_again(tmp_path):
 
 def test_cho2019_agents_declare_the_cpg_wrapper_around_the_robot_env():
     from cpg_actor.agents import get_agent_spec
-    from cpg_actor.envs import HopperVectorEnv
     from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
+    from cpg_actor.envs.vector import HopperVectorEnv
 
     spec = get_agent_spec("cho2019")
     env = spec.make_env(2, HopperConfig(), 1)

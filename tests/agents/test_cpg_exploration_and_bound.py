@@ -11,7 +11,7 @@ from cpg_actor.agents import AgentConfig, CPGActorAgent
 from cpg_actor.agents.start_gait import read_gait, start_parameters
 from cpg_actor.config import compose_config
 from cpg_actor.cpg import CPGState
-from cpg_actor.envs import HopperConfig
+from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.hopper import robot_spec
 
 HOPPER = robot_spec(HopperConfig())

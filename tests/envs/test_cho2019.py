@@ -9,7 +9,6 @@ import pytest
 import torch
 
 from cpg_actor.cpg import HOPPER_NOMINAL_POSE, hopper_cpg
-from cpg_actor.envs import HopperConfig
 from cpg_actor.envs.cho2019 import (
     PARAMETER_RANGES,
     CPGParameterVectorEnv,
@@ -17,6 +16,7 @@ from cpg_actor.envs.cho2019 import (
     parameters_to_action,
 )
 from cpg_actor.envs.cho2019_reference import REFERENCE_PARAMETERS, evaluate_parameters
+from cpg_actor.envs.config import HopperConfig
 
 SHORT = HopperConfig(episode_steps=20)
 

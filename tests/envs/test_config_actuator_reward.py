@@ -7,9 +7,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from cpg_actor.envs import REWARD_TERMS, HopperConfig, HopperEnv, reward_terms
 from cpg_actor.envs.actuator import Actuator
-from cpg_actor.envs.reward import total_reward
+from cpg_actor.envs.config import HopperConfig
+from cpg_actor.envs.hopper import HopperEnv
+from cpg_actor.envs.reward import REWARD_TERMS, reward_terms, total_reward
 
 # -- config ---------------------------------------------------------------------------------
 

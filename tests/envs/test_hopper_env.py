@@ -10,8 +10,11 @@ import pytest
 from gymnasium import spaces
 from gymnasium.utils.env_checker import check_env
 
-from cpg_actor.envs import ENV_ID, OBS_NAMES, PYBULLET_ENV_ID, HopperConfig, HopperEnv
+from cpg_actor.envs.config import HopperConfig
+from cpg_actor.envs.hopper import HopperEnv
 from cpg_actor.envs.robot import kinematics
+from cpg_actor.envs.simulation import OBS_NAMES
+from cpg_actor.robots.hopper.plugin import ENV_ID, PYBULLET_ENV_ID
 
 from .helpers import NOMINAL, SIMS
 
@@ -210,7 +213,7 @@ def test_import_cpg_actor_registers_the_gymnasium_ids_without_loading_a_simulato
         "import sys, gymnasium, cpg_actor\n"
         "assert 'cpg_actor/AnymalHopper-v0' in gymnasium.registry\n"
         "assert 'cpg_actor/AnymalHopper-pybullet-v0' in gymnasium.registry\n"
-        "assert 'mujoco' not in sys.modules and 'cpg_actor.envs' not in sys.modules\n"
+        "assert 'mujoco' not in sys.modules and 'torch' not in sys.modules\n"
         "env = gymnasium.make('cpg_actor/AnymalHopper-v0')\n"
         "print(env.reset(seed=0)[0].shape)\n"
     )
@@ -222,8 +225,9 @@ def test_import_cpg_actor_registers_the_gymnasium_ids_without_loading_a_simulato
 def test_step_or_reset_after_close_is_a_clear_error():
     import gymnasium
 
-    from cpg_actor.envs import HopperEnv, HopperVectorEnv
     from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
+    from cpg_actor.envs.hopper import HopperEnv
+    from cpg_actor.envs.vector import HopperVectorEnv
 
     for env in (HopperEnv(), HopperVectorEnv(2), CPGParameterVectorEnv(2)):
         env.reset(seed=0)
@@ -239,9 +243,9 @@ def test_step_or_reset_after_close_is_a_clear_error():
 def test_normalized_actions_map_minus_one_to_one_onto_the_joint_ranges():
     from cpg_actor.config import TrainConfig
     from cpg_actor.envs.hopper import ACTION_HIGH, ACTION_LOW
-    from cpg_actor.registration import EPISODE_STEPS
+    from cpg_actor.robots.hopper.plugin import ROBOT
 
-    assert gym.spec(ENV_ID).max_episode_steps == EPISODE_STEPS == HopperConfig().episode_steps
+    assert gym.spec(ENV_ID).max_episode_steps == ROBOT.episode_steps == HopperConfig().episode_steps
     env = gym.make(ENV_ID, normalized_actions=True)
     plain = HopperEnv()
     try:

@@ -10,13 +10,14 @@ import numpy as np
 import pytest
 import torch
 
-from cpg_actor.envs import HopperEnv, HopperVectorEnv, make_vector_env
 from cpg_actor.envs.actuator import Actuator
 from cpg_actor.envs.config import HopperConfig
+from cpg_actor.envs.hopper import HopperEnv
 from cpg_actor.envs.mjx import runtime
 from cpg_actor.envs.robot import description as robot
 from cpg_actor.envs.robot import kinematics
-from cpg_actor.registration import MJX_ENV_ID
+from cpg_actor.envs.vector import HopperVectorEnv, make_vector_env
+from cpg_actor.robots.hopper.plugin import MJX_ENV_ID
 
 if not runtime.available():
     pytest.skip('the MJX backend needs pip install -e ".[mjx]"', allow_module_level=True)

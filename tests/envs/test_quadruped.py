@@ -15,7 +15,7 @@ from cpg_actor.envs.quadruped import task
 from cpg_actor.envs.quadruped.config import QuadrupedConfig
 from cpg_actor.envs.quadruped.vector import AnymalVectorEnv, load_model
 from cpg_actor.envs.robot import description as hopper
-from cpg_actor.registration import ANYMAL_ENV_ID
+from cpg_actor.robots.anymal.plugin import ENV_ID as ANYMAL_ENV_ID
 
 NOMINAL = np.array(robot.NOMINAL_POSE)
 

@@ -9,12 +9,11 @@ import numpy as np
 import pytest
 
 from cpg_actor.cli import main
-from cpg_actor.envs import write_video
 from cpg_actor.envs.backends import mujoco_backend
 from cpg_actor.envs.backends.mujoco_backend import mujoco  # MUJOCO_GL chosen on import
 from cpg_actor.envs.quadruped import QuadrupedConfig
 from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
-from cpg_actor.envs.video import RenderingUnavailable
+from cpg_actor.envs.video import RenderingUnavailable, write_video
 
 FRAME = (QuadrupedConfig().render_height, QuadrupedConfig().render_width, 3)
 

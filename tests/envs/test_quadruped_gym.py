@@ -17,7 +17,9 @@ from cpg_actor.envs.quadruped import description as robot
 from cpg_actor.envs.quadruped.config import QuadrupedConfig
 from cpg_actor.envs.quadruped.env import AnymalEnv
 from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
-from cpg_actor.registration import ANYMAL_ENV_ID, ANYMAL_EPISODE_STEPS, ANYMAL_MJX_ENV_ID
+from cpg_actor.robots.anymal.plugin import ENV_ID as ANYMAL_ENV_ID
+from cpg_actor.robots.anymal.plugin import MJX_ENV_ID as ANYMAL_MJX_ENV_ID
+from cpg_actor.robots.anymal.plugin import ROBOT as ANYMAL
 
 NOMINAL = np.array(robot.NOMINAL_POSE)
 DOC = Path(__file__).resolve().parents[2] / "docs" / "quadruped.md"
@@ -45,8 +47,8 @@ def actions(steps: int, seed: int = 0) -> np.ndarray:
 
 
 def test_registered_for_make_with_the_vector_envs_episode_length():
-    assert ANYMAL_EPISODE_STEPS == QuadrupedConfig().episode_steps
-    assert gym.spec(ANYMAL_ENV_ID).max_episode_steps == ANYMAL_EPISODE_STEPS
+    assert ANYMAL.episode_steps == QuadrupedConfig().episode_steps == 1000
+    assert gym.spec(ANYMAL_ENV_ID).max_episode_steps == ANYMAL.episode_steps
     env = gym.make(ANYMAL_ENV_ID)
     assert isinstance(env.unwrapped, AnymalEnv)
     assert env.spec.max_episode_steps == env.unwrapped.config.episode_steps

@@ -196,7 +196,7 @@ def test_a_rollout_step_on_the_mjx_quadruped_never_waits_for_the_device():
 def test_registered_for_make_vec():
     import gymnasium
 
-    from cpg_actor.registration import ANYMAL_MJX_ENV_ID
+    from cpg_actor.robots.anymal.plugin import MJX_ENV_ID as ANYMAL_MJX_ENV_ID
 
     env = gymnasium.make_vec(ANYMAL_MJX_ENV_ID, num_envs=2)
     assert isinstance(env, MjxAnymalVectorEnv) and env.config.sim == "mjx"

@@ -10,7 +10,8 @@ import imageio.v2 as imageio  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from cpg_actor.envs import HopperEnv, write_video  # noqa: E402
+from cpg_actor.envs.hopper import HopperEnv  # noqa: E402
+from cpg_actor.envs.video import write_video
 
 
 def rendered(sim: str) -> np.ndarray:

@@ -6,8 +6,9 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from cpg_actor.envs import HopperConfig, HopperVectorEnv
+from cpg_actor.envs.config import HopperConfig
 from cpg_actor.envs.torch_env import TorchVectorEnv
+from cpg_actor.envs.vector import HopperVectorEnv
 
 
 def test_tensors_in_and_out_match_the_wrapped_env():

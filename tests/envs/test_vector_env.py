@@ -7,7 +7,10 @@ import numpy as np
 import pytest
 from gymnasium.vector import AutoresetMode, VectorEnv
 
-from cpg_actor.envs import ENV_ID, HopperConfig, HopperEnv, HopperVectorEnv, make_vector_env
+from cpg_actor.envs.config import HopperConfig
+from cpg_actor.envs.hopper import HopperEnv
+from cpg_actor.envs.vector import HopperVectorEnv, make_vector_env
+from cpg_actor.robots.hopper.plugin import ENV_ID
 
 from .helpers import NOMINAL, SIMS
 

@@ -6,8 +6,8 @@ import pytest
 
 from cpg_actor.cli import main
 from cpg_actor.commands.gradient import build_policy
-from cpg_actor.envs import HopperVectorEnv
 from cpg_actor.envs.torch_env import TorchVectorEnv
+from cpg_actor.envs.vector import HopperVectorEnv
 from cpg_actor.experiments.gradient import collect_rollout, truncation_study
 
 

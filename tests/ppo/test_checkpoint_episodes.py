@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from cpg_actor.config import TrainConfig
-from cpg_actor.envs import HopperVectorEnv
+from cpg_actor.envs.vector import HopperVectorEnv
 from cpg_actor.runner import Runner
 from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
 

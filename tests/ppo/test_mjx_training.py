@@ -15,8 +15,8 @@ if not runtime.available():
 
 import jax  # noqa: E402
 
-from cpg_actor.envs import make_vector_env  # noqa: E402
 from cpg_actor.envs.mjx.vector import MjxHopperVectorEnv  # noqa: E402
+from cpg_actor.envs.vector import make_vector_env  # noqa: E402
 from cpg_actor.evaluation import CHECK_EVERY, evaluate  # noqa: E402
 from cpg_actor.host_reads import host_reads  # noqa: E402
 from cpg_actor.policy import Policy  # noqa: E402

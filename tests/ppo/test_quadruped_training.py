@@ -202,9 +202,9 @@ def test_the_leg_layout_trains_four_foot_space_oscillators():
         runner.close()
     hopper = tiny_config("cpg-actor")
     hopper.agent_config.cpg_layout = "leg"
-    with pytest.raises(ValueError, match="robot 'anymal-hopper' has the CPG layouts joint"):
+    with pytest.raises(ValueError, match="cpg_layout must be one of joint on robot 'hopper'"):
         Runner(hopper, tensorboard=False)
     bad = TrainConfig()
     apply_dict(bad, parse_override("agent_config.cpg_layout=foot"), "")
-    with pytest.raises(ValueError, match="cpg_layout must be 'joint', 'leg'"):
+    with pytest.raises(ValueError, match="cpg_layout must be one of joint on robot 'hopper'"):
         bad.validate()

@@ -45,7 +45,7 @@ def build_cho2019(config: AgentConfig, env: Any) -> Agent:
     return MLPAgent(obs_dim, action_scale, config, nominal_pose=[0.0] * len(action_scale))
 
 
-def reference_action(start_gait: str = "", robot_name: str = "anymal-hopper") -> np.ndarray:
+def reference_action(start_gait: str = "", robot_model: str = "anymal-hopper") -> np.ndarray:
     """The warm start's target as an action in [-1, 1]: the reference hopping parameters
     (``cpg-actor cho2019-reference``), or with ``start_gait`` the frequency, amplitude and
     phase bias of that gait (:mod:`cpg_actor.agents.start_gait`), each moved inside the
@@ -56,7 +56,7 @@ def reference_action(start_gait: str = "", robot_name: str = "anymal-hopper") ->
 
     parameters = np.asarray(REFERENCE_PARAMETERS, dtype=np.float64)
     if start_gait:
-        gait = hopper_gait_parameters(start_parameters(start_gait, robot_name))
+        gait = hopper_gait_parameters(start_parameters(start_gait, robot_model))
         low, high = PARAMETER_RANGES[:, 0], PARAMETER_RANGES[:, 1]
         margin = 0.05 * (high - low)
         parameters = np.clip(np.asarray(gait), low + margin, high - margin)

@@ -21,7 +21,6 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.table import Table
 
-    from cpg_actor.envs import HopperConfig
     from cpg_actor.envs.cho2019 import PARAMETER_NAMES
     from cpg_actor.envs.cho2019_reference import (
         REFERENCE_PARAMETERS,
@@ -30,6 +29,7 @@ def run(args: argparse.Namespace) -> int:
         interior,
         search_reference,
     )
+    from cpg_actor.envs.config import HopperConfig
 
     if args.top < 1:
         raise ValueError(f"--top must be >= 1, got {args.top}")

@@ -27,7 +27,7 @@ from cpg_actor.envs.simulation import (
     HopperSimulation,
     StepResult,
 )
-from cpg_actor.robot import RobotSpec
+from cpg_actor.robots.spec import RobotSpec
 
 
 def resolve_config(

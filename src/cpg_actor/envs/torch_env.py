@@ -9,7 +9,7 @@ hopper's :class:`~cpg_actor.envs.HopperVectorEnv`, the Cho et al. CPG wrapper, a
   observations of the episodes that ended, the env's per-episode metrics (the hopper's
   ``hop_height``) and the reward terms, as tensors on ``device``; ``info`` is the wrapped
   env's own, untouched (traces, diagnostics);
-* ``robot`` (:class:`cpg_actor.robot.RobotSpec`), ``num_envs``, the single-env spaces,
+* ``robot`` (:class:`cpg_actor.robots.spec.RobotSpec`), ``num_envs``, the single-env spaces,
   ``get_state`` / ``set_state`` (episodes in checkpoints) and ``close`` pass through.
 
 A simulator that runs on the CPU and speaks numpy pays one copy per step here. An env with a

@@ -56,7 +56,7 @@ from cpg_actor.envs.quadruped import description as robot
 from cpg_actor.envs.quadruped import task
 from cpg_actor.envs.quadruped.config import QuadrupedConfig
 from cpg_actor.envs.quadruped.mjcf import SENSORS, mjcf_text
-from cpg_actor.robot import RobotSpec
+from cpg_actor.robots.spec import RobotSpec
 
 LOW = np.array([robot.JOINT_LIMITS[j][0] for j in robot.JOINT_NAMES])
 HIGH = np.array([robot.JOINT_LIMITS[j][1] for j in robot.JOINT_NAMES])
