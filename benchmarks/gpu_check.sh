@@ -35,7 +35,7 @@ EOF
 PARTS=" ${PARTS:-tests bench train scaling} "
 part() { [[ "$PARTS" == *" $1 "* ]]; }
 part tests && timeout "${TESTS_S:-120}" python3 -m pytest -q -p no:cacheprovider tests/test_device.py \
-    tests/ppo/test_mjx_training.py tests/envs/test_mjx.py tests/envs/test_quadruped_mjx.py \
+    tests/ppo/test_mjx_training.py tests/robots/hopper/test_mjx.py tests/robots/anymal/test_anymal_mjx.py \
     2>&1 | tee -a "$OUT/cuda_tests.txt"
 part bench && timeout "${BENCH_S:-170}" python3 benchmarks/gpu_throughput.py \
     --envs ${ENVS:-1024 4096 32768 131072} --agents ${AGENTS:-cpg-actor mlp} --iterations 2 \

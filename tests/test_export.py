@@ -15,12 +15,12 @@ import torch
 import cpg_actor
 from cpg_actor.cli import main
 from cpg_actor.config import apply_dict
-from cpg_actor.envs.actuator import Actuator
-from cpg_actor.envs.config import HopperConfig
-from cpg_actor.envs.quadruped import QuadrupedConfig
-from cpg_actor.envs.vector import HopperVectorEnv
 from cpg_actor.export import OBSERVATION_SOURCES, export_policy, read_metadata, sidecar_paths
 from cpg_actor.policy import load_policy
+from cpg_actor.robots.anymal.config import QuadrupedConfig
+from cpg_actor.robots.common.actuator import Actuator
+from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.hopper.vector import HopperVectorEnv
 from cpg_actor.robots.registry import get_robot
 from cpg_actor.runner import Runner
 from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
@@ -244,7 +244,7 @@ def test_the_exported_mjcf_is_the_model_the_env_simulates(config):
 def test_exported_quadruped_policy_reads_its_drive_from_the_raw_command(tmp_path):
     """On the quadruped the exported step sets the CPG's drive from the raw observation (the
     forward-speed command) as the policy does: same actions and states, drive row included."""
-    from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+    from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 
     trained_run(tmp_path / "run", "cpg-actor", "anymal", env={"episode_seconds": 0.2})
     policy = load_policy(tmp_path / "run")

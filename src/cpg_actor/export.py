@@ -136,7 +136,7 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
     :func:`cpg_actor.policy.load_policy`, which knows its run and robot), key -> string
     (``docs/training.md``, "Export", has the table)."""
     from cpg_actor import __version__
-    from cpg_actor.envs.actuator import Actuator
+    from cpg_actor.robots.common.actuator import Actuator
     from cpg_actor.robots.registry import get_robot
 
     config, robot = policy.config, policy.robot

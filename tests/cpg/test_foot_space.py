@@ -11,8 +11,8 @@ import torch
 from cpg_actor.cpg import CPGState
 from cpg_actor.cpg.foot_space import CLEARANCE, PENETRATION, FootSpaceMap, front_leg_foot
 from cpg_actor.cpg.gaits import GAITS, quadruped_leg_cpg
-from cpg_actor.envs.quadruped import description as robot
-from cpg_actor.envs.robot import kinematics
+from cpg_actor.robots.anymal import description as robot
+from cpg_actor.robots.hopper import kinematics
 
 NOMINAL = torch.tensor(robot.NOMINAL_POSE, dtype=torch.float64)
 

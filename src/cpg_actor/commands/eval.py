@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cpg_actor.envs.config import SIMULATORS
 from cpg_actor.plots import GAIT_WINDOW, draw_gait_diagram, save_figure
+from cpg_actor.robots.hopper.config import SIMULATORS
 
 HELP = "evaluate a trained run deterministically; save per-step traces, figures (and a video)"
 # the figures drawn where the traces have what they need (the quadruped's), next to the traces
@@ -209,7 +209,7 @@ def record_video(policy, config, path: Path, seed: int, overwrite: bool) -> None
     """One deterministic episode in the agent's own environment (one env), rendered offscreen
     by its ``render_frame`` (the hopper's or the quadruped's scene) and encoded as it runs."""
     from cpg_actor.agents import get_agent_spec
-    from cpg_actor.envs.video import write_video
+    from cpg_actor.robots.common.video import write_video
 
     env = get_agent_spec(config.agent).make_env(1, config.env, 1, config.agent_config)
 

@@ -100,8 +100,8 @@ def gaits_figure(traces: dict, summary: dict, command: float):
     import numpy as np
     from matplotlib.figure import Figure
 
-    from cpg_actor.envs.quadruped import description as robot
     from cpg_actor.plots import draw_gait_diagram
+    from cpg_actor.robots.anymal import description as robot
 
     fig = Figure(figsize=(12.0, 1.7 * len(traces) + 1.0), layout="constrained")
     axes = np.atleast_2d(fig.subplots(len(traces), 2, width_ratios=(3, 1), squeeze=False))
@@ -127,10 +127,10 @@ def run(args: argparse.Namespace) -> int:
     from cpg_actor.checkpoint import atomic_write_text
     from cpg_actor.cpg.foot_space import FootSpaceMap
     from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map, quadruped_leg_cpg
-    from cpg_actor.envs.quadruped import description as robot
-    from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
     from cpg_actor.evaluation import finite_mean
     from cpg_actor.plots import save_figure
+    from cpg_actor.robots.anymal import description as robot
+    from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         raise ValueError(f"--seconds must be a positive number, got {args.seconds}")

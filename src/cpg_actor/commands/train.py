@@ -14,7 +14,6 @@ from cpg_actor.config import (
     compose_config,
     parse_steps,
 )
-from cpg_actor.envs.config import SIMULATORS
 from cpg_actor.files import (
     MARKER,
     RUN,
@@ -28,6 +27,7 @@ from cpg_actor.files import (
 from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.presets import PRESETS
 from cpg_actor.progress import evaluation_text, metrics_text
+from cpg_actor.robots.hopper.config import SIMULATORS
 from cpg_actor.robots.registry import ROBOTS, get_robot
 from cpg_actor.run_lock import LOCK_NAME, RunLock
 

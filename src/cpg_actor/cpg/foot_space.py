@@ -10,7 +10,7 @@ in the leg's sagittal plane, around the foot's place in the nominal pose (x forw
 so the foot swings forward while theta goes from 0 to pi and pushes back on the ground from
 pi to 2 pi: the pattern of Bellegarda and Ijspeert's CPG-RL (2022), here driven by this
 project's Hopf oscillators. The HFE and KFE angles that put the foot there come from the leg's
-planar inverse kinematics (the same leg as the hopper's, :mod:`cpg_actor.envs.robot.kinematics`;
+planar inverse kinematics (the same leg as the hopper's, :mod:`cpg_actor.robots.hopper.kinematics`;
 the hind legs are the front legs mirrored front to back, so they solve the mirrored target and
 negate the angles). HAA stays at the nominal pose. Differentiable in theta and r (torch).
 """
@@ -23,7 +23,7 @@ from collections.abc import Sequence
 import torch
 from torch import Tensor, nn
 
-from cpg_actor.envs.robot import kinematics
+from cpg_actor.robots.hopper import kinematics
 
 # the leg (front, in its own sagittal plane; m): the knee in the thigh frame, the foot centre in
 # the shank frame, both relative to the joint before them; the HFE axis in the hip frame

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from cpg_actor.envs.quadruped.config import QuadrupedConfig
+from cpg_actor.robots.anymal.config import QuadrupedConfig
 from cpg_actor.robots.plugin import CPGLayout, GymId, MetricInfo, Robot
 
 ENV_ID = "cpg_actor/AnymalB-v0"  # gymnasium.make or make_vec
@@ -26,10 +26,10 @@ METRICS = {
 
 def make(num_envs: int, config: Any, num_threads: int | None = None) -> Any:
     if config.sim == "mjx":  # imported only when asked for (JAX, MJX)
-        from cpg_actor.envs.quadruped.mjx import MjxAnymalVectorEnv
+        from cpg_actor.robots.anymal.mjx import MjxAnymalVectorEnv
 
         return MjxAnymalVectorEnv(num_envs, config, num_threads)
-    from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+    from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 
     return AnymalVectorEnv(num_envs, config, num_threads)
 
@@ -45,19 +45,20 @@ def cpg_layouts() -> dict[str, CPGLayout]:
 
 
 def mjcf(config: Any) -> str:
-    from cpg_actor.envs.quadruped.mjcf import simulated_mjcf
+    from cpg_actor.robots.anymal.mjcf import simulated_mjcf
 
     return simulated_mjcf(config)
 
 
 def observation_sources() -> tuple[dict[str, Any], ...]:
-    from cpg_actor.envs.quadruped.task import OBS_SOURCES
+    from cpg_actor.robots.anymal.description import NOMINAL_POSE
+    from cpg_actor.tasks.velocity import observation_sources
 
-    return OBS_SOURCES
+    return observation_sources(NOMINAL_POSE)
 
 
 def assets() -> dict[Path, str]:
-    from cpg_actor.envs.quadruped import MJCF_PATH, mjcf_text
+    from cpg_actor.robots.anymal.mjcf import MJCF_PATH, mjcf_text
 
     return {MJCF_PATH: mjcf_text()}
 
@@ -72,14 +73,14 @@ ROBOT = Robot(
     gym_ids=(
         GymId(
             ENV_ID,
-            "cpg_actor.envs.quadruped.env:AnymalEnv",
-            "cpg_actor.envs.quadruped.vector:AnymalVectorEnv",
+            "cpg_actor.robots.anymal.env:AnymalEnv",
+            "cpg_actor.robots.anymal.vector:AnymalVectorEnv",
         ),
         # the MJX env's config names its simulator
         GymId(
             MJX_ENV_ID,
-            "cpg_actor.envs.quadruped.env:AnymalEnv",
-            "cpg_actor.envs.quadruped.mjx:MjxAnymalVectorEnv",
+            "cpg_actor.robots.anymal.env:AnymalEnv",
+            "cpg_actor.robots.anymal.mjx:MjxAnymalVectorEnv",
             {"config": {"sim": "mjx"}},
         ),
     ),  # fmt: skip

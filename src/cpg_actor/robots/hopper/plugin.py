@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from cpg_actor.envs.config import HopperConfig
+from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.robots.plugin import CPGLayout, GymId, MetricInfo, Robot
 
 ENV_ID = "cpg_actor/AnymalHopper-v0"
@@ -14,7 +14,7 @@ MJX_ENV_ID = "cpg_actor/AnymalHopper-mjx-v0"  # batched only: gymnasium.make_vec
 
 
 def make(num_envs: int, config: Any, num_threads: int | None = None) -> Any:
-    from cpg_actor.envs.vector import make_vector_env
+    from cpg_actor.robots.hopper.vector import make_vector_env
 
     return make_vector_env(num_envs, config=config, num_threads=num_threads)
 
@@ -26,26 +26,27 @@ def cpg_layouts() -> dict[str, CPGLayout]:
 
 
 def mjcf(config: Any) -> str:
-    from cpg_actor.envs.robot.mjcf import simulated_mjcf
+    from cpg_actor.robots.hopper.mjcf import simulated_mjcf
 
     return simulated_mjcf(config)
 
 
 def observation_sources() -> tuple[dict[str, Any], ...]:
-    from cpg_actor.envs.simulation import OBS_SOURCES
+    from cpg_actor.robots.hopper.simulation import OBS_SOURCES
 
     return OBS_SOURCES
 
 
 def assets() -> dict[Path, str]:
-    from cpg_actor.envs.robot import MJCF_PATH, URDF_PATH, mjcf_text, urdf_text
+    from cpg_actor.robots.hopper.mjcf import MJCF_PATH, mjcf_text
+    from cpg_actor.robots.hopper.urdf import URDF_PATH, urdf_text
 
     return {MJCF_PATH: mjcf_text(), URDF_PATH: urdf_text()}
 
 
 def _gym_id(env_id: str, sim: str, vector: str) -> GymId:
     # gymnasium.make on the MJX id says to use make_vec (there is no single-robot MJX env)
-    return GymId(env_id, "cpg_actor.envs.hopper:HopperEnv", vector, {"sim": sim})
+    return GymId(env_id, "cpg_actor.robots.hopper.env:HopperEnv", vector, {"sim": sim})
 
 
 ROBOT = Robot(
@@ -56,15 +57,12 @@ ROBOT = Robot(
     cpg_layouts=cpg_layouts,
     metrics={"hop_height": MetricInfo("hop height", "m")},
     gym_ids=(
-        _gym_id(ENV_ID, "mujoco", "cpg_actor.envs.vector:HopperVectorEnv"),
-        _gym_id(PYBULLET_ENV_ID, "pybullet", "cpg_actor.envs.vector:HopperVectorEnv"),
-        _gym_id(MJX_ENV_ID, "mjx", "cpg_actor.envs.mjx.vector:MjxHopperVectorEnv"),
+        _gym_id(ENV_ID, "mujoco", "cpg_actor.robots.hopper.vector:HopperVectorEnv"),
+        _gym_id(PYBULLET_ENV_ID, "pybullet", "cpg_actor.robots.hopper.vector:HopperVectorEnv"),
+        _gym_id(MJX_ENV_ID, "mjx", "cpg_actor.robots.hopper.mjx.vector:MjxHopperVectorEnv"),
     ),
     mjcf=mjcf,
     observation_sources=observation_sources,
     assets=assets,
-    start_gait=Path(__file__).resolve().parent.parent.parent
-    / "agents"
-    / "gaits"
-    / "anymal-hopper.yaml",
+    start_gait=Path(__file__).resolve().parent / "start_gait.yaml",
 )

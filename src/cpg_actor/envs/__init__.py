@@ -1,1 +1,0 @@
-"""The hopper's and the quadruped's environments (being moved to :mod:`cpg_actor.robots`)."""
