@@ -24,8 +24,8 @@ import numpy as np
 import torch
 
 from bench_report import measured, write
-from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
 from cpg_actor.robots.anymal import description as quadruped
+from cpg_actor.robots.anymal.gaits import quadruped_cpg, quadruped_joint_map
 from cpg_actor.robots.anymal.mjx import MjxAnymalVectorEnv
 from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 from cpg_actor.robots.hopper.mjx.dynamics import jax

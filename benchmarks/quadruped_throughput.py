@@ -23,9 +23,9 @@ import numpy as np
 import torch
 
 from bench_report import measured, write
-from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
 from cpg_actor.machine import cpu_model, load_average, usable_cores
 from cpg_actor.robots.anymal import description as robot
+from cpg_actor.robots.anymal.gaits import quadruped_cpg, quadruped_joint_map
 from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 from cpg_actor.robots.common.mujoco_runtime import CONTROL_SPEC, mujoco
 from cpg_actor.robots.common.threaded_rollout import ThreadedRollout

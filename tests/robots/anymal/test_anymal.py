@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 import torch
 
-from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
 from cpg_actor.robots.anymal import description as robot
 from cpg_actor.robots.anymal.config import QuadrupedConfig
+from cpg_actor.robots.anymal.gaits import quadruped_cpg, quadruped_joint_map
 from cpg_actor.robots.anymal.plugin import ENV_ID as ANYMAL_ENV_ID
 from cpg_actor.robots.anymal.vector import OBS_NAMES, AnymalVectorEnv, load_model
 from cpg_actor.robots.common.mujoco_runtime import mujoco

@@ -10,8 +10,8 @@ import pytest
 import torch
 
 from cpg_actor.cli import main
-from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
 from cpg_actor.robots.anymal import description as robot
+from cpg_actor.robots.anymal.gaits import quadruped_cpg, quadruped_joint_map
 from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 from cpg_actor.robots.common import mjx_runtime as runtime
 

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 import torch
 
-from cpg_actor.cpg import HOPPER_NOMINAL_POSE, hopper_cpg
 from cpg_actor.robots.hopper.cho2019 import (
     PARAMETER_RANGES,
     CPGParameterVectorEnv,
@@ -17,6 +16,7 @@ from cpg_actor.robots.hopper.cho2019 import (
 )
 from cpg_actor.robots.hopper.cho2019_reference import REFERENCE_PARAMETERS, evaluate_parameters
 from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.hopper.cpg import HOPPER_NOMINAL_POSE, hopper_cpg
 
 SHORT = HopperConfig(episode_steps=20)
 

@@ -35,8 +35,13 @@ def make(num_envs: int, config: Any, num_threads: int | None = None) -> Any:
 
 
 def cpg_layouts() -> dict[str, CPGLayout]:
-    from cpg_actor.cpg.foot_space import FootSpaceMap
-    from cpg_actor.cpg.gaits import GAITS, OSCILLATOR_JOINTS, quadruped_cpg, quadruped_leg_cpg
+    from cpg_actor.robots.anymal.foot_space import FootSpaceMap
+    from cpg_actor.robots.anymal.gaits import (
+        GAITS,
+        OSCILLATOR_JOINTS,
+        quadruped_cpg,
+        quadruped_leg_cpg,
+    )
 
     return {
         "joint": CPGLayout(quadruped_cpg, joints=OSCILLATOR_JOINTS, gaits=tuple(GAITS)),

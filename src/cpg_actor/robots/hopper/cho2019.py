@@ -46,10 +46,11 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from cpg_actor.cpg import CPGState, OscillatorParameters, hopf_step, hopper_cpg
+from cpg_actor.cpg import CPGState, OscillatorParameters, hopf_step
 from cpg_actor.robots.common.checks import check_real_tensor, real_actions
 from cpg_actor.robots.common.torch_env import EnvStep
 from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.hopper.cpg import hopper_cpg
 from cpg_actor.robots.hopper.simulation import OBS_BOUND, OBS_NAMES
 from cpg_actor.robots.hopper.vector import make_vector_env
 

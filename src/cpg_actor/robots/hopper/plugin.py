@@ -20,7 +20,7 @@ def make(num_envs: int, config: Any, num_threads: int | None = None) -> Any:
 
 
 def cpg_layouts() -> dict[str, CPGLayout]:
-    from cpg_actor.cpg.presets import hopper_cpg
+    from cpg_actor.robots.hopper.cpg import hopper_cpg
 
     return {"joint": CPGLayout(hopper_cpg)}
 

@@ -10,7 +10,7 @@ import pytest
 import torch
 
 from cpg_actor.cpg import CPGState
-from cpg_actor.cpg.gaits import (
+from cpg_actor.robots.anymal.gaits import (
     GAITS,
     OSCILLATOR_JOINTS,
     gait_phases,

@@ -1,6 +1,6 @@
 """The quadruped's ``leg`` layout: one oscillator per leg, a foot-space pattern through the
-leg's inverse kinematics (cpg_actor.cpg.foot_space), and its CPG (each gait's phase lags are
-where the network settles)."""
+leg's inverse kinematics (cpg_actor.robots.anymal.foot_space), and its CPG (each gait's phase lags
+are where the network settles)."""
 
 import math
 
@@ -9,9 +9,9 @@ import pytest
 import torch
 
 from cpg_actor.cpg import CPGState
-from cpg_actor.cpg.foot_space import CLEARANCE, PENETRATION, FootSpaceMap, front_leg_foot
-from cpg_actor.cpg.gaits import GAITS, quadruped_leg_cpg
 from cpg_actor.robots.anymal import description as robot
+from cpg_actor.robots.anymal.foot_space import CLEARANCE, PENETRATION, FootSpaceMap, front_leg_foot
+from cpg_actor.robots.anymal.gaits import GAITS, quadruped_leg_cpg
 from cpg_actor.robots.hopper import kinematics
 
 NOMINAL = torch.tensor(robot.NOMINAL_POSE, dtype=torch.float64)

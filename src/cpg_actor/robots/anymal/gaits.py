@@ -40,8 +40,8 @@ from collections.abc import Mapping, Sequence
 import torch
 from torch import Tensor
 
+from cpg_actor.cpg.joint_map import JointMap
 from cpg_actor.cpg.network import CPGNetwork
-from cpg_actor.cpg.presets import JointMap
 from cpg_actor.cpg.topology import Topology
 
 LEGS = ("LF", "RF", "LH", "RH")
@@ -112,7 +112,8 @@ def quadruped_cpg(
                          initial, frozen, check_inputs, dtype)  # fmt: skip
 
 
-# The ``leg`` layout (one oscillator per leg, a foot-space pattern: cpg_actor.cpg.foot_space):
+# The ``leg`` layout (one oscillator per leg, a foot-space pattern:
+# cpg_actor.robots.anymal.foot_space):
 # 3 Hz as the joint layout; r is half the foot's step, m: 1 + 8 d cm (at 3 Hz and duty 1/2 a
 # step of 2 r moves the body about 4 r f: 0.5 m/s at d = 0.5 with no slip).
 LEG_INITIAL = {
@@ -135,8 +136,8 @@ def quadruped_leg_cpg(
 ) -> CPGNetwork:
     """One oscillator per leg (LF, RF, LH, RH), coupled all to all with ``gait``'s phase lags
     and started in them; its amplitude is half the foot's step in metres
-    (:class:`~cpg_actor.cpg.foot_space.FootSpaceMap` turns phase and amplitude into joints).
-    Trainable as :func:`quadruped_cpg`, the drive gains included."""
+    (:class:`~cpg_actor.robots.anymal.foot_space.FootSpaceMap` turns phase and amplitude into
+    joints). Trainable as :func:`quadruped_cpg`, the drive gains included."""
     if gait not in GAITS:
         raise ValueError(f"unknown gait {gait!r}; available: {', '.join(GAITS)}")
     psi = [2.0 * math.pi * fraction for fraction in GAITS[gait]]
