@@ -26,7 +26,7 @@ fi
 # fails fast (and stops here) if the simulator or CUDA is missing
 { nvidia-smi -L; nproc; python3 - <<'EOF'
 import jax, torch
-from cpg_actor.envs import make_vector_env
+from cpg_actor.robots.hopper.vector import make_vector_env
 env = make_vector_env(4, sim="mjx")
 obs, _ = env.reset_tensors(seed=0)
 print(jax.devices(), jax.__version__, torch.__version__, torch.cuda.get_device_name(), obs.device)

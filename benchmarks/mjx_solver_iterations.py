@@ -1,8 +1,8 @@
 """MJX's Newton solver caps against each other and against MuJoCo's C solver, for both robots.
 
-The hopper hops open loop for 3 s (the 2 Hz squat-and-extend pattern of ``tests/envs/
-test_mjx.py``, 1 robot); the quadruped trots open loop for 6 s (the trot CPG at the drive of a
-1 m/s command, as ``tests/robots/anymal/test_anymal_mjx.py``, 4 robots, no reset noise). Each cap
+The hopper hops open loop for 3 s (the 2 Hz squat-and-extend pattern of ``tests/robots/
+hopper/test_mjx.py``, 1 robot); the quadruped trots open loop for 6 s (the trot CPG at the drive of
+a 1 m/s command, as ``tests/robots/anymal/test_anymal_mjx.py``, 4 robots, no reset noise). Each cap
 setting (``mjx_iterations`` / ``mjx_ls_iterations``) runs the same actions; the script reports
 the largest height difference from MJX at MuJoCo's own caps (100 / 50) and from MuJoCo's C
 solver (float64, its defaults), the return against the C solver's, and the time of a control

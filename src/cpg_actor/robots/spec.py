@@ -2,8 +2,9 @@
 by the environment (from the robot's description) and read by everything else.
 
 Agents are built from it (the number of joints, the nominal pose the actions are centred on,
-the control period of the CPG), so a new robot is a new environment and, for the CPG-Actor, a
-CPG preset for it (``cpg_actor.agents.cpg_actor.CPG_PRESETS``), not a change to the trainer.
+the control period of the CPG), so a new robot is a new environment and, for the CPG-Actor,
+its CPG layouts (``Robot.cpg_layouts``, :mod:`cpg_actor.robots.registry`), not a change to
+the trainer.
 """
 
 from __future__ import annotations

@@ -2,7 +2,8 @@
 a declared device.
 
 :class:`TorchVectorEnv` puts it around any Gymnasium-style vector env of this project (the
-hopper's :class:`~cpg_actor.envs.HopperVectorEnv`, the Cho et al. CPG wrapper, a test double):
+hopper's :class:`~cpg_actor.robots.hopper.vector.HopperVectorEnv`, the Cho et al. CPG wrapper, a
+test double):
 
 * ``reset(seed) -> (obs, info)``: obs ``(N, obs_dim)`` float32 on ``device``;
 * ``step(actions) -> EnvStep``: observations, rewards, terminated, truncated, the final

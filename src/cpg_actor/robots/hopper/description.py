@@ -4,7 +4,7 @@ Numbers are ANYmal B's right-front leg from ANYbotics' public description (the A
 BSD licence), collected in the project's design notes (not part of this repository) under
 "Facts for the hopper"; ``docs/hopper.md`` lists each number with its reason. ``mjcf.py``
 and ``urdf.py`` turn this data into the MJCF (MuJoCo)
-and URDF (PyBullet) files shipped in ``cpg_actor/envs/assets``; a test checks that both
+and URDF (PyBullet) files shipped in ``cpg_actor/robots/hopper/assets``; a test checks that both
 simulators load the same masses, inertias and joint frames from them.
 
 Frames and sign conventions (world: x forward, y to the robot's left, z up):

@@ -1,5 +1,6 @@
 """The hopper as pure JAX functions, batched over N robots and jitted: what
-:class:`cpg_actor.envs.HopperVectorEnv` computes on the CPU, computed on JAX's device.
+:class:`~cpg_actor.robots.hopper.vector.HopperVectorEnv` computes on the CPU, computed on JAX's
+device.
 
 Same robot, same physics and the same task as the CPU simulators:
 

@@ -2,8 +2,8 @@
 
 * The Gymnasium ``VectorEnv`` face (``reset`` / ``step``, numpy in and out, SAME_STEP autoreset,
   ``info["final_obs"]``, ``info["episode_metrics"]["hop_height"]``), exactly as
-  :class:`cpg_actor.envs.HopperVectorEnv`'s, so evaluation, the Cho et al. wrapper and any
-  Gymnasium tool work on it. It copies to the host at every step.
+  :class:`~cpg_actor.robots.hopper.vector.HopperVectorEnv`'s, so evaluation, the Cho et al. wrapper
+  and any Gymnasium tool work on it. It copies to the host at every step.
 * The trainer's tensor face (``reset_tensors`` / ``step_tensors``, torch in and out), which
   :class:`cpg_actor.robots.common.torch_env.TorchVectorEnv` uses when an env has it: actions go to
   JAX and observations, rewards and done flags come back to torch through DLPack, on JAX's
@@ -37,7 +37,8 @@ from cpg_actor.robots.hopper.mjx.dynamics import (
 
 class MjxHopperVectorEnv(VectorEnv):
     """N hoppers on MJX (module docstring). ``num_threads`` is accepted and ignored (JAX
-    chooses its own); the other arguments are :class:`cpg_actor.envs.HopperVectorEnv`'s."""
+    chooses its own); the other arguments are
+    :class:`~cpg_actor.robots.hopper.vector.HopperVectorEnv`'s."""
 
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
 
