@@ -31,10 +31,10 @@ import torch
 
 from bench_report import measured, write
 from cpg_actor.config import TrainConfig, apply_dict
-from cpg_actor.envs import make_vector_env
-from cpg_actor.envs.mjx.dynamics import jax
 from cpg_actor.machine import cpu_model, usable_cores
 from cpg_actor.presets import preset_values
+from cpg_actor.robots.hopper.mjx.dynamics import jax
+from cpg_actor.robots.hopper.vector import make_vector_env
 from cpg_actor.runner import Runner
 
 AGENTS = ("cpg-actor", "cpg-actor-open-loop", "mlp")

@@ -1,8 +1,8 @@
 """MJX's Newton solver caps against each other and against MuJoCo's C solver, for both robots.
 
-The hopper hops open loop for 3 s (the 2 Hz squat-and-extend pattern of ``tests/envs/
-test_mjx.py``, 1 robot); the quadruped trots open loop for 6 s (the trot CPG at the drive of a
-1 m/s command, as ``tests/envs/test_quadruped_mjx.py``, 4 robots, no reset noise). Each cap
+The hopper hops open loop for 3 s (the 2 Hz squat-and-extend pattern of ``tests/robots/
+hopper/test_mjx.py``, 1 robot); the quadruped trots open loop for 6 s (the trot CPG at the drive of
+a 1 m/s command, as ``tests/robots/anymal/test_anymal_mjx.py``, 4 robots, no reset noise). Each cap
 setting (``mjx_iterations`` / ``mjx_ls_iterations``) runs the same actions; the script reports
 the largest height difference from MJX at MuJoCo's own caps (100 / 50) and from MuJoCo's C
 solver (float64, its defaults), the return against the C solver's, and the time of a control
@@ -23,12 +23,12 @@ import time
 import numpy as np
 
 from bench_report import measured, write
-from cpg_actor.cpg.gaits import open_loop_positions
-from cpg_actor.envs import make_vector_env
-from cpg_actor.envs.mjx.dynamics import jax
-from cpg_actor.envs.quadruped import description as quadruped
-from cpg_actor.envs.quadruped.mjx import MjxAnymalVectorEnv
-from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+from cpg_actor.robots.anymal import description as quadruped
+from cpg_actor.robots.anymal.gaits import open_loop_positions
+from cpg_actor.robots.anymal.mjx import MjxAnymalVectorEnv
+from cpg_actor.robots.anymal.vector import AnymalVectorEnv
+from cpg_actor.robots.hopper.mjx.dynamics import jax
+from cpg_actor.robots.hopper.vector import make_vector_env
 
 HOPPER_STEPS = 300  # 3 s at 100 Hz
 ROBOTS = 4  # quadrupeds

@@ -6,7 +6,7 @@
 
 Inside a training rollout the MuJoCo envs (the hopper's backend, the quadruped's vector env)
 step their robots with
-:class:`~cpg_actor.envs.backends.threaded_rollout.ThreadedRollout`: at every control step the
+:class:`~cpg_actor.robots.common.threaded_rollout.ThreadedRollout`: at every control step the
 calling thread hands a job to the helper threads and steps chunks of robots itself, then
 waits for the helpers. Between two control steps the policy acts on one core and the helpers
 sleep. This script trains ``--preset`` (default ``throughput``, compiled; ``anymal``: the
@@ -27,7 +27,7 @@ sleep only from one call to the next. The ratio of the two wall times is what in
 policy with the simulation costs the simulation. Last, the two chunk schedules on the same
 calls, with the training's median pause between calls (the calling thread busy meanwhile, as with
 the policy): the guided one the rollout uses
-(:func:`~cpg_actor.envs.backends.threaded_rollout.guided_chunks`) and 4 fixed chunks per thread
+(:func:`~cpg_actor.robots.common.threaded_rollout.guided_chunks`) and 4 fixed chunks per thread
 (the schedule before 28 Nov 2026), alternating, 4 pairs; the median of the paired ratios of
 their call times. It also records the share of the machine's CPU time the
 hypervisor took (:func:`cpg_actor.machine.stolen_share`) and, on Linux, the guest's idle
@@ -51,9 +51,9 @@ import torch
 
 from bench_report import measured, write
 from cpg_actor.config import TrainConfig, apply_dict
-from cpg_actor.envs.backends import threaded_rollout
 from cpg_actor.machine import cpu_model, cpu_times, load_average, stolen_share, usable_cores
 from cpg_actor.presets import preset_values
+from cpg_actor.robots.common import threaded_rollout
 from cpg_actor.runner import Runner
 
 SYSFS = {

@@ -14,12 +14,13 @@ import torch
 
 import cpg_actor
 from cpg_actor.cli import main
-from cpg_actor.envs import HopperConfig, HopperVectorEnv
-from cpg_actor.envs.actuator import Actuator
-from cpg_actor.envs.quadruped import QuadrupedConfig
-from cpg_actor.envs.robots import robot_env
 from cpg_actor.export import OBSERVATION_SOURCES, export_policy, read_metadata, sidecar_paths
 from cpg_actor.policy import load_policy
+from cpg_actor.robots.anymal.config import QuadrupedConfig
+from cpg_actor.robots.common.actuator import Actuator
+from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.hopper.vector import HopperVectorEnv
+from cpg_actor.robots.registry import get_robot
 from tiny import trained_run  # tests/tiny.py (pytest puts tests/ on sys.path)
 
 
@@ -218,10 +219,10 @@ def test_the_exported_mjcf_is_the_model_the_env_simulates(config):
     """Loaded, the MJCF written next to an export equals the env's MjModel in every byte (the
     configured actuators, timestep, friction; the coast law's actuators switched off)."""
     name = "hopper" if isinstance(config, HopperConfig) else "anymal"
-    env = robot_env(name).make(1, config, 1)
+    env = get_robot(name).make(1, config, 1)
     try:
         simulated = env.sim.backend.model if name == "hopper" else env.model
-        loaded = mujoco.MjModel.from_xml_string(robot_env(name).mjcf(config))
+        loaded = mujoco.MjModel.from_xml_string(get_robot(name).mjcf(config))
         assert model_bytes(loaded) == model_bytes(simulated)
     finally:
         env.close()
@@ -230,7 +231,7 @@ def test_the_exported_mjcf_is_the_model_the_env_simulates(config):
 def test_exported_quadruped_policy_reads_its_drive_from_the_raw_command(tmp_path):
     """On the quadruped the exported step sets the CPG's drive from the raw observation (the
     forward-speed command) as the policy does: same actions and states, drive row included."""
-    from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+    from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 
     trained_run(tmp_path / "run", "cpg-actor", "anymal", env={"episode_seconds": 0.2})
     policy = load_policy(tmp_path / "run")

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import torch
 
-from cpg_actor.envs import HopperVectorEnv
 from cpg_actor.policy import load_policy
+from cpg_actor.robots.hopper.vector import HopperVectorEnv
 from cpg_actor.runner import Runner
 from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
 

@@ -575,7 +575,7 @@ def test_a_config_saved_before_a_field_existed_keeps_what_it_trained_with():
 
 
 def test_sim_mjx_without_jax_says_how_to_install_it(tmp_path, capsys, monkeypatch):
-    from cpg_actor.envs.mjx import runtime
+    from cpg_actor.robots.common import mjx_runtime as runtime
 
     def missing():
         raise runtime.MjxUnavailable(f"{runtime.INSTALL_HINT} (No module named 'jax')")

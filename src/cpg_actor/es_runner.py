@@ -57,11 +57,11 @@ from cpg_actor.checkpoint import (
 )
 from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
-from cpg_actor.envs.torch_env import TorchVectorEnv
 from cpg_actor.evaluation import evaluation_row, finite_mean
 from cpg_actor.policy import Policy
 from cpg_actor.ppo import RunningNormalizer
 from cpg_actor.progress import evaluation_text, make_progress
+from cpg_actor.robots.common.torch_env import TorchVectorEnv
 from cpg_actor.run_log import RunLog
 from cpg_actor.runner import EVAL_SEED_KEY, derived_seed, seed_everything
 

@@ -31,7 +31,7 @@ def finite_mean(values) -> float:
 
 def observation_columns(robot) -> dict[str, list[int]]:
     """Where the traces' quantities are in the observation, by the names the env's
-    :class:`cpg_actor.robot.RobotSpec` gives its columns: measured joint positions
+    :class:`cpg_actor.robots.spec.RobotSpec` gives its columns: measured joint positions
     (``p_m_<joint>``) and velocities (``v_m_<joint>``) in joint order, and the hip height
     where the robot has one. A quantity the robot does not observe is left out."""
     names = list(robot.observation_names)

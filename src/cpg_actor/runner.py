@@ -48,7 +48,6 @@ from cpg_actor.checkpoint import (
 )
 from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
-from cpg_actor.envs.torch_env import TorchVectorEnv
 from cpg_actor.episodes import EpisodeLog, EpisodeStats
 from cpg_actor.evaluation import evaluation_row
 from cpg_actor.machine import usable_cores
@@ -63,6 +62,7 @@ from cpg_actor.ppo import (
     compile_reproducibly,
 )
 from cpg_actor.progress import evaluation_text, make_progress, metrics_text, return_text
+from cpg_actor.robots.common.torch_env import TorchVectorEnv
 from cpg_actor.run_log import RunLog
 
 WARM_START_SEED_KEY = 2**31  # derived_seed(seed, this) seeds the warm start's environments

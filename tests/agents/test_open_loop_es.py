@@ -14,10 +14,10 @@ from cpg_actor.agents.open_loop_es import CMASearch, ESConfig, Rollouts, episode
 from cpg_actor.checkpoint import load_checkpoint
 from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig, compose_config
-from cpg_actor.envs import HopperConfig
 from cpg_actor.es_runner import ESRunner
 from cpg_actor.evaluation import evaluate
 from cpg_actor.policy import Policy, load_policy
+from cpg_actor.robots.hopper.config import HopperConfig
 
 # tests/ppo/fake_env.py: pytest puts tests/ on sys.path (tests/ is not a package)
 from ppo.fake_env import FakeHopperVectorEnv  # noqa: I001

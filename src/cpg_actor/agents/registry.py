@@ -28,9 +28,9 @@ from cpg_actor.agents.warm_start import warm_start_mlp
 
 
 def make_robot_env(num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
-    """The robot's plain vector env (the hopper, or the quadruped for a ``QuadrupedConfig``):
-    actions are desired joint positions."""
-    from cpg_actor.envs.robots import make_robot_env as make
+    """The plain vector env of the robot whose config ``env_config`` is
+    (:mod:`cpg_actor.robots.registry`): actions are desired joint positions."""
+    from cpg_actor.robots.registry import make_robot_env as make
 
     return make(num_envs, env_config, num_threads)
 
@@ -47,7 +47,7 @@ def env_shapes(env: Any) -> tuple[int, np.ndarray]:
 @dataclass(frozen=True)
 class AgentSpec:
     """``build(agent_config, env) -> Agent``: the agent for an env, from its spaces and its
-    ``robot`` (:class:`cpg_actor.robot.RobotSpec`: joints, nominal pose, control period);
+    ``robot`` (:class:`cpg_actor.robots.spec.RobotSpec`: joints, nominal pose, control period);
     ``env_factory(num_envs, env_config, num_threads) -> vector env`` (the robot's env, the
     hopper by default); ``wrapper(env, agent_config) -> env``, an environment around the
     robot's that the agent needs (``cho2019``: the CPG inside the env); an optional supervised

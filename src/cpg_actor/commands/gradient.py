@@ -102,12 +102,12 @@ def markdown(result: dict, share: float | None, title: str) -> str:
 def run(args: argparse.Namespace) -> int:
 
     from cpg_actor.checkpoint import atomic_write_text
-    from cpg_actor.envs.torch_env import TorchVectorEnv
     from cpg_actor.experiments.gradient import (
         collect_rollout,
         feedback_score_share,
         truncation_study,
     )
+    from cpg_actor.robots.common.torch_env import TorchVectorEnv
 
     if args.envs < 1 or args.steps < 2:
         raise ValueError(f"--envs must be >= 1 and --steps >= 2, got {args.envs}, {args.steps}")

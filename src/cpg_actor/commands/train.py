@@ -14,8 +14,6 @@ from cpg_actor.config import (
     compose_config,
     parse_steps,
 )
-from cpg_actor.envs.config import SIMULATORS
-from cpg_actor.envs.robots import ROBOTS, robot_env
 from cpg_actor.files import (
     MARKER,
     RUN,
@@ -29,6 +27,8 @@ from cpg_actor.files import (
 from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.presets import PRESETS
 from cpg_actor.progress import evaluation_text, metrics_text
+from cpg_actor.robots.hopper.config import SIMULATORS
+from cpg_actor.robots.registry import ROBOTS, get_robot
 from cpg_actor.run_lock import LOCK_NAME, RunLock
 
 HELP = (
@@ -131,7 +131,7 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
         flags["robot"] = args.robot
     if args.sim is not None:
         robot = flags.get("robot", TrainConfig.robot)
-        fields = {f.name for f in dataclasses.fields(robot_env(robot).config_class)}
+        fields = {f.name for f in dataclasses.fields(get_robot(robot).config_class)}
         if "sim" in fields:
             flags["env"] = {"sim": args.sim}
         elif args.sim != "mujoco":  # a robot with one simulator: MuJoCo

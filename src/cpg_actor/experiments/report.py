@@ -12,7 +12,6 @@ from typing import Any
 
 import numpy as np
 
-from cpg_actor.envs.reward import REWARD_TERMS
 from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.figures import make_figures, steps_per_iteration
 from cpg_actor.experiments.floor import FLOOR_FILE, load_floor
@@ -27,6 +26,7 @@ from cpg_actor.experiments.results import (
 )
 from cpg_actor.experiments.transfer import load_transfer, transfer_lines
 from cpg_actor.machine import cpu_model, git_commit
+from cpg_actor.robots.hopper.reward import REWARD_TERMS
 
 PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
 PAPER_STAGE_STEPS = (1_000_000, 20_000_000, 60_000_000)
