@@ -16,8 +16,8 @@ import cpg_actor
 from cpg_actor.cli import main
 from cpg_actor.export import OBSERVATION_SOURCES, export_policy, read_metadata, sidecar_paths
 from cpg_actor.policy import load_policy
-from cpg_actor.robots.anymal.config import QuadrupedConfig
 from cpg_actor.robots.common.actuator import Actuator
+from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.robots.hopper.vector import HopperVectorEnv
 from cpg_actor.robots.registry import get_robot

@@ -353,7 +353,7 @@ def apply_dict(obj: Any, data: dict[str, Any], prefix: str) -> None:
     if prefix == "" and isinstance(obj, TrainConfig) and "robot" in data:
         config_class = get_robot(str(data["robot"])).config_class
         obj.robot = str(data["robot"])
-        if not isinstance(obj.env, config_class):
+        if type(obj.env) is not config_class:  # a subclass is another robot's config
             obj.env = config_class()
         data = {key: value for key, value in data.items() if key != "robot"}
     names = {f.name: f for f in dataclasses.fields(obj)}

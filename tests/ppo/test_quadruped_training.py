@@ -11,8 +11,8 @@ import torch
 from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig, apply_dict, parse_override
 from cpg_actor.ppo import PPOConfig
-from cpg_actor.robots.anymal.config import QuadrupedConfig
 from cpg_actor.robots.anymal.vector import AnymalVectorEnv
+from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.runner import Runner
 from tiny import tiny_config
 

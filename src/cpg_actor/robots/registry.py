@@ -31,7 +31,7 @@ def get_robot(name: str) -> Robot:
 def robot_of_config(env_config: Any) -> Robot:
     """The robot whose env config ``env_config`` is."""
     for robot in ROBOTS.values():
-        if isinstance(env_config, robot.config_class):
+        if type(env_config) is robot.config_class:  # a subclass is another robot's config
             return robot
     raise ValueError(f"{type(env_config).__name__} is no robot's env config")
 

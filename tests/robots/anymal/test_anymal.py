@@ -8,11 +8,12 @@ import numpy as np
 import pytest
 
 from cpg_actor.robots.anymal import description as robot
-from cpg_actor.robots.anymal.config import QuadrupedConfig
 from cpg_actor.robots.anymal.gaits import open_loop_positions
 from cpg_actor.robots.anymal.plugin import ENV_ID as ANYMAL_ENV_ID
-from cpg_actor.robots.anymal.vector import OBS_NAMES, AnymalVectorEnv, load_model
+from cpg_actor.robots.anymal.vector import ANYMAL, OBS_NAMES, AnymalVectorEnv
 from cpg_actor.robots.common.mujoco_runtime import mujoco
+from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
+from cpg_actor.robots.common.quadruped.vector import load_model
 from cpg_actor.robots.hopper import description as hopper
 from cpg_actor.tasks import velocity as task
 
@@ -20,7 +21,7 @@ NOMINAL = np.array(robot.NOMINAL_POSE)
 
 
 def test_masses_and_the_legs_are_the_hoppers_mirrored():
-    model = load_model(QuadrupedConfig())
+    model = load_model(ANYMAL, QuadrupedConfig())
     assert model.body_mass.sum() == pytest.approx(16.793507758 + 4 * 3.40697, abs=1e-4)
     assert robot.TOTAL_MASS == pytest.approx(30.4214, abs=1e-4)
     # the right-front leg is the hopper's leg: same masses, COMs and principal inertias
@@ -139,7 +140,7 @@ def test_saved_state_continues_exactly():
         step = other.step(a)
         assert np.array_equal(step[0], obs) and np.array_equal(step[1], reward)
         assert np.array_equal(step[2], terminated) and np.array_equal(step[3], truncated)
-    with pytest.raises(ValueError, match="not an AnymalVectorEnv state"):
+    with pytest.raises(ValueError, match="not a state of AnymalVectorEnv"):
         other.set_state({"simulation": {}})
     # a state saved before the foot-slip counters existed: they restart at 0, the rest exact
     old = {"anymal": {k: v for k, v in state["anymal"].items()

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from cpg_actor.cli import main
-from cpg_actor.robots.anymal.config import QuadrupedConfig
 from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 from cpg_actor.robots.common import mujoco_runtime
 from cpg_actor.robots.common.mujoco_runtime import mujoco  # MUJOCO_GL chosen on import
+from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.common.video import RenderingUnavailable, write_video
 
 FRAME = (QuadrupedConfig().render_height, QuadrupedConfig().render_width, 3)

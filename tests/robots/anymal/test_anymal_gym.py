@@ -14,12 +14,12 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 from cpg_actor.robots.anymal import description as robot
-from cpg_actor.robots.anymal.config import QuadrupedConfig
 from cpg_actor.robots.anymal.env import AnymalEnv
 from cpg_actor.robots.anymal.plugin import ENV_ID as ANYMAL_ENV_ID
 from cpg_actor.robots.anymal.plugin import MJX_ENV_ID as ANYMAL_MJX_ENV_ID
 from cpg_actor.robots.anymal.plugin import ROBOT as ANYMAL
 from cpg_actor.robots.anymal.vector import AnymalVectorEnv
+from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 
 NOMINAL = np.array(robot.NOMINAL_POSE)
 DOC = Path(__file__).resolve().parents[3] / "docs" / "quadruped.md"

@@ -132,7 +132,7 @@ def test_bad_input_gets_a_clear_error(envs):
         env.step(np.zeros((4, 2)))
     with pytest.raises(ValueError, match="finite"):
         env.step(np.full((4, 12), np.nan))
-    with pytest.raises(ValueError, match="not an MjxAnymalVectorEnv state"):
+    with pytest.raises(ValueError, match="not a state of MjxAnymalVectorEnv"):
         env.set_state({"anymal": {}})
     with pytest.raises(ValueError, match="sim must be one of mujoco, mjx"):
         MjxAnymalVectorEnv(N, {"sim": "pybullet"})

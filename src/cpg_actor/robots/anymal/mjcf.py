@@ -16,6 +16,7 @@ from pathlib import Path
 
 from cpg_actor.robots.anymal import description as robot
 from cpg_actor.robots.common.mjcf import actuator_xml, exact, preamble
+from cpg_actor.robots.common.quadruped.model import task_sensors
 
 
 def _v(values) -> str:
@@ -60,31 +61,13 @@ def _leg(leg: str, indent: str) -> list[str]:
     return lines + closes[::-1]
 
 
-# after the 12 actuatorfrc sensors (N m), in this order (the env reads them by these offsets)
-SENSORS = (("gyro", 3), ("velocimeter", 3), ("feet", 12), ("base_touch", 1))
-
-
-def _task_sensors() -> list[str]:
-    """Base angular and linear velocity (base frame), the feet's world positions, and the
-    normal force on the base box (its contacts with the ground: a fall)."""
-    return [
-        "  <sensor>",
-        '    <gyro name="base_ang_vel" site="imu"/>',
-        '    <velocimeter name="base_lin_vel" site="imu"/>',
-        *(f'    <framepos name="{leg}_foot_pos" objtype="site" objname="{leg}_foot"/>'
-          for leg in robot.LEGS),
-        '    <touch name="base_touch" site="base_touch"/>',
-        "  </sensor>",
-    ]  # fmt: skip
-
-
 MJCF_PATH = Path(__file__).resolve().parent / "assets" / f"{robot.ROBOT_NAME}.xml"
 
 
 def default_actuator():
     """The actuator law's constants of the default :class:`QuadrupedConfig`."""
-    from cpg_actor.robots.anymal.config import QuadrupedConfig
     from cpg_actor.robots.common.actuator import Actuator
+    from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 
     return Actuator.from_config(QuadrupedConfig())
 
@@ -132,7 +115,7 @@ def mjcf_text(
             *actuator_xml(
                 actuator or default_actuator(), robot.JOINT_NAMES, torque_control=torque_control
             ),  # fmt: skip
-            *([] if torque_control else _task_sensors()),
+            *([] if torque_control else task_sensors(robot.LEGS)),
             "</mujoco>",
             "",
         ]
@@ -141,7 +124,8 @@ def mjcf_text(
 
 def simulated_mjcf(config) -> str:
     """The MJCF of the model :class:`~cpg_actor.robots.anymal.vector.AnymalVectorEnv`
-    simulates under ``config`` (a :class:`~cpg_actor.robots.anymal.QuadrupedConfig`): its
+    simulates under ``config`` (a
+    :class:`~cpg_actor.robots.common.quadruped.config.QuadrupedConfig`): its
     actuators, timestep and foot-ground friction written in. Loaded, it is the env's model
     field for field (``tests/test_export.py``); ``cpg-actor export`` writes it next to the
     policy."""

@@ -5,23 +5,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from cpg_actor.robots.anymal.config import QuadrupedConfig
-from cpg_actor.robots.plugin import CPGLayout, GymId, MetricInfo, Robot
+from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
+from cpg_actor.robots.common.quadruped.metrics import METRICS
+from cpg_actor.robots.plugin import CPGLayout, GymId, Robot
 
 ENV_ID = "cpg_actor/AnymalB-v0"  # gymnasium.make or make_vec
 MJX_ENV_ID = "cpg_actor/AnymalB-mjx-v0"  # on MJX, batched only
-
-# the velocity task's episode metrics
-METRICS = {
-    "speed_error": MetricInfo("forward-speed error", "m/s"),
-    "forward_speed": MetricInfo("forward speed", "m/s"),
-    "fell": MetricInfo("share of episodes that fell"),
-    "episode_seconds": MetricInfo("episode length", "s"),
-    "cost_of_transport": MetricInfo(
-        "cost of transport", undefined="the robot walked less than 0.1 m forward"
-    ),
-    "foot_slip": MetricInfo("foot slip speed", "m/s", undefined="no foot was planted"),
-}
 
 
 def make(num_envs: int, config: Any, num_threads: int | None = None) -> Any:

@@ -61,7 +61,8 @@ def actuator_xml(
     MuJoCo's ``dcmotor`` with ``input="pos"`` commands the torque ``Kp (u - q) - Kd q_dot``
     through a driver voltage clamped to ``V``; ``nominal="V tau_sat v_max"`` makes the motor's
     torque-speed line ``tau_sat (+-1 - q_dot / v_max)`` at that clamp, and ``saturation`` clips
-    the torque to ``tau_max``. ``V`` = 1 volt is arbitrary: only the ratios matter.
+    the torque to ``tau_max``. ``V`` = 1 volt is arbitrary: only the ratios matter. Constants
+    given per joint (or per joint of a leg) are written joint by joint.
 
     ``torque_control``: plain ``motor`` actuators whose control is the joint torque, and no
     sensors, for MJX (which has no ``dcmotor``): the MJX backend computes the same law itself
@@ -74,14 +75,23 @@ def actuator_xml(
             *(f'{inner}<motor name="{j}" joint="{j}"/>' for j in joint_names),
             f"{indent}</actuator>",
         ]
-    a = actuator
-    motor = (
-        f'input="pos" nominal="1 {a.saturation_torque:.17g} {a.velocity_limit:.17g}" '
-        f'controller="{a.kp:.17g} 0 {a.kd:.17g} 0 0 1" saturation="{a.torque_limit:.17g} 0 0"'
-    )
+    n = len(joint_names)
+    kp, kd, limit, speed, stall = (actuator.per_joint(name, n) for name in
+                                   ("kp", "kd", "torque_limit", "velocity_limit",
+                                    "saturation_torque"))  # fmt: skip
+
+    def motor(i: int) -> str:
+        return (
+            f'input="pos" nominal="1 {stall[i]:.17g} {speed[i]:.17g}" '
+            f'controller="{kp[i]:.17g} 0 {kd[i]:.17g} 0 0 1" saturation="{limit[i]:.17g} 0 0"'
+        )
+
     return [
         f"{indent}<actuator>",
-        *(f'{inner}<dcmotor name="{j}" joint="{j}" {motor}/>' for j in joint_names),
+        *(
+            f'{inner}<dcmotor name="{j}" joint="{j}" {motor(i)}/>'
+            for i, j in enumerate(joint_names)
+        ),  # fmt: skip
         f"{indent}</actuator>",
         f"{indent}<sensor>",
         *(f'{inner}<actuatorfrc name="{j}_torque" actuator="{j}"/>' for j in joint_names),

@@ -1,4 +1,10 @@
-"""`QuadrupedConfig`: every number of the quadruped's locomotion task, with its reason."""
+"""`QuadrupedConfig`: every number of a quadruped's locomotion task, with its reason.
+
+Its defaults are ANYmal B's (the first quadruped here); another robot subclasses it and changes
+the defaults where its body differs (``robots/go1/config.py``). The actuator constants are one
+number for all 12 joints, or three, one per joint of a leg (in the leg's joint order), repeated
+for each leg.
+"""
 
 from __future__ import annotations
 
@@ -7,7 +13,7 @@ import math
 from dataclasses import dataclass, field
 
 
-def _default_scales() -> dict[str, float]:
+def default_scales() -> dict[str, float]:
     # legged_gym's ANYmal scales (Rudin et al. 2021), per second of simulated time (each term is
     # multiplied by the control step), plus the two terms the task asks for that legged_gym
     # leaves at 0: orientation and base height.
@@ -29,11 +35,19 @@ def _default_scales() -> dict[str, float]:
 
 
 SIMULATORS = ("mujoco", "mjx")  # the quadruped's backends
+ACTUATOR_FIELDS = ("kp", "kd", "torque_limit", "velocity_limit", "saturation_torque")
+
+
+def _number(value, bound: float, strict: bool) -> bool:
+    """A finite int or float (no bool) above ``bound`` (``strict``) or at least it."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        return False
+    return value > bound if strict else value >= bound
 
 
 @dataclass
 class QuadrupedConfig:
-    """The ANYmal B locomotion task (``docs/quadruped.md``)."""
+    """The locomotion task of a quadruped; the defaults are ANYmal B's (``docs/quadruped.md``)."""
 
     # "mujoco" (MuJoCo on the CPU, the default) or "mjx" (MuJoCo XLA: JAX on a GPU where it
     # has one; docs/quadruped.md, "Backends")
@@ -46,12 +60,13 @@ class QuadrupedConfig:
     decimation: int = 10  # substeps per control step: control at 50 Hz (legged_gym's)
     episode_seconds: float = 20.0  # s, then truncated
     foot_friction: float = 0.8  # the hopper's
-    # the hopper's actuator law on all 12 joints (cpg_actor.robots.common.actuator)
-    kp: float = 80.0  # N m / rad
-    kd: float = 2.0  # N m s / rad
-    torque_limit: float = 40.0  # N m
-    velocity_limit: float = 15.0  # rad/s
-    saturation_torque: float = 80.0  # N m
+    # the hopper's actuator law on all 12 joints (cpg_actor.robots.common.actuator); each a
+    # number, or three: one per joint of a leg
+    kp: float | tuple[float, ...] = 80.0  # N m / rad
+    kd: float | tuple[float, ...] = 2.0  # N m s / rad
+    torque_limit: float | tuple[float, ...] = 40.0  # N m
+    velocity_limit: float | tuple[float, ...] = 15.0  # rad/s
+    saturation_torque: float | tuple[float, ...] = 80.0  # N m
     actuator_law: str = "dc-motor"
     # commands, each uniform in its range per episode: forward and lateral speed (base frame)
     # and yaw rate. Lateral and yaw are 0 by default (the forward task); the CPG's drive follows
@@ -64,7 +79,7 @@ class QuadrupedConfig:
     # (docs/quadruped.md)
     tracking_sigma: float = 0.1
     base_height_target: float = 0.48  # m: where the nominal pose stands under its weight
-    reward_scales: dict[str, float] = field(default_factory=_default_scales)
+    reward_scales: dict[str, float] = field(default_factory=default_scales)
     reset_noise: float = 0.1  # rad, uniform on each joint around the nominal pose
     fall_height: float = 0.25  # m: a base lower than this has fallen (standing: 0.48)
     fall_tilt: float = 1.0  # rad: a base tilted more than this has fallen
@@ -82,16 +97,28 @@ class QuadrupedConfig:
 
     def validate(self) -> QuadrupedConfig:
         """Raise ``ValueError`` naming the first bad field; returns ``self``."""
-        for name in ("physics_dt", "episode_seconds", "kp", "torque_limit", "velocity_limit",
-                     "saturation_torque", "tracking_sigma", "base_height_target", "fall_height",
-                     "fall_tilt"):  # fmt: skip
+        for name in ("physics_dt", "episode_seconds", "tracking_sigma", "base_height_target",
+                     "fall_height", "fall_tilt"):  # fmt: skip
             value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+            if not _number(value, 0.0, strict=True):
                 raise ValueError(f"{name} must be a positive finite number, got {value!r}")
-        for name in ("kd", "foot_friction", "reset_noise"):
+        for name in ("foot_friction", "reset_noise"):
             value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value >= 0):
+            if not _number(value, 0.0, strict=False):
                 raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        for name in ACTUATOR_FIELDS:
+            value, strict = getattr(self, name), name != "kd"
+            if isinstance(value, list):  # from YAML or --set
+                value = tuple(value)
+                setattr(self, name, value)
+            ok = _number(value, 0.0, strict) or (
+                isinstance(value, tuple) and len(value) == 3
+                and all(_number(v, 0.0, strict) for v in value)
+            )  # fmt: skip
+            if not ok:
+                raise ValueError(f"{name} must be a finite number {'>' if strict else '>='} 0 "
+                                 f"or three of them (one per joint of a leg), got "
+                                 f"{value!r}")  # fmt: skip
         if self.sim not in SIMULATORS:
             raise ValueError(f"sim must be one of {', '.join(SIMULATORS)} for the quadruped, "
                              f"got {self.sim!r}")  # fmt: skip
@@ -118,10 +145,10 @@ class QuadrupedConfig:
         if not isinstance(self.reward_scales, dict):
             raise ValueError(f"reward_scales must be a mapping of term to scale, got "
                              f"{self.reward_scales!r}")  # fmt: skip
-        unknown = set(self.reward_scales) - set(_default_scales())
+        unknown = set(self.reward_scales) - set(default_scales())
         if unknown:
             raise ValueError(
-                f"unknown reward terms {sorted(unknown)}; accepted: {sorted(_default_scales())}"
+                f"unknown reward terms {sorted(unknown)}; accepted: {sorted(default_scales())}"
             )
         for term, scale in self.reward_scales.items():
             if isinstance(scale, bool) or not (isinstance(scale, int | float)
@@ -142,10 +169,10 @@ class QuadrupedConfig:
         unknown = set(values) - names
         if unknown:
             raise ValueError(
-                f"unknown QuadrupedConfig fields {sorted(unknown)}; accepted: {sorted(names)}"
+                f"unknown {cls.__name__} fields {sorted(unknown)}; accepted: {sorted(names)}"
             )
         given = values.get("reward_scales", {})
         if not isinstance(given, dict):
             raise ValueError(f"reward_scales must be a mapping of term to scale, got {given!r}")
-        scales = {**_default_scales(), **given}
+        scales = {**cls().reward_scales, **given}  # the class's defaults for the others
         return cls(**{**values, "reward_scales": scales}).validate()
