@@ -49,8 +49,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--robot",
         default=None,
         choices=sorted(ROBOTS),
-        help="hopper (the paper's leg on a rail, default) or anymal (ANYmal B walking, MuJoCo "
-        "only; docs/quadruped.md)",
+        help="the robot (cpg_actor.robots.registry; default hopper, the paper's leg on a rail; "
+        "the quadrupeds: docs/quadruped.md, docs/go1.md)",
     )
     parser.add_argument(
         "--sim",

@@ -14,10 +14,11 @@ from typing import Any
 import gymnasium
 
 from cpg_actor.robots.anymal.plugin import ROBOT as ANYMAL
+from cpg_actor.robots.go1.plugin import ROBOT as GO1
 from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
 from cpg_actor.robots.plugin import CPGLayout, MetricInfo, Robot
 
-ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (HOPPER, ANYMAL)}
+ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (HOPPER, ANYMAL, GO1)}
 DEFAULT_ROBOT = HOPPER.name
 
 
