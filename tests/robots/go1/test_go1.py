@@ -79,6 +79,22 @@ def test_the_drives_are_clipped_at_the_go1s_torque_limits(model):
     assert upper[0, 2] == pytest.approx(0.0, abs=1e-9) and lower[0, 2] == -35.55
 
 
+@pytest.mark.parametrize(
+    "config", [Go1Config(), Go1Config(physics_dt=0.0013, foot_friction=0.55, kd=(1.0, 2.0, 3.0))]
+)
+def test_the_exported_mjcf_is_the_model_the_env_simulates(config):
+    """Loaded, the MJCF `cpg-actor export` writes equals the env's MjModel in every byte."""
+    env = get_robot("go1").make(1, config, 1)
+    loaded = mujoco.MjModel.from_xml_string(get_robot("go1").mjcf(config))
+    saved = []
+    for model in (loaded, env.model):
+        buffer = np.zeros(mujoco.mj_sizeModel(model), dtype=np.uint8)
+        mujoco.mj_saveModel(model, None, buffer)
+        saved.append(buffer.tobytes())
+    assert saved[0] == saved[1]
+    env.close()
+
+
 def test_the_registry_lists_the_go1_and_tells_its_config_from_anymals():
     assert "go1" in ROBOTS and get_robot("go1").config_class is Go1Config
     assert robot_of_config(Go1Config()).name == "go1"

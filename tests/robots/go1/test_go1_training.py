@@ -46,3 +46,19 @@ def test_train_from_the_command_line(tmp_path):
     assert (run / "checkpoints" / "last.pt").exists()
     lines = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines()]
     assert lines and "go1" in (run / "config.yaml").read_text()
+
+
+def test_a_trained_policy_exports_with_the_go1s_actuators(tmp_path):
+    """`cpg-actor export` of a Go1 run: the metadata names the robot and its per-joint
+    actuator constants, and the MJCF written next to the policy is the Go1's."""
+    from cpg_actor.export import export_policy, read_metadata, sidecar_paths
+    from cpg_actor.policy import load_policy
+    from tiny import trained_run
+
+    run = trained_run(tmp_path / "run", "cpg-actor", "go1", env={"episode_seconds": 0.2})
+    path = export_policy(load_policy(run), tmp_path / "policy.pt", "torchscript")
+    metadata = read_metadata(path)
+    assert metadata["robot"] == "go1" and metadata["robot_model"] == "unitree-go1"
+    actuator = metadata["actuator"]
+    assert actuator["torque_limit"] == [23.7, 23.7, 35.55]
+    assert '<mujoco model="go1">' in sidecar_paths(path)["mjcf"].read_text()
