@@ -25,8 +25,9 @@ from pathlib import Path
 import torch
 from torch.utils import benchmark
 
-from cpg_actor.cpg import CPGState, hopper_cpg
+from cpg_actor.cpg import CPGState
 from cpg_actor.machine import cpu_model, load_average
+from cpg_actor.robots.hopper.cpg import hopper_cpg
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "cpg_step.md"
 BATCH_SIZES = (1, 16, 256, 1024, 4096)

@@ -15,7 +15,7 @@ For each backend and number of environments N the script measures, in the same r
   the GIL), and
   ``rollout``: ``mujoco.rollout`` doing ``decimation`` steps per robot in C++, the faster of
   MuJoCo's own thread pool (``Rollout(nthread=threads)``) and the env's
-  :class:`~cpg_actor.envs.backends.threaded_rollout.ThreadedRollout` (the calling thread and
+  :class:`~cpg_actor.robots.common.threaded_rollout.ThreadedRollout` (the calling thread and
   helpers), both timed.
   Until 27 Nov 2026 the ceilings stepped one snapshot of states (50 control steps in) over
   and over; what a step costs depends on the phase of the hop (contacts), by up to 1.5x, so
@@ -44,8 +44,9 @@ from pathlib import Path
 
 import numpy as np
 
-from cpg_actor.envs import HopperConfig, HopperVectorEnv
 from cpg_actor.machine import cpu_model, load_average, usable_cores
+from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.hopper.vector import HopperVectorEnv
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "results" / "env_throughput.md"
 SIZES = (1, 16, 64, 256, 1024)
@@ -56,7 +57,7 @@ def machine_description() -> list[str]:
     import gymnasium
     import mujoco
 
-    from cpg_actor.envs.backends.pybullet_backend import pybullet
+    from cpg_actor.robots.hopper.backends.pybullet_backend import pybullet
 
     load = load_average()
     return [
@@ -91,7 +92,7 @@ WARMUP_STEPS = 50  # control steps of hopping before anything is timed or record
 
 
 class MotionRecorder:
-    """Records the control steps of a MuJoCo backend (:class:`~cpg_actor.envs.backends.
+    """Records the control steps of a MuJoCo backend (:class:`~cpg_actor.robots.hopper.backends.
     mujoco_backend.MujocoBackend`): the robots' full physics state before each and the mean
     joint torques it applied (what ``track`` returns), the motion a :class:`ReplayCeiling`
     replays. It wraps ``track`` on this one backend until :meth:`stop`; it copies a (K, 8)
@@ -137,7 +138,7 @@ class ReplayCeiling:
 
     * :meth:`rollout_rate`: ``mujoco.rollout`` of all K robots per control step, the faster
       of MuJoCo's thread pool (``Rollout(nthread=threads)``) and the env's own
-      :class:`~cpg_actor.envs.backends.threaded_rollout.ThreadedRollout`
+      :class:`~cpg_actor.robots.common.threaded_rollout.ThreadedRollout`
       (:meth:`rollout_rates`: each of the two).
     * :meth:`loop_rate`: a Python loop of ``mj_setState`` and ``mujoco.mj_step`` over the
       robots, split across ``threads`` threads (``mj_step`` releases the GIL).
@@ -148,7 +149,7 @@ class ReplayCeiling:
         import mujoco
         from mujoco import rollout
 
-        from cpg_actor.envs.backends.threaded_rollout import ThreadedRollout
+        from cpg_actor.robots.common.threaded_rollout import ThreadedRollout
 
         self.mujoco = mujoco
         self.model = copy.copy(model)
@@ -255,7 +256,10 @@ def bench_size(sim: str, num_envs: int, repeats: int, budget: int) -> dict:
         ceiling.close()
         row.update(env=env_rate, loop=loop_rate, rollout=roll_rate)
     else:
-        clients = [world.client for world in backend._worlds]
+        from cpg_actor.robots.hopper.backends.pybullet_backend import ROBOTS_PER_WORLD
+
+        first_of_each_world = range(0, num_envs, ROBOTS_PER_WORLD)
+        clients = [backend.handle(i)[0] for i in first_of_each_world]
 
         def run_bare() -> None:
             for _ in range(steps * config.decimation):

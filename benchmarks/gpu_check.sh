@@ -26,7 +26,7 @@ fi
 # fails fast (and stops here) if the simulator or CUDA is missing
 { nvidia-smi -L; nproc; python3 - <<'EOF'
 import jax, torch
-from cpg_actor.envs import make_vector_env
+from cpg_actor.robots.hopper.vector import make_vector_env
 env = make_vector_env(4, sim="mjx")
 obs, _ = env.reset_tensors(seed=0)
 print(jax.devices(), jax.__version__, torch.__version__, torch.cuda.get_device_name(), obs.device)
@@ -35,7 +35,8 @@ EOF
 PARTS=" ${PARTS:-tests bench train scaling} "
 part() { [[ "$PARTS" == *" $1 "* ]]; }
 part tests && timeout "${TESTS_S:-120}" python3 -m pytest -q -p no:cacheprovider tests/test_device.py \
-    tests/training/test_mjx_training.py tests/envs/test_mjx.py tests/envs/test_quadruped_mjx.py \
+    tests/training/test_mjx_training.py tests/robots/hopper/test_mjx.py \
+    tests/robots/anymal/test_anymal_mjx.py tests/robots/go1/test_go1_mjx.py \
     2>&1 | tee -a "$OUT/cuda_tests.txt"
 part bench && timeout "${BENCH_S:-170}" python3 benchmarks/gpu_throughput.py \
     --envs ${ENVS:-1024 4096 32768 131072} --agents ${AGENTS:-cpg-actor mlp} --iterations 2 \

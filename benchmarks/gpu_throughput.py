@@ -32,9 +32,9 @@ import torch
 from bench_report import measured, write
 from cpg_actor.config import TrainConfig, apply_dict
 from cpg_actor.config.presets import preset_values
-from cpg_actor.envs import make_vector_env
-from cpg_actor.envs.mjx.dynamics import jax
 from cpg_actor.machine import cpu_model, usable_cores
+from cpg_actor.robots.hopper.mjx.dynamics import jax
+from cpg_actor.robots.hopper.vector import make_vector_env
 from cpg_actor.training.runner import Runner
 
 AGENTS = ("cpg-actor", "cpg-actor-open-loop", "mlp")
@@ -67,7 +67,7 @@ def physics_and_env(num_envs: int, repeats: int) -> dict[str, float]:
     try:
         env.reset_tensors(seed=0)
         dynamics = env.dynamics
-        control = jax.jit(jax.vmap(dynamics._control))
+        control = jax.jit(jax.vmap(dynamics.control))
         phase = np.random.default_rng(0).uniform(0, 2 * np.pi, (num_envs, 1))
         draws = [  # one 2 Hz period of 50 control steps
             np.array([0.4, -0.8]) + np.array([0.35, -0.7]) * np.sin(2 * np.pi * k / 50 + phase)
@@ -76,7 +76,7 @@ def physics_and_env(num_envs: int, repeats: int) -> dict[str, float]:
         draws = [d.astype(np.float32) for d in draws]
         desired = [jax.device_put(d, env.jax_device) for d in draws]
         actions = [torch.from_numpy(d).to(env.device) for d in draws]
-        data, count = [env._state.data], [0]
+        data, count = [env.jax_state.data], [0]
 
         def physics():
             count[0] += 1

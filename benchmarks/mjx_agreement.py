@@ -1,5 +1,5 @@
 """How closely the MJX hopper follows the MuJoCo CPU backend, measured on the checks of
-``tests/envs/test_mjx.py`` (which assert looser tolerances): free fall against the hand
+``tests/robots/hopper/test_mjx.py`` (which assert looser tolerances): free fall against the hand
 calculation, standing statics, 3 s of open-loop hopping, its reward terms and apex payments.
 
     python benchmarks/mjx_agreement.py [--set mjx_iterations=100 ...]
@@ -14,10 +14,10 @@ import numpy as np
 
 from bench_report import measured, write
 from cpg_actor.config import parse_override
-from cpg_actor.envs import make_vector_env
-from cpg_actor.envs.mjx.dynamics import jax
-from cpg_actor.envs.robot import description as robot
-from cpg_actor.envs.robot import kinematics
+from cpg_actor.robots.hopper import description as robot
+from cpg_actor.robots.hopper import kinematics
+from cpg_actor.robots.hopper.mjx.dynamics import jax
+from cpg_actor.robots.hopper.vector import make_vector_env
 
 HOLD = np.array(robot.NOMINAL_POSE)
 TERMS = ("r1", "r2", "r3", "r4", "r5")

@@ -21,8 +21,8 @@ import numpy as np
 
 from bench_report import measured, write
 from cpg_actor.config import TrainConfig, apply_dict
-from cpg_actor.envs.mjx.dynamics import jax
 from cpg_actor.host_reads import host_reads
+from cpg_actor.robots.hopper.mjx.dynamics import jax
 from cpg_actor.training.evaluation import evaluate
 from cpg_actor.training.policy import Policy
 from cpg_actor.training.runner import Runner

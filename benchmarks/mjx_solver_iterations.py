@@ -1,8 +1,8 @@
 """MJX's Newton solver caps against each other and against MuJoCo's C solver, for both robots.
 
-The hopper hops open loop for 3 s (the 2 Hz squat-and-extend pattern of ``tests/envs/
-test_mjx.py``, 1 robot); the quadruped trots open loop for 6 s (the trot CPG at the drive of a
-1 m/s command, as ``tests/envs/test_quadruped_mjx.py``, 4 robots, no reset noise). Each cap
+The hopper hops open loop for 3 s (the 2 Hz squat-and-extend pattern of ``tests/robots/
+hopper/test_mjx.py``, 1 robot); the quadruped trots open loop for 6 s (the trot CPG at the drive of
+a 1 m/s command, as ``tests/robots/anymal/test_anymal_mjx.py``, 4 robots, no reset noise). Each cap
 setting (``mjx_iterations`` / ``mjx_ls_iterations``) runs the same actions; the script reports
 the largest height difference from MJX at MuJoCo's own caps (100 / 50) and from MuJoCo's C
 solver (float64, its defaults), the return against the C solver's, and the time of a control
@@ -21,15 +21,14 @@ import argparse
 import time
 
 import numpy as np
-import torch
 
 from bench_report import measured, write
-from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
-from cpg_actor.envs import make_vector_env
-from cpg_actor.envs.mjx.dynamics import jax
-from cpg_actor.envs.quadruped import description as quadruped
-from cpg_actor.envs.quadruped.mjx import MjxAnymalVectorEnv
-from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+from cpg_actor.robots.anymal import description as quadruped
+from cpg_actor.robots.anymal.gaits import open_loop_positions
+from cpg_actor.robots.anymal.mjx import MjxAnymalVectorEnv
+from cpg_actor.robots.anymal.vector import AnymalVectorEnv
+from cpg_actor.robots.hopper.mjx.dynamics import jax
+from cpg_actor.robots.hopper.vector import make_vector_env
 
 HOPPER_STEPS = 300  # 3 s at 100 Hz
 ROBOTS = 4  # quadrupeds
@@ -46,17 +45,10 @@ def hop_action(k: int, offsets: np.ndarray | None = None) -> np.ndarray:
     return np.stack([0.4 + 0.35 * np.sin(phase), -0.8 - 0.7 * np.sin(phase)], axis=1)
 
 
-def trot_actions(steps: int) -> list[np.ndarray]:
+def trot_actions(steps: int) -> np.ndarray:
     """The open-loop trot preset at the drive of a 1 m/s command (as the quadruped's test)."""
-    cpg = quadruped_cpg(0.02, "trot").double()
-    joint_map = quadruped_joint_map(quadruped.NOMINAL_POSE).double()
-    state, drive = cpg.initial_state(ROBOTS), torch.full((ROBOTS, 8), 1.0, dtype=torch.float64)
-    actions = []
-    with torch.no_grad():
-        for _ in range(steps):
-            out, state = cpg(state, drive)
-            actions.append(joint_map(out.position).numpy())
-    return actions
+    positions = open_loop_positions("trot", 0.02, quadruped.NOMINAL_POSE, ROBOTS, steps, 1.0)
+    return positions.numpy()
 
 
 def hopper(caps: tuple[int, int] | None) -> dict:
@@ -120,8 +112,8 @@ def step_seconds(runs: dict, rounds: int) -> dict:
     for _ in range(rounds):
         for caps, run in runs.items():
             env = run["env"]
-            dynamics, state = env.dynamics, env._state
-            extra = (env._episode,) if hasattr(env, "_episode") else ()
+            dynamics, state = env.dynamics, env.jax_state
+            extra = (env.episode,) if hasattr(env, "episode") else ()  # the hopper's
             batch = [jax.device_put(np.asarray(a, np.float32)) for a in run["actions"]]
             jax.block_until_ready(batch)
             start = time.perf_counter()

@@ -23,12 +23,12 @@ import numpy as np
 import torch
 
 from bench_report import measured, write
-from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map
-from cpg_actor.envs.backends.mujoco_backend import CONTROL_SPEC, mujoco
-from cpg_actor.envs.backends.threaded_rollout import ThreadedRollout
-from cpg_actor.envs.quadruped import description as robot
-from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
 from cpg_actor.machine import cpu_model, load_average, usable_cores
+from cpg_actor.robots.anymal import description as robot
+from cpg_actor.robots.anymal.gaits import quadruped_cpg, quadruped_joint_map
+from cpg_actor.robots.anymal.vector import AnymalVectorEnv
+from cpg_actor.robots.common.mujoco_runtime import CONTROL_SPEC, mujoco
+from cpg_actor.robots.common.threaded_rollout import ThreadedRollout
 
 
 def rates(num_envs: int, seconds: float) -> dict[str, float]:

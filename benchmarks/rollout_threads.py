@@ -6,7 +6,7 @@
 
 Inside a training rollout the MuJoCo envs (the hopper's backend, the quadruped's vector env)
 step their robots with
-:class:`~cpg_actor.envs.backends.threaded_rollout.ThreadedRollout`: at every control step the
+:class:`~cpg_actor.robots.common.threaded_rollout.ThreadedRollout`: at every control step the
 calling thread hands a job to the helper threads and steps chunks of robots itself, then
 waits for the helpers. Between two control steps the policy acts on one core and the helpers
 sleep. This script trains ``--preset`` (default ``throughput``, compiled; ``anymal``: the
@@ -27,7 +27,7 @@ sleep only from one call to the next. The ratio of the two wall times is what in
 policy with the simulation costs the simulation. Last, the two chunk schedules on the same
 calls, with the training's median pause between calls (the calling thread busy meanwhile, as with
 the policy): the guided one the rollout uses
-(:func:`~cpg_actor.envs.backends.threaded_rollout.guided_chunks`) and 4 fixed chunks per thread
+(:func:`~cpg_actor.robots.common.threaded_rollout.guided_chunks`) and 4 fixed chunks per thread
 (the schedule before 28 Nov 2026), alternating, 4 pairs; the median of the paired ratios of
 their call times. It also records the share of the machine's CPU time the
 hypervisor took (:func:`cpg_actor.machine.stolen_share`) and, on Linux, the guest's idle
@@ -52,8 +52,8 @@ import torch
 from bench_report import measured, write
 from cpg_actor.config import TrainConfig, apply_dict
 from cpg_actor.config.presets import preset_values
-from cpg_actor.envs.backends import threaded_rollout
 from cpg_actor.machine import cpu_model, cpu_times, load_average, stolen_share, usable_cores
+from cpg_actor.robots.common import threaded_rollout
 from cpg_actor.training.runner import Runner
 
 SYSFS = {
@@ -83,7 +83,7 @@ class CallRecorder:
         self.inputs: list[tuple] = []
         self._caller = threading.get_ident()
         self._current: dict | None = None
-        stepper_call = threaded_rollout._ChunkStepper.__call__
+        stepper_call = threaded_rollout.ChunkStepper.__call__
         call = rollout.rollout
         recorder = self
 
@@ -107,11 +107,11 @@ class CallRecorder:
             self.calls.append(record)
 
         self._restore = stepper_call
-        threaded_rollout._ChunkStepper.__call__ = timed_stepper
+        threaded_rollout.ChunkStepper.__call__ = timed_stepper
         rollout.rollout = timed_call
 
     def stop(self) -> None:
-        threaded_rollout._ChunkStepper.__call__ = self._restore
+        threaded_rollout.ChunkStepper.__call__ = self._restore
         if "rollout" in vars(self.rollout):  # the instance attribute: the class's method again
             del self.rollout.rollout
 
@@ -171,15 +171,16 @@ def fixed_chunk_rollout(
 ) -> threaded_rollout.ThreadedRollout:
     """A rollout of the same robots and threads with 4 fixed chunks per thread (the schedule
     before the guided one)."""
-    model = rollout._steppers[0].models[0]
     size = max(1, -(-rollout.num_robots // (4 * rollout.num_threads)))
-    return threaded_rollout.ThreadedRollout(model, rollout.num_robots, rollout.num_threads, size)
+    return threaded_rollout.ThreadedRollout(
+        rollout.model, rollout.num_robots, rollout.num_threads, size
+    )
 
 
 def env_rollout(env) -> threaded_rollout.ThreadedRollout:
     """The ``ThreadedRollout`` of a MuJoCo env: the hopper's backend's or the quadruped's."""
     for holder in (getattr(getattr(env, "sim", None), "backend", None), env):
-        stepper = getattr(holder, "_rollout", None)
+        stepper = getattr(holder, "stepper", None)
         if isinstance(stepper, threaded_rollout.ThreadedRollout):
             return stepper
     raise SystemExit(f"{type(env).__name__} does not step with ThreadedRollout")

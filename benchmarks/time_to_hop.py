@@ -15,7 +15,7 @@ of it), and to when they first met the other agents' thresholds. Time is trainin
 evaluations excluded. Runs go one at a time (no two measurements share the CPU).
 
 The search is charged. The default ``cpg-actor`` starts from a packaged gait
-(``agent_config.start_gait: search``, ``agents/gaits/ROBOT.yaml``) that the open-loop search
+(``agent_config.start_gait: search``, ``robots/ROBOT/start_gait.yaml``) that the open-loop search
 (``open-loop-es``, CMA-ES) found; the honest time to the threshold includes finding it. So,
 before the seeds, the search behind each agent's start gait is rerun as its gait file records
 it (``cpg-actor train --agent open-loop-es --seed SEED --total-steps STEPS``: the file's seed
@@ -223,9 +223,9 @@ def start_gait_file(agent: str, preset: str, values: list[dict]) -> Path | None:
     if start != "search":
         return Path(start).resolve()
     from cpg_actor.agents.start_gait import packaged_gait_path
-    from cpg_actor.envs.robots import robot_env
+    from cpg_actor.robots.registry import get_robot
 
-    return packaged_gait_path(robot_env(config.robot).spec_name)
+    return packaged_gait_path(get_robot(config.robot))
 
 
 def search_runs(spec: SearchSpec) -> dict:
@@ -415,7 +415,9 @@ def sb3_run(
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
 
-    from cpg_actor.envs import ENV_ID, HopperConfig, HopperVectorEnv
+    from cpg_actor.robots.hopper.config import HopperConfig
+    from cpg_actor.robots.hopper.plugin import ENV_ID
+    from cpg_actor.robots.hopper.vector import HopperVectorEnv
     from cpg_actor.training.evaluation import evaluate
     from cpg_actor.training.seeding import EVAL_SEED_KEY, derived_seed
 

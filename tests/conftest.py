@@ -4,6 +4,10 @@ from pathlib import Path
 
 import pytest
 
+# the offscreen-rendering backend (MUJOCO_GL) chosen before any test module imports mujoco:
+# mujoco binds it on import, and a test that rendered could otherwise depend on the order
+import cpg_actor.robots.common.mujoco_runtime  # noqa: F401
+
 MUJOCO_LOG = Path("MUJOCO_LOG.TXT")
 
 

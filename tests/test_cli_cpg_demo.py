@@ -70,7 +70,7 @@ def test_the_two_oscillators_lines_stay_distinguishable_where_they_coincide():
     import numpy as np
 
     from cpg_actor.commands.cpg_demo import demo_figure
-    from cpg_actor.cpg import hopper_cpg
+    from cpg_actor.robots.hopper.cpg import hopper_cpg
 
     values = {k: v.detach().numpy() for k, v in hopper_cpg(0.01).parametrisation.values().items()}
     t = 0.01 * np.arange(1, 101)

@@ -68,7 +68,7 @@ def test_the_gait_figure_draws_each_gaits_reference_next_to_the_cpgs_result():
     """Next to each gait's diagram, one cycle of its reference pattern (grey: each leg's
     touchdown at the gait's phase offset) over the CPG's measured one (blue)."""
     from cpg_actor.commands.gaits import REFERENCE_DUTY, gaits_figure
-    from cpg_actor.cpg.gaits import GAITS
+    from cpg_actor.robots.anymal.gaits import GAITS
 
     contact = np.zeros((100, 4), dtype=bool)
     contact[::2] = True

@@ -332,7 +332,8 @@ COMPLEX = "actions must be real numbers"
 
 @pytest.mark.filterwarnings("error")  # numpy's ComplexWarning would fail the test
 def test_complex_actions_are_refused_by_the_hopper_envs():
-    from cpg_actor.envs import HopperEnv, HopperVectorEnv
+    from cpg_actor.robots.hopper.env import HopperEnv
+    from cpg_actor.robots.hopper.vector import HopperVectorEnv
 
     env = HopperEnv()
     env.reset(seed=0)
@@ -350,8 +351,8 @@ def test_complex_actions_are_refused_by_the_hopper_envs():
 
 @pytest.mark.filterwarnings("error")
 def test_complex_actions_are_refused_by_the_quadruped_and_cho_envs():
-    from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
-    from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+    from cpg_actor.robots.anymal.vector import AnymalVectorEnv
+    from cpg_actor.robots.hopper.cho2019 import CPGParameterVectorEnv
 
     anymal = AnymalVectorEnv(1)
     anymal.reset(seed=0)

@@ -300,12 +300,13 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
     # the CPG at the anymal preset's fixed rate, outside the adaptive schedule
     assert (gpu.ppo.lr_schedule, gpu.ppo.cpg_learning_rate) == ("adaptive", 3e-4)
     assert (fast.ppo.lr_schedule, fast.ppo.learning_rate) == ("adaptive", 1e-3)
+    assert fast.ppo.cpg_learning_rate == gpu.ppo.cpg_learning_rate  # the CPG outside it too
     # the quadruped's: the throughput recipe plus the CPG-Actor settings of its results
     anymal = build_config(parser.parse_args(["--preset", "anymal"]))
     spelled = build_config(parser.parse_args(
         ["--preset", "throughput", "--robot", "anymal", "--set", "agent_config.cpg_layout=leg",
-         "--set", "agent_config.init_std=0.1", "--set", "agent_config.feedback_noise=0.2",
-         "--set", "ppo.cpg_learning_rate=3e-4"]))  # fmt: skip
+         "--set", "agent_config.init_std=0.1",
+         "--set", "agent_config.feedback_noise=0.2"]))  # fmt: skip
     assert anymal.robot == "anymal" and type(anymal.env).__name__ == "QuadrupedConfig"
     assert {**anymal.to_dict(), "preset": "throughput"} == spelled.to_dict()
     assert anymal.ppo.cpg_learning_rate == gpu.ppo.cpg_learning_rate
@@ -574,7 +575,7 @@ def test_a_config_saved_before_a_field_existed_keeps_what_it_trained_with():
 
 
 def test_sim_mjx_without_jax_says_how_to_install_it(tmp_path, capsys, monkeypatch):
-    from cpg_actor.envs.mjx import runtime
+    from cpg_actor.robots.common import mjx_runtime as runtime
 
     def missing():
         raise runtime.MjxUnavailable(f"{runtime.INSTALL_HINT} (No module named 'jax')")

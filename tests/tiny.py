@@ -1,8 +1,12 @@
-"""The smallest real training config (2 MuJoCo envs x 8 steps, one epoch of 2 minibatches),
-shared by the tests that need a trained run but not a trained policy."""
+"""The smallest real training config (2 MuJoCo envs x 8 steps, one epoch of 2 minibatches)
+and a run trained with it, shared by the tests that need a trained run but not a trained
+policy."""
 
-from cpg_actor.config import TrainConfig
+from pathlib import Path
+
+from cpg_actor.config import TrainConfig, apply_dict
 from cpg_actor.ppo import PPOConfig
+from cpg_actor.training.runner import Runner
 
 
 def tiny_config(agent: str, iterations: int = 2, **fields) -> TrainConfig:
@@ -14,3 +18,15 @@ def tiny_config(agent: str, iterations: int = 2, **fields) -> TrainConfig:
         eval_interval=0,
         **fields,
     )
+
+
+def trained_run(path: Path, agent: str, robot: str = "hopper", **changes) -> Path:
+    """A tiny training run in ``path``, with its config.yaml as `cpg-actor train` writes it;
+    ``changes``: config values (``seed=1``, ``env={...}``)."""
+    config = tiny_config(agent)
+    apply_dict(config, {"robot": robot, **changes}, "")
+    runner = Runner(config, run_dir=path, tensorboard=False)
+    runner.learn()
+    runner.close()
+    config.save(path / "config.yaml")
+    return path

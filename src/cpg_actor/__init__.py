@@ -6,6 +6,6 @@ Implements *CPG-Actor: Reinforcement Learning for Central Pattern Generators*
 
 __version__ = "0.1.0"
 
-from cpg_actor.registration import register as _register_envs
+from cpg_actor.robots.registry import register as _register_envs
 
-_register_envs()  # the Gymnasium ids cpg_actor/AnymalHopper-v0 (and -pybullet-v0)
+_register_envs()  # every robot's Gymnasium ids (cpg_actor/AnymalHopper-v0, cpg_actor/AnymalB-v0)

@@ -34,10 +34,9 @@ def brief_openmp_spinning(environ) -> None:
 
     torch's OpenMP threads spin up to 300,000 times at each barrier before they sleep. Alone
     on the machine that spinning only uses idle cores; with runs started side by side it holds
-    the cores the other runs' threads wait for. Two throughput-preset runs on 2 cores trained
-    at 1.2k control steps/s together with it and 14-15k with 2,000 spins, one run alone as fast
-    either way (``benchmarks/shared_device.py``, ``benchmarks/results/shared_device.md``). The
-    ``cpg-actor`` command and the benchmarks that time what it runs set it."""
+    the cores the other runs' threads wait for, and they all crawl. 2,000 spins cost a run
+    alone nothing (``benchmarks/shared_device.py`` times both). The ``cpg-actor`` command and
+    the benchmarks that time what it runs set it."""
     environ.setdefault("GOMP_SPINCOUNT", "2000")
 
 

@@ -8,43 +8,19 @@ from __future__ import annotations
 import os
 import uuid
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from cpg_actor.robots.registry import all_metrics
+
 GAIT_WINDOW = 2.0  # s: the last seconds a gait diagram shows
 
 
-@dataclass(frozen=True)
-class MetricInfo:
-    """How an env's episode metric reads on a figure or in a printed line."""
-
-    label: str  # plain words
-    unit: str = ""  # "" for a ratio or a count
-    undefined: str = ""  # when an episode leaves it NaN (undefined), in words
-
-
-# the episode metrics of the robots' envs (``info["episode_metrics"]``); a metric not listed
-# is shown by its name
-METRICS: dict[str, MetricInfo] = {
-    "hop_height": MetricInfo("hop height", "m"),
-    "speed_error": MetricInfo("forward-speed error", "m/s"),
-    "forward_speed": MetricInfo("forward speed", "m/s"),
-    "fell": MetricInfo("share of episodes that fell"),
-    "episode_seconds": MetricInfo("episode length", "s"),
-    "cost_of_transport": MetricInfo(
-        "cost of transport",
-        undefined="the robot walked less than 0.1 m forward",
-    ),
-    "foot_slip": MetricInfo("foot slip speed", "m/s", undefined="no foot was planted"),
-}
-
-
 def metric_label(name: str) -> str:
-    """An axis label for an episode metric: ``"hop height (m)"``; its name for one not in
-    :data:`METRICS`."""
-    info = METRICS.get(name)
+    """An axis label for an episode metric: ``"hop height (m)"``; its name for one no robot
+    describes (:func:`cpg_actor.robots.registry.all_metrics`)."""
+    info = all_metrics().get(name)
     if info is None:
         return name.replace("_", " ")
     return f"{info.label} ({info.unit})" if info.unit else info.label

@@ -9,10 +9,10 @@ import torch
 from cpg_actor.agents.cho2019 import reference_action
 from cpg_actor.agents.warm_start import WarmStartConfig
 from cpg_actor.config import TrainConfig
-from cpg_actor.envs import HopperConfig
-from cpg_actor.envs.cho2019 import action_to_parameters
-from cpg_actor.envs.cho2019_reference import REFERENCE_PARAMETERS
 from cpg_actor.ppo import PPOConfig
+from cpg_actor.robots.hopper.cho2019 import action_to_parameters
+from cpg_actor.robots.hopper.cho2019_reference import REFERENCE_PARAMETERS
+from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.training.runner import Runner
 
 
@@ -126,8 +126,8 @@ def test_a_run_resumed_at_iteration_0_is_not_warm_started_again(tmp_path):
 
 def test_cho2019_agents_declare_the_cpg_wrapper_around_the_robot_env():
     from cpg_actor.agents import get_agent_spec
-    from cpg_actor.envs import HopperVectorEnv
-    from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
+    from cpg_actor.robots.hopper.cho2019 import CPGParameterVectorEnv
+    from cpg_actor.robots.hopper.vector import HopperVectorEnv
 
     spec = get_agent_spec("cho2019")
     env = spec.make_env(2, HopperConfig(), 1)
@@ -146,7 +146,7 @@ def test_the_papers_cho2019_acts_on_frequency_and_amplitude_and_sees_the_hopper_
     observations (no CPG state), warm-started toward Ijspeert et al. 2007's limb oscillators
     at drive 3 (0.6 Hz, 0.524 rad), which lie inside the action ranges."""
     from cpg_actor.agents.cho2019 import ijspeert_2007_parameters
-    from cpg_actor.envs.cho2019 import PAPER_PARAMETER_RANGES, parameters_to_action
+    from cpg_actor.robots.hopper.cho2019 import PAPER_PARAMETER_RANGES, parameters_to_action
 
     np.testing.assert_allclose(ijspeert_2007_parameters(), [0.6, 0.6, 0.524, 0.524])
     target = parameters_to_action(ijspeert_2007_parameters(), PAPER_PARAMETER_RANGES)

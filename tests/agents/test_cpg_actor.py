@@ -6,9 +6,9 @@ import torch
 from cpg_actor.agents import AgentConfig, CPGActorAgent, MLPAgent, get_agent_spec
 from cpg_actor.config import TrainConfig
 from cpg_actor.cpg import CPGState
-from cpg_actor.envs import HopperConfig
-from cpg_actor.envs.hopper import robot_spec
 from cpg_actor.ppo import PPOConfig
+from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.hopper.env import robot_spec
 from cpg_actor.training.runner import Runner
 
 # tests/ppo/fake_env.py: pytest puts tests/ on sys.path (tests/ is not a package)
@@ -203,8 +203,8 @@ def test_agents_supply_their_own_scalars_and_histograms():
 def test_agents_are_built_from_the_env_robot():
     """The nominal pose and the CPG's time step come from the env's RobotSpec, defined once."""
     from cpg_actor.agents.registry import build_cpg_actor, build_mlp
-    from cpg_actor.envs.robot import description
-    from cpg_actor.robot import RobotSpec
+    from cpg_actor.robots.hopper import description
+    from cpg_actor.robots.spec import RobotSpec
 
     env = FakeHopperVectorEnv(2, FakeConfig(control_dt=0.02))
     assert env.robot.nominal_pose == tuple(description.NOMINAL_POSE) == HOPPER.nominal_pose
@@ -213,7 +213,7 @@ def test_agents_are_built_from_the_env_robot():
     assert torch.equal(agent.joint_map.offset, torch.tensor([0.4, -0.8]))
     assert torch.equal(build_mlp(AgentConfig(), env).nominal_pose, torch.tensor([0.4, -0.8]))
     env.robot = RobotSpec("a-biped", ("HFE", "KFE"), (0.4, -0.8), (-1, -2), (1, 0), 0.01, ())
-    with pytest.raises(ValueError, match="no CPG preset for robot 'a-biped'"):
+    with pytest.raises(ValueError, match="no robot is registered for the robot model 'a-biped'"):
         build_cpg_actor(AgentConfig(), env)
     with pytest.raises(ValueError, match="nominal_pose needs 2 entries"):
         RobotSpec("x", ("HFE", "KFE"), (0.4,), (-1, -2), (1, 0), 0.01, ())

@@ -11,8 +11,8 @@ from cpg_actor.agents import AgentConfig, CPGActorAgent
 from cpg_actor.agents.start_gait import read_gait, start_parameters
 from cpg_actor.config import compose_config
 from cpg_actor.cpg import CPGState
-from cpg_actor.envs import HopperConfig
-from cpg_actor.envs.hopper import robot_spec
+from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.hopper.env import robot_spec
 
 HOPPER = robot_spec(HopperConfig())
 SCALE = [0.9, 0.9]

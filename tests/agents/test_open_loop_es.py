@@ -14,7 +14,7 @@ from cpg_actor.agents.open_loop_es import CMASearch, ESConfig, Rollouts, episode
 from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig, compose_config
 from cpg_actor.deploy import Policy, load_policy
-from cpg_actor.envs import HopperConfig
+from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.training.checkpoint import load_checkpoint
 from cpg_actor.training.es_runner import ESRunner
 from cpg_actor.training.evaluation import evaluate

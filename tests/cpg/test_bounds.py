@@ -6,9 +6,9 @@ import math
 import pytest
 import torch
 
-from cpg_actor.cpg import hopper_cpg
 from cpg_actor.cpg.parametrisation import Parametrisation
 from cpg_actor.cpg.topology import Topology
+from cpg_actor.robots.hopper.cpg import hopper_cpg
 
 INITIAL = {"frequency": 2.0, "amplitude": (0.15, 0.3), "convergence": 20.0}
 

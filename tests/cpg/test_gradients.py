@@ -9,7 +9,8 @@ import torch
 from torch.autograd import gradcheck
 from torch.func import functional_call
 
-from cpg_actor.cpg import CPGNetwork, CPGState, Topology, hopper_cpg
+from cpg_actor.cpg import CPGNetwork, CPGState, Topology
+from cpg_actor.robots.hopper.cpg import hopper_cpg
 
 VECTOR = "parametrisation.vector"
 

@@ -8,15 +8,8 @@ import numpy as np
 import pytest
 import torch
 
-from cpg_actor.cpg import (
-    HOPPER_INITIAL,
-    HOPPER_NOMINAL_POSE,
-    CPGNetwork,
-    CPGState,
-    JointMap,
-    Topology,
-    hopper_cpg,
-)
+from cpg_actor.cpg import CPGNetwork, CPGState, JointMap, Topology
+from cpg_actor.robots.hopper.cpg import HOPPER_INITIAL, HOPPER_NOMINAL_POSE, hopper_cpg
 
 from .helpers import measured_amplitude, measured_frequency, simulate, wrap
 
@@ -151,16 +144,16 @@ def test_hopper_preset_settles_in_antiphase_around_the_nominal_pose():
     assert abs(wrap(theta[1] - theta[0] - math.pi)) < 0.01
     # antiphase with twice the amplitude: the knee offset is -2x the hip offset
     np.testing.assert_allclose(x[:, 1], -2 * x[:, 0], atol=2e-3)
-    positions = JointMap()(torch.as_tensor(x))
+    positions = JointMap(HOPPER_NOMINAL_POSE)(torch.as_tensor(x))
     np.testing.assert_allclose(positions.mean(0).numpy(), HOPPER_NOMINAL_POSE, atol=5e-3)
 
 
 def test_joint_map_offsets_fixed_or_learnable():
-    fixed = JointMap()
+    fixed = JointMap(HOPPER_NOMINAL_POSE)
     assert list(fixed.parameters()) == []
     x = torch.tensor([[0.1, -0.2]])
     assert torch.allclose(fixed(x), x + torch.tensor(HOPPER_NOMINAL_POSE))
-    learnable = JointMap(learnable_offset=True)
+    learnable = JointMap(HOPPER_NOMINAL_POSE, learnable_offset=True)
     assert [p.shape for p in learnable.parameters()] == [torch.Size([2])]
     with pytest.raises(ValueError, match="3 oscillators, the joint map expects 2"):
         fixed(torch.zeros(1, 3))

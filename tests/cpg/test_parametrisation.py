@@ -7,7 +7,8 @@ import math
 import pytest
 import torch
 
-from cpg_actor.cpg import CPGNetwork, Parametrisation, Topology, hopper_cpg
+from cpg_actor.cpg import CPGNetwork, Parametrisation, Topology
+from cpg_actor.robots.hopper.cpg import hopper_cpg
 
 BASE = {"frequency": (1.0, 2.0), "amplitude": (0.3, 0.6), "convergence": (10.0, 20.0)}
 

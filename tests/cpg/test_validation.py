@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 import torch
 
-from cpg_actor.cpg import CPGNetwork, CPGState, Parametrisation, Topology, hopper_cpg
+from cpg_actor.cpg import CPGNetwork, CPGState, Parametrisation, Topology
+from cpg_actor.robots.hopper.cpg import hopper_cpg
 
 NAN, INF = float("nan"), float("inf")
 BASE = {"frequency": 1.0, "amplitude": 1.0, "convergence": 10.0}

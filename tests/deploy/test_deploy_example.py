@@ -20,12 +20,11 @@ import numpy as np
 import pytest
 
 from cpg_actor.agents import get_agent_spec
-from cpg_actor.config import TrainConfig, apply_dict
+from cpg_actor.config import TrainConfig
 from cpg_actor.deploy import load_policy
 from cpg_actor.deploy.export import export_policy
 from cpg_actor.training.evaluation import evaluate, evaluate_policy
-from cpg_actor.training.runner import Runner
-from tiny import tiny_config  # tests/tiny.py
+from tiny import trained_run  # tests/tiny.py
 
 ort = pytest.importorskip("onnxruntime")
 pytest.importorskip("onnxscript")
@@ -36,12 +35,7 @@ SEED = 1000
 
 def exported_run(path: Path, agent: str, robot: str, **changes) -> tuple[TrainConfig, Path]:
     """A tiny training run (its config.yaml as `cpg-actor train` writes it), exported."""
-    config = tiny_config(agent)
-    apply_dict(config, {"robot": robot, **changes}, "")
-    runner = Runner(config, run_dir=path, tensorboard=False)
-    runner.learn()
-    runner.close()
-    config.save(path / "config.yaml")
+    config = TrainConfig.load(trained_run(path, agent, robot, **changes) / "config.yaml")
     policy = load_policy(path, run_config=config)
     return config, export_policy(policy, path / "export" / "policy.onnx", "onnx")
 

@@ -7,33 +7,21 @@ import json
 import logging
 import warnings
 
-import mujoco
 import numpy as np
 import pytest
 import torch
 
 import cpg_actor
 from cpg_actor.cli import main
-from cpg_actor.config import apply_dict
 from cpg_actor.deploy import load_policy
 from cpg_actor.deploy.export import OBSERVATION_SOURCES, export_policy, read_metadata, sidecar_paths
-from cpg_actor.envs import HopperConfig, HopperVectorEnv
-from cpg_actor.envs.actuator import Actuator
-from cpg_actor.envs.quadruped import QuadrupedConfig
-from cpg_actor.envs.robots import robot_env
-from cpg_actor.training.runner import Runner
-from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
-
-
-def trained_run(path, agent, robot="hopper", **changes):
-    """A tiny training run, with its config.yaml as `cpg-actor train` writes it."""
-    config = tiny_config(agent)
-    apply_dict(config, {"robot": robot, **changes}, "")
-    runner = Runner(config, run_dir=path, tensorboard=False)
-    runner.learn()
-    runner.close()
-    config.save(path / "config.yaml")
-    return path
+from cpg_actor.robots.common.actuator import Actuator
+from cpg_actor.robots.common.mujoco_runtime import mujoco  # MUJOCO_GL chosen first
+from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
+from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.hopper.vector import HopperVectorEnv
+from cpg_actor.robots.registry import get_robot
+from tiny import trained_run  # tests/tiny.py (pytest puts tests/ on sys.path)
 
 
 @pytest.fixture(scope="module")
@@ -231,10 +219,10 @@ def test_the_exported_mjcf_is_the_model_the_env_simulates(config):
     """Loaded, the MJCF written next to an export equals the env's MjModel in every byte (the
     configured actuators, timestep, friction; the coast law's actuators switched off)."""
     name = "hopper" if isinstance(config, HopperConfig) else "anymal"
-    env = robot_env(name).make(1, config, 1)
+    env = get_robot(name).make(1, config, 1)
     try:
         simulated = env.sim.backend.model if name == "hopper" else env.model
-        loaded = mujoco.MjModel.from_xml_string(robot_env(name).mjcf(config))
+        loaded = mujoco.MjModel.from_xml_string(get_robot(name).mjcf(config))
         assert model_bytes(loaded) == model_bytes(simulated)
     finally:
         env.close()
@@ -243,7 +231,7 @@ def test_the_exported_mjcf_is_the_model_the_env_simulates(config):
 def test_exported_quadruped_policy_reads_its_drive_from_the_raw_command(tmp_path):
     """On the quadruped the exported step sets the CPG's drive from the raw observation (the
     forward-speed command) as the policy does: same actions and states, drive row included."""
-    from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
+    from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 
     trained_run(tmp_path / "run", "cpg-actor", "anymal", env={"episode_seconds": 0.2})
     policy = load_policy(tmp_path / "run")

@@ -316,9 +316,9 @@ def test_comparisons_beyond_the_paper_name_the_better_variant_only_when_resolved
 def test_open_loop_floor_is_the_best_grid_return_and_the_report_places_variants_against_it(
     tmp_path,
 ):
-    from cpg_actor.envs import HopperConfig
-    from cpg_actor.envs.cho2019_reference import evaluate_parameters, grid_candidates
     from cpg_actor.experiments.floor import FLOOR_FILE, open_loop_floor
+    from cpg_actor.robots.hopper.cho2019_reference import evaluate_parameters, grid_candidates
+    from cpg_actor.robots.hopper.config import HopperConfig
 
     grid = {"frequency": (1.5, 3.0), "amplitude_hip": (0.3,), "amplitude_knee": (0.6,),
             "phase_bias": (0.0, np.pi)}  # fmt: skip

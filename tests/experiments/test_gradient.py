@@ -6,9 +6,9 @@ import pytest
 
 from cpg_actor.cli import main
 from cpg_actor.commands.gradient import build_policy
-from cpg_actor.envs import HopperVectorEnv
-from cpg_actor.envs.torch_env import TorchVectorEnv
 from cpg_actor.experiments.gradient import collect_rollout, truncation_study
+from cpg_actor.robots.common.torch_env import TorchVectorEnv
+from cpg_actor.robots.hopper.vector import HopperVectorEnv
 
 
 def test_a_window_as_long_as_the_rollout_is_the_full_gradient_and_one_step_is_a_sliver():

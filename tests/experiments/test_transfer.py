@@ -8,19 +8,14 @@ import pytest
 from cpg_actor.cli import main
 from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.transfer import kept, transfer_lines
-from cpg_actor.training.runner import Runner
-from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
+from tiny import trained_run  # tests/tiny.py (pytest puts tests/ on sys.path)
 
 
 def test_transfer_evaluates_each_run_in_both_simulators(tmp_path, capsys):
     out = tmp_path / "out"
     for seed in (0, 1):
         run_dir = out / "runs" / "cpg-actor" / f"seed{seed}"
-        config = tiny_config("cpg-actor", seed=seed)
-        runner = Runner(config, run_dir=run_dir, tensorboard=False)
-        runner.learn()
-        runner.close()
-        config.save(run_dir / "config.yaml")  # as `cpg-actor train` does
+        trained_run(run_dir, "cpg-actor", seed=seed)
     assert main(["transfer", str(out), "--episodes", "2"]) == 0
     data = json.loads((out / "transfer.json").read_text())
     runs = data["runs"]["cpg-actor"]

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
-from cpg_actor.robot import RobotSpec
+from cpg_actor.robots.spec import RobotSpec
 
 
 @dataclass

@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from cpg_actor.config import TrainConfig
-from cpg_actor.envs import HopperVectorEnv
+from cpg_actor.robots.hopper.vector import HopperVectorEnv
 from cpg_actor.training.runner import Runner
 from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
 
@@ -44,7 +44,7 @@ def test_checkpoint_every_iteration_changes_nothing_and_cuts_no_episode(tmp_path
 
 
 def mjx_available() -> bool:
-    from cpg_actor.envs.mjx import runtime
+    from cpg_actor.robots.common import mjx_runtime as runtime
 
     return runtime.available()
 

@@ -7,9 +7,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from cpg_actor.envs.config import HopperConfig
 from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.results import sent_velocity
+from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.training.evaluation import evaluate
 
 
@@ -32,7 +32,7 @@ class ScriptedPolicy:
 
 
 def test_joint_commands_are_traced_as_sent_and_differenced_by_hand():
-    from cpg_actor.envs.vector import make_vector_env
+    from cpg_actor.robots.hopper.vector import make_vector_env
 
     config = HopperConfig(episode_steps=4)
     # HFE beyond its upper limit (1.3 rad) for two steps: the env tracks 1.3
@@ -60,7 +60,7 @@ def test_joint_commands_are_traced_as_sent_and_differenced_by_hand():
 
 
 def test_cho2019_traces_hold_the_clipped_nominal_pose_plus_x_and_its_difference():
-    from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
+    from cpg_actor.robots.hopper.cho2019 import CPGParameterVectorEnv
 
     config = HopperConfig(episode_steps=30)
     env = CPGParameterVectorEnv(2, config, num_threads=1)

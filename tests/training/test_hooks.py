@@ -5,7 +5,7 @@ from types import SimpleNamespace
 
 import torch
 
-from cpg_actor.envs.torch_env import SavableEnv, TensorEnv, TorchVectorEnv
+from cpg_actor.robots.common.torch_env import SavableEnv, TensorEnv, TorchVectorEnv
 from cpg_actor.training.hooks import Hook
 from ppo.fake_env import FakeHopperVectorEnv
 

@@ -8,16 +8,16 @@ import numpy as np
 import pytest
 import torch
 
-from cpg_actor.envs.mjx import runtime  # noqa: E402
+from cpg_actor.robots.common import mjx_runtime as runtime  # noqa: E402
 
 if not runtime.available():
     pytest.skip('the MJX backend needs pip install -e ".[mjx]"', allow_module_level=True)
 
 import jax  # noqa: E402
 
-from cpg_actor.envs import make_vector_env  # noqa: E402
-from cpg_actor.envs.mjx.vector import MjxHopperVectorEnv  # noqa: E402
 from cpg_actor.host_reads import host_reads  # noqa: E402
+from cpg_actor.robots.hopper.mjx.vector import MjxHopperVectorEnv  # noqa: E402
+from cpg_actor.robots.hopper.vector import make_vector_env  # noqa: E402
 from cpg_actor.training.evaluation import CHECK_EVERY, evaluate  # noqa: E402
 from cpg_actor.training.policy import Policy  # noqa: E402
 from cpg_actor.training.runner import Runner  # noqa: E402

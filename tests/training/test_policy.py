@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from cpg_actor.deploy import load_policy
-from cpg_actor.envs import HopperVectorEnv
+from cpg_actor.robots.hopper.vector import HopperVectorEnv
 from cpg_actor.training.runner import Runner
 from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
 

@@ -10,9 +10,9 @@ import torch
 
 from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig, apply_dict, parse_override
-from cpg_actor.envs.quadruped import QuadrupedConfig
-from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
 from cpg_actor.ppo import PPOConfig
+from cpg_actor.robots.anymal.vector import AnymalVectorEnv
+from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.training.runner import Runner
 from tiny import tiny_config
 
@@ -202,9 +202,9 @@ def test_the_leg_layout_trains_four_foot_space_oscillators():
         runner.close()
     hopper = tiny_config("cpg-actor")
     hopper.agent_config.cpg_layout = "leg"
-    with pytest.raises(ValueError, match="robot 'anymal-hopper' has the CPG layouts joint"):
+    with pytest.raises(ValueError, match="cpg_layout must be one of joint on robot 'hopper'"):
         Runner(hopper, tensorboard=False)
     bad = TrainConfig()
     apply_dict(bad, parse_override("agent_config.cpg_layout=foot"), "")
-    with pytest.raises(ValueError, match="cpg_layout must be 'joint', 'leg'"):
+    with pytest.raises(ValueError, match="cpg_layout must be one of joint on robot 'hopper'"):
         bad.validate()

@@ -37,9 +37,8 @@ class AgentConfig:
     init_std: float = 1.0
     output_gain: float = 0.01  # orthogonal gain of the actor's / feedback's last layer
     # The feedback is bounded: xi = xi_scale * tanh(out[:N]) (rad/s), kappa = kappa_scale *
-    # tanh(out[N:]) (rad/s^2). Unbounded feedback (feedback_tanh=False: scale * out) learned a
-    # period-2 chatter of theta_dot through the observation loop and unstable returns; see
-    # docs/results/training-measurements.md, "Bounded feedback".
+    # tanh(out[N:]) (rad/s^2). Unbounded feedback (feedback_tanh=False: scale * out) can learn
+    # a period-2 chatter of theta_dot through the observation loop, and unstable returns.
     xi_scale: float = 4.0
     kappa_scale: float = 25.0
     feedback_tanh: bool = True
@@ -49,12 +48,12 @@ class AgentConfig:
     # likelihood instead of the one-step lever dx/dxi. 0 (the paper): deterministic feedback.
     feedback_noise: float = 0.0
     cpg_initial: dict = field(default_factory=dict)  # overrides of the robot's CPG preset
-    # the quadruped's gait (cpg_actor.cpg.gaits.GAITS: trot, pace, bound, pronk, walk); empty:
-    # the preset's (trot). The hopper has none.
+    # the gait the robot's CPG starts in (its CPGLayout.gaits, e.g. the quadruped's trot, pace,
+    # bound, pronk, walk); empty: the preset's. The hopper has none.
     cpg_gait: str = ""
-    # how the quadruped's CPG drives its joints: "joint" (one oscillator per HFE and KFE joint,
-    # the default) or "leg" (one oscillator per leg, a foot-space pattern); empty: the robot's
-    # first (cpg_actor.agents.cpg_actor.CPG_PRESETS). The hopper has "joint" only.
+    # how the robot's CPG drives its joints, one of its CPG layouts (Robot.cpg_layouts, e.g.
+    # the quadruped's "joint": one oscillator per HFE and KFE joint, or "leg": one per leg, a
+    # foot-space pattern); empty: the robot's first. The hopper has "joint" only.
     cpg_layout: str = ""
     # the CPG's drive d (eq. 3) follows the robot's drive observation (the quadruped's
     # forward-speed command; RobotSpec.drive_observation). False, or a robot without one: d = 0
@@ -96,18 +95,6 @@ class AgentConfig:
         for name in ("init_std", "output_gain", "xi_scale", "kappa_scale"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"agent_config.{name} must be > 0, got {getattr(self, name)!r}")
-        from cpg_actor.cpg.gaits import GAITS
-
-        if self.cpg_gait and self.cpg_gait not in GAITS:
-            raise ValueError(
-                f"agent_config.cpg_gait must be one of {', '.join(GAITS)} (or empty), "
-                f"got {self.cpg_gait!r}"
-            )
-        if self.cpg_layout not in ("", "joint", "leg"):
-            raise ValueError(
-                f"agent_config.cpg_layout must be 'joint', 'leg' (the quadruped) or empty, "
-                f"got {self.cpg_layout!r}"
-            )
         if not self.feedback_noise >= 0:
             raise ValueError(
                 f"agent_config.feedback_noise must be >= 0, got {self.feedback_noise!r}"
@@ -143,9 +130,8 @@ EXPLORATIONS = ("position", "cpg")
 
 def tanh(x: Tensor) -> Tensor:
     """tanh(x), computed as ``2 sigmoid(2x) - 1`` (the same function; within 2e-7 of
-    ``torch.tanh`` in float32). On the project's CPU (torch 2.13, AVX512) float32 ``tanh`` is
-    8-10x slower than ``sigmoid``; this form makes two tanh layers' forward and backward
-    1.2-1.3x faster (``benchmarks/activation.py``; end to end within the machine's noise)."""
+    ``torch.tanh`` in float32): on the CPU torch's float32 ``tanh`` is much slower than its
+    ``sigmoid`` (``benchmarks/activation.py`` compares them)."""
     return torch.sigmoid(2.0 * x) * 2.0 - 1.0
 
 

@@ -1,5 +1,6 @@
 """The Cho et al. 2019 baseline as agents: a classic MLP actor-critic whose actions are CPG
-parameters, acting on :class:`cpg_actor.envs.cho2019.CPGParameterVectorEnv` (paper Fig. 2b).
+parameters, acting on :class:`cpg_actor.robots.hopper.cho2019.CPGParameterVectorEnv` (paper Fig.
+2b).
 
 ``cho2019`` starts from a freshly initialised actor (mean action 0: the middle of every
 parameter range); ``cho2019-warm`` first fits the actor's mean to the reference hopping
@@ -28,7 +29,7 @@ def cpg_parameter_wrapper(env: Any, agent_config: AgentConfig | None = None):
     """The CPG put inside the hopper env: actions become CPG parameters in [-1, 1]. With a
     start gait (``agent_config.start_gait``), its CPG has the gait's convergence rate and
     coupling weight, the parameters the actions do not set."""
-    from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
+    from cpg_actor.robots.hopper.cho2019 import CPGParameterVectorEnv
 
     initial = None
     if agent_config is not None and agent_config.start_gait:
@@ -45,18 +46,18 @@ def build_cho2019(config: AgentConfig, env: Any) -> Agent:
     return MLPAgent(obs_dim, action_scale, config, nominal_pose=[0.0] * len(action_scale))
 
 
-def reference_action(start_gait: str = "", robot_name: str = "anymal-hopper") -> np.ndarray:
+def reference_action(start_gait: str = "", robot_model: str = "anymal-hopper") -> np.ndarray:
     """The warm start's target as an action in [-1, 1]: the reference hopping parameters
     (``cpg-actor cho2019-reference``), or with ``start_gait`` the frequency, amplitude and
     phase bias of that gait (:mod:`cpg_actor.agents.start_gait`), each moved inside the
     action range by 5 % of it if it lies outside (a target on the clip would pull the
     Gaussian mean onto the edge)."""
-    from cpg_actor.envs.cho2019 import PARAMETER_RANGES, parameters_to_action
-    from cpg_actor.envs.cho2019_reference import REFERENCE_PARAMETERS
+    from cpg_actor.robots.hopper.cho2019 import PARAMETER_RANGES, parameters_to_action
+    from cpg_actor.robots.hopper.cho2019_reference import REFERENCE_PARAMETERS
 
     parameters = np.asarray(REFERENCE_PARAMETERS, dtype=np.float64)
     if start_gait:
-        gait = hopper_gait_parameters(start_parameters(start_gait, robot_name))
+        gait = hopper_gait_parameters(start_parameters(start_gait, robot_model))
         low, high = PARAMETER_RANGES[:, 0], PARAMETER_RANGES[:, 1]
         margin = 0.05 * (high - low)
         parameters = np.clip(np.asarray(gait), low + margin, high - margin)
@@ -89,14 +90,14 @@ def ijspeert_2007_parameters() -> np.ndarray:
 def paper_cpg_parameter_wrapper(env: Any, agent_config: AgentConfig | None = None):
     """The CPG inside the hopper env as the paper has it: frequency and amplitude actions,
     no CPG state in the observation."""
-    from cpg_actor.envs.cho2019 import CPGParameterVectorEnv
+    from cpg_actor.robots.hopper.cho2019 import CPGParameterVectorEnv
 
     return CPGParameterVectorEnv(env, action_set="paper", observe_cpg=False)
 
 
 def warm_start_cho2019_paper(agent: Agent, normalizer, env, config, seed: int):
     """Fit the actor's mean to :func:`ijspeert_2007_parameters` (as a paper-set action)."""
-    from cpg_actor.envs.cho2019 import PAPER_PARAMETER_RANGES, parameters_to_action
+    from cpg_actor.robots.hopper.cho2019 import PAPER_PARAMETER_RANGES, parameters_to_action
 
     target = parameters_to_action(ijspeert_2007_parameters(), PAPER_PARAMETER_RANGES)
     return warm_start(agent, normalizer, env, target.astype(np.float32), config.warm_start, seed)

@@ -27,25 +27,10 @@ from cpg_actor.agents.base import (
     tanh,
 )
 from cpg_actor.agents.start_gait import start_parameters
-from cpg_actor.cpg import CPGNetwork, CPGState, JointMap, hopper_cpg
-from cpg_actor.cpg.foot_space import FootSpaceMap
-from cpg_actor.cpg.gaits import OSCILLATOR_JOINTS, quadruped_cpg, quadruped_leg_cpg
+from cpg_actor.cpg import CPGNetwork, CPGState, JointMap
 from cpg_actor.cpg.hopf import STATE_FIELDS
-from cpg_actor.robot import RobotSpec
-
-# robot name -> its CPG layouts (``agent_config.cpg_layout``; the first is the default), each
-# the CPG, ``preset(dt, initial=..., check_inputs=..., gait=...)``, and how it drives the
-# joints: a tuple of the joint (index in the robot's joint order) each oscillator drives
-# (None: one oscillator per joint, in the joint order; the joints no oscillator drives are held
-# at the nominal pose), or a pattern module built from the nominal pose that maps the
-# oscillators' phase and amplitude to all joints (the quadruped's foot-space legs)
-CPG_PRESETS = {
-    "anymal-hopper": {"joint": (hopper_cpg, None)},
-    "anymal-b": {
-        "joint": (quadruped_cpg, OSCILLATOR_JOINTS),
-        "leg": (quadruped_leg_cpg, FootSpaceMap),
-    },
-}
+from cpg_actor.robots.registry import cpg_layout
+from cpg_actor.robots.spec import RobotSpec
 
 
 def output_bounds(
@@ -129,24 +114,10 @@ class CPGActorAgent(Agent):
         robot: RobotSpec,
         feedback: bool = True,
     ) -> None:
-        if robot.name not in CPG_PRESETS:
-            raise ValueError(
-                f"no CPG preset for robot '{robot.name}'; add one to "
-                f"cpg_actor.agents.cpg_actor.CPG_PRESETS (known: {', '.join(CPG_PRESETS)})"
-            )
-        layouts = CPG_PRESETS[robot.name]
-        layout = config.cpg_layout or next(iter(layouts))
-        if layout not in layouts:
-            raise ValueError(
-                f"agent_config.cpg_layout {layout!r}: robot '{robot.name}' has the CPG "
-                f"layouts {', '.join(layouts)}"
-            )
-        preset, joints = layouts[layout]
-        pattern = None if joints is None or isinstance(joints, tuple) else joints
-        if pattern is not None:
-            joints = None
+        layout, cpg = cpg_layout(robot.name, config.cpg_layout)  # the robot's CPG layouts
+        preset, joints, pattern = cpg.preset, cpg.joints, cpg.pattern
         options = {"gait": config.cpg_gait} if config.cpg_gait else {}
-        if options and "gait" not in inspect.signature(preset).parameters:
+        if options and not cpg.gaits:
             raise ValueError(
                 f"agent_config.cpg_gait: the CPG preset of robot '{robot.name}' has no gaits; "
                 "leave it empty"

@@ -290,7 +290,7 @@ class CandidateRollouts:
     ``agent`` is an open-loop :class:`cpg_actor.agents.CPGActorAgent`; its own control step
     runs under ``torch.func.vmap`` over V (with ``functional_call``), so each candidate
     acts exactly as the agent would with that V. ``env`` is a
-    :class:`cpg_actor.envs.torch_env.TorchVectorEnv`. Episodes end at the env's
+    :class:`cpg_actor.robots.common.torch_env.TorchVectorEnv`. Episodes end at the env's
     termination or truncation, or after ``max_steps`` control steps.
     """
 

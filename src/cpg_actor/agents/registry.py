@@ -28,9 +28,9 @@ from cpg_actor.agents.warm_start import warm_start_mlp
 
 
 def make_robot_env(num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
-    """The robot's plain vector env (the hopper, or the quadruped for a ``QuadrupedConfig``):
-    actions are desired joint positions."""
-    from cpg_actor.envs.robots import make_robot_env as make
+    """The plain vector env of the robot whose config ``env_config`` is
+    (:mod:`cpg_actor.robots.registry`): actions are desired joint positions."""
+    from cpg_actor.robots.registry import make_robot_env as make
 
     return make(num_envs, env_config, num_threads)
 
@@ -47,7 +47,7 @@ def env_shapes(env: Any) -> tuple[int, np.ndarray]:
 @dataclass(frozen=True)
 class AgentSpec:
     """``build(agent_config, env) -> Agent``: the agent for an env, from its spaces and its
-    ``robot`` (:class:`cpg_actor.robot.RobotSpec`: joints, nominal pose, control period);
+    ``robot`` (:class:`cpg_actor.robots.spec.RobotSpec`: joints, nominal pose, control period);
     ``env_factory(num_envs, env_config, num_threads) -> vector env`` (the robot's env, the
     hopper by default); ``wrapper(env, agent_config) -> env``, an environment around the
     robot's that the agent needs (``cho2019``: the CPG inside the env); an optional supervised
@@ -115,10 +115,10 @@ def build_cpg_actor(config: AgentConfig, env: Any, feedback: bool = True) -> Age
 
 
 # The CPG-Actor at its best on the hopper: the start gait of the open-loop search, the command
-# inside the joint range, and the best of its tuning (docs/results/tuning/: seeds 100-101,
-# 500k steps): Gaussian noise on the joint command of 0.3 half-ranges with the gradient through
-# 8 CPG steps (exploration "cpg" scored within the seeds' spread). cpg-actor-paper is the
-# paper's method (its preset start, position noise of 1 half-range, the one-step gradient).
+# inside the joint range, and the settings chosen by tuning (docs/results/tuning): Gaussian
+# noise on the joint command of 0.3 half-ranges with the gradient through 8 CPG steps.
+# cpg-actor-paper is the paper's method (its preset start, position noise of 1 half-range,
+# the one-step gradient).
 CPG_ACTOR_DEFAULTS: dict[str, Any] = {
     "agent_config": {
         "start_gait": "search",
@@ -134,7 +134,7 @@ register_agent(
         "mlp",
         "classic actor-critic: MLP actor on desired joint positions",
         build_mlp,
-        # the best of its tuning (docs/results/tuning/): seeds 100-101, 500k steps
+        # chosen by tuning (docs/results/tuning)
         defaults={"hopper": {"agent_config": {"init_std": 0.3}, "ppo": {"learning_rate": 1e-3}}},
     )
 )
@@ -144,8 +144,7 @@ register_agent(
         "the MLP actor warm-started by behaviour cloning toward the start gait's motion",
         build_mlp,
         warm_start=warm_start_mlp,
-        # the warm start's noise (warm_start.action_noise) and init_std chosen on tuning
-        # seeds 100-101 (docs/results/tuning)
+        # the warm start's noise (warm_start.action_noise) and init_std chosen by tuning
         defaults={
             "hopper": {
                 "agent_config": {"start_gait": "search", "init_std": 0.3},
@@ -220,7 +219,7 @@ register_agent(
         wrapper=paper_cpg_parameter_wrapper,
         warm_start=warm_start_cho2019_paper,
         robots=("hopper",),
-        # the best of its tuning (docs/results/tuning/)
+        # chosen by tuning (docs/results/tuning)
         defaults={"hopper": {"agent_config": {"init_std": 0.3}}},
     )
 )

@@ -10,11 +10,12 @@ the agents differ in their method and not in their prior.
 from __future__ import annotations
 
 import math
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from cpg_actor.agents.gait_file import load_gait
+from cpg_actor.robots.plugin import Robot
+from cpg_actor.robots.registry import get_robot, robot_of_model
 
 SEARCH = "search"  # the packaged gait found by the open-loop search for the robot
 
@@ -29,25 +30,26 @@ def read_gait(path: str | Path) -> dict[str, Any]:
         raise ValueError(f"{error} (agent_config.start_gait)") from None
 
 
-def packaged_gait_path(robot_name: str) -> Path:
-    """The gait shipped for ``robot_name`` (``agents/gaits/ROBOT.yaml``)."""
-    path = Path(str(resources.files("cpg_actor.agents") / "gaits" / f"{robot_name}.yaml"))
-    if not path.is_file():
+def packaged_gait_path(robot: Robot) -> Path:
+    """The gait shipped with ``robot`` (its ``Robot.start_gait``)."""
+    path = robot.start_gait
+    if path is None or not path.is_file():
         raise ValueError(
-            f"agent_config.start_gait 'search': no gait is shipped for robot '{robot_name}'; "
+            f"agent_config.start_gait 'search': no gait is shipped for robot '{robot.name}'; "
             "run `cpg-actor train --agent open-loop-es` and pass its gait.yaml, or leave "
             "start_gait empty (the CPG preset)"
         )
     return path
 
 
-def start_parameters(start_gait: str, robot_name: str) -> dict[str, Any]:
-    """The CPG parameters ``start_gait`` names: ``{}`` for "" (the preset), the packaged
-    gait for "search", else the gait file at that path."""
+def start_parameters(start_gait: str, robot_model: str) -> dict[str, Any]:
+    """The CPG parameters ``start_gait`` names for robot model ``robot_model``
+    (``RobotSpec.name``): ``{}`` for "" (the preset), the packaged gait for "search", else
+    the gait file at that path."""
     if not start_gait:
         return {}
     if start_gait == SEARCH:
-        return read_gait(packaged_gait_path(robot_name))
+        return read_gait(packaged_gait_path(robot_of_model(robot_model)))
     return read_gait(start_gait)
 
 
@@ -58,11 +60,9 @@ def search_steps(start_gait: str, robot: str) -> int:
     search to the agents that use it."""
     if not start_gait:
         return 0
-    from cpg_actor.envs.robots import robot_env
-
     path = start_gait
     if start_gait == SEARCH:
-        path = packaged_gait_path(robot_env(robot).spec_name)
+        path = packaged_gait_path(get_robot(robot))
     try:
         gait = load_gait(path)
     except FileNotFoundError as error:

@@ -1,6 +1,6 @@
 """`cpg-actor cho2019-reference`: search the reference hopping CPG parameters of the baseline.
 
-Runs :func:`cpg_actor.envs.cho2019_reference.search_reference` on the default grid (960
+Runs :func:`cpg_actor.robots.hopper.cho2019_reference.search_reference` on the default grid (960
 constant parameter sets, open loop, one episode each) and prints the best ones and the chosen
 reference, which is what :data:`REFERENCE_PARAMETERS` ships.
 """
@@ -21,15 +21,15 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.table import Table
 
-    from cpg_actor.envs import HopperConfig
-    from cpg_actor.envs.cho2019 import PARAMETER_NAMES
-    from cpg_actor.envs.cho2019_reference import (
+    from cpg_actor.robots.hopper.cho2019 import PARAMETER_NAMES
+    from cpg_actor.robots.hopper.cho2019_reference import (
         REFERENCE_PARAMETERS,
         choose_reference,
         describe,
         interior,
         search_reference,
     )
+    from cpg_actor.robots.hopper.config import HopperConfig
 
     if args.top < 1:
         raise ValueError(f"--top must be >= 1, got {args.top}")
@@ -53,6 +53,6 @@ def run(args: argparse.Namespace) -> int:
     same = shipped == tuple(round(v, 6) for v in chosen.parameters)
     console.print(
         f"shipped REFERENCE_PARAMETERS: {describe(REFERENCE_PARAMETERS)} "
-        f"({'same' if same else 'DIFFERENT: update cpg_actor/envs/cho2019_reference.py'})"
+        f"({'same' if same else 'DIFFERENT: update cpg_actor/robots/hopper/cho2019_reference.py'})"
     )
     return 0

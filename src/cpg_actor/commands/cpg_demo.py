@@ -88,7 +88,7 @@ def demo_figure(t, x, theta_dot, r_ddot, values, dt, phase0, xi_values, kappa_va
     import numpy as np
     from matplotlib.figure import Figure  # no pyplot: no global state, Agg canvas
 
-    from cpg_actor.cpg import HOPPER_JOINTS, HOPPER_NOMINAL_POSE
+    from cpg_actor.robots.hopper.cpg import HOPPER_JOINTS, HOPPER_NOMINAL_POSE
 
     fig = Figure(figsize=(9.0, 7.5), layout="constrained")
     axes = fig.subplots(3, 1, sharex=True)
@@ -142,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
 
-    from cpg_actor.cpg import HOPPER_JOINTS, hopper_cpg
+    from cpg_actor.robots.hopper.cpg import HOPPER_JOINTS, hopper_cpg
 
     out = Path(args.out)
     if out.suffix.lower() != ".png":

@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from cpg_actor.envs.config import SIMULATORS
 from cpg_actor.plots import GAIT_WINDOW, draw_gait_diagram, save_figure
+from cpg_actor.robots.hopper.config import SIMULATORS
 
 HELP = "evaluate a trained run deterministically; save per-step traces, figures (and a video)"
 # the figures drawn where the traces have what they need (the quadruped's), next to the traces
@@ -145,7 +145,7 @@ def episode_lines(traces: dict[str, np.ndarray]) -> list[str]:
     """The printed result of an evaluation: a line per episode (return, the env's metrics,
     steps), the means, and a footnote where a metric was undefined (NaN) for an episode: it
     prints as "—" and the mean is over the episodes that define it (how many is said)."""
-    from cpg_actor.plots import METRICS
+    from cpg_actor.robots.registry import all_metrics
     from cpg_actor.training.evaluation import finite_mean
 
     names = [str(name) for name in traces["metric_names"]]  # the env's (hop_height)
@@ -170,7 +170,8 @@ def episode_lines(traces: dict[str, np.ndarray]) -> list[str]:
     lines.append(", ".join([f"mean return {traces['episode_return'].mean():.3f}", *means])
                  + f" over {episodes} episodes")  # fmt: skip
     for name in undefined:
-        reason = METRICS[name].undefined if name in METRICS else ""
+        info = all_metrics().get(name)
+        reason = info.undefined if info is not None else ""
         where = f" where {reason}" if reason else ""
         lines.append(f"—: {name} is undefined for an episode{where}; the mean leaves it out")
     return lines
@@ -180,7 +181,7 @@ def record_video(policy, config, path: Path, seed: int, overwrite: bool) -> None
     """One deterministic episode in the agent's own environment (one env), rendered offscreen
     by its ``render_frame`` (the hopper's or the quadruped's scene) and encoded as it runs."""
     from cpg_actor.agents import get_agent_spec
-    from cpg_actor.envs import write_video
+    from cpg_actor.robots.common.video import write_video
 
     env = get_agent_spec(config.agent).make_env(1, config.env, 1, config.agent_config)
 
@@ -224,14 +225,15 @@ def training_curves_figure(rows: list[dict], metric_names=(), title: str = ""):
     (``eval/NAME``) where logged. A quantity never logged gets no panel."""
     from matplotlib.figure import Figure
 
-    from cpg_actor.plots import METRICS, metric_label
+    from cpg_actor.plots import metric_label
+    from cpg_actor.robots.registry import all_metrics
     from cpg_actor.training.progress import NOT_ENV_METRICS
 
     names = list(metric_names) or sorted(
         {key.removeprefix("eval/") for row in rows for key in row if key.startswith("eval/")}
         - set(NOT_ENV_METRICS)
     )
-    order = list(METRICS)  # the known metrics in the table's order (the task's first)
+    order = list(all_metrics())  # the known metrics in the robots' order (each's headline first)
     names.sort(key=lambda name: (order.index(name) if name in order else len(order), name))
     steps = np.array([row.get("global_step", np.nan) for row in rows], dtype=float)
 

@@ -1,6 +1,7 @@
 """`cpg-actor gaits`: the quadruped's CPG gait presets, open loop, on the ANYmal B.
 
-Each gait preset (``cpg_actor.cpg.gaits.GAITS``) drives ``--robots`` robots for ``--seconds``
+Each gait preset (``cpg_actor.robots.anymal.gaits.GAITS``) drives ``--robots`` robots for
+``--seconds``
 with no learning and no feedback (the untrained ``cpg-actor-open-loop``'s mean action), its
 drive d (eq. 3) set by the forward command ``--command``. It
 writes a gait diagram (which foot is on the ground, per leg, over the last seconds of robot 0,
@@ -22,7 +23,7 @@ HELP = "run the quadruped's CPG gait presets open loop; write a gait diagram and
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    from cpg_actor.cpg.gaits import GAITS
+    from cpg_actor.robots.anymal.gaits import GAITS
 
     parser.add_argument("--gaits", nargs="+", default=list(GAITS), choices=list(GAITS))
     parser.add_argument("--seconds", type=float, default=20.0, help="per run (default 20)")
@@ -68,7 +69,7 @@ def draw_reference(axis, gait: str, summary: dict | None = None) -> None:
     its touchdown at the gait's phase offset (``GAITS``, a fraction of a cycle after LF) for
     ``REFERENCE_DUTY`` of the cycle; under it, from ``summary`` (the robot's measured
     ``touchdown_phase`` and ``duty_factor``), the CPG's result in blue."""
-    from cpg_actor.cpg.gaits import GAITS, LEGS
+    from cpg_actor.robots.anymal.gaits import GAITS, LEGS
 
     def cycle(start: float, duty: float) -> list[tuple[float, float]]:
         """The bar from ``start`` for ``duty`` of a cycle, split where it wraps past 1."""
@@ -100,8 +101,8 @@ def gaits_figure(traces: dict, summary: dict, command: float):
     import numpy as np
     from matplotlib.figure import Figure
 
-    from cpg_actor.envs.quadruped import description as robot
     from cpg_actor.plots import draw_gait_diagram
+    from cpg_actor.robots.anymal import description as robot
 
     fig = Figure(figsize=(12.0, 1.7 * len(traces) + 1.0), layout="constrained")
     axes = np.atleast_2d(fig.subplots(len(traces), 2, width_ratios=(3, 1), squeeze=False))
@@ -124,12 +125,12 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
 
-    from cpg_actor.cpg.foot_space import FootSpaceMap
-    from cpg_actor.cpg.gaits import quadruped_cpg, quadruped_joint_map, quadruped_leg_cpg
-    from cpg_actor.envs.quadruped import description as robot
-    from cpg_actor.envs.quadruped.vector import AnymalVectorEnv
     from cpg_actor.files import atomic_write_text
     from cpg_actor.plots import save_figure
+    from cpg_actor.robots.anymal import description as robot
+    from cpg_actor.robots.anymal.foot_space import FootSpaceMap
+    from cpg_actor.robots.anymal.gaits import quadruped_cpg, quadruped_joint_map, quadruped_leg_cpg
+    from cpg_actor.robots.anymal.vector import AnymalVectorEnv
     from cpg_actor.training.evaluation import finite_mean
 
     if not (math.isfinite(args.seconds) and args.seconds > 0):

@@ -3,8 +3,8 @@
 See :mod:`cpg_actor.experiments.gradient`. Example (a trained run, and the untrained default
 CPG-Actor)::
 
-    cpg-actor gradient --run runs/cpg0 --out docs/results/gradient/trained.md
-    cpg-actor gradient --out docs/results/gradient/untrained.md
+    cpg-actor gradient --run runs/cpg0 --out gradient/trained.md
+    cpg-actor gradient --out gradient/untrained.md
 """
 
 from __future__ import annotations
@@ -101,13 +101,13 @@ def markdown(result: dict, share: float | None, title: str) -> str:
 
 def run(args: argparse.Namespace) -> int:
 
-    from cpg_actor.envs.torch_env import TorchVectorEnv
     from cpg_actor.experiments.gradient import (
         collect_rollout,
         feedback_score_share,
         truncation_study,
     )
     from cpg_actor.files import atomic_write_text
+    from cpg_actor.robots.common.torch_env import TorchVectorEnv
 
     if args.envs < 1 or args.steps < 2:
         raise ValueError(f"--envs must be >= 1 and --steps >= 2, got {args.envs}, {args.steps}")

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from cpg_actor.commands import add_set_option
 from cpg_actor.config.presets import PRESETS
-from cpg_actor.envs.config import SIMULATORS
+from cpg_actor.robots.hopper.config import SIMULATORS
 
 HELP = "reproduce the paper: train variants x seeds in parallel (or on Ray), figures and a report"
 

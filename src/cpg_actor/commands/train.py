@@ -16,8 +16,6 @@ from cpg_actor.config import (
     without_compile_if_no_compiler,
 )
 from cpg_actor.config.presets import PRESETS
-from cpg_actor.envs.config import SIMULATORS
-from cpg_actor.envs.robots import ROBOTS, robot_env
 from cpg_actor.files import (
     MARKER,
     RUN,
@@ -28,6 +26,8 @@ from cpg_actor.files import (
     remove_stale_temporaries,
     write_marker,
 )
+from cpg_actor.robots.hopper.config import SIMULATORS
+from cpg_actor.robots.registry import ROBOTS, get_robot
 from cpg_actor.training.progress import evaluation_text, metrics_text
 from cpg_actor.training.run_lock import LOCK_NAME, RunLock
 
@@ -49,8 +49,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--robot",
         default=None,
         choices=sorted(ROBOTS),
-        help="hopper (the paper's leg on a rail, default) or anymal (ANYmal B walking, MuJoCo "
-        "only; docs/quadruped.md)",
+        help="the robot (cpg_actor.robots.registry; default hopper, the paper's leg on a rail; "
+        "the quadrupeds: docs/quadruped.md, docs/go1.md)",
     )
     parser.add_argument(
         "--sim",
@@ -131,7 +131,7 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
         flags["robot"] = args.robot
     if args.sim is not None:
         robot = flags.get("robot", TrainConfig.robot)
-        fields = {f.name for f in dataclasses.fields(robot_env(robot).config_class)}
+        fields = {f.name for f in dataclasses.fields(get_robot(robot).config_class)}
         if "sim" in fields:
             flags["env"] = {"sim": args.sim}
         elif args.sim != "mujoco":  # a robot with one simulator: MuJoCo

@@ -7,26 +7,25 @@ saved in the run's ``config.yaml`` (``preset``).
 * ``paper``: OpenAI Baselines' ppo2 settings for MuJoCo tasks, the framework the paper used
   (every number and its source: :class:`cpg_actor.ppo.PPOConfig`). These are the dataclass
   defaults; the preset only adds ``ppo.compile`` (the same algorithm, its gradient step,
-  the rollout's policy step and reward scaling compiled by ``torch.compile``: several times
-  faster updates, faster rollouts, ``benchmarks/train_throughput.py``).
+  the rollout's policy step and reward scaling compiled by ``torch.compile`` into fewer,
+  fused kernels).
 * ``throughput``: the massively parallel recipe of legged_gym / rsl_rl (Rudin et al. 2021):
   many envs, short rollouts, few large minibatches, a learning rate adapted to a target KL.
   256 envs x 32 steps = 8,192 samples per iteration, 5 epochs of 4 minibatches (20 gradient
-  steps per 8,192 samples; paper: 320 per 2,048), learning rate 1e-3 adapted to KL 0.01. It
-  keeps a 2-core CPU near the physics ceiling (``benchmarks/train_throughput.py``) and learns
-  less per sample; what it reaches and when: ``docs/training.md``, "Presets".
+  steps per 8,192 samples; paper: 320 per 2,048), learning rate 1e-3 adapted to KL 0.01, the
+  CPG and its feedback at a fixed 3e-4 outside that schedule (``ppo.cpg_learning_rate``: the
+  KL the schedule follows hardly sees them, so its rate, up to 1e-2, would drive them). It
+  spends a small CPU's time on the physics rather than the update and learns less per
+  sample; what it reaches and when: ``docs/training.md``, "Presets".
 * ``gpu``: the same recipe at GPU scale on the MJX simulator (``docs/gpu.md``): 4,096 envs x 24
   steps = 98,304 samples per iteration (legged_gym's rollout length for 4,096 envs), 5 epochs
-  of 4 minibatches of 24,576, learning rate 1e-3 adapted to KL 0.01, and, as ``anymal``, the
-  CPG and its feedback at a fixed 3e-4 outside that schedule (``ppo.cpg_learning_rate``: the
-  KL the schedule follows hardly sees them, so its rate, up to 1e-2, would drive them; no
-  effect on agents whose policy holds no CPG: ``mlp``, ``cho2019*``); ``device`` auto (CUDA if
-  torch sees it). It runs on a CPU too (JAX's CPU backend), slowly.
+  of 4 minibatches of 24,576, learning rate 1e-3 adapted to KL 0.01 and the CPG's own 3e-4
+  as ``throughput`` (no effect on agents whose policy holds no CPG: ``mlp``, ``cho2019*``);
+  ``device`` auto (CUDA if torch sees it). It runs on a CPU too (JAX's CPU backend), slowly.
 * ``anymal``: the ANYmal B quadruped (``robot: anymal``) with the ``throughput`` recipe and the
   CPG-Actor settings its results were trained with (``docs/quadruped.md``, "Training"): one
   oscillator per leg (``cpg_layout: leg``), action noise 0.1 of the joint ranges, feedback
-  noise 0.2, and the CPG and its feedback at a fixed learning rate of 3e-4 outside the
-  adaptive schedule. The ``mlp`` results add ``--set agent_config.init_std=0.3``; the open-loop
+  noise 0.2. The ``mlp`` results add ``--set agent_config.init_std=0.3``; the open-loop
   CPG-Actor needs ``--set agent_config.feedback_noise=0`` (it has no feedback).
 """
 
@@ -46,6 +45,7 @@ THROUGHPUT: dict[str, Any] = {
         "num_minibatches": 4,
         "lr_schedule": "adaptive",
         "learning_rate": 1e-3,
+        "cpg_learning_rate": CPG_LEARNING_RATE,
         "compile": True,
     },
 }
@@ -72,7 +72,6 @@ PRESETS: dict[str, dict[str, Any]] = {
         **THROUGHPUT,
         "robot": "anymal",
         "agent_config": {"cpg_layout": "leg", "init_std": 0.1, "feedback_noise": 0.2},
-        "ppo": {**THROUGHPUT["ppo"], "cpg_learning_rate": CPG_LEARNING_RATE},
     },
 }
 

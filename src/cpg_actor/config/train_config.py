@@ -25,6 +25,8 @@ from cpg_actor.device import check_device_name
 from cpg_actor.files import atomic_write_text
 from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.ppo.config import PPOConfig
+from cpg_actor.robots.plugin import Robot
+from cpg_actor.robots.registry import DEFAULT_ROBOT, get_robot
 
 # the largest seed: torch takes seeds below 2**64, but seeds pass through int64 tensors and
 # arrays (checkpoints, env seeds), so the accepted range is that of an int64
@@ -38,9 +40,28 @@ def check_seed(seed: Any, name: str = "--seed") -> None:
 
 
 def _default_env_config() -> Any:
-    from cpg_actor.envs import HopperConfig
+    return get_robot(DEFAULT_ROBOT).config_class()
 
-    return HopperConfig()
+
+def check_cpg_choice(agent_config: AgentConfig, robot: Robot) -> None:
+    """ValueError unless ``agent_config.cpg_layout`` and ``cpg_gait`` are empty or among
+    ``robot``'s CPG layouts and that layout's gaits."""
+    layouts = robot.cpg_layouts()
+    layout = agent_config.cpg_layout
+    if layout and layout not in layouts:
+        raise ValueError(
+            f"agent_config.cpg_layout must be one of {', '.join(layouts)} on robot "
+            f"{robot.name!r} (or empty), got {layout!r}"
+        )
+    gait, gaits = agent_config.cpg_gait, layouts[layout or next(iter(layouts))].gaits
+    if gait and not gaits:
+        raise ValueError(
+            f"agent_config.cpg_gait: the CPG of robot {robot.name!r} has no gaits; leave it empty"
+        )
+    if gait and gait not in gaits:
+        raise ValueError(
+            f"agent_config.cpg_gait must be one of {', '.join(gaits)} (or empty), got {gait!r}"
+        )
 
 
 @dataclass
@@ -48,7 +69,7 @@ class TrainConfig:
     """One training run. ``total_steps`` counts control steps summed over all environments."""
 
     agent: str = "cpg-actor"  # a name in cpg_actor.agents.AGENTS
-    robot: str = "hopper"  # hopper | anymal (cpg_actor.envs.robots); env holds its config
+    robot: str = DEFAULT_ROBOT  # a name in cpg_actor.robots.registry.ROBOTS; env holds its config
     preset: str = "paper"  # the preset the run started from (cpg_actor.config.presets.PRESETS)
     seed: int = 0
     num_envs: int = 16  # x ppo.num_steps = 2,048 samples per update, as Baselines' ppo2
@@ -74,7 +95,7 @@ class TrainConfig:
     agent_config: AgentConfig = field(default_factory=AgentConfig)
     ppo: PPOConfig = field(default_factory=PPOConfig)
     warm_start: WarmStartConfig = field(default_factory=WarmStartConfig)  # cho2019-warm only
-    # the robot's env config: cpg_actor.envs.HopperConfig, or QuadrupedConfig for the anymal
+    # the robot's env config (its Robot.config_class: HopperConfig, QuadrupedConfig, ...)
     env: Any = field(default_factory=_default_env_config)
     es: ESConfig = field(default_factory=ESConfig)  # open-loop-es only: the CMA-ES search
 
@@ -138,11 +159,11 @@ class TrainConfig:
                 "env.normalized_actions is for off-the-shelf RL libraries (gymnasium.make); "
                 "the project's agents act on desired positions in rad: leave it false"
             )
-        from cpg_actor.envs.robots import robot_env, robot_name
+        from cpg_actor.robots.registry import robot_of_config
 
-        robot_env(self.robot)
+        robot = get_robot(self.robot)
         try:
-            holds = robot_name(self.env)
+            holds = robot_of_config(self.env).name
         except ValueError:  # a config of the caller's own env (a test double, an extension)
             holds = self.robot
         if holds != self.robot:
@@ -161,6 +182,7 @@ class TrainConfig:
             )
         check_device_name(self.device)
         self.agent_config.validate()
+        check_cpg_choice(self.agent_config, robot)
         self.ppo.validate()
         self.warm_start.validate()
         if self.steps_per_iteration < self.ppo.num_minibatches:
@@ -343,11 +365,9 @@ def apply_dict(obj: Any, data: dict[str, Any], prefix: str) -> None:
     A ``robot`` key of a ``TrainConfig`` comes first: it swaps ``env`` for that robot's
     default config when ``env`` holds another robot's."""
     if prefix == "" and isinstance(obj, TrainConfig) and "robot" in data:
-        from cpg_actor.envs.robots import robot_env
-
-        config_class = robot_env(str(data["robot"])).config_class
+        config_class = get_robot(str(data["robot"])).config_class
         obj.robot = str(data["robot"])
-        if not isinstance(obj.env, config_class):
+        if type(obj.env) is not config_class:  # a subclass is another robot's config
             obj.env = config_class()
         data = {key: value for key, value in data.items() if key != "robot"}
     names = {f.name: f for f in dataclasses.fields(obj)}

@@ -1,4 +1,6 @@
-"""Differentiable Hopf-oscillator CPG networks (paper section III-A, eq. 1-3)."""
+"""Differentiable Hopf-oscillator CPG networks (paper section III-A, eq. 1-3) and the joint
+map from their outputs to joint positions. Knows no robot: each robot's CPG presets live in
+its folder (:mod:`cpg_actor.robots`)."""
 
 from cpg_actor.cpg.hopf import (
     CPGOutput,
@@ -9,15 +11,9 @@ from cpg_actor.cpg.hopf import (
     hopf_step,
     phase_velocity,
 )
+from cpg_actor.cpg.joint_map import JointMap
 from cpg_actor.cpg.network import CPGNetwork
 from cpg_actor.cpg.parametrisation import FIELDS, Parametrisation, symmetric_coupling_ties
-from cpg_actor.cpg.presets import (
-    HOPPER_INITIAL,
-    HOPPER_JOINTS,
-    HOPPER_NOMINAL_POSE,
-    JointMap,
-    hopper_cpg,
-)
 from cpg_actor.cpg.topology import Topology
 
 __all__ = [
@@ -25,9 +21,6 @@ __all__ = [
     "CPGOutput",
     "CPGState",
     "FIELDS",
-    "HOPPER_INITIAL",
-    "HOPPER_JOINTS",
-    "HOPPER_NOMINAL_POSE",
     "JointMap",
     "OscillatorParameters",
     "Parametrisation",
@@ -35,7 +28,6 @@ __all__ = [
     "amplitude_acceleration",
     "coupling_term",
     "hopf_step",
-    "hopper_cpg",
     "phase_velocity",
     "symmetric_coupling_ties",
 ]

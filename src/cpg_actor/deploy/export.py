@@ -6,12 +6,12 @@ The exported function is the deterministic control step of
     (observation, state) -> (action, next_state)
 
 * ``observation``: ``(B, obs_dim)`` float32, the env's raw observation (for the hopper, in the
-  order of ``cpg_actor.envs.OBS_NAMES``: measured HFE, KFE positions (rad) and velocities
-  (rad/s), the desired positions being tracked (rad), hip height (m), hip velocity (m/s));
-  the observation normaliser is inside. A non-finite entry (NaN, +-inf) is replaced by the
-  normaliser's mean (0 where the run does not normalise) before anything else, so the policy
-  acts as if that sensor read its average; the action stays finite. A deployment should not
-  rely on it: it should refuse a non-finite observation before the call (as
+  order of ``cpg_actor.robots.hopper.simulation.OBS_NAMES``: measured HFE, KFE positions (rad)
+  and velocities (rad/s), the desired positions being tracked (rad), hip height (m), hip
+  velocity (m/s)); the observation normaliser is inside. A non-finite entry (NaN, +-inf) is
+  replaced by the normaliser's mean (0 where the run does not normalise) before anything else,
+  so the policy acts as if that sensor read its average; the action stays finite. A deployment
+  should not rely on it: it should refuse a non-finite observation before the call (as
   ``examples/deploy_onnx.py`` does), the model's replacement being the fallback.
 * ``state``: ``(B, *state_shape)`` float32, the agent's recurrent state: for the CPG-Actor the
   CPG state ``(B, 5, N)`` (rows: phase theta, theta_dot, amplitude r, r_dot, r_ddot; columns:
@@ -137,8 +137,8 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
     :func:`cpg_actor.training.policy.load_policy`, which knows its run and robot), key -> string
     (``docs/training.md``, "Export", has the table)."""
     from cpg_actor import __version__
-    from cpg_actor.envs.actuator import Actuator
-    from cpg_actor.envs.robots import robot_env
+    from cpg_actor.robots.common.actuator import Actuator
+    from cpg_actor.robots.registry import get_robot
 
     config, robot = policy.config, policy.robot
     if config is None or robot is None:
@@ -150,7 +150,7 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
     normalizer = policy.normalizer
     std = torch.sqrt(normalizer.var + normalizer.epsilon)
     state = initial_state(policy, batch)
-    sources = robot_env(config.robot).observation_sources
+    sources = get_robot(config.robot).observation_sources()
     values: dict[str, Any] = {
         "cpg_actor_version": __version__,
         "robot": config.robot,
@@ -242,7 +242,7 @@ def export_policy(
         )
     if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
         raise ValueError(f"batch must be a positive integer, got {batch!r}")
-    from cpg_actor.envs.robots import robot_env
+    from cpg_actor.robots.registry import get_robot
 
     path = Path(path)
     sidecars = sidecar_paths(path)
@@ -256,7 +256,7 @@ def export_policy(
             raise FileExistsError(f"{target} exists; pass --overwrite to replace it")
     existed = {target for target in sidecars.values() if target.exists()}
     metadata = export_metadata(policy, batch, sidecars["mjcf"].name)
-    mjcf = robot_env(policy.config.robot).mjcf(policy.config.env)
+    mjcf = get_robot(policy.config.robot).mjcf(policy.config.env)
     module = ControlStep(policy).cpu().eval()  # exported for the CPU, wherever it trained
     obs_dim = int(policy.normalizer.mean.shape[0])
     example = (torch.zeros(batch, obs_dim), torch.as_tensor(initial_state(policy, batch)))

@@ -2,7 +2,7 @@
 learning at all, for a reproduction's environment.
 
 The open-loop CPG-Actor learns constant CPG parameters; a grid over the same parameters
-(:data:`cpg_actor.envs.cho2019_reference.DEFAULT_GRID`: 960 sets of frequency, hip and knee
+(:data:`cpg_actor.robots.hopper.cho2019_reference.DEFAULT_GRID`: 960 sets of frequency, hip and knee
 amplitude and hip-knee phase bias, a and w at the preset's values) run for one episode each
 with no reset noise gives a floor any CPG agent's trained return should clear. The report
 shows it next to the trained variants (``OUT/open_loop_floor.json``).
@@ -20,8 +20,8 @@ FLOOR_FILE = "open_loop_floor.json"
 def open_loop_floor(env_config: Any, grid: dict | None = None) -> dict[str, Any]:
     """The best grid candidate by episode return (and, for reference, by hop height);
     ``grid`` entries replace those of the default grid."""
-    from cpg_actor.envs.cho2019 import PARAMETER_NAMES
-    from cpg_actor.envs.cho2019_reference import evaluate_parameters, grid_candidates
+    from cpg_actor.robots.hopper.cho2019 import PARAMETER_NAMES
+    from cpg_actor.robots.hopper.cho2019_reference import evaluate_parameters, grid_candidates
 
     candidates = evaluate_parameters(grid_candidates(grid), env_config)
     by_return = max(candidates, key=lambda c: c.episode_return)

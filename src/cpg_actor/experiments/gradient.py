@@ -55,7 +55,7 @@ class Rollout:
 @torch.no_grad()
 def collect_rollout(policy: Policy, env, num_steps: int, seed: int, gamma: float) -> Rollout:
     """Sample ``num_steps`` control steps of ``policy`` in every env of ``env`` (a
-    :class:`~cpg_actor.envs.torch_env.TorchVectorEnv`) from a reset with ``seed``."""
+    :class:`~cpg_actor.robots.common.torch_env.TorchVectorEnv`) from a reset with ``seed``."""
     agent = policy.agent
     n = env.num_envs
     storage = RolloutStorage(

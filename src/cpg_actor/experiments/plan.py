@@ -53,8 +53,8 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     # the hop-height reward: r1 paid once per flight, at its apex (env.hop_reward=apex)
     "cpg-actor-apex": ("cpg-actor-paper", ("env.hop_reward=apex",)),
     "mlp-apex": ("mlp", ("env.hop_reward=apex",)),
-    # beyond the paper's one-step gradient (docs/training.md): k = 32 was the best of
-    # k = 1, 4, 8, 32 on the tuning seeds 100 and 101 (250k steps), which are never reported
+    # beyond the paper's one-step gradient (docs/training.md): k = 32 chosen by tuning, on
+    # seeds that are never reported
     "cpg-actor-bptt32": ("cpg-actor-paper", ("ppo.bptt_steps=32",)),
     "cpg-actor-feedback-noise": ("cpg-actor-paper", ("agent_config.feedback_noise=0.1",)),
 }
@@ -220,8 +220,8 @@ def thread_shares(workers: int) -> dict[str, int]:
     """The thread settings of each of ``workers`` runs sharing the machine: one torch thread
     for the rollout, and for the simulator and the update its share of the cores this process
     may use (``usable_cores``, as the runs' own automatic threads count them). Those automatic
-    threads (every usable core each) would oversubscribe them: two throughput-preset runs on 2
-    cores trained 12x slower together than one alone (``benchmarks/results/shared_device.md``)."""
+    threads (every usable core each) would oversubscribe them, and runs side by side would
+    train far slower together than one alone."""
     share = max(1, usable_cores() // max(1, workers))
     return {"torch_threads": 1, "env_threads": share, "update_threads": share}
 

@@ -12,7 +12,6 @@ from typing import Any
 
 import numpy as np
 
-from cpg_actor.envs.reward import REWARD_TERMS
 from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments.figures import make_figures, steps_per_iteration
 from cpg_actor.experiments.floor import FLOOR_FILE, load_floor
@@ -27,6 +26,7 @@ from cpg_actor.experiments.results import (
 )
 from cpg_actor.experiments.transfer import load_transfer, transfer_lines
 from cpg_actor.machine import cpu_model, git_commit
+from cpg_actor.robots.hopper.reward import REWARD_TERMS
 
 PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
 PAPER_STAGE_STEPS = (1_000_000, 20_000_000, 60_000_000)
@@ -344,6 +344,7 @@ COMPARISONS = (
     ("cpg-actor-unbounded", "cpg-actor-paper", "the paper's unbounded feedback vs bounded"),
     ("mlp", "cpg-actor", "MLP vs CPG-Actor, eq. 4 reward"),
     ("mlp-apex", "cpg-actor-apex", "MLP vs CPG-Actor, apex (hop-height) reward"),
+    ("cpg-actor", "cho2019-warm", "CPG-Actor vs Cho et al. from the same start gait"),
     ("cpg-actor", "cho2019-paper", "CPG-Actor vs Cho et al. as the paper has it"),
     ("cho2019-warm", "cho2019-paper", "the stronger Cho et al. vs the paper's"),
     ("cpg-actor", "cpg-actor-paper", "CPG-Actor vs the CPG-Actor in the paper's form"),

@@ -91,7 +91,7 @@ def trace_joint_limits(traces: dict[str, np.ndarray]) -> tuple[np.ndarray, np.nd
     hopper's (joints HFE, KFE, or no joint names); None otherwise."""
     if "action_low" in traces and "action_high" in traces:
         return np.asarray(traces["action_low"], float), np.asarray(traces["action_high"], float)
-    from cpg_actor.envs.robot import description as hopper
+    from cpg_actor.robots.hopper import description as hopper
 
     joints = tuple(str(name) for name in traces.get("joint_names", hopper.JOINT_NAMES))
     if joints != tuple(hopper.JOINT_NAMES):

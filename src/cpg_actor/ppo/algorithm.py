@@ -135,7 +135,7 @@ def compile_reproducibly(fn, **options):
     normaliser): kernels specialised per shape (``dynamic=False``: the same whatever shapes
     came before, so a resumed run computes what an uninterrupted one does), and no masked
     vector loads in loop tails: they let stray lanes into reductions, and results varied in
-    the last bits from run to run (torch 2.13, measured). ``options``: more inductor options."""
+    the last bits from run to run. ``options``: more inductor options."""
     return torch.compile(fn, dynamic=False, options={"cpp.enable_loop_tail_vec": False, **options})
 
 
@@ -158,7 +158,7 @@ class PPO:
         )
         self._clipped = list(agent.parameters())  # clip_grad_norm_'s order: the agent's
         # torch.compile fuses the loss's small operators (forward and backward) into a few
-        # kernels: about 2x faster updates at 64-sample minibatches, after a one-off compile
+        # kernels, after a one-off compile: small minibatches are dominated by their overhead
         if config.compile and not cpp_compiler():
             raise ValueError(
                 "ppo.compile=true needs a C++ compiler for torch.compile's CPU backend and none "
@@ -173,11 +173,11 @@ class PPO:
             forget_compiled()
             self.loss = compile_reproducibly(ppo_loss)
             # the check after every update: one fused pass instead of the eager actor and
-            # critic over the whole rollout (about 6 % of a throughput-preset update)
+            # critic over the whole rollout
             self.outputs_are_finite = compile_reproducibly(outputs_are_finite)
         # the loss, its gradient, the clip and the Adam step as one compiled function, where it
-        # computes what the separate calls compute (train_step.usable): ~1.8x faster steps at
-        # the paper's 64-sample minibatches
+        # computes what the separate calls compute (train_step.usable): less overhead per step
+        # at the paper's 64-sample minibatches
         self.fused_step = (
             train_step.make(agent, self.optimizer, config, ppo_loss, compile_reproducibly)
             if config.compile and config.fused_step

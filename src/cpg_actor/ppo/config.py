@@ -57,12 +57,11 @@ class PPOConfig:
     # discounted return (discount ``gamma``), clipped to +-10; training only, logs stay raw
     normalize_rewards: bool = True
     # torch.compile the minibatch loss (forward and backward) and the rollout's policy step
-    # (Policy.compile: normaliser, agent, sampling): same algorithm, updates about twice as
-    # fast at small minibatches and the rollout's own cost about 30 % lower, after compiles of
-    # a few seconds per run; needs a C++ compiler (inductor). On the CPU the whole gradient
-    # step (loss, gradient, clip, the adaptive rate, Adam) is one compiled function
-    # (ppo/train_step.py), faster again. Results differ from eager in the last bits, not run
-    # to run.
+    # (Policy.compile: normaliser, agent, sampling): the same algorithm in fewer, fused
+    # kernels, after compiles of a few seconds per run; needs a C++ compiler (inductor). On
+    # the CPU the whole gradient step (loss, gradient, clip, the adaptive rate, Adam) is one
+    # compiled function (ppo/train_step.py). Results differ from eager in the last bits, not
+    # run to run.
     compile: bool = False
     # with ``compile`` on the CPU: the whole gradient step as one compiled function (above).
     # False: the separate calls (compiled loss, autograd, clip, fused Adam), the path a CUDA
@@ -71,10 +70,9 @@ class PPOConfig:
     # with ``compile`` on the CPU: once a runner has made one iteration (every compiled
     # function built for the shapes and settings its loop uses), dynamo stops checking their
     # guards before each compiled call of the rollout and the update
-    # (``torch.compiler.set_stance(skip_guard_eval_unsafe=True)``; training/compile_stance.py):
-    # 0.1-0.4 ms per call: the throughput preset trains about 1.06x as fast on 2 cores
-    # (benchmarks/guard_checks.py). The same compiled code runs, so the same numbers
-    # (tests/training/test_runner.py); false: checked at every call, as torch.compile does
+    # (``torch.compiler.set_stance(skip_guard_eval_unsafe=True)``; training/compile_stance.py),
+    # which saves their per-call cost. The same compiled code runs, so the same numbers;
+    # false: checked at every call, as torch.compile does
     skip_guard_checks: bool = True
     # the gradient through the CPG (beyond the paper): the PPO loss replays each step's CPG
     # state from the state stored k - 1 steps earlier, so the gradient reaches the CPG and

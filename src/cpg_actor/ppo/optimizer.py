@@ -3,8 +3,8 @@
 At the paper's settings (320 gradient steps of 64 samples per 2,048 samples) the update makes
 thousands of small steps, and ``torch.nn.utils.clip_grad_norm_`` and ``torch.optim.Adam.step``
 spend most of their time in Python around a few kernels (grouping the tensors by device,
-checks, profiler hooks): about 150 and 180 us per call on a 2-core CPU for the CPG-Actor's 14
-parameter tensors, a third of its update. These functions call the same kernels in the same
+checks, profiler hooks), a large share of the update for a network of few small tensors.
+These functions call the same kernels in the same
 order with the same arguments, so the results are the same bit for bit
 (``tests/ppo/test_optimizer.py``); where that cannot be promised (tensors on several devices
 or of several dtypes, an Adam that is not the fused one or whose state does not exist yet) they

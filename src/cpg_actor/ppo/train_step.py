@@ -7,10 +7,7 @@ compiles the whole step, ``torch.func.grad`` of the PPO loss (:func:`ppo_loss`) 
 ``functional_call``, the global-norm clip, the adaptive learning-rate rule (``lr_schedule=
 "adaptive"``: the step's KL sets the rate before its Adam update, as ``PPO.update`` does) and
 the Adam update, into one ``torch.compile``d function that writes the new parameters, the Adam
-moments and the rate in place. On a 2-core CPU the paper preset's update (64-sample
-minibatches) is about 1.5x faster than with the compiled loss, autograd, the lean clip and the
-fused Adam kernel, the throughput preset's (2,048 samples) about 1.3x
-(``docs/results/throughput-measurements.md``, "The whole gradient step compiled").
+moments and the rate in place, so the overhead between the kernels goes.
 
 It computes the same algorithm with the same Adam state (``optimizer.state``: ``step``,
 ``exp_avg``, ``exp_avg_sq``, so checkpoints and resume are unchanged), but not the same bits

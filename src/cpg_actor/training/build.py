@@ -18,7 +18,6 @@ import torch
 from cpg_actor.agents import Agent, AgentSpec, get_agent_spec
 from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
-from cpg_actor.envs.torch_env import TorchVectorEnv
 from cpg_actor.ppo import (
     PPO,
     RewardNormalizer,
@@ -26,6 +25,7 @@ from cpg_actor.ppo import (
     RunningNormalizer,
     compile_reproducibly,
 )
+from cpg_actor.robots.common.torch_env import TorchVectorEnv
 from cpg_actor.training.policy import Policy
 from cpg_actor.training.seeding import seed_everything
 

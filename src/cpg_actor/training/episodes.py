@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from cpg_actor.envs.torch_env import EnvStep
+from cpg_actor.robots.common.torch_env import EnvStep
 
 WINDOW = 100  # finished episodes averaged in the logs
 

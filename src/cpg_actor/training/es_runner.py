@@ -48,8 +48,8 @@ from cpg_actor.agents.open_loop_es import (
 )
 from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
-from cpg_actor.envs.torch_env import TorchVectorEnv
 from cpg_actor.ppo import RunningNormalizer
+from cpg_actor.robots.common.torch_env import TorchVectorEnv
 from cpg_actor.training import run_checkpoint
 from cpg_actor.training.checkpoint import (
     CHECKPOINT_FORMAT,

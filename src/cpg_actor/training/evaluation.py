@@ -6,8 +6,8 @@ envs, never updates the observation normaliser and draws no random numbers (the 
 is taken and the envs are reset with their own seed), so training is the same with or
 without it.
 
-On an env with a tensor face (MJX: :class:`cpg_actor.envs.torch_env.TensorEnv`) an evaluation
-without traces stays on the env's device: the policy's tensors go to the env and its
+On an env with a tensor face (MJX: :class:`cpg_actor.robots.common.torch_env.TensorEnv`) an
+evaluation without traces stays on the env's device: the policy's tensors go to the env and its
 returns, lengths and episode metrics are summed there, with a look at the host only every
 :data:`CHECK_EVERY` steps (whether every episode has ended) instead of copying each step's
 outputs to numpy. The numbers are those of the numpy loop (tested).
@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from cpg_actor.envs.torch_env import TensorEnv
+from cpg_actor.robots.common.torch_env import TensorEnv
 from cpg_actor.training.seeding import EVAL_SEED_KEY, derived_seed
 
 
@@ -35,7 +35,7 @@ def finite_mean(values) -> float:
 
 def observation_columns(robot) -> dict[str, list[int]]:
     """Where the traces' quantities are in the observation, by the names the env's
-    :class:`cpg_actor.robot.RobotSpec` gives its columns: measured joint positions
+    :class:`cpg_actor.robots.spec.RobotSpec` gives its columns: measured joint positions
     (``p_m_<joint>``) and velocities (``v_m_<joint>``) in joint order, and the hip height
     where the robot has one. A quantity the robot does not observe is left out."""
     names = list(robot.observation_names)

@@ -111,12 +111,10 @@ class Policy:
     def compile(self) -> None:
         """``torch.compile`` the training step (:meth:`act` with ``deterministic=False`` and
         ``update_normalizer=True``): the normaliser, the agent, the sampling and the clip in
-        a few fused kernels instead of about 700 small operators per control step (the
-        rollout's cost outside the simulator 29 % lower for the CPG-Actor at 256 envs on 2
-        cores, ``docs/results/throughput-measurements.md``, "The rollout's policy step
-        compiled"). The Gaussian is
-        drawn by torch's own ``normal`` (``fallback_random``), so the actions are those of
-        the eager step; the rest differs from it in the last bits, never from run to run.
+        a few fused kernels instead of about 700 small operators per control step, which
+        dominate the rollout's cost outside the simulator. The Gaussian is drawn by torch's
+        own ``normal`` (``fallback_random``), so the actions are those of the eager step;
+        the rest differs from it in the last bits, never from run to run.
         Evaluation and deployment (deterministic) stay eager. Needs a C++ compiler on the
         CPU; a new batch size compiles again."""
         from cpg_actor.ppo.algorithm import compile_reproducibly

@@ -1,0 +1,38 @@
+"""Checks every robot's Gymnasium envs make alike: actions that are real numbers, and a
+render mode the env offers."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+
+def real_actions(actions: Any, expected: str, dtype: Any = np.float64) -> np.ndarray:
+    """``actions`` as a real ``dtype`` array; ValueError for what is not numbers, and for
+    complex numbers (numpy would drop their imaginary part with only a warning)."""
+    try:
+        raw = np.asarray(actions)
+        is_complex = np.iscomplexobj(raw)
+        array = None if is_complex else raw.astype(dtype)
+    except (TypeError, ValueError):
+        raise ValueError(f"actions must be numbers {expected}, got {actions!r}") from None
+    if is_complex:
+        raise ValueError(
+            f"actions must be real numbers {expected}, got complex values (dtype {raw.dtype})"
+        )
+    return array
+
+
+def check_real_tensor(actions: Any) -> None:
+    """ValueError for a complex tensor of actions (as :func:`real_actions`)."""
+    if actions.is_complex():
+        raise ValueError(f"actions must be real numbers, got complex values ({actions.dtype})")
+
+
+def check_render_mode(render_mode: str | None, metadata: dict[str, Any]) -> None:
+    """ValueError unless ``render_mode`` is None or one of ``metadata["render_modes"]``."""
+    if render_mode is not None and render_mode not in metadata["render_modes"]:
+        raise ValueError(
+            f"render_mode must be None or one of {metadata['render_modes']}, got {render_mode!r}"
+        )

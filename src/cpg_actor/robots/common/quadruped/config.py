@@ -1,0 +1,178 @@
+"""`QuadrupedConfig`: every number of a quadruped's locomotion task, with its reason.
+
+Its defaults are ANYmal B's (the first quadruped here); another robot subclasses it and changes
+the defaults where its body differs (``robots/go1/config.py``). The actuator constants are one
+number for all 12 joints, or three, one per joint of a leg (in the leg's joint order), repeated
+for each leg.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+
+def default_scales() -> dict[str, float]:
+    # legged_gym's ANYmal scales (Rudin et al. 2021), per second of simulated time (each term is
+    # multiplied by the control step), plus the two terms the task asks for that legged_gym
+    # leaves at 0: orientation and base height.
+    return {
+        "tracking_lin_vel": 1.0,  # exp(-|v_xy - command_xy|^2 / sigma)
+        "tracking_ang_vel": 0.5,  # exp(-(w_z - command_yaw)^2 / sigma)
+        "lin_vel_z": -2.0,  # v_z^2: no bouncing
+        "ang_vel_xy": -0.05,  # w_x^2 + w_y^2: no rocking
+        "orientation": -1.0,  # |projected gravity xy|^2: keep the base level
+        "base_height": -10.0,  # (h - base_height_target)^2
+        "torques": -1e-5,  # |tau|^2
+        "joint_acc": -2.5e-7,  # |q_ddot|^2
+        "action_rate": -0.01,  # |a_t - a_t-1|^2
+        "feet_air_time": 1.0,  # sum over touchdowns of (air time - 0.5 s): longer steps
+        # sum over planted feet of their sliding speed^2 (m/s)^2. Off (0) by default, as in
+        # legged_gym; the trained MLP drags its hind feet without it (docs/quadruped.md)
+        "feet_slip": 0.0,
+    }
+
+
+SIMULATORS = ("mujoco", "mjx")  # the quadruped's backends
+ACTUATOR_FIELDS = ("kp", "kd", "torque_limit", "velocity_limit", "saturation_torque")
+
+
+def _number(value, bound: float, strict: bool) -> bool:
+    """A finite int or float (no bool) above ``bound`` (``strict``) or at least it."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        return False
+    return value > bound if strict else value >= bound
+
+
+@dataclass
+class QuadrupedConfig:
+    """The locomotion task of a quadruped; the defaults are ANYmal B's (``docs/quadruped.md``)."""
+
+    # "mujoco" (MuJoCo on the CPU, the default) or "mjx" (MuJoCo XLA: JAX on a GPU where it
+    # has one; docs/quadruped.md, "Backends")
+    sim: str = "mujoco"
+    # sim="mjx" only: the Newton solver's iteration caps (the MJX hopper's; HopperConfig). The
+    # trot needs more than 4 iterations to stay on MuJoCo's trajectory (docs/gpu.md)
+    mjx_iterations: int = 15
+    mjx_ls_iterations: int = 15
+    physics_dt: float = 0.002  # s: 500 Hz, stable for this robot's contacts (legged_gym: 5 ms)
+    decimation: int = 10  # substeps per control step: control at 50 Hz (legged_gym's)
+    episode_seconds: float = 20.0  # s, then truncated
+    foot_friction: float = 0.8  # the hopper's
+    # the hopper's actuator law on all 12 joints (cpg_actor.robots.common.actuator); each a
+    # number, or three: one per joint of a leg
+    kp: float | tuple[float, ...] = 80.0  # N m / rad
+    kd: float | tuple[float, ...] = 2.0  # N m s / rad
+    torque_limit: float | tuple[float, ...] = 40.0  # N m
+    velocity_limit: float | tuple[float, ...] = 15.0  # rad/s
+    saturation_torque: float | tuple[float, ...] = 80.0  # N m
+    actuator_law: str = "dc-motor"
+    # commands, each uniform in its range per episode: forward and lateral speed (base frame)
+    # and yaw rate. Lateral and yaw are 0 by default (the forward task); the CPG's drive follows
+    # the forward command only, turning and side-stepping are left to the feedback
+    command_range: tuple[float, float] = (0.0, 1.0)  # m/s
+    lateral_range: tuple[float, float] = (0.0, 0.0)  # m/s, positive to the left
+    yaw_range: tuple[float, float] = (0.0, 0.0)  # rad/s, positive counter-clockwise
+    # (m/s)^2 and (rad/s)^2 of the tracking kernels. legged_gym's 0.25 pays 96% of the term at
+    # 0.1 m/s of error, too little pull to track a command within 0.1 m/s; 0.1 pays 90% there
+    # (docs/quadruped.md)
+    tracking_sigma: float = 0.1
+    base_height_target: float = 0.48  # m: where the nominal pose stands under its weight
+    reward_scales: dict[str, float] = field(default_factory=default_scales)
+    reset_noise: float = 0.1  # rad, uniform on each joint around the nominal pose
+    fall_height: float = 0.25  # m: a base lower than this has fallen (standing: 0.48)
+    fall_tilt: float = 1.0  # rad: a base tilted more than this has fallen
+    normalized_actions: bool = False  # actions in [-1, 1] mapped onto the joint ranges
+    render_width: int = 640  # pixels of render_frame's images (videos)
+    render_height: int = 480
+
+    @property
+    def control_dt(self) -> float:
+        return self.physics_dt * self.decimation
+
+    @property
+    def episode_steps(self) -> int:
+        return round(self.episode_seconds / self.control_dt)
+
+    def validate(self) -> QuadrupedConfig:
+        """Raise ``ValueError`` naming the first bad field; returns ``self``."""
+        for name in ("physics_dt", "episode_seconds", "tracking_sigma", "base_height_target",
+                     "fall_height", "fall_tilt"):  # fmt: skip
+            value = getattr(self, name)
+            if not _number(value, 0.0, strict=True):
+                raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+        for name in ("foot_friction", "reset_noise"):
+            value = getattr(self, name)
+            if not _number(value, 0.0, strict=False):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        for name in ACTUATOR_FIELDS:
+            value, strict = getattr(self, name), name != "kd"
+            if isinstance(value, list):  # from YAML or --set
+                value = tuple(value)
+                setattr(self, name, value)
+            ok = _number(value, 0.0, strict) or (
+                isinstance(value, tuple) and len(value) == 3
+                and all(_number(v, 0.0, strict) for v in value)
+            )  # fmt: skip
+            if not ok:
+                raise ValueError(f"{name} must be a finite number {'>' if strict else '>='} 0 "
+                                 f"or three of them (one per joint of a leg), got "
+                                 f"{value!r}")  # fmt: skip
+        if self.sim not in SIMULATORS:
+            raise ValueError(f"sim must be one of {', '.join(SIMULATORS)} for the quadruped, "
+                             f"got {self.sim!r}")  # fmt: skip
+        for name in ("decimation", "mjx_iterations", "mjx_ls_iterations", "render_width",
+                     "render_height"):  # fmt: skip
+            value = getattr(self, name)
+            if isinstance(value, bool) or not (isinstance(value, int) and value >= 1):
+                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+        if not (isinstance(self.decimation, int) and self.decimation >= 1):
+            raise ValueError(f"decimation must be an integer >= 1, got {self.decimation!r}")
+        if self.physics_dt > 0.005:
+            raise ValueError(f"physics_dt must be <= 0.005 s, got {self.physics_dt}")
+        for name, unit in (("command_range", "m/s"), ("lateral_range", "m/s"),
+                           ("yaw_range", "rad/s")):  # fmt: skip
+            bounds = getattr(self, name)
+            if not (
+                isinstance(bounds, list | tuple)
+                and len(bounds) == 2
+                and all(isinstance(b, int | float) and math.isfinite(b) for b in bounds)
+                and bounds[0] <= bounds[1]
+            ):
+                raise ValueError(f"{name} must be [low, high] in {unit} with low <= high, got "
+                                 f"{bounds!r}")  # fmt: skip
+        if not isinstance(self.reward_scales, dict):
+            raise ValueError(f"reward_scales must be a mapping of term to scale, got "
+                             f"{self.reward_scales!r}")  # fmt: skip
+        unknown = set(self.reward_scales) - set(default_scales())
+        if unknown:
+            raise ValueError(
+                f"unknown reward terms {sorted(unknown)}; accepted: {sorted(default_scales())}"
+            )
+        for term, scale in self.reward_scales.items():
+            if isinstance(scale, bool) or not (isinstance(scale, int | float)
+                                               and math.isfinite(scale)):  # fmt: skip
+                raise ValueError(f"reward_scales.{term} must be a finite number, got {scale!r}")
+        if self.actuator_law not in ("dc-motor", "coast"):
+            raise ValueError(f"actuator_law must be 'dc-motor' or 'coast', got "
+                             f"{self.actuator_law!r}")  # fmt: skip
+        return self
+
+    def replace(self, **changes) -> QuadrupedConfig:
+        """A validated copy with ``changes`` (as the hopper's ``HopperConfig.replace``)."""
+        return dataclasses.replace(self, **changes).validate()
+
+    @classmethod
+    def from_dict(cls, values: dict) -> QuadrupedConfig:
+        names = {f.name for f in dataclasses.fields(cls)}
+        unknown = set(values) - names
+        if unknown:
+            raise ValueError(
+                f"unknown {cls.__name__} fields {sorted(unknown)}; accepted: {sorted(names)}"
+            )
+        given = values.get("reward_scales", {})
+        if not isinstance(given, dict):
+            raise ValueError(f"reward_scales must be a mapping of term to scale, got {given!r}")
+        scales = {**cls().reward_scales, **given}  # the class's defaults for the others
+        return cls(**{**values, "reward_scales": scales}).validate()

@@ -1,0 +1,189 @@
+"""CPG presets for a quadruped: the classic gaits as phase biases (paper eq. 1: the coupling term
+pulls theta_j - theta_i towards phi_ij), for any robot whose legs are each a hip (abduction),
+a hip flexion and a knee joint, in that order.
+
+Two layouts. ``joint``: eight oscillators, per leg one for the hip flexion and one for the
+knee; the abduction joints are not driven (held at the nominal pose by
+:class:`~cpg_actor.cpg.JointMap`). Coupling (Lambda):
+
+* the four hip oscillators all to all, with the gait's phase lags between the legs;
+* each leg's knee oscillator with its own hip oscillator only.
+
+``leg``: one oscillator per leg, all to all with the gait's lags, driving a foot-space pattern
+(:mod:`cpg_actor.robots.common.quadruped.foot_space`).
+
+Each oscillator has a target phase psi; every coupled pair gets ``phi_ij = psi_j - psi_i``, so
+the network's phase-locked state is the gait, and the network starts in it. The leg phases by
+the leg's place on the body (fractions of a cycle, as in Ijspeert 2008 and the legged-robot
+CPG literature; L/R left/right, F/H front/hind):
+
+========  ====  ====  ====  ====
+gait       LF    RF    LH    RH
+========  ====  ====  ====  ====
+trot       0    1/2   1/2    0     diagonal pairs in phase
+pace       0    1/2    0    1/2    lateral pairs in phase
+bound      0     0    1/2   1/2    front pair, then hind pair
+pronk      0     0     0     0     all four together
+walk       0    1/2   3/4   1/4    lateral-sequence walk: LF, RH, RF, LH
+========  ====  ====  ====  ====
+
+Within a leg the knee leads or lags the hip by a quarter cycle so that the foot lifts while
+the hip swings forward (hip angle decreasing, ``theta`` in (0, pi) for ``x = r cos theta``): a
+knee that flexes towards negative angles (ANYmal's front knees, all of the Go1's) has its
+``x`` lowest at ``theta_hip = pi/2``: ``psi_knee = psi_hip + pi/2``; a knee that flexes towards
+positive angles (ANYmal's hind knees): ``psi_knee = psi_hip - pi/2``. A robot says which
+(:attr:`GaitCPGs.knee_signs`).
+
+The drive d of eq. 3 is the commanded forward speed (m/s): ``nu(d) = c_nu1 d + c_nu0`` and
+``rho(d) = c_R1 d + c_R0``, so the step's frequency and length follow the command (the
+CPG-Actor reads d from the observation, ``RobotSpec.drive_observation``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import torch
+from torch import Tensor
+
+from cpg_actor.cpg.joint_map import JointMap
+from cpg_actor.cpg.network import CPGNetwork
+from cpg_actor.cpg.topology import Topology
+
+PLACES = ("LF", "RF", "LH", "RH")  # the columns of GAITS
+GAITS: dict[str, tuple[float, float, float, float]] = {  # leg phase, fraction of a cycle
+    "trot": (0.0, 0.5, 0.5, 0.0),
+    "pace": (0.0, 0.5, 0.0, 0.5),
+    "bound": (0.0, 0.0, 0.5, 0.5),
+    "pronk": (0.0, 0.0, 0.0, 0.0),
+    "walk": (0.0, 0.5, 0.75, 0.25),
+}
+# the joint (index in the action order: per leg abduction, hip, knee) of each oscillator of
+# the joint layout
+OSCILLATOR_JOINTS = tuple(3 * leg + joint for leg in range(4) for joint in (1, 2))
+
+
+def leg_phase(gait: str, place: str) -> float:
+    """The phase (fraction of a cycle) of the leg at ``place`` (one of :data:`PLACES`)."""
+    if gait not in GAITS:
+        raise ValueError(f"unknown gait {gait!r}; available: {', '.join(GAITS)}")
+    return GAITS[gait][PLACES.index(place)]
+
+
+@dataclass(frozen=True)
+class GaitCPGs:
+    """The gait CPGs of one robot: its legs in joint order, where each is on the body, which way
+    each knee flexes, and the initial parameters of each layout (eq. 3, the drive d the
+    commanded forward speed in m/s; keys as :class:`~cpg_actor.cpg.CPGNetwork`'s ``initial``).
+    Its methods are the robot's CPG presets (``Robot.cpg_layouts``)."""
+
+    legs: tuple[str, ...]  # the robot's leg names, in joint order
+    places: tuple[str, ...]  # each leg's place on the body, one of PLACES
+    joints: tuple[str, str]  # the names of a leg's hip and knee joint (the oscillators')
+    knee_signs: tuple[int, ...]  # -1: the knee flexes towards negative angles, +1: positive
+    joint_initial: Mapping[str, float | Sequence]  # the joint layout's (angles in rad)
+    leg_initial: Mapping[str, float | Sequence]  # the leg layout's (amplitude: half a step, m)
+
+    @property
+    def oscillators(self) -> tuple[str, ...]:
+        return tuple(f"{leg}_{joint}" for leg in self.legs for joint in self.joints)
+
+    def gait_phases(self, gait: str) -> tuple[float, ...]:
+        """The target phase psi (rad) of each of the joint layout's 8 oscillators in ``gait``."""
+        phases = []
+        for place, sign in zip(self.places, self.knee_signs, strict=True):
+            hip = 2.0 * math.pi * leg_phase(gait, place)
+            phases += [hip, hip - sign * math.pi / 2]
+        return tuple(phases)
+
+    def topology(self) -> Topology:
+        """Hips all to all, each knee with its own hip (both directions)."""
+        hips = [2 * leg for leg in range(4)]
+        edges = [(i, j) for i in hips for j in hips if i != j]
+        edges += [(h, h + 1) for h in hips] + [(h + 1, h) for h in hips]
+        return Topology(8, tuple(edges), self.oscillators)
+
+    def joint_cpg(
+        self,
+        dt: float,
+        gait: str = "trot",
+        initial: Mapping[str, float | Sequence | Tensor] | None = None,
+        frozen: Mapping[str, bool | Sequence | Tensor] | None = None,
+        check_inputs: bool = True,
+        dtype: torch.dtype | None = None,
+    ) -> CPGNetwork:
+        """The ``joint`` layout's CPG in ``gait`` (module docstring), started in that gait's
+        phases. ``initial`` entries override :attr:`joint_initial` and the gait's phase biases.
+        Trainable: as the hopper's, frequency, amplitude and convergence per oscillator, and per
+        coupled pair one coupling weight and one phase bias (symmetric ties); and, unlike the
+        hopper's, the drive gains c_nu1 and c_R1 of eq. 3 per oscillator. Step it with the
+        drive ``d >= 0`` (the commanded forward speed in m/s) as ``cpg(state, d)``."""
+        return _gait_network(self.topology(), self.gait_phases(gait), self.joint_initial, dt,
+                             initial, frozen, check_inputs, dtype)  # fmt: skip
+
+    def leg_cpg(
+        self,
+        dt: float,
+        gait: str = "trot",
+        initial: Mapping[str, float | Sequence | Tensor] | None = None,
+        frozen: Mapping[str, bool | Sequence | Tensor] | None = None,
+        check_inputs: bool = True,
+        dtype: torch.dtype | None = None,
+    ) -> CPGNetwork:
+        """One oscillator per leg, coupled all to all with ``gait``'s phase lags and started in
+        them; its amplitude is half the foot's step in metres (the foot-space pattern turns
+        phase and amplitude into joints). Trainable as :meth:`joint_cpg`."""
+        psi = [2.0 * math.pi * leg_phase(gait, place) for place in self.places]
+        return _gait_network(Topology.all_to_all(4, names=self.legs), psi, self.leg_initial,
+                             dt, initial, frozen, check_inputs, dtype)  # fmt: skip
+
+    def open_loop_positions(
+        self,
+        gait: str,
+        dt: float,
+        nominal_pose: Sequence[float],
+        num_robots: int,
+        steps: int,
+        drive: float,
+    ) -> Tensor:
+        """The desired joint positions ``(steps, num_robots, 12)``, float64, of the ``gait``
+        preset (joint layout) run open loop from its initial state at the constant drive
+        ``drive`` (the commanded forward speed, m/s): no learning, no feedback, the same for
+        every robot."""
+        cpg = self.joint_cpg(dt, gait).double()
+        joint_map = joint_map_for(nominal_pose).double()
+        state = cpg.initial_state(num_robots)
+        drives = torch.full((num_robots, cpg.num_oscillators), float(drive), dtype=torch.float64)
+        positions = []
+        with torch.no_grad():
+            for _ in range(steps):
+                out, state = cpg(state, drives)
+                positions.append(joint_map(out.position))
+        return torch.stack(positions)
+
+
+def _gait_network(topology, psi, defaults, dt, initial, frozen, check_inputs, dtype) -> CPGNetwork:
+    """A CPG started in the phases ``psi`` whose coupled pairs pull towards them
+    (``phi_ij = psi_j - psi_i``), with the drive gains trainable."""
+    n = topology.num_oscillators
+    phase_bias = torch.zeros(n, n, dtype=torch.float64)
+    for i, j in topology.edges:
+        phase_bias[i, j] = psi[j] - psi[i]
+    return CPGNetwork(
+        topology,
+        dt=dt,
+        initial={**defaults, "phase_bias": phase_bias, **(initial or {})},
+        frozen={"frequency_gain": False, "amplitude_gain": False, **(frozen or {})},
+        symmetric_coupling=True,
+        initial_phase=psi,
+        check_inputs=check_inputs,
+        dtype=dtype,
+    )
+
+
+def joint_map_for(nominal_pose: Sequence[float]) -> JointMap:
+    """The joint layout's map: hip and knee of every leg driven by their oscillators,
+    abduction held at the nominal pose."""
+    return JointMap(nominal_pose, joints=OSCILLATOR_JOINTS)

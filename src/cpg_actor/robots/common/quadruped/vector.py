@@ -1,0 +1,499 @@
+"""`QuadrupedVectorEnv`: N quadrupeds on MuJoCo, a Gymnasium ``VectorEnv`` (SAME_STEP autoreset),
+the locomotion task of :mod:`cpg_actor.tasks.velocity`. A robot's env is a subclass that names
+its :class:`~cpg_actor.robots.common.quadruped.model.QuadrupedModel` (``quadruped``), e.g.
+:class:`cpg_actor.robots.anymal.vector.AnymalVectorEnv`.
+
+As the hopper's MuJoCo env: the robots are rows of one state array and a control step is
+``mujoco.rollout`` of ``decimation`` substeps over chunks of them, on the calling thread and
+a helper per further core (``ThreadedRollout``), the ``dcmotor`` actuators running the
+actuator law inside MuJoCo. Actions are desired joint positions (12,
+rad; in [-1, 1] with ``normalized_actions``), clipped to the joint ranges.
+
+Per episode: a forward-speed command uniform in ``command_range`` (lateral and yaw speed
+commands uniform in ``lateral_range`` and ``yaw_range``, 0 by default), a start
+in the nominal pose with uniform joint noise, the feet on the ground, at rest. An episode ends
+when the base falls (``task.fallen``) or touches the ground (terminated), or after
+``episode_seconds`` (truncated). ``info["episode_metrics"]`` (NaN for envs still running):
+``speed_error`` (mean |forward speed - command| over the episode, m/s), ``forward_speed`` (mean,
+m/s), ``fell`` (1 or 0), ``episode_seconds``, ``cost_of_transport`` (the joints' mechanical
+work, sum of |torque x joint speed| dt, over m g times the distance walked forward; NaN under
+0.1 m), ``foot_slip`` (the planted feet's mean sliding speed, m/s: ``task.planted_slip``
+over every foot and step it applies to; NaN if no foot was planted).
+
+``info`` of a step also has, per env: ``command`` (the one the step ran under, also on the step
+that ends an episode), ``contact`` (4 bool, the feet in the robot's leg order (``foot_names``)
+within 5 mm of the ground), ``forward_speed`` (the base's, m/s), ``base_height``,
+``desired_position`` and ``measured_position``.
+
+Seeding: ``reset(seed=s)`` seeds env i with ``s + i``; every random draw (noise, commands)
+comes from env i's own generator.
+
+Rendering: :meth:`QuadrupedVectorEnv.render_frame` draws one robot with MuJoCo's offscreen
+renderer (needs an OpenGL backend, as the hopper's), a camera following the base over the
+checkered ground.
+"""
+
+from __future__ import annotations
+
+import copy
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import torch
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+
+from cpg_actor.robots.common.actuator import Actuator
+from cpg_actor.robots.common.checks import real_actions
+from cpg_actor.robots.common.mujoco_runtime import (
+    CONTROL_SPEC,
+    STATE_SPEC,
+    default_threads,
+    mujoco,
+    offscreen_renderer,
+)
+from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
+from cpg_actor.robots.common.quadruped.model import SENSORS, QuadrupedModel
+from cpg_actor.robots.common.seeding import env_seeds
+from cpg_actor.robots.common.threaded_rollout import ThreadedRollout
+from cpg_actor.robots.spec import RobotSpec
+from cpg_actor.tasks import velocity as task
+
+EPISODE_METRICS = ("speed_error", "forward_speed", "fell", "episode_seconds", "cost_of_transport",
+                   "foot_slip")  # fmt: skip
+MIN_DISTANCE = 0.1  # m: below this the cost of transport is not defined (NaN)
+
+
+def load_model(quadruped: QuadrupedModel, config: QuadrupedConfig,
+               torque_control: bool = False) -> mujoco.MjModel:  # fmt: skip
+    """The robot's MjModel under ``config``: its actuators (plain motors with
+    ``torque_control``), timestep and foot-ground friction."""
+    actuator = None if torque_control else Actuator.from_config(config)
+    text = quadruped.mjcf_text(actuator, torque_control=torque_control)
+    model = mujoco.MjModel.from_xml_string(text)
+    model.opt.timestep = config.physics_dt
+    for leg in quadruped.legs:
+        model.geom_friction[model.geom(f"{leg}_foot").id, 0] = config.foot_friction
+    model.geom_friction[model.geom("ground").id, 0] = config.foot_friction
+    return model
+
+
+def resolve_config(
+    config: QuadrupedConfig | dict | None, config_class: type = QuadrupedConfig
+) -> QuadrupedConfig:
+    """``config`` (a ``config_class`` or a dict of its fields; defaults if None), validated."""
+    name = config_class.__name__
+    if config is None:
+        config = config_class()
+    elif isinstance(config, dict):
+        config = config_class.from_dict(config)
+    elif type(config) is not config_class:  # another robot's subclass is not this robot's
+        raise ValueError(f"config must be a {name} or a dict of its fields, got "
+                         f"{type(config).__name__}")  # fmt: skip
+    return config.validate()
+
+
+def init_spaces(
+    env: VectorEnv,
+    num_envs: int,
+    config: QuadrupedConfig | dict | None,
+    max_episode_steps: int | None = None,
+) -> None:
+    """``env.config`` (validated), ``num_envs`` and the observation and action spaces of a
+    quadruped vector env (MuJoCo's and MJX's alike). ``max_episode_steps`` is what
+    ``gymnasium.make_vec`` passes from the registered spec: it must equal the config's
+    ``episode_steps`` (the env truncates its episodes itself)."""
+    if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
+        raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+    quadruped = env.quadruped
+    config = resolve_config(config, quadruped.config_class)
+    if max_episode_steps is not None and max_episode_steps != config.episode_steps:
+        raise ValueError(
+            f"max_episode_steps={max_episode_steps} differs from the config's episode_steps="
+            f"{config.episode_steps} (episode_seconds / control_dt); give both the same value"
+        )
+    env.config = config
+    env.num_envs = num_envs
+    n_obs, n_act = len(quadruped.observation_names), len(quadruped.joint_names)
+    env.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (n_obs,), np.float32)
+    if config.normalized_actions:
+        env.single_action_space = gym.spaces.Box(-1.0, 1.0, (n_act,), np.float32)
+    else:
+        low, high = quadruped.low.astype(np.float32), quadruped.high.astype(np.float32)
+        env.single_action_space = gym.spaces.Box(low, high)
+    env.observation_space = gym.vector.utils.batch_space(env.single_observation_space, num_envs)
+    env.action_space = gym.vector.utils.batch_space(env.single_action_space, num_envs)
+
+
+def robot_spec(quadruped: QuadrupedModel, config: QuadrupedConfig) -> RobotSpec:
+    return RobotSpec(
+        name=quadruped.name,
+        joint_names=quadruped.joint_names,
+        nominal_pose=quadruped.nominal_pose,
+        action_low=tuple(quadruped.low),
+        action_high=tuple(quadruped.high),
+        control_dt=config.control_dt,
+        observation_names=quadruped.observation_names,
+        drive_observation="command_vx",  # the commanded forward speed (m/s) drives the CPG
+    )
+
+
+class QuadrupedVectorEnv(VectorEnv):
+    """N quadrupeds (``quadruped``, set by a robot's subclass) walking on flat ground (module
+    docstring).
+
+    Args:
+        num_envs: N.
+        config: the robot's config (``quadruped.config_class``) or a dict of its fields;
+            defaults if None.
+        num_threads: MuJoCo stepping threads; None: the usable cores (>= 8 robots each).
+        max_episode_steps: what ``gymnasium.make_vec`` passes from the registered spec; must
+            equal the config's ``episode_steps`` (the env truncates its episodes itself).
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
+    quadruped: QuadrupedModel  # the robot (a subclass sets it)
+
+    @property
+    def foot_names(self) -> tuple[str, ...]:
+        """The columns of ``info["contact"]``."""
+        return self.quadruped.legs
+
+    def __init__(
+        self,
+        num_envs: int,
+        config: QuadrupedConfig | dict | None = None,
+        num_threads: int | None = None,
+        max_episode_steps: int | None = None,
+    ) -> None:
+        init_spaces(self, num_envs, config, max_episode_steps)
+        config, quadruped = self.config, self.quadruped
+        if config.sim != "mujoco":
+            raise ValueError(
+                f"{type(self).__name__} simulates with MuJoCo, got sim={config.sim!r} (sim='mjx': "
+                "the robot's MJX env)"
+            )
+        self.robot = robot_spec(quadruped, config)
+        self.model = load_model(quadruped, config)
+        self._low, self._high = quadruped.low, quadruped.high
+        self._nominal = np.asarray(quadruped.nominal_pose)
+        threads = default_threads(num_envs) if num_threads is None else int(num_threads)
+        self.num_threads = max(1, min(threads, num_envs))
+        self.stepper = ThreadedRollout(self.model, num_envs, self.num_threads)  # its threads
+        self._data = mujoco.MjData(self.model)  # for resets and queries between control steps
+        nstate = mujoco.mj_stateSize(self.model, STATE_SPEC)
+        self._state = np.zeros((num_envs, nstate))
+        self._next = np.zeros((num_envs, config.decimation, nstate))
+        self._control = np.zeros((num_envs, config.decimation, self.model.nu))
+        self._sensors = np.zeros((num_envs, config.decimation, self.model.nsensordata))
+        nq, nv = self.model.nq, self.model.nv
+        self.qpos = self._state[:, 1 : 1 + nq]
+        self.qvel = self._state[:, 1 + nq : 1 + nq + nv]
+        offsets, start = {}, self.model.nu
+        for name, size in SENSORS:
+            offsets[name] = slice(start, start + size)
+            start += size
+        self._offsets = offsets
+        self._rngs: list[np.random.Generator] | None = None
+        self._needs_reset = True
+        self._renderer: mujoco.Renderer | None = None
+        self._camera: mujoco.MjvCamera | None = None
+        self._render_model: mujoco.MjModel | None = None
+        self._render_data: mujoco.MjData | None = None
+
+    @property
+    def env_rngs(self) -> list[np.random.Generator] | None:
+        """Each env's random generator (reset noise, commands); None before the first reset.
+        Assigning a list of ``num_envs`` generators makes the next draws come from them (the
+        single-robot env hands its ``np_random`` over this way)."""
+        return self._rngs
+
+    @env_rngs.setter
+    def env_rngs(self, rngs: list[np.random.Generator]) -> None:
+        if not (
+            isinstance(rngs, list | tuple)
+            and len(rngs) == self.num_envs
+            and all(isinstance(rng, np.random.Generator) for rng in rngs)
+        ):
+            raise ValueError(
+                f"env_rngs must be a list of {self.num_envs} numpy Generators, got {rngs!r}"
+            )
+        self._rngs = list(rngs)
+
+    # -- episodes ------------------------------------------------------------------------------
+    def _start(self, index: np.ndarray) -> None:
+        """New episodes for the envs in ``index``: pose, command, clocks."""
+        for i in index:
+            rng = self._rngs[i]
+            noise = rng.uniform(-self.config.reset_noise, self.config.reset_noise, 12)
+            joints = np.clip(self._nominal + noise, self._low, self._high)
+            self.command[i] = (rng.uniform(*self.config.command_range), 0.0, 0.0)
+            # drawn only where the range is not a point: the forward task's streams unchanged
+            for column, name in ((1, "lateral_range"), (2, "yaw_range")):
+                low, high = getattr(self.config, name)
+                self.command[i, column] = rng.uniform(low, high) if high > low else low
+            data = self._data
+            mujoco.mj_resetData(self.model, data)
+            data.qpos[7:] = joints
+            mujoco.mj_kinematics(self.model, data)
+            lowest = min(data.site(f"{leg}_foot").xpos[2] for leg in self.quadruped.legs)
+            data.qpos[2] += self.quadruped.foot_radius - lowest  # feet on the ground
+            mujoco.mj_getState(self.model, data, self._state[i], STATE_SPEC)
+            self.last_action[i] = joints
+            self.joint_vel_before[i] = 0.0
+        self.elapsed[index] = 0
+        self.air_time[index] = 0.0
+        self.in_contact[index] = True
+        self.speed_error_sum[index] = 0.0
+        self.speed_sum[index] = 0.0
+        self.work[index] = 0.0
+        self.start_x[index] = self.qpos[index, 0]
+        self.slip_sum[index] = 0.0
+        self.planted_steps[index] = 0
+
+    def reset(
+        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Reset every env. ``seed``: an int s (env i gets s + i), a list of N ints, or None."""
+        self._check_open("reset")
+        if seed is not None or self._rngs is None:
+            seeds = env_seeds(seed, self.num_envs) if seed is not None else [None] * self.num_envs
+            self._rngs = [seeding.np_random(s)[0] for s in seeds]
+        n = self.num_envs
+        self.command = np.zeros((n, 3))
+        self.last_action = np.zeros((n, 12))
+        self.joint_vel_before = np.zeros((n, 12))
+        self.elapsed = np.zeros(n, dtype=np.int64)
+        self.air_time = np.zeros((n, 4))
+        self.in_contact = np.ones((n, 4), dtype=bool)
+        self.speed_error_sum = np.zeros(n)
+        self.speed_sum = np.zeros(n)
+        self.work = np.zeros(n)
+        self.start_x = np.zeros(n)
+        self.slip_sum = np.zeros(n)
+        self.planted_steps = np.zeros(n, dtype=np.int64)
+        self._start(np.arange(n))
+        self._sensors[:] = 0.0
+        self._refresh_sensors(np.arange(n))
+        self._needs_reset = False
+        return self._observe(), {"command": self.command.copy()}
+
+    def _refresh_sensors(self, index: np.ndarray) -> None:
+        """Sensor values of freshly reset robots (no step has written them yet)."""
+        data = self._data
+        for i in index:
+            mujoco.mj_setState(self.model, data, self._state[i], STATE_SPEC)
+            mujoco.mj_forward(self.model, data)
+            self._sensors[i, -1] = data.sensordata
+
+    def _sensor(self, name: str) -> np.ndarray:
+        return self._sensors[:, -1, self._offsets[name]]
+
+    def _feet(self) -> np.ndarray:
+        """(N, 4, 3) the feet's positions (world, m), in ``foot_names`` order."""
+        return self._sensor("feet").reshape(-1, 4, 3)
+
+    def _observe(self) -> np.ndarray:
+        gravity = task.projected_gravity(self.qpos[:, 3:7])
+        return task.observation(self._sensor("gyro"), gravity, self.command, self.qpos[:, 7:],
+                                self.qvel[:, 6:], self.last_action, self._nominal)  # fmt: skip
+
+    # -- stepping ------------------------------------------------------------------------------
+    def step(self, actions: Any):
+        self._check_open("step")
+        if self._needs_reset:
+            raise RuntimeError("call reset() before step()")
+        actions = real_actions(actions, f"of shape {(self.num_envs, 12)}")
+        if actions.shape != (self.num_envs, 12):
+            raise ValueError(f"actions must have shape {(self.num_envs, 12)} (desired joint "
+                             f"positions, rad, joints {self.quadruped.joint_names}), got "
+                             f"{actions.shape}")  # fmt: skip
+        if not np.isfinite(actions).all():
+            raise ValueError("actions must be finite, got NaN or inf")
+        if self.config.normalized_actions:
+            actions = self._low + (np.clip(actions, -1.0, 1.0) + 1.0) * (self._high - self._low) / 2
+        desired = np.clip(actions, self._low, self._high)
+        cfg, dt = self.config, self.config.control_dt
+        self._control[:] = desired[:, None, :]
+        feet_xy_before = self._feet()[:, :, :2].copy()  # the rollout overwrites the sensors
+        self.stepper.rollout(
+            self._state, self._control, self._next, self._sensors, CONTROL_SPEC, cfg.decimation
+        )
+        np.copyto(self._state, self._next[:, -1])
+        self.elapsed += 1
+
+        # copies: the autoreset below rewrites the sensors of the robots it resets
+        lin_vel, ang_vel = self._sensor("velocimeter").copy(), self._sensor("gyro").copy()
+        gravity = task.projected_gravity(self.qpos[:, 3:7])
+        height = self.qpos[:, 2].copy()
+        joint_vel = self.qvel[:, 6:]
+        joint_acc = (joint_vel - self.joint_vel_before) / dt
+        feet = self._feet()
+        contact = feet[:, :, 2] < self.quadruped.foot_radius + 0.005  # within 5 mm of the ground
+        slip, planted = task.planted_slip(feet[:, :, :2], feet_xy_before, contact,
+                                          self.in_contact, dt)  # fmt: skip
+        self.slip_sum += slip.sum(axis=1)
+        self.planted_steps += planted.sum(axis=1)
+        touchdown = contact & ~self.in_contact
+        self.air_time += dt
+        moving = np.linalg.norm(self.command[:, :2], axis=1) > 0.1
+        air_paid = np.sum((self.air_time - 0.5) * touchdown, axis=1) * moving
+        self.air_time[contact] = 0.0
+        self.in_contact = contact
+        terms = task.reward_terms(
+            lin_vel, ang_vel, gravity, height, self.command,
+            self._sensors[:, -1, : self.model.nu], joint_acc, desired, self.last_action,
+            air_paid, slip, cfg.tracking_sigma, cfg.base_height_target,
+        )  # fmt: skip
+        scaled = {name: value * cfg.reward_scales[name] * dt for name, value in terms.items()}
+        reward = np.sum(list(scaled.values()), axis=0)
+        self.last_action = desired
+        self.joint_vel_before = joint_vel.copy()
+        self.speed_error_sum += np.abs(lin_vel[:, 0] - self.command[:, 0])
+        self.speed_sum += lin_vel[:, 0]
+        torque = self._sensors[:, :, : self.model.nu]  # every substep's
+        joint_speed = self._next[:, :, 1 + self.model.nq + 6 : 1 + self.model.nq + self.model.nv]
+        self.work += np.abs(torque * joint_speed).sum(axis=(1, 2)) * cfg.physics_dt
+
+        unstable = ~np.isfinite(self._state).all(axis=1)
+        terminated = (task.fallen(height, gravity, cfg.fall_height, cfg.fall_tilt)
+                      | (self._sensor("base_touch")[:, 0] > 0) | unstable)  # fmt: skip
+        truncated = (self.elapsed >= cfg.episode_steps) & ~terminated
+        obs = self._observe()
+        obs[unstable] = 0.0
+        done = terminated | truncated
+        command = self.command.copy()  # this step's (an ended episode's next one is drawn below)
+        final_obs = obs.copy()
+        metrics = {name: np.full(self.num_envs, np.nan) for name in EPISODE_METRICS}
+        if done.any():
+            ended = np.flatnonzero(done)
+            steps = self.elapsed[ended]
+            metrics["speed_error"][ended] = self.speed_error_sum[ended] / steps
+            metrics["forward_speed"][ended] = self.speed_sum[ended] / steps
+            metrics["fell"][ended] = terminated[ended].astype(float)
+            metrics["episode_seconds"][ended] = steps * dt
+            distance = self.qpos[ended, 0] - self.start_x[ended]
+            weight = self.quadruped.total_mass * self.quadruped.gravity
+            metrics["cost_of_transport"][ended] = np.where(
+                distance >= MIN_DISTANCE, self.work[ended] / (weight * distance), np.nan
+            )
+            planted = self.planted_steps[ended]
+            metrics["foot_slip"][ended] = np.where(
+                planted > 0, self.slip_sum[ended] / np.maximum(planted, 1), np.nan
+            )
+            self._start(ended)
+            self._refresh_sensors(ended)
+            obs[ended] = self._observe()[ended]
+        info = {
+            "reward_terms": scaled,
+            "final_obs": final_obs,
+            "_final_obs": done,
+            "episode_metrics": metrics,
+            "command": command,
+            "contact": contact,
+            "base_height": height,
+            "forward_speed": lin_vel[:, 0].copy(),
+            "desired_position": desired,
+            "measured_position": self.qpos[:, 7:].copy(),
+        }
+        return obs, reward, terminated, truncated, info
+
+    # -- state ---------------------------------------------------------------------------------
+    _EPISODE_FIELDS = ("command", "last_action", "joint_vel_before", "elapsed", "air_time",
+                       "in_contact", "speed_error_sum", "speed_sum", "work", "start_x",
+                       "slip_sum", "planted_steps")  # fmt: skip
+    _ADDED_FIELDS = ("slip_sum", "planted_steps")  # zero in states saved before they existed
+
+    def get_state(self) -> dict[str, Any]:
+        """Everything the next step depends on: the physics state, the episode fields, each
+        env's generator and the last sensor values, as tensors and plain Python values
+        (``torch.save``-able with ``weights_only``)."""
+        if self._needs_reset:
+            raise RuntimeError("call reset() before get_state()")
+        arrays = {"physics": self._state, "sensors": self._sensors[:, -1]}
+        arrays.update({name: getattr(self, name) for name in self._EPISODE_FIELDS})
+        return {
+            self.quadruped.state_key: {
+                **{name: torch.from_numpy(np.array(value)) for name, value in arrays.items()},
+                "rngs": [rng.bit_generator.state for rng in self._rngs],
+            }
+        }
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        key = self.quadruped.state_key
+        if not isinstance(state, dict) or key not in state:
+            raise ValueError(f"not a state of {type(self).__name__} (get_state() makes one)")
+        state = {name: value.numpy() if isinstance(value, torch.Tensor) else value
+                 for name, value in state[key].items()}  # fmt: skip
+        if np.shape(state["physics"]) != self._state.shape:
+            raise ValueError(f"the state has {len(state['physics'])} envs, this env "
+                             f"{self.num_envs}")  # fmt: skip
+        np.copyto(self._state, np.asarray(state["physics"]))
+        self._sensors[:, -1] = np.asarray(state["sensors"])
+        for name in self._EPISODE_FIELDS:
+            if name not in state and name in self._ADDED_FIELDS:
+                dtype = np.int64 if name == "planted_steps" else np.float64
+                setattr(self, name, np.zeros(self.num_envs, dtype=dtype))
+                continue
+            setattr(self, name, np.array(state[name]))
+        self._rngs = []
+        for saved in state["rngs"]:
+            rng = np.random.default_rng()
+            rng.bit_generator.state = saved
+            self._rngs.append(rng)
+        self._needs_reset = False
+
+    # -- rendering -----------------------------------------------------------------------------
+    def render_frame(self, index: int = 0) -> np.ndarray:
+        """An RGB frame ``(H, W, 3)`` uint8 of env ``index`` in its current state: MuJoCo's
+        offscreen renderer, a camera tracking the base (``quadruped.camera``), the
+        checkered ground showing the forward motion. The config's ``render_width`` by
+        ``render_height`` pixels. Raises
+        :class:`~cpg_actor.robots.common.video.RenderingUnavailable` without an OpenGL backend."""
+        self._check_open("render_frame")
+        if self._needs_reset:
+            raise RuntimeError("call reset() before render_frame()")
+        if not 0 <= index < self.num_envs:
+            raise ValueError(f"index must be in 0..{self.num_envs - 1}, got {index}")
+        return self.render_pose(self.qpos[index])
+
+    def render_pose(self, qpos: np.ndarray) -> np.ndarray:
+        """:meth:`render_frame` of a robot at the configuration ``qpos`` (``nq`` numbers: base
+        position, quaternion, 12 joints), e.g. one the MJX env simulated."""
+        self._check_open("render_pose")
+        qpos = np.asarray(qpos, dtype=np.float64)
+        if qpos.shape != (self.model.nq,):
+            raise ValueError(f"qpos must have {self.model.nq} entries, got {qpos.shape}")
+        if self._renderer is None:
+            # the renderer's own copy of the model, its light following the robot (the world's
+            # centre of mass: the robot's) as the camera does: a robot walking 10 m away from
+            # the light would be in the dark
+            model = copy.copy(self.model)
+            model.light_mode[:] = mujoco.mjtCamLight.mjCAMLIGHT_TRACKCOM
+            width, height = int(self.config.render_width), int(self.config.render_height)
+            self._renderer = offscreen_renderer(model, width, height)
+            camera = mujoco.MjvCamera()
+            camera.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+            camera.trackbodyid = model.body(self.quadruped.base_body).id
+            for name, value in self.quadruped.camera.items():
+                setattr(camera, name, value)
+            self._camera = camera
+            self._render_model, self._render_data = model, mujoco.MjData(model)
+        model, data = self._render_model, self._render_data
+        data.qpos[:] = qpos
+        mujoco.mj_forward(model, data)  # the camera tracks the subtree's centre of mass
+        self._renderer.update_scene(data, camera=self._camera)
+        return self._renderer.render().copy()
+
+    def _check_open(self, what: str) -> None:
+        if getattr(self, "stepper", None) is None:
+            raise gym.error.ClosedEnvironmentError(f"{what}() on a closed environment")
+
+    def close(self, **kwargs: Any) -> None:
+        if getattr(self, "_renderer", None) is not None:
+            self._renderer.close()
+            self._renderer = None
+        if getattr(self, "stepper", None) is not None:
+            self.stepper.close()
+            self.stepper = None

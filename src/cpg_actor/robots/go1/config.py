@@ -1,0 +1,48 @@
+"""`Go1Config`: the quadruped locomotion task (:class:`QuadrupedConfig`) with the Go1's numbers
+where its body differs from ANYmal B's, each with its reason."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from cpg_actor.robots.common.quadruped.config import QuadrupedConfig, default_scales
+from cpg_actor.robots.go1 import description as robot
+
+
+def _go1_scales() -> dict[str, float]:
+    # the torque penalty of legged_gym's A1 (Rudin et al. 2021; the Go1's sibling, of the same
+    # torque range): -2e-4 per (N m)^2 s; ANYmal's -1e-5 hardly weighs on the Go1's smaller torques
+    return {**default_scales(), "torques": -2e-4}
+
+
+@dataclass
+class Go1Config(QuadrupedConfig):
+    """The Unitree Go1 locomotion task (``docs/go1.md``); unlisted fields are ANYmal's
+    (:class:`QuadrupedConfig`'s, ``docs/quadruped.md``)."""
+
+    # The project's actuator law (cpg_actor.robots.common.actuator) per joint of a leg
+    # (abduction, hip, knee). kp: Menagerie's position actuators' 100 N m/rad. kd: 1 N m s/rad,
+    # which with the joints' passive damping (2 on hip and knee) damps the hip and knee about
+    # critically (sqrt(kp I) * 2 ~ 3 N m s/rad for the ~0.02 kg m^2 each moves, armature
+    # included). Torque limits: the Go1's (description.TORQUE_LIMITS, Menagerie's forcerange).
+    kp: float | tuple[float, ...] = 100.0
+    kd: float | tuple[float, ...] = 1.0
+    torque_limit: float | tuple[float, ...] = tuple(
+        robot.TORQUE_LIMITS[k] for k in robot.JOINT_KINDS
+    )
+    # The joint speed limit (the torque-speed line's no-load speed). The MJCF gives none; these
+    # are the velocity limits mjlab gives its Go1 actuators (mujocolab/mjlab,
+    # asset_zoo/robots/unitree_go1/go1_constants.py: 30.1 rad/s for the abduction and hip
+    # drives, 20.06 rad/s for the knee, whose gearbox is 1.5 times the hip's). That file does
+    # not say where 30.1 comes from; reading it as the motor's no-load output speed is an
+    # assumption. So is the stall torque, twice the torque limit (ANYmal's proportion; no
+    # torque-speed curve of the Go1's motor was at hand): the full torque is there up to half
+    # the no-load speed.
+    velocity_limit: float | tuple[float, ...] = (30.1, 30.1, 20.06)
+    saturation_torque: float | tuple[float, ...] = tuple(
+        2.0 * robot.TORQUE_LIMITS[k] for k in robot.JOINT_KINDS
+    )
+    foot_friction: float = robot.FOOT_FRICTION  # Menagerie's feet
+    base_height_target: float = 0.27  # m: Menagerie's home keyframe (the nominal pose stands there)
+    fall_height: float = 0.14  # m: about half the standing height, as ANYmal's 0.25 of 0.48
+    reward_scales: dict[str, float] = field(default_factory=_go1_scales)

@@ -1,0 +1,68 @@
+"""The hopper's entry in the robot registry (:mod:`cpg_actor.robots.registry`)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.plugin import CPGLayout, GymId, MetricInfo, Robot
+
+ENV_ID = "cpg_actor/AnymalHopper-v0"
+PYBULLET_ENV_ID = "cpg_actor/AnymalHopper-pybullet-v0"
+MJX_ENV_ID = "cpg_actor/AnymalHopper-mjx-v0"  # batched only: gymnasium.make_vec
+
+
+def make(num_envs: int, config: Any, num_threads: int | None = None) -> Any:
+    from cpg_actor.robots.hopper.vector import make_vector_env
+
+    return make_vector_env(num_envs, config=config, num_threads=num_threads)
+
+
+def cpg_layouts() -> dict[str, CPGLayout]:
+    from cpg_actor.robots.hopper.cpg import hopper_cpg
+
+    return {"joint": CPGLayout(hopper_cpg)}
+
+
+def mjcf(config: Any) -> str:
+    from cpg_actor.robots.hopper.mjcf import simulated_mjcf
+
+    return simulated_mjcf(config)
+
+
+def observation_sources() -> tuple[dict[str, Any], ...]:
+    from cpg_actor.robots.hopper.simulation import OBS_SOURCES
+
+    return OBS_SOURCES
+
+
+def assets() -> dict[Path, str]:
+    from cpg_actor.robots.hopper.mjcf import MJCF_PATH, mjcf_text
+    from cpg_actor.robots.hopper.urdf import URDF_PATH, urdf_text
+
+    return {MJCF_PATH: mjcf_text(), URDF_PATH: urdf_text()}
+
+
+def _gym_id(env_id: str, sim: str, vector: str) -> GymId:
+    # gymnasium.make on the MJX id says to use make_vec (there is no single-robot MJX env)
+    return GymId(env_id, "cpg_actor.robots.hopper.env:HopperEnv", vector, {"sim": sim})
+
+
+ROBOT = Robot(
+    name="hopper",
+    model="anymal-hopper",
+    config_class=HopperConfig,
+    make=make,
+    cpg_layouts=cpg_layouts,
+    metrics={"hop_height": MetricInfo("hop height", "m")},
+    gym_ids=(
+        _gym_id(ENV_ID, "mujoco", "cpg_actor.robots.hopper.vector:HopperVectorEnv"),
+        _gym_id(PYBULLET_ENV_ID, "pybullet", "cpg_actor.robots.hopper.vector:HopperVectorEnv"),
+        _gym_id(MJX_ENV_ID, "mjx", "cpg_actor.robots.hopper.mjx.vector:MjxHopperVectorEnv"),
+    ),
+    mjcf=mjcf,
+    observation_sources=observation_sources,
+    assets=assets,
+    start_gait=Path(__file__).resolve().parent / "start_gait.yaml",
+)

@@ -1,0 +1,81 @@
+"""What a robot plug-in gives the project: a :class:`Robot`, one entry of
+:data:`cpg_actor.robots.registry.ROBOTS`.
+
+Each robot's folder defines its entry in ``plugin.py``. The entry is light to import (no torch,
+no simulator): what needs them (the env, the CPG presets, the simulator files) is a function
+that imports on call.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+
+@dataclass(frozen=True)
+class MetricInfo:
+    """How an env's episode metric (``info["episode_metrics"]``) reads on a figure or in a
+    printed line."""
+
+    label: str  # plain words
+    unit: str = ""  # "" for a ratio or a count
+    undefined: str = ""  # when an episode leaves it NaN (undefined), in words
+
+
+@dataclass(frozen=True)
+class GymId:
+    """A Gymnasium id: ``gymnasium.make`` builds ``entry_point``, ``gymnasium.make_vec`` the
+    ``vector_entry_point`` (both "module:Class", imported only then)."""
+
+    id: str
+    entry_point: str
+    vector_entry_point: str
+    kwargs: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class CPGLayout:
+    """How a robot's CPG drives its joints (``agent_config.cpg_layout``).
+
+    ``preset(dt, initial=..., check_inputs=..., dtype=...)`` builds the CPG (with ``gait=``
+    where ``gaits`` names any, with ``bounds=`` where it accepts them). Its oscillators drive
+    the joints through a joint map (``joints``: the joint, by index in the robot's joint
+    order, that each oscillator drives; None: one oscillator per joint, in order; the joints
+    no oscillator drives are held at the nominal pose), or through ``pattern``, a module built
+    from the nominal pose that maps the oscillators' phase and amplitude to every joint.
+    """
+
+    preset: Callable[..., Any]
+    joints: tuple[int, ...] | None = None
+    pattern: Callable[[Sequence[float]], Any] | None = None
+    gaits: tuple[str, ...] = ()  # agent_config.cpg_gait's choices; the first is the default
+
+
+@dataclass(frozen=True)
+class Robot:
+    """One robot, as the trainer, the CLI, evaluation and export see it."""
+
+    name: str  # TrainConfig.robot and `--robot`
+    model: str  # the RobotSpec.name of its envs (the exported policy's robot_model)
+    config_class: type  # its env config dataclass (with from_dict): TrainConfig.env
+    make: Callable[..., Any]  # (num_envs, config, num_threads) -> its vector env
+    # agent_config.cpg_layout -> its CPG layout (the first is the default), built on call
+    cpg_layouts: Callable[[], dict[str, CPGLayout]]
+    metrics: dict[str, MetricInfo]  # its envs' episode metrics, the headline first
+    gym_ids: tuple[GymId, ...]
+    # for a policy deployed outside the project (cpg_actor.deploy.export): the MJCF of the model
+    # its MuJoCo env simulates under a config, and where each observation entry comes from in
+    # that model's data (one mapping per entry; cpg_actor.deploy.export.OBSERVATION_SOURCES)
+    mjcf: Callable[[Any], str]
+    observation_sources: Callable[[], tuple[dict[str, Any], ...]]
+    # each shipped simulator file and the text its description generates
+    # (`python -m cpg_actor.robots` rewrites them)
+    assets: Callable[[], dict[Path, str]]
+    start_gait: Path | None = None  # the gait of agent_config.start_gait "search", if shipped
+
+    @property
+    def episode_steps(self) -> int:
+        """Control steps of an episode under the default config."""
+        return int(self.config_class().episode_steps)

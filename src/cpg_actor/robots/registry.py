@@ -1,0 +1,91 @@
+"""The robots a run can train on: the one place a robot is named.
+
+``TrainConfig.robot`` (``--robot``) names one; ``TrainConfig.env`` then holds that robot's env
+config. Everything the project knows about a robot comes from its :class:`Robot` entry
+(:mod:`cpg_actor.robots.plugin`): the env factory, the Gymnasium ids, the CPG layouts, the
+start gait and the headline metrics. A robot is added as a folder with a ``plugin.py`` and one
+line here.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium
+
+from cpg_actor.robots.anymal.plugin import ROBOT as ANYMAL
+from cpg_actor.robots.go1.plugin import ROBOT as GO1
+from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
+from cpg_actor.robots.plugin import CPGLayout, MetricInfo, Robot
+
+ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (HOPPER, ANYMAL, GO1)}
+DEFAULT_ROBOT = HOPPER.name
+
+
+def get_robot(name: str) -> Robot:
+    """The robot called ``name``; ValueError if there is none."""
+    if name not in ROBOTS:
+        raise ValueError(f"unknown robot {name!r}; available: {', '.join(ROBOTS)}")
+    return ROBOTS[name]
+
+
+def robot_of_config(env_config: Any) -> Robot:
+    """The robot whose env config ``env_config`` is."""
+    for robot in ROBOTS.values():
+        if type(env_config) is robot.config_class:  # a subclass is another robot's config
+            return robot
+    raise ValueError(f"{type(env_config).__name__} is no robot's env config")
+
+
+def robot_of_model(model: str) -> Robot:
+    """The robot whose envs describe it as ``model`` (``RobotSpec.name``)."""
+    for robot in ROBOTS.values():
+        if robot.model == model:
+            return robot
+    known = ", ".join(robot.model for robot in ROBOTS.values())
+    raise ValueError(f"no robot is registered for the robot model {model!r} (known: {known})")
+
+
+def make_robot_env(num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
+    """The vector env of the robot whose config ``env_config`` is."""
+    return robot_of_config(env_config).make(num_envs, env_config, num_threads)
+
+
+def cpg_layout(model: str, layout: str = "") -> tuple[str, CPGLayout]:
+    """The name and the :class:`CPGLayout` of robot model ``model``'s CPG layout ``layout``
+    (empty: its default, the first)."""
+    robot = robot_of_model(model)
+    layouts = robot.cpg_layouts()
+    name = layout or next(iter(layouts))
+    if name not in layouts:
+        raise ValueError(
+            f"agent_config.cpg_layout {name!r}: robot '{model}' has the CPG layouts "
+            f"{', '.join(layouts)}"
+        )
+    return name, layouts[name]
+
+
+def all_metrics() -> dict[str, MetricInfo]:
+    """Every robot's episode metrics by name, in the order of the robots and their metrics."""
+    metrics: dict[str, MetricInfo] = {}
+    for robot in ROBOTS.values():
+        metrics.update(robot.metrics)
+    return metrics
+
+
+def register() -> None:
+    """Register every robot's Gymnasium ids (entry points as strings: nothing heavy is
+    imported until ``gymnasium.make``). Each env truncates its episodes itself; the id's
+    ``max_episode_steps`` says when, and a longer episode needs both, e.g.
+    ``gym.make(ENV_ID, episode_steps=1000, max_episode_steps=1000)``."""
+    for robot in ROBOTS.values():
+        for gym_id in robot.gym_ids:
+            if gym_id.id in gymnasium.registry:
+                continue
+            gymnasium.register(
+                id=gym_id.id,
+                entry_point=gym_id.entry_point,
+                vector_entry_point=gym_id.vector_entry_point,
+                kwargs=dict(gym_id.kwargs),
+                max_episode_steps=robot.episode_steps,
+            )
