@@ -1,7 +1,7 @@
 """The package's layers: no module imports from a layer above its own (the CLI above the
 experiments, above deployment, above training, above the configuration, above the agents
 and PPO, above the robots' registry, above the robots, above their tasks and shared
-machinery, above the CPG; small shared utilities at the bottom)."""
+machinery (and the parts they share), above the CPG; small shared utilities at the bottom)."""
 
 import ast
 from pathlib import Path
@@ -17,6 +17,7 @@ LAYERS = {
     "robots.spec": 2, "robots.plugin": 2, "robots.common": 2,  # what robots share; no robot
     "tasks": 3,  # a task (command, reward, observation); knows no robot
     "robots.common.quadruped": 4,  # the quadrupeds' machinery, on the velocity task
+    "robots.anymal_leg": 4,  # the leg the hopper and ANYmal B are built of
     "robots": 5,  # a folder per robot (hopper, anymal, go1)
     # the one place the robots are named; the package registers their Gymnasium ids
     "robots.registry": 6, "robots.assets": 6, "robots.__main__": 6, "__init__": 6,

@@ -12,7 +12,7 @@ from cpg_actor.cpg import CPGState
 from cpg_actor.robots.anymal import description as robot
 from cpg_actor.robots.anymal.foot_space import CLEARANCE, PENETRATION, FootSpaceMap, front_leg_foot
 from cpg_actor.robots.anymal.gaits import GAITS, quadruped_leg_cpg
-from cpg_actor.robots.hopper import kinematics
+from cpg_actor.robots.anymal_leg import kinematics
 
 NOMINAL = torch.tensor(robot.NOMINAL_POSE, dtype=torch.float64)
 
@@ -23,7 +23,7 @@ def pattern():
 
 
 def feet(joints: torch.Tensor) -> torch.Tensor:
-    """(B, 4, 2) foot centres (x forward, z) relative to each leg's HFE axis, by the hopper's
+    """(B, 4, 2) foot centres (x forward, z) relative to each leg's HFE axis, by the leg's
     forward kinematics (an independent reference), the hind legs mirrored front to back."""
     q = joints.reshape(-1, 4, 3)[..., 1:].numpy()
     signs = np.array([1, 1, -1, -1])[None, :, None]

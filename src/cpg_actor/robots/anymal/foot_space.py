@@ -1,6 +1,6 @@
 """ANYmal B's foot-space pattern (its ``leg`` CPG layout): the quadruped pattern
-(:mod:`cpg_actor.robots.common.quadruped.foot_space`) on ANYmal's leg, the hopper's
-(:mod:`cpg_actor.robots.hopper.kinematics`); the hind legs are the front legs mirrored."""
+(:mod:`cpg_actor.robots.common.quadruped.foot_space`) on ANYmal's leg
+(:mod:`cpg_actor.robots.anymal_leg.kinematics`); the hind legs are the front legs mirrored."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from collections.abc import Sequence
 
 from torch import Tensor
 
+from cpg_actor.robots.anymal_leg import kinematics
 from cpg_actor.robots.common.quadruped.foot_space import FootSpacePattern, leg_foot
-from cpg_actor.robots.hopper import kinematics
 
 # the leg (front, in its own sagittal plane; m): the knee in the thigh frame, the foot centre in
 # the shank frame, both relative to the joint before them; the HFE axis in the hip frame

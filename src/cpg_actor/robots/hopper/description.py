@@ -1,8 +1,9 @@
 """The single-leg ANYmal hopper as plain Python data: the one source of both robot files.
 
-Numbers are ANYmal B's right-front leg from ANYbotics' public description (the ANYmal B URDF,
-BSD licence), collected in the project's design notes (not part of this repository) under
-"Facts for the hopper"; ``docs/hopper.md`` lists each number with its reason. ``mjcf.py``
+The hopper is ANYmal B's right-front leg (:mod:`cpg_actor.robots.anymal_leg`, from
+ANYbotics' public description) on a vertical rail: this module adds the rail and the hip
+slider, and carries the leg's links as the hopper's files state them (rounded, principal
+inertias only); ``docs/hopper.md`` lists each number with its reason. ``mjcf.py``
 and ``urdf.py`` turn this data into the MJCF (MuJoCo)
 and URDF (PyBullet) files shipped in ``cpg_actor/robots/hopper/assets``; a test checks that both
 simulators load the same masses, inertias and joint frames from them.
@@ -24,19 +25,21 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from cpg_actor.robots.anymal_leg import description as leg
+
 Vec3 = tuple[float, float, float]
 
-GRAVITY = 9.81  # m/s^2, both simulators
+GRAVITY = leg.GRAVITY
+RF = (1, -1)  # the leg's signs (sx, sy): the right-front leg
 
 ROBOT_NAME = "anymal_hopper"
 JOINT_NAMES = ("HFE", "KFE")  # actuated joints, in action / observation order
 RAIL_JOINT = "rail"
-NOMINAL_POSE = (0.4, -0.8)  # rad, HFE and KFE
+NOMINAL_POSE = (leg.NOMINAL_HFE, leg.NOMINAL_KFE)  # rad, HFE and KFE
 
-# Mechanical joint stops, rad (also the bounds of the action space: desired positions).
-# Nominal pose +-0.9 rad: wide enough for a squat-and-extend hop (the leg goes from folded,
-# hip ~0.33 m, to almost straight, hip ~0.55 m), narrow enough that a random policy cannot
-# fold the foot above the hip.
+# Mechanical joint stops, rad (also the bounds of the action space: desired positions): the
+# leg's range, nominal pose +-0.9 rad (the leg goes from folded, hip ~0.33 m, to almost
+# straight, hip ~0.55 m).
 JOINT_LIMITS = {"HFE": (-0.5, 1.3), "KFE": (-1.7, 0.1)}
 # Rail stops, m of hip height: a bottom stop (the test stand's) and a top far out of reach.
 RAIL_LIMITS = (0.15, 2.0)
@@ -44,7 +47,8 @@ RAIL_LIMITS = (0.15, 2.0)
 
 @dataclass(frozen=True)
 class Link:
-    """A rigid link: its inertial properties in its own frame (principal axes = frame axes)."""
+    """A rigid link as the hopper's files state it: its inertial properties in its own frame
+    (principal axes = frame axes)."""
 
     name: str
     mass: float  # kg
@@ -65,6 +69,9 @@ class Joint:
     limits: tuple[float, float] | None = None
 
 
+# The leg's links (:data:`cpg_actor.robots.anymal_leg.description.LINKS`) on the right-front
+# leg, rounded as docs/hopper.md lists them, products of inertia left out (a test checks they
+# round the leg's facts).
 LINKS = {
     link.name: link
     for link in (
@@ -75,20 +82,23 @@ LINKS = {
     )
 }
 
+# the leg's joint origins on the right-front leg
+HFE_ORIGIN, KFE_ORIGIN, ADAPTER_ORIGIN = (
+    leg.mirrored(origin, *RF) for origin in (leg.HFE_ORIGIN, leg.KFE_ORIGIN, leg.ADAPTER_ORIGIN)
+)
 JOINTS = (
     Joint("rail", "prismatic", "world", "hip", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), RAIL_LIMITS),
-    Joint("HFE", "revolute", "hip", "thigh", (0.0635, -0.041, 0.0), limits=JOINT_LIMITS["HFE"]),
-    Joint("KFE", "revolute", "thigh", "shank", (0.0, -0.109, -0.25), limits=JOINT_LIMITS["KFE"]),
-    Joint("shank_to_adapter", "fixed", "shank", "adapter", (0.1, 0.02, 0.0)),
+    Joint("HFE", "revolute", "hip", "thigh", HFE_ORIGIN, limits=JOINT_LIMITS["HFE"]),
+    Joint("KFE", "revolute", "thigh", "shank", KFE_ORIGIN, limits=JOINT_LIMITS["KFE"]),
+    Joint("shank_to_adapter", "fixed", "shank", "adapter", ADAPTER_ORIGIN),
 )
 
-# The foot: a point of the adapter at (0, 0, -0.32125); the contact sphere is centred 0.02325 m
-# above it. Foot position / velocity / height everywhere in this package refer to the sphere.
+# The leg's foot (its contact sphere) on the adapter
 FOOT_LINK = "adapter"
-FOOT_POINT = (0.0, 0.0, -0.32125)
-FOOT_RADIUS = 0.031
-FOOT_CENTER = (0.0, 0.0, -0.32125 + 0.02325)  # in the adapter frame
-FOOT_FRICTION = 0.8
+FOOT_POINT = leg.FOOT_POINT
+FOOT_RADIUS = leg.FOOT_RADIUS
+FOOT_CENTER = leg.FOOT_CENTER  # in the adapter frame
+FOOT_FRICTION = leg.FOOT_FRICTION
 
 TOTAL_MASS = sum(link.mass for link in LINKS.values())  # 3.40697 kg, all of it moves on the rail
 

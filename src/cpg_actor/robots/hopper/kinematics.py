@@ -1,70 +1,32 @@
-"""Planar kinematics and statics of the hopper, by hand: used to place the robot on the ground
-at reset, by the reward, and by the tests as the independent reference the simulators are
-checked on. The batched functions take numpy arrays (float64) or JAX arrays (the MJX backend
-calls them inside ``jax.jit``; :mod:`cpg_actor.robots.common.array_namespace`).
-
-The leg moves in the x-z plane; y offsets in the description change nothing here. A rotation
-by ``q`` about +y maps a vector ``(x, z)`` to ``(x cos q + z sin q, -x sin q + z cos q)``.
+"""Planar statics of the hopper, by hand: the leg's kinematics
+(:mod:`cpg_actor.robots.anymal_leg.kinematics`) on the rail, with the hopper's link masses.
+Used to place the robot on the ground at reset, by the reward, and by the tests as the
+independent reference the simulators are checked on. The batched functions take numpy arrays
+(float64) or JAX arrays (the MJX backend calls them inside ``jax.jit``;
+:mod:`cpg_actor.robots.common.array_namespace`).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from cpg_actor.robots.anymal_leg.kinematics import (
+    ADAPTER_IN_SHANK,
+    HFE_ORIGIN,
+    foot_position,
+    foot_velocity,
+    knee_position,
+    rotate,
+)
 from cpg_actor.robots.common.array_namespace import as_float, namespace
 from cpg_actor.robots.hopper import description as robot
 
-
-def _rotate(angle: np.ndarray, x: float | np.ndarray, z: float | np.ndarray):
-    xp = namespace(angle)
-    c, s = xp.cos(angle), xp.sin(angle)
-    return x * c + z * s, -x * s + z * c
-
-
-def _xz(v) -> tuple[float, float]:
-    return float(v[0]), float(v[2])
-
-
-HFE_ORIGIN = _xz(robot.JOINTS[1].origin)  # in the hip frame
-KNEE_IN_THIGH = _xz(robot.JOINTS[2].origin)
-ADAPTER_IN_SHANK = _xz(robot.JOINTS[3].origin)
-FOOT_IN_SHANK = (
-    ADAPTER_IN_SHANK[0] + robot.FOOT_CENTER[0],
-    ADAPTER_IN_SHANK[1] + robot.FOOT_CENTER[2],
-)
-
-
-def knee_position(joint_pos: np.ndarray) -> np.ndarray:
-    """KFE axis (x, z) in the hip frame, for joint positions ``(..., 2)``."""
-    xp = namespace(joint_pos)
-    q = as_float(xp, joint_pos)
-    dx, dz = _rotate(q[..., 0], *KNEE_IN_THIGH)
-    return xp.stack([HFE_ORIGIN[0] + dx, HFE_ORIGIN[1] + dz], axis=-1)
-
-
-def foot_position(joint_pos: np.ndarray) -> np.ndarray:
-    """Centre of the foot sphere (x, z) in the hip frame, for joint positions ``(..., 2)``."""
-    xp = namespace(joint_pos)
-    q = as_float(xp, joint_pos)
-    knee = knee_position(q)
-    dx, dz = _rotate(q[..., 0] + q[..., 1], *FOOT_IN_SHANK)
-    return xp.stack([knee[..., 0] + dx, knee[..., 1] + dz], axis=-1)
-
-
-def foot_velocity(joint_pos: np.ndarray, joint_vel: np.ndarray) -> np.ndarray:
-    """Velocity (x, z) of the foot sphere centre relative to the hip, ``(..., 2)``."""
-    xp = namespace(joint_pos, joint_vel)
-    q, qd = as_float(xp, joint_pos), as_float(xp, joint_vel)
-    a1, a12 = q[..., 0], q[..., 0] + q[..., 1]
-    kx, kz = KNEE_IN_THIGH
-    fx, fz = FOOT_IN_SHANK
-    # d/dq R(q)(x, z) = (-x sin q + z cos q, -x cos q - z sin q)
-    knee_dx = -kx * xp.sin(a1) + kz * xp.cos(a1)
-    knee_dz = -kx * xp.cos(a1) - kz * xp.sin(a1)
-    foot_dx = -fx * xp.sin(a12) + fz * xp.cos(a12)
-    foot_dz = -fx * xp.cos(a12) - fz * xp.sin(a12)
-    w1, w12 = qd[..., 0], qd[..., 0] + qd[..., 1]
-    return xp.stack([knee_dx * w1 + foot_dx * w12, knee_dz * w1 + foot_dz * w12], axis=-1)
+# the hopper's kinematics: the leg's (foot, knee) and the statics below
+__all__ = [
+    "HFE_ORIGIN", "foot_position", "foot_velocity", "knee_position", "standing_hip_height",
+    "com_positions", "com_height_offset", "com_vertical_velocity", "highest_standing_com",
+    "standing_torques",
+]  # fmt: skip
 
 
 def standing_hip_height(joint_pos: np.ndarray) -> np.ndarray:
@@ -80,9 +42,9 @@ def com_positions(joint_pos) -> dict[str, tuple[float, float]]:
     thigh = robot.LINKS["thigh"].com
     shank = robot.LINKS["shank"].com
     adapter = robot.LINKS["adapter"].com
-    tx, tz = _rotate(q1, thigh[0], thigh[2])
-    sx, sz = _rotate(q1 + q2, shank[0], shank[2])
-    ax, az = _rotate(q1 + q2, ADAPTER_IN_SHANK[0] + adapter[0], ADAPTER_IN_SHANK[1] + adapter[2])
+    tx, tz = rotate(q1, thigh[0], thigh[2])
+    sx, sz = rotate(q1 + q2, shank[0], shank[2])
+    ax, az = rotate(q1 + q2, ADAPTER_IN_SHANK[0] + adapter[0], ADAPTER_IN_SHANK[1] + adapter[2])
     return {
         "hip": (hip[0], hip[2]),
         "thigh": (HFE_ORIGIN[0] + tx, HFE_ORIGIN[1] + tz),
@@ -98,11 +60,11 @@ def com_height_offset(joint_pos: np.ndarray) -> np.ndarray:
     links = robot.LINKS
     knee_z = knee_position(q)[..., 1]
     thigh, shank, adapter = links["thigh"].com, links["shank"].com, links["adapter"].com
-    thigh_z = HFE_ORIGIN[1] + _rotate(q[..., 0], thigh[0], thigh[2])[1]
+    thigh_z = HFE_ORIGIN[1] + rotate(q[..., 0], thigh[0], thigh[2])[1]
     leg = q[..., 0] + q[..., 1]
-    shank_z = knee_z + _rotate(leg, shank[0], shank[2])[1]
+    shank_z = knee_z + rotate(leg, shank[0], shank[2])[1]
     adapter_z = (
-        knee_z + _rotate(leg, ADAPTER_IN_SHANK[0] + adapter[0], ADAPTER_IN_SHANK[1] + adapter[2])[1]
+        knee_z + rotate(leg, ADAPTER_IN_SHANK[0] + adapter[0], ADAPTER_IN_SHANK[1] + adapter[2])[1]
     )
     weighted = (
         links["hip"].mass * links["hip"].com[2]
