@@ -276,7 +276,7 @@ def test_resume_refuses_a_config_edited_since_the_checkpoint(tmp_path, capsys):
 
 
 def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path, capsys):
-    from cpg_actor.commands.train import add_arguments, build_config
+    from cpg_actor.commands.train import add_arguments, build_config, simulator
 
     parser = argparse.ArgumentParser()
     add_arguments(parser)
@@ -310,6 +310,11 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
     assert anymal.robot == "anymal" and type(anymal.env).__name__ == "QuadrupedConfig"
     assert {**anymal.to_dict(), "preset": "throughput"} == spelled.to_dict()
     assert anymal.ppo.cpg_learning_rate == gpu.ppo.cpg_learning_rate
+    # --sim: the robot entry's simulators (the quadrupeds have no PyBullet)
+    go1 = build_config(parser.parse_args(["--robot", "go1", "--sim", "mjx"]))
+    assert go1.env.sim == "mjx" and simulator(go1) == "go1-mjx"
+    with pytest.raises(ValueError, match="--sim pybullet: the go1 runs on mujoco, mjx"):
+        build_config(parser.parse_args(["--robot", "go1", "--sim", "pybullet"]))
     fast.save(tmp_path / "fast.yaml")
     # the flags and --set win over the preset; a config file brings its preset along
     mixed = build_config(

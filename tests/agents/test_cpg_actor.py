@@ -212,9 +212,13 @@ def test_agents_are_built_from_the_env_robot():
     assert agent.cpg.dt == 0.02
     assert torch.equal(agent.joint_map.offset, torch.tensor([0.4, -0.8]))
     assert torch.equal(build_mlp(AgentConfig(), env).nominal_pose, torch.tensor([0.4, -0.8]))
+    assert env.robot.name == "fake-hopper"  # its CPG layouts are its spec's, not a name's
     env.robot = RobotSpec("a-biped", ("HFE", "KFE"), (0.4, -0.8), (-1, -2), (1, 0), 0.01, ())
     with pytest.raises(ValueError, match="no robot is registered for the robot model 'a-biped'"):
         build_cpg_actor(AgentConfig(), env)
+    with pytest.raises(ValueError, match=r"traced_observations \['hip'\] are not observed"):
+        RobotSpec("x", ("HFE", "KFE"), (0.4, -0.8), (-1, -2), (1, 0), 0.01, ("q",),
+                  traced_observations=("hip",))  # fmt: skip
     with pytest.raises(ValueError, match="nominal_pose needs 2 entries"):
         RobotSpec("x", ("HFE", "KFE"), (0.4,), (-1, -2), (1, 0), 0.01, ())
     with pytest.raises(ValueError, match="drive_observation 'speed' is not one of"):

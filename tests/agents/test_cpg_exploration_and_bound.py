@@ -124,7 +124,7 @@ def test_kappa_is_bounded_in_radians_of_amplitude_change():
 
 
 def test_the_packaged_start_gait_is_where_the_cpg_starts(tmp_path):
-    gait = start_parameters("search", "anymal-hopper")
+    gait = start_parameters("search", robot_spec(HopperConfig()))
     a = agent(start_gait="search", output_bound=True)
     values = a.cpg.parametrisation.values()
     torch.testing.assert_close(

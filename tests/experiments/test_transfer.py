@@ -40,3 +40,27 @@ def test_kept_share_is_other_over_own_with_a_paired_interval():
     assert row["hop_height_kept"].estimate == pytest.approx(0.5)
     assert m.bootstrap_ratio([90.0, 180.0, 270.0], [100.0, 200.0, 300.0]).low < 0.9
     assert "| `mlp` | mujoco | 3 | 200 | 180 | 90% [90, 90] |" in "\n".join(transfer_lines(data))
+
+
+def test_the_report_and_transfer_are_the_hoppers(tmp_path):
+    """The reproduction report tests the paper's claims on the hopper and says so for other
+    robots' runs; transfer needs a robot that runs in both simulators. The tables name the
+    robot's headline metric (its Robot entry's first)."""
+    from cpg_actor.experiments.report import check_hopper_runs
+    from cpg_actor.experiments.results import Results
+    from cpg_actor.experiments.transfer import evaluate_run
+    from cpg_actor.robots.registry import get_robot
+
+    run_dir = tmp_path / "runs" / "mlp" / "seed0"
+    run_dir.mkdir(parents=True)
+    (run_dir / "config.yaml").write_text("robot: go1\n")
+    with pytest.raises(ValueError, match="report is the paper's, on the hopper; .* on go1"):
+        check_hopper_runs(Results.load(tmp_path))
+    with pytest.raises(ValueError, match="transfer evaluates in mujoco and pybullet: the go1"):
+        evaluate_run(run_dir, 1, 0)
+    assert get_robot("hopper").headline_metric == "hop_height"
+    assert get_robot("go1").headline_metric == "speed_error"
+    data = {"episodes": 1, "seed": 0, "metric": "speed_error", "runs": {"mlp": {"0": {
+        "trained_in": "mujoco", "mujoco": {"return": 10.0, "speed_error": 0.2},
+        "pybullet": {"return": 5.0, "speed_error": 0.4}}}}}  # fmt: skip
+    assert "forward-speed error own (m/s) |" in "\n".join(transfer_lines(data))

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 from gymnasium import spaces
 
+from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
 from cpg_actor.robots.spec import RobotSpec
 
 
@@ -30,15 +31,17 @@ class FakeHopperVectorEnv:
             np.array([-1.0, -2.5], dtype=np.float32), np.array([1.5, 0.0], dtype=np.float32)
         )
         self.single_observation_space = spaces.Box(-np.inf, np.inf, (8,), np.float32)
-        # the hopper's joints, so that the hopper's agents (and its CPG preset) build on it
+        # the hopper's joints and CPG, so that the hopper's agents build on it
         self.robot = RobotSpec(
-            name="anymal-hopper",
+            name="fake-hopper",
             joint_names=("HFE", "KFE"),
             nominal_pose=(0.4, -0.8),
             action_low=(-1.0, -2.5),
             action_high=(1.5, 0.0),
             control_dt=self.config.control_dt,
             observation_names=tuple(f"o{i}" for i in range(8)),
+            cpg_layouts=HOPPER.cpg_layouts,
+            start_gait=HOPPER.start_gait,
         )
         self.rng = np.random.default_rng(0)
         self.nan_at_step: int | None = None  # inject a NaN reward at this global step

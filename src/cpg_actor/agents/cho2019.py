@@ -23,6 +23,7 @@ from cpg_actor.agents.base import Agent, AgentConfig
 from cpg_actor.agents.mlp import MLPAgent
 from cpg_actor.agents.start_gait import hopper_gait_parameters, start_parameters
 from cpg_actor.agents.warm_start import warm_start
+from cpg_actor.robots.spec import RobotSpec
 
 
 def cpg_parameter_wrapper(env: Any, agent_config: AgentConfig | None = None):
@@ -33,7 +34,7 @@ def cpg_parameter_wrapper(env: Any, agent_config: AgentConfig | None = None):
 
     initial = None
     if agent_config is not None and agent_config.start_gait:
-        gait = start_parameters(agent_config.start_gait, env.robot.name)
+        gait = start_parameters(agent_config.start_gait, env.robot)
         initial = {k: gait[k] for k in ("convergence", "coupling_weight") if k in gait}
     return CPGParameterVectorEnv(env, cpg_initial=initial)
 
@@ -46,18 +47,21 @@ def build_cho2019(config: AgentConfig, env: Any) -> Agent:
     return MLPAgent(obs_dim, action_scale, config, nominal_pose=[0.0] * len(action_scale))
 
 
-def reference_action(start_gait: str = "", robot_model: str = "anymal-hopper") -> np.ndarray:
+def reference_action(start_gait: str = "", robot: RobotSpec | None = None) -> np.ndarray:
     """The warm start's target as an action in [-1, 1]: the reference hopping parameters
     (``cpg-actor cho2019-reference``), or with ``start_gait`` the frequency, amplitude and
     phase bias of that gait (:mod:`cpg_actor.agents.start_gait`), each moved inside the
     action range by 5 % of it if it lies outside (a target on the clip would pull the
-    Gaussian mean onto the edge)."""
+    Gaussian mean onto the edge). ``robot``: the env's (None: the hopper's)."""
     from cpg_actor.robots.hopper.cho2019 import PARAMETER_RANGES, parameters_to_action
     from cpg_actor.robots.hopper.cho2019_reference import REFERENCE_PARAMETERS
+    from cpg_actor.robots.hopper.config import HopperConfig
+    from cpg_actor.robots.hopper.env import robot_spec
 
     parameters = np.asarray(REFERENCE_PARAMETERS, dtype=np.float64)
     if start_gait:
-        gait = hopper_gait_parameters(start_parameters(start_gait, robot_model))
+        robot = robot if robot is not None else robot_spec(HopperConfig())
+        gait = hopper_gait_parameters(start_parameters(start_gait, robot))
         low, high = PARAMETER_RANGES[:, 0], PARAMETER_RANGES[:, 1]
         margin = 0.05 * (high - low)
         parameters = np.clip(np.asarray(gait), low + margin, high - margin)
@@ -67,7 +71,7 @@ def reference_action(start_gait: str = "", robot_model: str = "anymal-hopper") -
 def warm_start_cho2019(agent: Agent, normalizer, env, config, seed: int):
     """Fit the actor's mean to :func:`reference_action` (``config`` the run's
     :class:`TrainConfig`); returns the loss of each epoch."""
-    target = reference_action(config.agent_config.start_gait, env.robot.name)
+    target = reference_action(config.agent_config.start_gait, env.robot)
     return warm_start(agent, normalizer, env, target, config.warm_start, seed)
 
 

@@ -114,7 +114,7 @@ class CPGActorAgent(Agent):
         robot: RobotSpec,
         feedback: bool = True,
     ) -> None:
-        layout, cpg = cpg_layout(robot.name, config.cpg_layout)  # the robot's CPG layouts
+        layout, cpg = cpg_layout(robot, config.cpg_layout)  # the robot's CPG layouts
         preset, joints, pattern = cpg.preset, cpg.joints, cpg.pattern
         options = {"gait": config.cpg_gait} if config.cpg_gait else {}
         if options and not cpg.gaits:
@@ -122,7 +122,7 @@ class CPGActorAgent(Agent):
                 f"agent_config.cpg_gait: the CPG preset of robot '{robot.name}' has no gaits; "
                 "leave it empty"
             )
-        initial = {**start_parameters(config.start_gait, robot.name), **config.cpg_initial}
+        initial = {**start_parameters(config.start_gait, robot), **config.cpg_initial}
         if config.output_bound:
             if pattern is not None:
                 raise ValueError(

@@ -14,8 +14,8 @@ from pathlib import Path
 from typing import Any
 
 from cpg_actor.agents.gait_file import load_gait
-from cpg_actor.robots.plugin import Robot
-from cpg_actor.robots.registry import get_robot, robot_of_model
+from cpg_actor.robots.registry import cpg_choices, get_robot
+from cpg_actor.robots.spec import RobotSpec
 
 SEARCH = "search"  # the packaged gait found by the open-loop search for the robot
 
@@ -30,26 +30,25 @@ def read_gait(path: str | Path) -> dict[str, Any]:
         raise ValueError(f"{error} (agent_config.start_gait)") from None
 
 
-def packaged_gait_path(robot: Robot) -> Path:
-    """The gait shipped with ``robot`` (its ``Robot.start_gait``)."""
-    path = robot.start_gait
+def packaged_gait_path(path: Path | None, robot: str) -> Path:
+    """The gait shipped with robot ``robot`` at ``path`` (its ``Robot.start_gait``)."""
     if path is None or not path.is_file():
         raise ValueError(
-            f"agent_config.start_gait 'search': no gait is shipped for robot '{robot.name}'; "
+            f"agent_config.start_gait 'search': no gait is shipped for robot '{robot}'; "
             "run `cpg-actor train --agent open-loop-es` and pass its gait.yaml, or leave "
             "start_gait empty (the CPG preset)"
         )
     return path
 
 
-def start_parameters(start_gait: str, robot_model: str) -> dict[str, Any]:
-    """The CPG parameters ``start_gait`` names for robot model ``robot_model``
-    (``RobotSpec.name``): ``{}`` for "" (the preset), the packaged gait for "search", else
-    the gait file at that path."""
+def start_parameters(start_gait: str, robot: RobotSpec) -> dict[str, Any]:
+    """The CPG parameters ``start_gait`` names for the env's robot ``robot``: ``{}`` for ""
+    (the preset), the packaged gait for "search"
+    (:func:`cpg_actor.robots.registry.cpg_choices`), else the gait file at that path."""
     if not start_gait:
         return {}
     if start_gait == SEARCH:
-        return read_gait(packaged_gait_path(robot_of_model(robot_model)))
+        return read_gait(packaged_gait_path(cpg_choices(robot)[1], robot.name))
     return read_gait(start_gait)
 
 
@@ -62,7 +61,7 @@ def search_steps(start_gait: str, robot: str) -> int:
         return 0
     path = start_gait
     if start_gait == SEARCH:
-        path = packaged_gait_path(get_robot(robot))
+        path = packaged_gait_path(get_robot(robot).start_gait, robot)
     try:
         gait = load_gait(path)
     except FileNotFoundError as error:

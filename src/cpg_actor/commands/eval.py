@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from cpg_actor.plots import GAIT_WINDOW, draw_gait_diagram, save_figure
-from cpg_actor.robots.hopper.config import SIMULATORS
+from cpg_actor.robots.registry import all_metrics, all_simulators, get_robot
 
 HELP = "evaluate a trained run deterministically; save per-step traces, figures (and a video)"
 # the figures drawn where the traces have what they need (the quadruped's), next to the traces
@@ -39,7 +39,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--sim",
         default=None,
-        choices=SIMULATORS,
+        choices=all_simulators(),
         help="physics backend (default: the run's)",
     )
     parser.add_argument("--seed", type=int, default=1000, help="environment seed (default 1000)")
@@ -92,7 +92,7 @@ def run(args: argparse.Namespace) -> int:
         raise FileNotFoundError(f"checkpoint {checkpoint} does not exist")
     config = TrainConfig.load(config_path)
     if args.sim is not None:
-        config.env.sim = args.sim
+        config.env = config.env.replace(**get_robot(config.robot).simulator_config(args.sim))
     for text in args.set:
         override = parse_override(text)
         if set(override) != {"env"}:
@@ -145,7 +145,6 @@ def episode_lines(traces: dict[str, np.ndarray]) -> list[str]:
     """The printed result of an evaluation: a line per episode (return, the env's metrics,
     steps), the means, and a footnote where a metric was undefined (NaN) for an episode: it
     prints as "—" and the mean is over the episodes that define it (how many is said)."""
-    from cpg_actor.robots.registry import all_metrics
     from cpg_actor.training.evaluation import finite_mean
 
     names = [str(name) for name in traces["metric_names"]]  # the env's (hop_height)
@@ -226,7 +225,6 @@ def training_curves_figure(rows: list[dict], metric_names=(), title: str = ""):
     from matplotlib.figure import Figure
 
     from cpg_actor.plots import metric_label
-    from cpg_actor.robots.registry import all_metrics
     from cpg_actor.training.progress import NOT_ENV_METRICS
 
     names = list(metric_names) or sorted(

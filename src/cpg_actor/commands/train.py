@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import shlex
 import sys
 from pathlib import Path
@@ -26,8 +25,7 @@ from cpg_actor.files import (
     remove_stale_temporaries,
     write_marker,
 )
-from cpg_actor.robots.hopper.config import SIMULATORS
-from cpg_actor.robots.registry import ROBOTS, get_robot
+from cpg_actor.robots.registry import ROBOTS, all_simulators, get_robot
 from cpg_actor.training.progress import evaluation_text, metrics_text
 from cpg_actor.training.run_lock import LOCK_NAME, RunLock
 
@@ -55,7 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--sim",
         default=None,
-        choices=SIMULATORS,
+        choices=all_simulators(),
         help="physics backend (default mujoco; mjx: MuJoCo XLA on JAX's device, docs/gpu.md)",
     )
     parser.add_argument(
@@ -111,7 +109,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def simulator(config: TrainConfig) -> str:
     """The run's simulator, prefixed by the robot when it is not the default robot
     ("anymal-mujoco"; the default's runs keep their names, "mujoco")."""
-    sim = getattr(config.env, "sim", "mujoco")
+    sim = get_robot(config.robot).simulator(config.env)
     return sim if config.robot == TrainConfig.robot else f"{config.robot}-{sim}"
 
 
@@ -130,12 +128,9 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
     if getattr(args, "robot", None) is not None:
         flags["robot"] = args.robot
     if args.sim is not None:
-        robot = flags.get("robot", TrainConfig.robot)
-        fields = {f.name for f in dataclasses.fields(get_robot(robot).config_class)}
-        if "sim" in fields:
-            flags["env"] = {"sim": args.sim}
-        elif args.sim != "mujoco":  # a robot with one simulator: MuJoCo
-            raise ValueError(f"--sim {args.sim}: the {robot} runs on MuJoCo only")
+        chosen = get_robot(flags.get("robot", TrainConfig.robot)).simulator_config(args.sim)
+        if chosen:
+            flags["env"] = chosen
     if getattr(args, "device", None) is not None:
         flags["device"] = args.device
     config = compose_config(getattr(args, "preset", None), args.config, flags, args.overrides)

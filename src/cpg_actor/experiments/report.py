@@ -26,6 +26,7 @@ from cpg_actor.experiments.results import (
 )
 from cpg_actor.experiments.transfer import load_transfer, transfer_lines
 from cpg_actor.machine import cpu_model, git_commit
+from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
 from cpg_actor.robots.hopper.reward import REWARD_TERMS
 
 PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
@@ -198,9 +199,23 @@ def _median_interval(values: list[float]) -> list[float] | None:
     return [interval.estimate, interval.low, interval.high]
 
 
+def check_hopper_runs(results: Results) -> None:
+    """ValueError unless every run is the hopper's: the report tests the paper's claims,
+    which are about the hopper (its hop height, its reward terms, its Cho et al. baseline)."""
+    robots = {run.config.get("robot") or HOPPER.name for runs in results.runs.values()
+              for run in runs}  # fmt: skip
+    others = sorted(str(robot) for robot in robots - {HOPPER.name})
+    if others:
+        raise ValueError(
+            f"the reproduction report is the paper's, on the {HOPPER.name}; these runs are on "
+            f"{', '.join(others)}: use `cpg-actor eval` and `cpg-actor curves` for them"
+        )
+
+
 def summarise(results: Results, total_steps: int) -> dict[str, Any]:
     """Per-variant numbers (means and stds, medians with bootstrap CIs over seeds, the
-    per-seed values) and the claim verdicts."""
+    per-seed values) and the claim verdicts, of the hopper's runs (:func:`check_hopper_runs`)."""
+    check_hopper_runs(results)
     comparison_step = min(total_steps, PAPER_COMPARISON_STEPS)
     variants: dict[str, Any] = {}
     seeds: dict[str, dict[str, list[float]]] = {}

@@ -12,6 +12,7 @@ import numpy as np
 
 from cpg_actor.experiments.execute import MARKER, STAGES_FILE, list_checkpoints
 from cpg_actor.experiments.metrics import desired_velocity
+from cpg_actor.robots.plugin import Robot
 
 LABELS = {
     "cpg-actor": "CPG-Actor",
@@ -53,6 +54,23 @@ KINDS = {
     "open-loop-es": "cpg",
     "mlp-warm": "mlp",
 }
+
+
+def run_robot(config: dict[str, Any]) -> Robot:
+    """The robot of a run's saved config (``robot``; the default robot where not saved)."""
+    from cpg_actor.robots.registry import DEFAULT_ROBOT, get_robot
+
+    return get_robot(config.get("robot") or DEFAULT_ROBOT)
+
+
+def read_config(run_dir: Path) -> dict[str, Any]:
+    """A run's saved ``config.yaml`` as a mapping (empty if it has none)."""
+    import yaml
+
+    try:
+        return yaml.safe_load((run_dir / "config.yaml").read_text()) or {}
+    except (OSError, yaml.YAMLError):
+        return {}
 
 
 def label(variant: str) -> str:
@@ -172,12 +190,7 @@ class Run:
     @cached_property
     def config(self) -> dict[str, Any]:
         """The run's saved ``config.yaml`` as a mapping (empty if it has none)."""
-        import yaml
-
-        try:
-            return yaml.safe_load((self.path / "config.yaml").read_text()) or {}
-        except (OSError, yaml.YAMLError):
-            return {}
+        return read_config(self.path)
 
     @cached_property
     def stages(self) -> list[dict[str, Any]]:

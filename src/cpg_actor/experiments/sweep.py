@@ -5,7 +5,8 @@ changed (``--vary KEY=V1,V2`` or ``--vary KEY1,KEY2=A1:A2,B1:B2``). A setting is
 (:class:`~cpg_actor.experiments.plan.ReproduceSettings`, variants x seeds) in ``OUT/LABEL``,
 evaluated once at the end; all runs of all settings share one pool of workers. The summary
 (``OUT/sensitivity.md``, ``OUT/sensitivity.json``, ``OUT/sensitivity.png``) is made from the
-deterministic evaluations logged during training (``eval/return``, ``eval/hop_height``).
+deterministic evaluations logged during training (``eval/return`` and ``eval/`` the robot's
+headline metric, ``Robot.headline_metric``: the hopper's ``hop_height``).
 """
 
 from __future__ import annotations
@@ -19,6 +20,8 @@ from typing import Any
 import numpy as np
 
 from cpg_actor.experiments import plan
+from cpg_actor.experiments.results import read_config, run_robot
+from cpg_actor.robots.registry import all_metrics
 
 FINAL_EVALS = 3  # the score of a run: the mean of its last FINAL_EVALS evaluations
 
@@ -82,8 +85,10 @@ def reproduce_settings(
     )
 
 
-def read_evaluations(run_dir: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(steps, eval return, eval hop height, train wall seconds)`` from ``metrics.jsonl``."""
+def read_evaluations(
+    run_dir: Path, metric: str = "hop_height"
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(steps, eval return, eval metric, train wall seconds)`` from ``metrics.jsonl``."""
     rows = []
     path = run_dir / "metrics.jsonl"
     if path.is_file():
@@ -95,7 +100,7 @@ def read_evaluations(run_dir: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     return (
         np.array([r["global_step"] for r in rows], dtype=float),
         np.array([r["eval/return"] for r in rows], dtype=float),
-        np.array([r["eval/hop_height"] for r in rows], dtype=float),
+        np.array([r.get(f"eval/{metric}", math.nan) for r in rows], dtype=float),
         np.array([r.get("time/train_wall") or math.nan for r in rows], dtype=float),
     )
 
@@ -103,24 +108,23 @@ def read_evaluations(run_dir: Path) -> tuple[np.ndarray, np.ndarray, np.ndarray,
 def summarize(
     out: Path, settings: list[Setting], variants: list[str], seeds: int, first_seed: int = 0
 ) -> dict[str, Any]:
-    """Per setting and variant: each seed's score (mean of the last evaluations) and curve."""
-    summary: dict[str, Any] = {"final_evals": FINAL_EVALS, "settings": {}}
+    """Per setting and variant: each seed's score (mean of the last evaluations: the return
+    and the robot's headline metric, named in ``metric``) and curve."""
+    runs = out / settings[0].label / "runs" / variants[0] / f"seed{first_seed}"
+    metric = run_robot(read_config(runs)).headline_metric
+    summary: dict[str, Any] = {"final_evals": FINAL_EVALS, "metric": metric, "settings": {}}
     for setting in settings:
         entry: dict[str, Any] = {"overrides": list(setting.overrides), "variants": {}}
         for variant in variants:
-            returns, hops, curves = [], [], []
+            returns, scores, curves = [], [], []
             for seed in range(first_seed, first_seed + seeds):
-                steps, ret, hop, wall = read_evaluations(
-                    out / setting.label / "runs" / variant / f"seed{seed}"
+                steps, ret, score, wall = read_evaluations(
+                    out / setting.label / "runs" / variant / f"seed{seed}", metric
                 )
                 returns.append(float(ret[-FINAL_EVALS:].mean()) if ret.size else math.nan)
-                hops.append(float(hop[-FINAL_EVALS:].mean()) if hop.size else math.nan)
+                scores.append(float(score[-FINAL_EVALS:].mean()) if score.size else math.nan)
                 curves.append({"steps": steps.tolist(), "return": ret.tolist()})
-            entry["variants"][variant] = {
-                "return": returns,
-                "hop_height": hops,
-                "curves": curves,
-            }
+            entry["variants"][variant] = {"return": returns, metric: scores, "curves": curves}
         summary["settings"][setting.label] = entry
     return summary
 
@@ -140,20 +144,22 @@ def write_summary(out: Path, summary: dict[str, Any], command: str, seeds: int) 
     (out / "sensitivity.json").write_text(json.dumps(summary, indent=1) + "\n")
     labels = list(summary["settings"])
     variants = list(next(iter(summary["settings"].values()))["variants"])
+    metric = summary.get("metric", "hop_height")
+    column = all_metrics()[metric].column if metric in all_metrics() else metric
     lines = [
         "# Sensitivity of PPO settings (one at a time around the defaults)",
         "",
         f"Produced by `{command}`.",
         "",
         f"Score of a run: the mean of its last {summary['final_evals']} deterministic "
-        f"evaluations (`eval/return`, `eval/hop_height`, 5 episodes each); mean ± std over "
+        f"evaluations (`eval/return`, `eval/{metric}`, 5 episodes each); mean ± std over "
         f"{seeds} seeds (one seed: its value alone, n=1, no interval); *steps*: the fewest "
         "env steps any seed's run reached (less than the budget for runs that did not "
         "finish). The first row is the defaults; every other row changes only the values it "
         "names.",
         "",
         "| setting | "
-        + " | ".join(f"{v} return | {v} hop (m) | {v} steps" for v in variants)
+        + " | ".join(f"{v} return | {v} {column} | {v} steps" for v in variants)
         + " |",
         "| --- | " + " | ".join("---: | ---: | ---:" for _ in variants) + " |",
     ]
@@ -164,7 +170,7 @@ def write_summary(out: Path, summary: dict[str, Any], command: str, seeds: int) 
             reached = [c["steps"][-1] if c["steps"] else 0 for c in data["curves"]]
             cells += [
                 _mean_std(data["return"], 0),
-                _mean_std(data["hop_height"], 3),
+                _mean_std(data[metric], 3),
                 f"{min(reached) / 1000:.0f}k",
             ]
         lines.append(f"| `{label}` | " + " | ".join(cells) + " |")

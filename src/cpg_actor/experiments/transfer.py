@@ -2,7 +2,8 @@
 
 A policy trained in MuJoCo (or PyBullet) is evaluated deterministically, with the same env
 seed, in its own simulator and in the other one; per variant the report gives how much of its
-return and hop height it keeps (other / own, mean over seeds, paired bootstrap CI).
+return and headline metric (``Robot.headline_metric``: the hopper's hop height) it keeps
+(other / own, mean over seeds, paired bootstrap CI). It needs a robot that runs in both.
 ``cpg-actor transfer OUT`` writes ``OUT/transfer.json``; ``cpg-actor figures`` renders it.
 """
 
@@ -15,44 +16,56 @@ from typing import Any
 import numpy as np
 
 from cpg_actor.experiments import metrics as m
+from cpg_actor.robots.registry import all_metrics
 
 TRANSFER_FILE = "transfer.json"
 SIMULATORS = ("mujoco", "pybullet")
 
 
 def evaluate_run(run_dir: Path, episodes: int, seed: int) -> dict[str, dict[str, float]]:
-    """``{sim: {"return": mean, "hop_height": mean}}`` of a run's last checkpoint."""
+    """``{sim: {"return": mean, METRIC: mean}}`` of a run's last checkpoint, METRIC its
+    robot's headline metric."""
     from cpg_actor.config import TrainConfig
     from cpg_actor.deploy import load_policy
+    from cpg_actor.robots.registry import get_robot
     from cpg_actor.training.evaluation import evaluate_policy
 
     config = TrainConfig.load(run_dir / "config.yaml")
-    out: dict[str, Any] = {"trained_in": config.env.sim}
+    robot = get_robot(config.robot)
+    if not set(SIMULATORS) <= set(robot.simulators):
+        raise ValueError(
+            f"transfer evaluates in {' and '.join(SIMULATORS)}: the {robot.name} runs on "
+            f"{', '.join(robot.simulators)} ({run_dir})"
+        )
+    metric = robot.headline_metric
+    out: dict[str, Any] = {"trained_in": robot.simulator(config.env)}
     for sim in SIMULATORS:
-        config.env = config.env.replace(sim=sim)
+        config.env = config.env.replace(**robot.simulator_config(sim))
         policy = load_policy(run_dir / "checkpoints" / "last.pt", env_config=config.env)
         traces = evaluate_policy(policy, config, episodes, seed=seed)
         out[sim] = {
             "return": float(np.mean(traces["episode_return"])),
-            "hop_height": float(np.nanmean(traces["hop_height"])),
+            metric: float(np.nanmean(traces[metric])),
         }
     return out
 
 
 def write_transfer(out: Path, episodes: int = 5, seed: int = 1000, progress=print) -> Path:
     """Evaluate every run of ``out`` that has a last checkpoint; write ``TRANSFER_FILE``."""
-    from cpg_actor.experiments.results import Results
+    from cpg_actor.experiments.results import Results, run_robot
     from cpg_actor.files import atomic_write_text
 
     results = Results.load(Path(out))
     runs: dict[str, dict[str, Any]] = {}
+    metric = "hop_height"  # the runs' robot's headline metric (the hopper's without runs)
     for variant, variant_runs in results.runs.items():
         for run in variant_runs:
             if not (run.path / "checkpoints" / "last.pt").is_file():
                 continue
             progress(f"transfer: {variant}/seed{run.seed}")
+            metric = run_robot(run.config).headline_metric
             runs.setdefault(variant, {})[str(run.seed)] = evaluate_run(run.path, episodes, seed)
-    data = {"episodes": episodes, "seed": seed, "runs": runs}
+    data = {"episodes": episodes, "seed": seed, "metric": metric, "runs": runs}
     path = Path(out) / TRANSFER_FILE
     atomic_write_text(json.dumps(data, indent=1) + "\n", path)
     return path
@@ -67,11 +80,13 @@ def load_transfer(out: Path) -> dict[str, Any] | None:
 
 
 def kept(data: dict[str, Any]) -> dict[str, dict[str, Any]]:
-    """Per variant: the share of return and hop height kept in the other simulator."""
+    """Per variant: the share of return and of the headline metric (``data["metric"]``)
+    kept in the other simulator."""
     table = {}
+    metric = data.get("metric", "hop_height")
     for variant, seeds in data["runs"].items():
-        own = {"return": [], "hop_height": []}
-        other = {"return": [], "hop_height": []}
+        own: dict[str, list[float]] = {"return": [], metric: []}
+        other: dict[str, list[float]] = {"return": [], metric: []}
         trained = set()
         for values in seeds.values():
             sim = values["trained_in"]
@@ -115,6 +130,10 @@ def transfer_lines(data: dict[str, Any] | None) -> list[str]:
             f"{100 * interval.estimate:.0f}% [{100 * interval.low:.0f}, {100 * interval.high:.0f}]"
         )
 
+    metric = data.get("metric", "hop_height")
+    info = all_metrics().get(metric)
+    name = (info.short or info.label) if info else metric
+    unit = f" ({info.unit})" if info and info.unit else ""
     lines = [
         "## Cross-simulator transfer",
         "",
@@ -124,14 +143,14 @@ def transfer_lines(data: dict[str, Any] | None) -> list[str]:
         f"(no CI with fewer than {m.MIN_SEEDS} seeds).",
         "",
         "| variant | trained in | seeds | return own | return other | return kept | "
-        "hop own (m) | hop other (m) | hop kept |",
+        f"{name} own{unit} | {name} other{unit} | {name} kept |",
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for variant, row in kept(data).items():
         lines.append(
             f"| `{variant}` | {row['trained_in']} | {row['seeds']} | "
             f"{row['return_own'][0]:.0f} | {row['return_other'][0]:.0f} | "
-            f"{kept_text(row['return_kept'])} | {row['hop_height_own'][0]:.3f} | "
-            f"{row['hop_height_other'][0]:.3f} | {kept_text(row['hop_height_kept'])} |"
+            f"{kept_text(row['return_kept'])} | {row[f'{metric}_own'][0]:.3f} | "
+            f"{row[f'{metric}_other'][0]:.3f} | {kept_text(row[f'{metric}_kept'])} |"
         )
     return lines + [""]

@@ -22,6 +22,13 @@ class MetricInfo:
     label: str  # plain words
     unit: str = ""  # "" for a ratio or a count
     undefined: str = ""  # when an episode leaves it NaN (undefined), in words
+    short: str = ""  # its name in a table's column (empty: the label)
+
+    @property
+    def column(self) -> str:
+        """Its column heading: the short name and the unit."""
+        name = self.short or self.label
+        return f"{name} ({self.unit})" if self.unit else name
 
 
 @dataclass(frozen=True)
@@ -74,8 +81,26 @@ class Robot:
     # (`python -m cpg_actor.robots` rewrites them)
     assets: Callable[[], dict[Path, str]]
     start_gait: Path | None = None  # the gait of agent_config.start_gait "search", if shipped
+    # the simulators its envs run on (`--sim`), the first the default; with more than one,
+    # its env config's ``sim`` field names the run's
+    simulators: tuple[str, ...] = ("mujoco",)
 
     @property
     def episode_steps(self) -> int:
         """Control steps of an episode under the default config."""
         return int(self.config_class().episode_steps)
+
+    @property
+    def headline_metric(self) -> str:
+        """The episode metric that says how well a run did (the first of ``metrics``)."""
+        return next(iter(self.metrics))
+
+    def simulator(self, config: Any) -> str:
+        """The simulator an env config of this robot runs on."""
+        return str(config.sim) if len(self.simulators) > 1 else self.simulators[0]
+
+    def simulator_config(self, sim: str) -> dict[str, Any]:
+        """The env config values that choose simulator ``sim``; ValueError if it has none."""
+        if sim not in self.simulators:
+            raise ValueError(f"--sim {sim}: the {self.name} runs on {', '.join(self.simulators)}")
+        return {"sim": sim} if len(self.simulators) > 1 else {}

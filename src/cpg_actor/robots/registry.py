@@ -9,6 +9,7 @@ line here.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import gymnasium
@@ -17,6 +18,7 @@ from cpg_actor.robots.anymal.plugin import ROBOT as ANYMAL
 from cpg_actor.robots.go1.plugin import ROBOT as GO1
 from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
 from cpg_actor.robots.plugin import CPGLayout, MetricInfo, Robot
+from cpg_actor.robots.spec import RobotSpec
 
 ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (HOPPER, ANYMAL, GO1)}
 DEFAULT_ROBOT = HOPPER.name
@@ -51,18 +53,31 @@ def make_robot_env(num_envs: int, env_config: Any, num_threads: int | None = Non
     return robot_of_config(env_config).make(num_envs, env_config, num_threads)
 
 
-def cpg_layout(model: str, layout: str = "") -> tuple[str, CPGLayout]:
-    """The name and the :class:`CPGLayout` of robot model ``model``'s CPG layout ``layout``
+def cpg_choices(spec: RobotSpec) -> tuple[dict[str, CPGLayout], Path | None]:
+    """The CPG layouts and the start gait of the robot an env simulates: those its
+    :class:`RobotSpec` gives, else those of the registered robot whose envs are named as it."""
+    if spec.cpg_layouts is not None:
+        return spec.cpg_layouts(), spec.start_gait
+    robot = robot_of_model(spec.name)
+    return robot.cpg_layouts(), robot.start_gait
+
+
+def cpg_layout(spec: RobotSpec, layout: str = "") -> tuple[str, CPGLayout]:
+    """The name and the :class:`CPGLayout` of the env's robot's CPG layout ``layout``
     (empty: its default, the first)."""
-    robot = robot_of_model(model)
-    layouts = robot.cpg_layouts()
+    layouts, _ = cpg_choices(spec)
     name = layout or next(iter(layouts))
     if name not in layouts:
         raise ValueError(
-            f"agent_config.cpg_layout {name!r}: robot '{model}' has the CPG layouts "
+            f"agent_config.cpg_layout {name!r}: robot '{spec.name}' has the CPG layouts "
             f"{', '.join(layouts)}"
         )
     return name, layouts[name]
+
+
+def all_simulators() -> tuple[str, ...]:
+    """Every robot's simulators, in the order of the robots (``--sim``'s choices)."""
+    return tuple(dict.fromkeys(sim for robot in ROBOTS.values() for sim in robot.simulators))
 
 
 def all_metrics() -> dict[str, MetricInfo]:

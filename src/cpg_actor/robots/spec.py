@@ -2,14 +2,16 @@
 by the environment (from the robot's description) and read by everything else.
 
 Agents are built from it (the number of joints, the nominal pose the actions are centred on,
-the control period of the CPG), so a new robot is a new environment and, for the CPG-Actor,
-its CPG layouts (``Robot.cpg_layouts``, :mod:`cpg_actor.robots.registry`), not a change to
-the trainer.
+the control period of the CPG, for the CPG agents the CPG layouts and the start gait), so a
+new robot is a new environment, not a change to the trainer.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -29,6 +31,15 @@ class RobotSpec:
     # nu(d), rho(d)), as it comes from the env, before normalisation: the quadruped's
     # forward-speed command. None: no drive (the hopper: d = 0)
     drive_observation: str | None = None
+    # observations evaluation records as traces of their own, by name (the hopper's
+    # hip_height), with their value after reset as standing_<name>
+    traced_observations: tuple[str, ...] = ()
+    # what the CPG agents build on: the robot's CPG layouts (``Robot.cpg_layouts``: name ->
+    # CPGLayout, the first the default) and the gait of agent_config.start_gait "search"
+    # (``Robot.start_gait``). None: both are those of the registered robot whose envs are
+    # named ``name`` (:func:`cpg_actor.robots.registry.cpg_choices`)
+    cpg_layouts: Callable[[], dict[str, Any]] | None = field(default=None, repr=False)
+    start_gait: Path | None = None
 
     def __post_init__(self) -> None:
         n = len(self.joint_names)
@@ -50,6 +61,9 @@ class RobotSpec:
                 f"RobotSpec.drive_observation {self.drive_observation!r} is not one of the "
                 f"observation names {self.observation_names}"
             )
+        unknown = set(self.traced_observations) - set(self.observation_names)
+        if unknown:
+            raise ValueError(f"RobotSpec.traced_observations {sorted(unknown)} are not observed")
 
     @property
     def num_joints(self) -> int:

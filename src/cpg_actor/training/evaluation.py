@@ -36,16 +36,17 @@ def finite_mean(values) -> float:
 def observation_columns(robot) -> dict[str, list[int]]:
     """Where the traces' quantities are in the observation, by the names the env's
     :class:`cpg_actor.robots.spec.RobotSpec` gives its columns: measured joint positions
-    (``p_m_<joint>``) and velocities (``v_m_<joint>``) in joint order, and the hip height
-    where the robot has one. A quantity the robot does not observe is left out."""
+    (``p_m_<joint>``) and velocities (``v_m_<joint>``) in joint order, and each observation
+    the robot traces on its own (``traced_observations``: the hopper's ``hip_height``). A
+    quantity the robot does not observe is left out."""
     names = list(robot.observation_names)
     columns = {}
     for key, prefix in (("measured_position", "p_m_"), ("measured_velocity", "v_m_")):
         wanted = [prefix + joint for joint in robot.joint_names]
         if all(name in names for name in wanted):
             columns[key] = [names.index(name) for name in wanted]
-    if "hip_height" in names:
-        columns["hip_height"] = [names.index("hip_height")]
+    for name in robot.traced_observations:
+        columns[name] = [names.index(name)]
     return columns
 
 
@@ -99,8 +100,8 @@ def evaluate(
     columns = observation_columns(env.robot)
     obs, _ = env.reset(seed=seed)
     obs = np.asarray(obs, dtype=np.float32)
-    hip = columns.get("hip_height")
-    standing = float(obs[:, hip[0]].mean()) if hip else float("nan")
+    standing = {name: float(obs[:, columns[name][0]].mean())
+                for name in env.robot.traced_observations}  # fmt: skip
     policy.reset(num_envs)
     # the desired velocity of the first step is left out (NaN): the command before it is the
     # env's reset pose, not the agent's
@@ -172,12 +173,13 @@ def evaluate_policy(policy, config, episodes: int, seed: int) -> dict[str, np.nd
 
 def _run_on_device(policy, env, seed: int, max_steps: int):
     """The loop of :func:`evaluate` on the env's tensor face: ``(length, episode_return,
-    metrics, standing hip height)`` as numpy, the same numbers as the numpy loop's."""
+    metrics, standing values of the traced observations)`` as numpy, the same numbers as the
+    numpy loop's."""
     columns = observation_columns(env.robot)
     obs, _ = env.reset_tensors(seed)
     device, num_envs = obs.device, env.num_envs
-    hip = columns.get("hip_height")
-    standing = obs[:, hip[0]].clone() if hip else None  # averaged as the numpy loop does
+    # averaged as the numpy loop does
+    standing = {name: obs[:, columns[name][0]].clone() for name in env.robot.traced_observations}
     policy.reset(num_envs)
     active = torch.ones(num_envs, dtype=torch.bool, device=device)
     length = torch.zeros(num_envs, dtype=torch.int64, device=device)
@@ -207,7 +209,7 @@ def _run_on_device(policy, env, seed: int, max_steps: int):
         length.cpu().numpy(),
         returns.cpu().numpy(),
         {name: value.cpu().numpy() for name, value in metrics.items()},
-        float(standing.cpu().numpy().mean()) if standing is not None else float("nan"),
+        {name: float(value.cpu().numpy().mean()) for name, value in standing.items()},
     )
 
 
@@ -229,7 +231,8 @@ def _result(env, records, length, returns, metrics, standing, control_dt, traces
         if feet is None:
             feet = [f"foot {i}" for i in range(result["foot_contact"].shape[-1])]
         result["foot_names"] = np.array(feet, dtype=str)
-    result["standing_hip_height"] = np.array(standing)
+    for name, value in standing.items():  # each traced observation's mean after reset
+        result[f"standing_{name}"] = np.array(value)
     result["control_dt"] = np.array(control_dt)
     return result
 
@@ -245,7 +248,8 @@ def _trace_row(
     num_envs = applied.shape[0]
     row = {"desired_position": applied}
     for key, where in columns.items():
-        row[key] = measured[:, where[0]] if key == "hip_height" else measured[:, where]
+        joints = key in ("measured_position", "measured_velocity")
+        row[key] = measured[:, where] if joints else measured[:, where[0]]
     if "measured_position" not in row and "measured_position" in info:  # not observed as such
         row["measured_position"] = np.asarray(info["measured_position"], dtype=np.float64)
     row["foot_height"] = np.asarray(info.get("foot_height", np.full(num_envs, np.nan)))

@@ -5,7 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
+from cpg_actor.robots.common.quadruped.config import SIMULATORS, QuadrupedConfig
 from cpg_actor.robots.common.quadruped.metrics import METRICS
 from cpg_actor.robots.plugin import CPGLayout, GymId, Robot
 
@@ -81,4 +81,5 @@ ROBOT = Robot(
     mjcf=mjcf,
     observation_sources=observation_sources,
     assets=assets,
+    simulators=SIMULATORS,
 )

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from cpg_actor.robots.common.quadruped.config import SIMULATORS
 from cpg_actor.robots.common.quadruped.metrics import METRICS
 from cpg_actor.robots.go1.config import Go1Config
 from cpg_actor.robots.plugin import CPGLayout, GymId, Robot
@@ -75,4 +76,5 @@ ROBOT = Robot(
     mjcf=mjcf,
     observation_sources=observation_sources,
     assets=assets,
+    simulators=SIMULATORS,
 )

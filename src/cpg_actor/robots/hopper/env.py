@@ -19,6 +19,7 @@ from gymnasium.vector.utils import batch_space
 from cpg_actor.robots.common.checks import check_render_mode, real_actions
 from cpg_actor.robots.hopper import description as robot
 from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.hopper.plugin import START_GAIT, cpg_layouts
 from cpg_actor.robots.hopper.simulation import (
     ACTION_HIGH,
     ACTION_LOW,
@@ -86,6 +87,9 @@ def robot_spec(config: HopperConfig) -> RobotSpec:
         action_high=tuple(float(v) for v in ACTION_HIGH),
         control_dt=float(config.control_dt),
         observation_names=tuple(OBS_NAMES),
+        traced_observations=("hip_height",),  # the hop, drawn in eval's traces
+        cpg_layouts=cpg_layouts,
+        start_gait=START_GAIT,
     )
 
 

@@ -5,12 +5,13 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.hopper.config import SIMULATORS, HopperConfig
 from cpg_actor.robots.plugin import CPGLayout, GymId, MetricInfo, Robot
 
 ENV_ID = "cpg_actor/AnymalHopper-v0"
 PYBULLET_ENV_ID = "cpg_actor/AnymalHopper-pybullet-v0"
 MJX_ENV_ID = "cpg_actor/AnymalHopper-mjx-v0"  # batched only: gymnasium.make_vec
+START_GAIT = Path(__file__).resolve().parent / "start_gait.yaml"  # the open-loop search's
 
 
 def make(num_envs: int, config: Any, num_threads: int | None = None) -> Any:
@@ -55,7 +56,7 @@ ROBOT = Robot(
     config_class=HopperConfig,
     make=make,
     cpg_layouts=cpg_layouts,
-    metrics={"hop_height": MetricInfo("hop height", "m")},
+    metrics={"hop_height": MetricInfo("hop height", "m", short="hop")},
     gym_ids=(
         _gym_id(ENV_ID, "mujoco", "cpg_actor.robots.hopper.vector:HopperVectorEnv"),
         _gym_id(PYBULLET_ENV_ID, "pybullet", "cpg_actor.robots.hopper.vector:HopperVectorEnv"),
@@ -64,5 +65,6 @@ ROBOT = Robot(
     mjcf=mjcf,
     observation_sources=observation_sources,
     assets=assets,
-    start_gait=Path(__file__).resolve().parent / "start_gait.yaml",
+    start_gait=START_GAIT,
+    simulators=SIMULATORS,
 )
