@@ -10,7 +10,9 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-SIMULATORS = ("mujoco", "pybullet", "mjx")
+from cpg_actor.robots.hopper.backends import BACKENDS, BATCHED_ONLY
+
+SIMULATORS = (*BACKENDS, BATCHED_ONLY)  # the backends' and MJX
 ACTUATOR_LAWS = ("dc-motor", "coast")  # see cpg_actor.robots.common.actuator
 HOP_REWARDS = ("hip-velocity", "apex")  # see cpg_actor.robots.hopper.reward
 
