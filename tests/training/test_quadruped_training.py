@@ -86,7 +86,7 @@ def test_cli_trains_a_pace_resumes_and_logs_the_robots_metrics(tmp_path, capsys)
     assert "anymal-mujoco" in capsys.readouterr().out
     assert main(["train", "--robot", "anymal", "--sim", "pybullet", "--run-dir",
                  str(tmp_path / "other")]) == 2  # fmt: skip
-    assert "sim must be one of mujoco, mjx for the quadruped" in capsys.readouterr().err
+    assert "--sim pybullet: the anymal runs on mujoco, mjx" in capsys.readouterr().err
     assert not (tmp_path / "other").exists()
 
 
