@@ -444,3 +444,20 @@ def test_a_sweep_of_one_seed_shows_the_value_alone_marked_n_1():
     assert _mean_std([1.0, float("nan")], 1) == "1.0 (n=1)"
     assert _mean_std([1.0, 3.0], 1) == "2.0 ± 1.0"
     assert _mean_std([], 1) == "-"
+
+
+def test_stage_steps_are_the_logged_steps_with_a_start_gaits_search_charged(tmp_path):
+    """A run charged with its start gait's search begins its step count at the search's steps:
+    a stage's steps are those logged at its iteration, not the iteration times the first
+    row's steps per iteration."""
+    from cpg_actor.experiments.report import summarise
+
+    out = tmp_path / "out"
+    for seed in range(3):
+        run = _fake_run(out, "cpg-actor", seed)
+        rows = [{"iteration": i, "global_step": 496_000 + 2048 * i} for i in range(8)]
+        (run / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+    summary = summarise(Results.load(out, ["cpg-actor"]), total_steps=510_336)
+    assert [stage["steps"] for stage in summary["variants"]["cpg-actor"]["stages"]] == [
+        496_000 + 2048 * 5
+    ]

@@ -368,15 +368,16 @@ def cpg_actor_training_over_time(results: Results, directory: Path) -> Output:
             stages.append((stage, traces))
     if not stages:
         return [], [f"{name}: cpg-actor seed {run.seed} has no stage evaluations"]
-    per_iteration = steps_per_iteration(run)
     # stages evaluated at one checkpoint (a budget too short for them) are one snapshot: drawn
     # once, so that each line is a different policy with a label of its own
     stages = list({stage["iteration"]: (stage, traces) for stage, traces in stages}.values())
-    counts = [stage["iteration"] * (per_iteration or 1) for stage, _ in stages]
-    texts = step_labels(counts) if per_iteration else [str(count) for count in counts]
-    names = [f"{text} steps" if per_iteration else f"iteration {text}" for text in texts]
+    steps = [steps_at_iteration(run, stage["iteration"]) for stage, _ in stages]
+    logged = all(count is not None for count in steps)
+    counts = steps if logged else [stage["iteration"] for stage, _ in stages]
+    texts = step_labels(counts) if logged else [str(count) for count in counts]
+    names = [f"{text} steps" if logged else f"iteration {text}" for text in texts]
     labels = {stage["iteration"]: name for (stage, _), name in zip(stages, names, strict=True)}
-    snapshots = f"{', '.join(texts)} {'training steps' if per_iteration else 'iterations'}"
+    snapshots = f"{', '.join(texts)} {'training steps' if logged else 'iterations'}"
     cmap = plt.get_cmap("viridis")
     robot = run.config.get("robot", "hopper")
     joints = _named_joints(stages[0][1])
@@ -459,10 +460,13 @@ def _named_joints(traces: dict) -> list[tuple[int, str]]:
     return found
 
 
-def steps_per_iteration(run: Run) -> int | None:
+def steps_at_iteration(run: Run, iteration: int) -> int | None:
+    """The env steps a run had taken at the end of ``iteration``, as logged: a start gait's
+    search steps included when the run is charged with them (``search_steps``); None when the
+    run logged no row for that iteration."""
     for row in run.metrics:
-        if row.get("iteration"):
-            return int(row["global_step"]) // int(row["iteration"])
+        if row.get("iteration") == iteration and "global_step" in row:
+            return int(row["global_step"])
     return None
 
 

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from cpg_actor.experiments import metrics as m
-from cpg_actor.experiments.figures import make_figures, steps_per_iteration
+from cpg_actor.experiments.figures import make_figures, steps_at_iteration
 from cpg_actor.experiments.floor import FLOOR_FILE, load_floor
 from cpg_actor.experiments.plan import STAGE_LABELS, load_settings_file
 from cpg_actor.experiments.results import (
@@ -153,9 +153,7 @@ def _stages(results: Results, variant: str) -> list[dict[str, Any]]:
             hops.append(float(np.mean(traces["hop_height"])))
             returns.append(float(np.mean(traces["episode_return"])))
             if steps is None:
-                per_iteration = steps_per_iteration(run)
-                if per_iteration:
-                    steps = run.stages[k]["iteration"] * per_iteration
+                steps = steps_at_iteration(run, run.stages[k]["iteration"])
         fraction = runs[0].stages[k]["fraction"] if k < len(runs[0].stages) else float("nan")
         stages.append(
             {
