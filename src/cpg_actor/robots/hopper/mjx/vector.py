@@ -92,15 +92,8 @@ class MjxHopperVectorEnv(VectorEnv):
         """Reset every env (seeds as :meth:`reset`): the first observations, on ``device``."""
         self._check_open("reset")
         keys = reset_keys(seed, self.num_envs, self.jax_device)
-        self._state, obs = self.dynamics.reset(keys, self.episode)
-        data = self._state.data
-        info = {
-            "hip_height": self._to_torch(data.qpos[:, 0]),
-            "foot_height": self._to_torch(self.dynamics.foot_height(data.qpos)),
-            "desired_position": self._to_torch(self._state.desired),
-            "measured_position": self._to_torch(data.qpos[:, 1:3]),
-        }
-        return self._to_torch(obs), info
+        self._state, obs, info = self.dynamics.reset(keys, self.episode)
+        return self._to_torch(obs), jax.tree.map(self._to_torch, info)
 
     def step_tensors(self, actions: torch.Tensor, check_finite: bool = True) -> EnvStep:
         """One control step from desired joint positions ``(N, 2)`` (a tensor on any device).
@@ -122,22 +115,18 @@ class MjxHopperVectorEnv(VectorEnv):
     def _advance(self, actions) -> EnvStep:
         self._state, out = self.dynamics.step(self._state, actions, self.episode)
         tensors = jax.tree.map(self._to_torch, out)
-        info = {
-            key: tensors[key]
-            for key in ("reward_terms", "hip_height", "foot_height", "joint_torque",
-                        "desired_position", "measured_position")
-        }  # fmt: skip
+        info = dict(tensors["info"])
         done = tensors["terminated"] | tensors["truncated"]
         info.update(final_obs=tensors["final_obs"], _final_obs=done)
-        info["episode_metrics"] = {"hop_height": tensors["hop_height"]}
+        info["episode_metrics"] = tensors["episode_metrics"]
         return EnvStep(
             obs=tensors["obs"],
             reward=tensors["reward"],
             terminated=tensors["terminated"],
             truncated=tensors["truncated"],
             final_obs=tensors["final_obs"],
-            episode_metrics={"hop_height": tensors["hop_height"]},
-            reward_terms=tensors["reward_terms"],
+            episode_metrics=tensors["episode_metrics"],
+            reward_terms=info["reward_terms"],
             info=info,
         )
 
