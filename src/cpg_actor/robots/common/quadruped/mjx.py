@@ -32,15 +32,11 @@ from __future__ import annotations
 
 from typing import Any, NamedTuple
 
-import gymnasium as gym
 import numpy as np
-import torch
-from gymnasium.vector import AutoresetMode, VectorEnv
 
 from cpg_actor.robots.common.actuator import Actuator
-from cpg_actor.robots.common.checks import check_real_tensor, real_actions
-from cpg_actor.robots.common.jax_bridge import reset_keys, to_host, torch_device
-from cpg_actor.robots.common.mjx_runtime import load
+from cpg_actor.robots.common.mjx_runtime import STATE_FIELDS, load
+from cpg_actor.robots.common.mjx_vector import MjxVectorEnv
 from cpg_actor.robots.common.mujoco_runtime import mujoco
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.common.quadruped.model import QuadrupedModel
@@ -50,15 +46,10 @@ from cpg_actor.robots.common.quadruped.vector import (
     load_model,
     robot_spec,
 )
-from cpg_actor.robots.common.torch_env import EnvStep
 from cpg_actor.tasks import velocity as task
 
 jax, mjx = load()
 jnp = jax.numpy
-
-STATE_FIELDS = ("qpos", "qvel", "qacc_warmstart")  # what a step starts from (mjx.Data)
-# what a saved state holds beside STATE_FIELDS: the task's episode and each env's key
-EPISODE_FIELDS = (*task.Episode._fields, "key")
 
 
 def box_corners(box) -> np.ndarray:
@@ -225,16 +216,16 @@ def dynamics_for(quadruped: QuadrupedModel, config: QuadrupedConfig) -> Quadrupe
     return _DYNAMICS[key]
 
 
-class MjxQuadrupedVectorEnv(VectorEnv):
-    """N quadrupeds on MJX: the Gymnasium face of the robot's MuJoCo env (``mujoco_env``, a
-    :class:`~cpg_actor.robots.common.quadruped.vector.QuadrupedVectorEnv`; numpy, copied to the
-    host) and the trainer's tensor face (``reset_tensors`` / ``step_tensors``: torch through
-    DLPack on JAX's device), as the MJX hopper's. ``num_threads`` is accepted and ignored;
-    ``max_episode_steps`` is checked as the MuJoCo env's. A robot's subclass sets
-    ``mujoco_env``; the robot is its ``quadruped``."""
+class MjxQuadrupedVectorEnv(MjxVectorEnv):
+    """N quadrupeds on MJX behind the faces of every MJX env
+    (:class:`~cpg_actor.robots.common.mjx_vector.MjxVectorEnv`), with the info and episode
+    metrics of the robot's MuJoCo env (``mujoco_env``, a
+    :class:`~cpg_actor.robots.common.quadruped.vector.QuadrupedVectorEnv`). ``num_threads`` is
+    accepted and ignored; ``max_episode_steps`` is checked as the MuJoCo env's. A robot's
+    subclass sets ``mujoco_env``; the robot is its ``quadruped``."""
 
-    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": []}
     mujoco_env: type[QuadrupedVectorEnv]  # the robot's MuJoCo env (a subclass sets it)
+    saved_fields = (*task.Episode._fields, "key")
 
     @property
     def quadruped(self) -> QuadrupedModel:
@@ -244,6 +235,14 @@ class MjxQuadrupedVectorEnv(VectorEnv):
     def foot_names(self) -> tuple[str, ...]:
         """The columns of ``info["contact"]``."""
         return self.quadruped.legs
+
+    @property
+    def state_key(self) -> str:
+        return "mjx-" + self.quadruped.state_key
+
+    @property
+    def action_hint(self) -> str:
+        return f"desired joint positions, rad, joints {self.quadruped.joint_names}"
 
     def __init__(
         self,
@@ -258,136 +257,19 @@ class MjxQuadrupedVectorEnv(VectorEnv):
                 f"{type(self).__name__} simulates with MJX, got sim={self.config.sim!r}"
             )
         self.robot = robot_spec(self.quadruped, self.config)
-        self.dynamics = dynamics_for(self.quadruped, self.config)
-        self.jax_device = jax.devices()[0]
-        self.device = torch_device(self.jax_device)
-        self.num_threads = None
-        self._state: EnvState | None = None
-        self._renderer = None
-        self._closed = False
+        self._start_mjx(dynamics_for(self.quadruped, self.config))
 
-    def _check_started(self, what: str) -> None:
-        if self._closed:
-            raise gym.error.ClosedEnvironmentError(f"{what}() on a closed environment")
-        if self._state is None and what != "reset":
-            raise RuntimeError(f"call reset() before {what}()")
+    def saved(self, state: EnvState) -> dict[str, Any]:
+        return {**state.episode._asdict(), "key": state.key}
 
-    @property
-    def jax_state(self) -> EnvState | None:
-        """Every env's state as the dynamics step takes it; None before the first reset."""
-        return self._state
-
-    # -- the tensor face ----------------------------------------------------------------------
-    def reset_tensors(self, seed: int | list[int] | None = None) -> tuple[torch.Tensor, dict]:
-        self._check_started("reset")
-        keys = reset_keys(seed, self.num_envs, self.jax_device)
-        self._state, obs, info = self.dynamics.reset(keys)
-        return torch.from_dlpack(obs), jax.tree.map(torch.from_dlpack, info)
-
-    def step_tensors(self, actions: torch.Tensor, check_finite: bool = True) -> EnvStep:
-        """One control step from desired joint positions ``(N, 12)`` (a tensor on any device);
-        ``check_finite`` as the MJX hopper's (False: no wait for the device)."""
-        self._check_started("step")
-        if tuple(actions.shape) != (self.num_envs, 12):
-            raise ValueError(f"actions must have shape {(self.num_envs, 12)} (desired joint "
-                             f"positions, rad, joints {self.quadruped.joint_names}), got "
-                             f"{tuple(actions.shape)}")  # fmt: skip
-        check_real_tensor(actions)
-        if check_finite and not bool(torch.isfinite(actions).all()):
-            raise ValueError("actions must be finite, got NaN or inf")
-        if actions.device != self.device:
-            actions = actions.to(self.device)
-        return self._advance(
-            jax.dlpack.from_dlpack(actions.detach().to(torch.float32).contiguous())
+    def restored(self, data: Any, fields: dict[str, Any]) -> EnvState:
+        return EnvState(
+            data, task.Episode(*(fields[n] for n in task.Episode._fields)), fields["key"]
         )
 
-    def _advance(self, actions) -> EnvStep:
-        self._state, out = self.dynamics.step(self._state, actions)
-        tensors = jax.tree.map(torch.from_dlpack, out)
-        done = tensors["terminated"] | tensors["truncated"]
-        info = dict(tensors["info"])
-        info.update(final_obs=tensors["final_obs"], _final_obs=done,
-                    episode_metrics=tensors["episode_metrics"])  # fmt: skip
-        return EnvStep(
-            obs=tensors["obs"], reward=tensors["reward"], terminated=tensors["terminated"],
-            truncated=tensors["truncated"], final_obs=tensors["final_obs"],
-            episode_metrics=tensors["episode_metrics"], reward_terms=info["reward_terms"],
-            info=info,
-        )  # fmt: skip
-
-    # -- the Gymnasium face -------------------------------------------------------------------
-    def reset(
-        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[np.ndarray, dict[str, Any]]:
-        """Reset every env. ``seed``: an int s (env i gets s + i), a list of N ints, or None."""
-        obs, info = self.reset_tensors(seed)
-        return to_host(obs), to_host(info)
-
-    def step(self, actions: Any):
-        self._check_started("step")
-        actions = real_actions(actions, f"of shape {(self.num_envs, 12)}", np.float32)
-        if actions.shape != (self.num_envs, 12):
-            raise ValueError(f"actions must have shape {(self.num_envs, 12)} (desired joint "
-                             f"positions, rad, joints {self.quadruped.joint_names}), got "
-                             f"{actions.shape}")  # fmt: skip
-        if not np.isfinite(actions).all():
-            raise ValueError("actions must be finite, got NaN or inf")
-        out = self._advance(jax.device_put(actions, self.jax_device))
-        info = to_host(out.info)
-        info["episode_metrics"] = {k: v.astype(np.float64) for k, v in
-                                   info["episode_metrics"].items()}  # fmt: skip
-        return (to_host(out.obs), to_host(out.reward).astype(np.float64), to_host(out.terminated),
-                to_host(out.truncated), info)  # fmt: skip
-
-    # -- checkpoints --------------------------------------------------------------------------
-    def get_state(self) -> dict[str, Any]:
-        """Everything the next step depends on, as CPU tensors: each robot's ``qpos``, ``qvel``
-        and solver warm start, the episode bookkeeping and each env's random key;
-        :meth:`set_state` continues exactly."""
-        self._check_started("get_state")
-        state = self._state
-        fields = {name: getattr(state.data, name) for name in STATE_FIELDS}
-        fields.update(state.episode._asdict(), key=state.key)
-        key = "mjx-" + self.quadruped.state_key
-        return {key: {k: torch.from_numpy(np.array(v)) for k, v in fields.items()}}
-
-    def set_state(self, state: dict[str, Any]) -> None:
-        """Restore what :meth:`get_state` returned (ValueError if it does not fit)."""
-        if self._closed:
-            raise gym.error.ClosedEnvironmentError("set_state() on a closed environment")
-        key = "mjx-" + self.quadruped.state_key
-        if not isinstance(state, dict) or key not in state:
-            raise ValueError(f"not a state of {type(self).__name__} (get_state() makes one)")
-        fields = {k: np.asarray(v.numpy()) for k, v in state[key].items()}
-        missing = [k for k in (*STATE_FIELDS, *EPISODE_FIELDS) if k not in fields]
-        if missing:
-            raise ValueError(f"the MJX state lacks {', '.join(missing)}")
-        if fields["qpos"].shape[0] != self.num_envs:
-            raise ValueError(f"the state has {fields['qpos'].shape[0]} envs, this env "
-                             f"{self.num_envs}")  # fmt: skip
-        if self._state is None:
-            self.reset_tensors(seed=0)
-        put = lambda name: jax.device_put(fields[name], self.jax_device)  # noqa: E731
-        data = self._state.data.replace(**{name: put(name) for name in STATE_FIELDS})
-        episode = task.Episode(*(put(name) for name in task.Episode._fields))
-        self._state = EnvState(data, episode, put("key"))
-
-    # -- rendering ----------------------------------------------------------------------------
-    def render_frame(self, index: int = 0) -> np.ndarray:
-        """An RGB frame of env ``index``, drawn by MuJoCo on the CPU from that robot's state
-        (the MuJoCo env's camera and scene; needs an OpenGL backend)."""
-        self._check_started("render_frame")
-        if not 0 <= index < self.num_envs:
-            raise ValueError(f"index must be in 0..{self.num_envs - 1}, got {index}")
+    def draw(self, qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:
+        """The MuJoCo env's camera and scene."""
         if self._renderer is None:
             self._renderer = self.mujoco_env(1, self.config.replace(sim="mujoco"), 1)
             self._renderer.reset(seed=0)
-        data = self._state.data
-        return self._renderer.render_pose(np.asarray(data.qpos[index], dtype=np.float64))
-
-    def close_extras(self, **kwargs: Any) -> None:
-        if self._renderer is not None:
-            self._renderer.close()
-            self._renderer = None
-        self._state = None
-        self._closed = True
+        return self._renderer.render_pose(qpos)

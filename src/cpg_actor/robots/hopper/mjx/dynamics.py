@@ -33,7 +33,7 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 from cpg_actor.robots.common.actuator import Actuator
-from cpg_actor.robots.common.mjx_runtime import load
+from cpg_actor.robots.common.mjx_runtime import STATE_FIELDS, load
 from cpg_actor.robots.common.mujoco_runtime import mujoco  # MUJOCO_GL chosen before mujoco
 from cpg_actor.robots.hopper import task
 from cpg_actor.robots.hopper.config import HopperConfig
@@ -42,11 +42,6 @@ from cpg_actor.robots.hopper.task import NOMINAL_POSE
 
 jax, mjx = load()
 jnp = jax.numpy
-
-
-# the fields of mjx.Data a step starts from (with ctrl, which the actuator law sets at every
-# substep); every other field is derived from them by mjx.step
-STATE_FIELDS = ("qpos", "qvel", "qacc_warmstart")
 
 
 class Episode(NamedTuple):
