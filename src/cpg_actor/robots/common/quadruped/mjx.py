@@ -78,7 +78,8 @@ def mjx_model(quadruped: QuadrupedModel, config: QuadrupedConfig) -> mujoco.MjMo
 
 
 class QuadrupedDynamics:
-    """Jitted ``reset(keys)`` and ``step(state, actions)`` for one robot and config."""
+    """Jitted ``reset(keys, episode)`` and ``step(state, actions, episode)`` for one robot and
+    config (``episode`` unused: every config number is compiled in)."""
 
     def __init__(self, quadruped: QuadrupedModel, config: QuadrupedConfig) -> None:
         self.quadruped = quadruped
