@@ -6,7 +6,7 @@ The exported function is the deterministic control step of
     (observation, state) -> (action, next_state)
 
 * ``observation``: ``(B, obs_dim)`` float32, the env's raw observation (for the hopper, in the
-  order of ``cpg_actor.robots.hopper.simulation.OBS_NAMES``: measured HFE, KFE positions (rad)
+  order of ``cpg_actor.robots.hopper.task.OBS_NAMES``: measured HFE, KFE positions (rad)
   and velocities (rad/s), the desired positions being tracked (rad), hip height (m), hip
   velocity (m/s)); the observation normaliser is inside. A non-finite entry (NaN, +-inf) is
   replaced by the normaliser's mean (0 where the run does not normalise) before anything else,

@@ -11,11 +11,17 @@ the nominal pose (rad).
 
 Reward: each term of :func:`reward_terms` times its scale (the env config's ``reward_scales``)
 times the control step, summed (legged_gym's convention: the scales are per second).
+
+A control step of the task (:func:`step`) is written once: the physics of each simulator hands
+it a :class:`Reading`, the task carries an :class:`Episode` from step to step, and it returns
+the observation, reward, terminations, episode metrics and the step's info. Masks are
+``where``, never Python branches on values, so that JAX can trace them.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -113,3 +119,168 @@ def fallen(base_height, gravity, fall_height: float, fall_tilt: float) -> np.nda
     xp = namespace(gravity)
     tilt = xp.arccos(xp.clip(-gravity[:, 2], -1.0, 1.0))
     return (base_height < fall_height) | (tilt > fall_tilt)
+
+
+# ---------------------------------------------------------------------------------------------
+# one control step, for any simulator
+
+EPISODE_METRICS = ("speed_error", "forward_speed", "fell", "episode_seconds", "cost_of_transport",
+                   "foot_slip")  # fmt: skip
+MIN_DISTANCE = 0.1  # m: below this the cost of transport is not defined (NaN)
+CONTACT_MARGIN = 0.005  # m: a foot whose centre is within its radius plus this touches the ground
+MOVING = 0.1  # m/s: a command faster than this pays the feet's air time
+
+
+class Episode(NamedTuple):
+    """What the task carries from one control step to the next, N rows each."""
+
+    command: Any  # (N, 3) forward, lateral (m/s), yaw (rad/s) command
+    last_action: Any  # (N, J) desired positions of the last step, rad
+    joint_vel_before: Any  # (N, J) joint velocities after the last step
+    elapsed: Any  # (N,) int, control steps of the episode
+    air_time: Any  # (N, 4) s since each foot left the ground
+    in_contact: Any  # (N, 4) bool
+    speed_error_sum: Any  # (N,) sum of |forward speed - command|
+    speed_sum: Any  # (N,) sum of the forward speed
+    work: Any  # (N,) J, the joints' mechanical work (|torque x speed| dt)
+    start_x: Any  # (N,) the base's x at the episode's start, m
+    slip_sum: Any  # (N,) sum of the planted feet's sliding speeds, m/s
+    planted_steps: Any  # (N,) int, count of planted feet over the episode's steps
+    feet_xy: Any  # (N, 4, 2) the feet's horizontal positions at the last reading, m
+
+
+class Reading(NamedTuple):
+    """What a simulator's physics hands the task after a control step, N rows each."""
+
+    qpos: Any  # (N, 7 + J) free base (position, quaternion w x y z), then the joints
+    qvel: Any  # (N, 6 + J)
+    lin_vel: Any  # (N, 3) the base's linear velocity in the base frame, m/s
+    ang_vel: Any  # (N, 3) the base's angular velocity in the base frame (the gyro), rad/s
+    feet: Any  # (N, 4, 3) the feet's positions (world), m
+    torque: Any  # (N, J) the joint torques of the last physics substep, N m
+    work: Any  # (N,) the joints' mechanical work over the step, J
+    base_touch: Any  # (N,) bool: the base touches the ground
+    unstable: Any  # (N,) bool: the simulation blew up (non-finite state)
+
+
+def desired_positions(actions, low, high, normalized: bool):
+    """Actions to desired joint positions within ``low`` .. ``high`` (J,): the actions are the
+    positions (rad), or with ``normalized`` in [-1, 1] from the lower to the upper limit."""
+    xp = namespace(actions)
+    if normalized:
+        actions = low + (xp.clip(actions, -1.0, 1.0) + 1.0) * (high - low) / 2
+    return xp.clip(actions, low, high)
+
+
+def new_episode(command, joints, start_x, feet_xy) -> Episode:
+    """A fresh :class:`Episode` for robots at rest in ``joints`` (N, J) under ``command``."""
+    xp = namespace(joints)
+    n = joints.shape[0]
+    zero = xp.zeros_like(start_x)
+    count = xp.zeros(n, dtype=int)
+    return Episode(
+        command=command, last_action=joints, joint_vel_before=xp.zeros_like(joints),
+        elapsed=count, air_time=xp.zeros((n, 4), dtype=joints.dtype),
+        in_contact=xp.ones((n, 4), dtype=bool), speed_error_sum=zero, speed_sum=zero, work=zero,
+        start_x=start_x, slip_sum=zero, planted_steps=count, feet_xy=feet_xy,
+    )  # fmt: skip
+
+
+def restart(episode: Episode, done, fresh: Episode) -> Episode:
+    """``episode`` with the rows of ``done`` (N,) taken from ``fresh``."""
+    return Episode(*(rows(done, new, old) for new, old in zip(fresh, episode, strict=True)))
+
+
+def rows(mask, new, old):
+    """``new`` where ``mask`` (N,) is set, else ``old``: rows of arrays of any rank."""
+    xp = namespace(old)
+    return xp.where(mask.reshape((-1,) + (1,) * (old.ndim - 1)), new, old)
+
+
+def observe(qpos, qvel, ang_vel, command, last_action, nominal):
+    """:func:`observation` of the state after a step (non-finite entries 0)."""
+    xp = namespace(qpos)
+    obs = observation(ang_vel, projected_gravity(qpos[:, 3:7]), command, qpos[:, 7:],
+                      qvel[:, 6:], last_action, nominal)  # fmt: skip
+    return xp.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0)
+
+
+def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radius: float,
+         weight: float) -> tuple[Episode, dict]:  # fmt: skip
+    """One control step of the task: ``(episode, outputs)``, the episode after the step (not
+    yet restarted where it ended) and ``obs`` (the step's last observation), ``reward``,
+    ``reward_terms`` (scaled), ``terminated``, ``truncated``, ``episode_metrics`` (NaN for
+    the robots whose episode goes on) and ``info`` (``command``, ``contact``,
+    ``base_height``, ``forward_speed``, ``desired_position``, ``measured_position``).
+
+    ``config``: the env's (scales, sigma, fall limits, steps); ``desired`` (N, J) the positions
+    the step tracked; ``nominal`` (J,) the nominal pose; ``weight`` m g (N), the cost of
+    transport's."""
+    xp = namespace(reading.qpos)
+    dt, unstable = config.control_dt, reading.unstable
+    qpos, qvel, lin_vel, ang_vel, feet = (reading.qpos, reading.qvel, reading.lin_vel,
+                                          reading.ang_vel, reading.feet)  # fmt: skip
+    gravity = projected_gravity(qpos[:, 3:7])
+    height = qpos[:, 2]
+    joint_vel = qvel[:, 6:]
+    joint_acc = (joint_vel - episode.joint_vel_before) / dt
+    contact = feet[:, :, 2] < foot_radius + CONTACT_MARGIN
+    slip, planted = planted_slip(feet[:, :, :2], episode.feet_xy, contact, episode.in_contact,
+                                 dt)  # fmt: skip
+    touchdown = contact & ~episode.in_contact
+    air_time = episode.air_time + dt
+    moving = xp.linalg.norm(episode.command[:, :2], axis=1) > MOVING
+    air_paid = xp.sum((air_time - 0.5) * touchdown, axis=1) * moving
+    terms = reward_terms(
+        lin_vel, ang_vel, gravity, height, episode.command, reading.torque, joint_acc, desired,
+        episode.last_action, air_paid, slip, config.tracking_sigma, config.base_height_target,
+    )  # fmt: skip
+    scaled = {name: xp.where(unstable, 0.0, value * config.reward_scales[name] * dt)
+              for name, value in terms.items()}  # fmt: skip
+    terminated = (fallen(height, gravity, config.fall_height, config.fall_tilt)
+                  | reading.base_touch | unstable)  # fmt: skip
+    after = Episode(
+        command=episode.command, last_action=desired, joint_vel_before=joint_vel,
+        elapsed=episode.elapsed + 1, air_time=xp.where(contact, 0.0, air_time),
+        in_contact=contact,
+        speed_error_sum=episode.speed_error_sum + xp.abs(lin_vel[:, 0] - episode.command[:, 0]),
+        speed_sum=episode.speed_sum + lin_vel[:, 0], work=episode.work + reading.work,
+        start_x=episode.start_x, slip_sum=episode.slip_sum + slip.sum(axis=1),
+        planted_steps=episode.planted_steps + planted.sum(axis=1), feet_xy=feet[:, :, :2],
+    )  # fmt: skip
+    truncated = (after.elapsed >= config.episode_steps) & ~terminated
+    done = terminated | truncated
+    obs = observe(qpos, qvel, ang_vel, episode.command, desired, nominal)
+    outputs = {
+        "obs": xp.where(unstable[:, None], xp.zeros_like(obs), obs),
+        "reward": sum(scaled.values()),
+        "reward_terms": scaled,
+        "terminated": terminated,
+        "truncated": truncated,
+        "episode_metrics": episode_metrics(after, qpos[:, 0], terminated, done, dt, weight),
+        "info": {
+            "command": episode.command, "contact": contact, "base_height": height,
+            "forward_speed": lin_vel[:, 0], "desired_position": desired,
+            "measured_position": qpos[:, 7:],
+        },
+    }  # fmt: skip
+    return after, outputs
+
+
+def episode_metrics(episode: Episode, x, fell, done, dt: float, weight: float) -> dict:
+    """The :data:`EPISODE_METRICS` of the episodes that ended (``done``), NaN elsewhere; ``x``
+    (N,) the base's position now, ``fell`` (N,) bool."""
+    xp = namespace(x)
+    steps = episode.elapsed.astype(episode.speed_sum.dtype)
+    distance = x - episode.start_x
+    planted = episode.planted_steps
+    metrics = {
+        "speed_error": episode.speed_error_sum / steps,
+        "forward_speed": episode.speed_sum / steps,
+        "fell": fell.astype(steps.dtype),
+        "episode_seconds": steps * dt,
+        "cost_of_transport": xp.where(distance >= MIN_DISTANCE,
+                                      episode.work / (weight * distance), xp.nan),
+        "foot_slip": xp.where(planted > 0, episode.slip_sum / xp.maximum(planted, 1), xp.nan),
+    }  # fmt: skip
+    return {name: xp.where(done, value, xp.nan) for name, value in metrics.items()}

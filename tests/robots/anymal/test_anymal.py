@@ -137,7 +137,8 @@ def test_saved_state_continues_exactly():
     old = {"anymal": {k: v for k, v in state["anymal"].items()
                       if k not in ("slip_sum", "planted_steps")}}  # fmt: skip
     other.set_state(old)
-    assert np.array_equal(other.slip_sum, [0.0, 0.0]) and other.planted_steps.dtype == np.int64
+    episode = other.episode
+    assert np.array_equal(episode.slip_sum, [0.0, 0.0]) and episode.planted_steps.dtype == np.int64
     assert np.array_equal(other.step(actions[10])[0], expected[0][0])
 
 

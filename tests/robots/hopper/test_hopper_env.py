@@ -14,7 +14,7 @@ from cpg_actor.robots.hopper import kinematics
 from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.robots.hopper.env import HopperEnv
 from cpg_actor.robots.hopper.plugin import ENV_ID, PYBULLET_ENV_ID
-from cpg_actor.robots.hopper.simulation import OBS_NAMES
+from cpg_actor.robots.hopper.task import OBS_NAMES
 
 from .helpers import NOMINAL, SIMS
 

@@ -207,7 +207,7 @@ def test_resume_from_a_saved_state_is_exact():
         assert np.array_equal(step[3], truncated)
     with pytest.raises(ValueError, match="has 3 envs, this env 2"):
         make_vector_env(2, sim="mjx").set_state(state)
-    with pytest.raises(ValueError, match="not an MjxHopperVectorEnv state"):
+    with pytest.raises(ValueError, match="not a state of MjxHopperVectorEnv"):
         other.set_state({"simulation": {}})
 
 

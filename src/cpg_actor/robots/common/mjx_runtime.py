@@ -18,6 +18,11 @@ import os
 
 from cpg_actor.errors import MjxUnavailable  # noqa: F401 (defined there: the CLI catches it)
 
+# the fields of mjx.Data a step starts from (with ctrl, which the actuator law sets at every
+# substep): every other field is derived from them by mjx.step; what a reset replaces and a
+# checkpoint saves
+STATE_FIELDS = ("qpos", "qvel", "qacc_warmstart")
+
 INSTALL_HINT = (
     'sim="mjx" needs JAX and MuJoCo XLA: pip install -e ".[mjx]" (CPU), and JAX\'s CUDA '
     "build for a GPU (docs/gpu.md)"

@@ -51,7 +51,7 @@ from cpg_actor.robots.common.checks import check_real_tensor, real_actions
 from cpg_actor.robots.common.torch_env import EnvStep, TensorEnv
 from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.robots.hopper.cpg import hopper_cpg
-from cpg_actor.robots.hopper.simulation import OBS_BOUND, OBS_NAMES
+from cpg_actor.robots.hopper.task import OBS_BOUND, OBS_NAMES
 from cpg_actor.robots.hopper.vector import make_vector_env
 
 PARAMETER_NAMES = ("nu_HFE", "nu_KFE", "rho_HFE", "rho_KFE", "phi_HFE_KFE")

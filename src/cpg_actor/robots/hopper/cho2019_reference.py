@@ -27,7 +27,7 @@ from cpg_actor.robots.hopper.cho2019 import (
     parameters_to_action,
 )
 from cpg_actor.robots.hopper.config import HopperConfig
-from cpg_actor.robots.hopper.simulation import NOMINAL_POSE
+from cpg_actor.robots.hopper.task import NOMINAL_POSE
 
 # nu_HFE, nu_KFE (Hz), rho_HFE, rho_KFE (rad), phi_HFE,KFE (rad): `cpg-actor cho2019-reference`
 REFERENCE_PARAMETERS = (1.5, 1.5, 0.5, 0.6, -math.pi / 4)

@@ -20,14 +20,14 @@ from cpg_actor.robots.common.checks import check_render_mode, real_actions
 from cpg_actor.robots.hopper import description as robot
 from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.robots.hopper.plugin import START_GAIT, cpg_layouts
-from cpg_actor.robots.hopper.simulation import (
+from cpg_actor.robots.hopper.simulation import HopperSimulation, StepResult
+from cpg_actor.robots.hopper.task import (
     ACTION_HIGH,
     ACTION_LOW,
     NOMINAL_POSE,
     OBS_BOUND,
     OBS_NAMES,
-    HopperSimulation,
-    StepResult,
+    desired_positions,
 )
 from cpg_actor.robots.spec import RobotSpec
 
@@ -120,9 +120,7 @@ def check_actions(actions: Any, shape: tuple[int, ...], normalized: bool = False
         )
     if not np.isfinite(array).all():
         raise ValueError(f"actions must be finite, got {array.tolist()}")
-    if normalized:
-        array = ACTION_LOW + (np.clip(array, -1.0, 1.0) + 1.0) * (ACTION_HIGH - ACTION_LOW) / 2.0
-    return np.clip(array, ACTION_LOW.astype(np.float32), ACTION_HIGH.astype(np.float32))
+    return desired_positions(array, normalized)
 
 
 def step_info(result: StepResult, row: int) -> dict[str, Any]:

@@ -8,6 +8,8 @@ independent reference the simulators are checked on. The batched functions take 
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 from cpg_actor.robots.anymal_leg.kinematics import (
@@ -92,6 +94,7 @@ def com_vertical_velocity(
     return as_float(xp, hip_velocity) + rate
 
 
+@functools.cache  # pure, and asked for at every step of the apex reward
 def highest_standing_com(resolution: int = 61) -> float:
     """The highest the centre of mass gets with the foot on the ground, over a grid of poses
     within the joint limits: a hop's apex above it is height no standing pose reaches."""

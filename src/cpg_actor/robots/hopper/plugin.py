@@ -33,7 +33,7 @@ def mjcf(config: Any) -> str:
 
 
 def observation_sources() -> tuple[dict[str, Any], ...]:
-    from cpg_actor.robots.hopper.simulation import OBS_SOURCES
+    from cpg_actor.robots.hopper.task import OBS_SOURCES
 
     return OBS_SOURCES
 

@@ -34,9 +34,11 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 from cpg_actor.robots.common.seeding import env_seeds
+from cpg_actor.robots.hopper import task
 from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.robots.hopper.env import check_actions, init_vector_env, resolve_config
-from cpg_actor.robots.hopper.simulation import NOMINAL_POSE, HopperSimulation
+from cpg_actor.robots.hopper.simulation import HopperSimulation
+from cpg_actor.robots.hopper.task import NOMINAL_POSE
 
 
 class HopperVectorEnv(VectorEnv):
@@ -123,10 +125,9 @@ class HopperVectorEnv(VectorEnv):
         done = result.terminated | result.truncated
         final_obs = obs.copy()
         self._max_hip = np.maximum(self._max_hip, result.hip_height)
-        hop_height = np.full(self.num_envs, np.nan)
+        hop_height = task.hop_height(done, self._max_hip, self._standing)
         if done.any():
             ended = np.flatnonzero(done)
-            hop_height[ended] = np.maximum(0.0, self._max_hip[ended] - self._standing[ended])
             noise = np.stack([self.sim.sample_noise(self._rngs[i]) for i in ended])
             self.sim.reset_robots(ended, noise)
             obs[ended] = self.sim.observation()[ended]

@@ -3,7 +3,8 @@ the locomotion task of :mod:`cpg_actor.tasks.velocity`. A robot's env is a subcl
 its :class:`~cpg_actor.robots.common.quadruped.model.QuadrupedModel` (``quadruped``), e.g.
 :class:`cpg_actor.robots.anymal.vector.AnymalVectorEnv`.
 
-As the hopper's MuJoCo env: the robots are rows of one state array and a control step is
+The task's step (:func:`cpg_actor.tasks.velocity.step`) is the MJX env's too: only the physics
+differs. As the hopper's MuJoCo env: the robots are rows of one state array and a control step is
 ``mujoco.rollout`` of ``decimation`` substeps over chunks of them, on the calling thread and
 a helper per further core (``ThreadedRollout``), the ``dcmotor`` actuators running the
 actuator law inside MuJoCo. Actions are desired joint positions (12,
@@ -60,9 +61,9 @@ from cpg_actor.robots.common.threaded_rollout import ThreadedRollout
 from cpg_actor.robots.spec import RobotSpec
 from cpg_actor.tasks import velocity as task
 
-EPISODE_METRICS = ("speed_error", "forward_speed", "fell", "episode_seconds", "cost_of_transport",
-                   "foot_slip")  # fmt: skip
-MIN_DISTANCE = 0.1  # m: below this the cost of transport is not defined (NaN)
+# the task's episode fields a saved state holds (the feet's positions are its sensors')
+SAVED_FIELDS = tuple(name for name in task.Episode._fields if name != "feet_xy")
+ADDED_FIELDS = ("slip_sum", "planted_steps")  # zero in states saved before they existed
 
 
 def load_model(quadruped: QuadrupedModel, config: QuadrupedConfig,
@@ -196,6 +197,7 @@ class QuadrupedVectorEnv(VectorEnv):
             start += size
         self._offsets = offsets
         self._rngs: list[np.random.Generator] | None = None
+        self.episode: task.Episode | None = None  # the task's bookkeeping
         self._needs_reset = True
         self._renderer: mujoco.Renderer | None = None
         self._camera: mujoco.MjvCamera | None = None
@@ -221,36 +223,37 @@ class QuadrupedVectorEnv(VectorEnv):
             )
         self._rngs = list(rngs)
 
+    @property
+    def command(self) -> np.ndarray:
+        """(N, 3) each env's command: forward, lateral (m/s), yaw (rad/s)."""
+        return self.episode.command
+
     # -- episodes ------------------------------------------------------------------------------
-    def _start(self, index: np.ndarray) -> None:
-        """New episodes for the envs in ``index``: pose, command, clocks."""
+    def _start(self, done: np.ndarray) -> None:
+        """New episodes for the envs where ``done`` (N,) is set: pose, command, the task's
+        bookkeeping."""
+        index = np.flatnonzero(done)
+        command, joints = np.zeros((self.num_envs, 3)), np.zeros((self.num_envs, 12))
         for i in index:
             rng = self._rngs[i]
             noise = rng.uniform(-self.config.reset_noise, self.config.reset_noise, 12)
-            joints = np.clip(self._nominal + noise, self._low, self._high)
-            self.command[i] = (rng.uniform(*self.config.command_range), 0.0, 0.0)
+            joints[i] = np.clip(self._nominal + noise, self._low, self._high)
+            command[i, 0] = rng.uniform(*self.config.command_range)
             # drawn only where the range is not a point: the forward task's streams unchanged
             for column, name in ((1, "lateral_range"), (2, "yaw_range")):
                 low, high = getattr(self.config, name)
-                self.command[i, column] = rng.uniform(low, high) if high > low else low
+                command[i, column] = rng.uniform(low, high) if high > low else low
             data = self._data
             mujoco.mj_resetData(self.model, data)
-            data.qpos[7:] = joints
+            data.qpos[7:] = joints[i]
             mujoco.mj_kinematics(self.model, data)
             lowest = min(data.site(f"{leg}_foot").xpos[2] for leg in self.quadruped.legs)
             data.qpos[2] += self.quadruped.foot_radius - lowest  # feet on the ground
             mujoco.mj_getState(self.model, data, self._state[i], STATE_SPEC)
-            self.last_action[i] = joints
-            self.joint_vel_before[i] = 0.0
-        self.elapsed[index] = 0
-        self.air_time[index] = 0.0
-        self.in_contact[index] = True
-        self.speed_error_sum[index] = 0.0
-        self.speed_sum[index] = 0.0
-        self.work[index] = 0.0
-        self.start_x[index] = self.qpos[index, 0]
-        self.slip_sum[index] = 0.0
-        self.planted_steps[index] = 0
+        self._refresh_sensors(index)
+        fresh = task.new_episode(command, joints, self.qpos[:, 0].copy(),
+                                 self._feet()[:, :, :2].copy())  # fmt: skip
+        self.episode = fresh if self.episode is None else task.restart(self.episode, done, fresh)
 
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
@@ -260,22 +263,9 @@ class QuadrupedVectorEnv(VectorEnv):
         if seed is not None or self._rngs is None:
             seeds = env_seeds(seed, self.num_envs) if seed is not None else [None] * self.num_envs
             self._rngs = [seeding.np_random(s)[0] for s in seeds]
-        n = self.num_envs
-        self.command = np.zeros((n, 3))
-        self.last_action = np.zeros((n, 12))
-        self.joint_vel_before = np.zeros((n, 12))
-        self.elapsed = np.zeros(n, dtype=np.int64)
-        self.air_time = np.zeros((n, 4))
-        self.in_contact = np.ones((n, 4), dtype=bool)
-        self.speed_error_sum = np.zeros(n)
-        self.speed_sum = np.zeros(n)
-        self.work = np.zeros(n)
-        self.start_x = np.zeros(n)
-        self.slip_sum = np.zeros(n)
-        self.planted_steps = np.zeros(n, dtype=np.int64)
-        self._start(np.arange(n))
         self._sensors[:] = 0.0
-        self._refresh_sensors(np.arange(n))
+        self.episode = None
+        self._start(np.ones(self.num_envs, dtype=bool))
         self._needs_reset = False
         return self._observe(), {"command": self.command.copy()}
 
@@ -295,9 +285,9 @@ class QuadrupedVectorEnv(VectorEnv):
         return self._sensor("feet").reshape(-1, 4, 3)
 
     def _observe(self) -> np.ndarray:
-        gravity = task.projected_gravity(self.qpos[:, 3:7])
-        return task.observation(self._sensor("gyro"), gravity, self.command, self.qpos[:, 7:],
-                                self.qvel[:, 6:], self.last_action, self._nominal)  # fmt: skip
+        episode = self.episode
+        return task.observe(self.qpos, self.qvel, self._sensor("gyro"), episode.command,
+                            episode.last_action, self._nominal)  # fmt: skip
 
     # -- stepping ------------------------------------------------------------------------------
     def step(self, actions: Any):
@@ -311,100 +301,45 @@ class QuadrupedVectorEnv(VectorEnv):
                              f"{actions.shape}")  # fmt: skip
         if not np.isfinite(actions).all():
             raise ValueError("actions must be finite, got NaN or inf")
-        if self.config.normalized_actions:
-            actions = self._low + (np.clip(actions, -1.0, 1.0) + 1.0) * (self._high - self._low) / 2
-        desired = np.clip(actions, self._low, self._high)
-        cfg, dt = self.config, self.config.control_dt
+        desired = task.desired_positions(actions, self._low, self._high,
+                                         self.config.normalized_actions)  # fmt: skip
+        cfg, model = self.config, self.model
         self._control[:] = desired[:, None, :]
-        feet_xy_before = self._feet()[:, :, :2].copy()  # the rollout overwrites the sensors
         self.stepper.rollout(
             self._state, self._control, self._next, self._sensors, CONTROL_SPEC, cfg.decimation
         )
         np.copyto(self._state, self._next[:, -1])
-        self.elapsed += 1
-
-        # copies: the autoreset below rewrites the sensors of the robots it resets
-        lin_vel, ang_vel = self._sensor("velocimeter").copy(), self._sensor("gyro").copy()
-        gravity = task.projected_gravity(self.qpos[:, 3:7])
-        height = self.qpos[:, 2].copy()
-        joint_vel = self.qvel[:, 6:]
-        joint_acc = (joint_vel - self.joint_vel_before) / dt
-        feet = self._feet()
-        contact = feet[:, :, 2] < self.quadruped.foot_radius + 0.005  # within 5 mm of the ground
-        slip, planted = task.planted_slip(feet[:, :, :2], feet_xy_before, contact,
-                                          self.in_contact, dt)  # fmt: skip
-        self.slip_sum += slip.sum(axis=1)
-        self.planted_steps += planted.sum(axis=1)
-        touchdown = contact & ~self.in_contact
-        self.air_time += dt
-        moving = np.linalg.norm(self.command[:, :2], axis=1) > 0.1
-        air_paid = np.sum((self.air_time - 0.5) * touchdown, axis=1) * moving
-        self.air_time[contact] = 0.0
-        self.in_contact = contact
-        terms = task.reward_terms(
-            lin_vel, ang_vel, gravity, height, self.command,
-            self._sensors[:, -1, : self.model.nu], joint_acc, desired, self.last_action,
-            air_paid, slip, cfg.tracking_sigma, cfg.base_height_target,
+        torque = self._sensors[:, :, : model.nu]  # every substep's
+        joint_speed = self._next[:, :, 1 + model.nq + 6 : 1 + model.nq + model.nv]
+        # copies: the autoreset below rewrites the state and sensors of the robots it resets
+        reading = task.Reading(
+            qpos=self.qpos.copy(), qvel=self.qvel.copy(),
+            lin_vel=self._sensor("velocimeter").copy(), ang_vel=self._sensor("gyro").copy(),
+            feet=self._feet().copy(), torque=torque[:, -1].copy(),
+            work=np.abs(torque * joint_speed).sum(axis=(1, 2)) * cfg.physics_dt,
+            base_touch=self._sensor("base_touch")[:, 0] > 0,
+            unstable=~np.isfinite(self._state).all(axis=1),
         )  # fmt: skip
-        scaled = {name: value * cfg.reward_scales[name] * dt for name, value in terms.items()}
-        reward = np.sum(list(scaled.values()), axis=0)
-        self.last_action = desired
-        self.joint_vel_before = joint_vel.copy()
-        self.speed_error_sum += np.abs(lin_vel[:, 0] - self.command[:, 0])
-        self.speed_sum += lin_vel[:, 0]
-        torque = self._sensors[:, :, : self.model.nu]  # every substep's
-        joint_speed = self._next[:, :, 1 + self.model.nq + 6 : 1 + self.model.nq + self.model.nv]
-        self.work += np.abs(torque * joint_speed).sum(axis=(1, 2)) * cfg.physics_dt
-
-        unstable = ~np.isfinite(self._state).all(axis=1)
-        terminated = (task.fallen(height, gravity, cfg.fall_height, cfg.fall_tilt)
-                      | (self._sensor("base_touch")[:, 0] > 0) | unstable)  # fmt: skip
-        truncated = (self.elapsed >= cfg.episode_steps) & ~terminated
-        obs = self._observe()
-        obs[unstable] = 0.0
-        done = terminated | truncated
-        command = self.command.copy()  # this step's (an ended episode's next one is drawn below)
-        final_obs = obs.copy()
-        metrics = {name: np.full(self.num_envs, np.nan) for name in EPISODE_METRICS}
-        if done.any():
-            ended = np.flatnonzero(done)
-            steps = self.elapsed[ended]
-            metrics["speed_error"][ended] = self.speed_error_sum[ended] / steps
-            metrics["forward_speed"][ended] = self.speed_sum[ended] / steps
-            metrics["fell"][ended] = terminated[ended].astype(float)
-            metrics["episode_seconds"][ended] = steps * dt
-            distance = self.qpos[ended, 0] - self.start_x[ended]
-            weight = self.quadruped.total_mass * self.quadruped.gravity
-            metrics["cost_of_transport"][ended] = np.where(
-                distance >= MIN_DISTANCE, self.work[ended] / (weight * distance), np.nan
-            )
-            planted = self.planted_steps[ended]
-            metrics["foot_slip"][ended] = np.where(
-                planted > 0, self.slip_sum[ended] / np.maximum(planted, 1), np.nan
-            )
-            self._start(ended)
-            self._refresh_sensors(ended)
-            obs[ended] = self._observe()[ended]
+        weight = self.quadruped.total_mass * self.quadruped.gravity
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # blown up: masked
+            self.episode, out = task.step(cfg, self.episode, reading, desired, self._nominal,
+                                          self.quadruped.foot_radius, weight)  # fmt: skip
+        final_obs, done = out["obs"], out["terminated"] | out["truncated"]
+        obs = final_obs.copy()
+        if done.any():  # SAME_STEP autoreset
+            self._start(done)
+            obs = task.rows(done, self._observe(), obs)
         info = {
-            "reward_terms": scaled,
+            **out["info"],
+            "command": out["info"]["command"].copy(),  # this step's (not the next episode's)
+            "reward_terms": out["reward_terms"],
             "final_obs": final_obs,
             "_final_obs": done,
-            "episode_metrics": metrics,
-            "command": command,
-            "contact": contact,
-            "base_height": height,
-            "forward_speed": lin_vel[:, 0].copy(),
-            "desired_position": desired,
-            "measured_position": self.qpos[:, 7:].copy(),
+            "episode_metrics": out["episode_metrics"],
         }
-        return obs, reward, terminated, truncated, info
+        return obs, out["reward"], out["terminated"], out["truncated"], info
 
     # -- state ---------------------------------------------------------------------------------
-    _EPISODE_FIELDS = ("command", "last_action", "joint_vel_before", "elapsed", "air_time",
-                       "in_contact", "speed_error_sum", "speed_sum", "work", "start_x",
-                       "slip_sum", "planted_steps")  # fmt: skip
-    _ADDED_FIELDS = ("slip_sum", "planted_steps")  # zero in states saved before they existed
-
     def get_state(self) -> dict[str, Any]:
         """Everything the next step depends on: the physics state, the episode fields, each
         env's generator and the last sensor values, as tensors and plain Python values
@@ -412,7 +347,7 @@ class QuadrupedVectorEnv(VectorEnv):
         if self._needs_reset:
             raise RuntimeError("call reset() before get_state()")
         arrays = {"physics": self._state, "sensors": self._sensors[:, -1]}
-        arrays.update({name: getattr(self, name) for name in self._EPISODE_FIELDS})
+        arrays.update({name: getattr(self.episode, name) for name in SAVED_FIELDS})
         return {
             self.quadruped.state_key: {
                 **{name: torch.from_numpy(np.array(value)) for name, value in arrays.items()},
@@ -431,12 +366,14 @@ class QuadrupedVectorEnv(VectorEnv):
                              f"{self.num_envs}")  # fmt: skip
         np.copyto(self._state, np.asarray(state["physics"]))
         self._sensors[:, -1] = np.asarray(state["sensors"])
-        for name in self._EPISODE_FIELDS:
-            if name not in state and name in self._ADDED_FIELDS:
+        fields = {}
+        for name in SAVED_FIELDS:
+            if name not in state and name in ADDED_FIELDS:
                 dtype = np.int64 if name == "planted_steps" else np.float64
-                setattr(self, name, np.zeros(self.num_envs, dtype=dtype))
+                fields[name] = np.zeros(self.num_envs, dtype=dtype)
                 continue
-            setattr(self, name, np.array(state[name]))
+            fields[name] = np.array(state[name])
+        self.episode = task.Episode(**fields, feet_xy=self._feet()[:, :, :2].copy())
         self._rngs = []
         for saved in state["rngs"]:
             rng = np.random.default_rng()

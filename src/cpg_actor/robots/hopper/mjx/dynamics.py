@@ -12,10 +12,9 @@ Same robot, same physics and the same task as the CPU simulators:
   integrator, elliptic friction cone, the configured foot friction; the Newton solver capped
   at ``mjx_iterations`` and ``mjx_ls_iterations`` (``HopperConfig``: 15 and 15, which give
   the trajectories of MuJoCo's 100 and 50 at a lower cost, docs/gpu.md);
-* the observation of :data:`cpg_actor.robots.hopper.simulation.OBS_NAMES`, the reward of paper eq. 4
-  (or the apex reward) through the same functions as the CPU envs
-  (:mod:`cpg_actor.robots.hopper.reward`, :mod:`cpg_actor.robots.hopper.kinematics`, which accept
-  JAX arrays), blow-up termination, truncation after ``episode_steps``;
+* the task of :mod:`cpg_actor.robots.hopper.task`, the CPU envs' own functions on JAX arrays:
+  the observation, the reward of paper eq. 4 (or the apex reward), blow-up termination,
+  truncation after ``episode_steps``, the episode's hop height;
 * resets in the nominal pose plus uniform joint noise, the foot on the ground, at rest; an env
   whose episode ended is reset in the same step (Gymnasium's SAME_STEP autoreset) and its
   last observation returned as ``final_obs``.
@@ -34,22 +33,15 @@ from __future__ import annotations
 from typing import Any, NamedTuple
 
 from cpg_actor.robots.common.actuator import Actuator
-from cpg_actor.robots.common.mjx_runtime import load
+from cpg_actor.robots.common.mjx_runtime import STATE_FIELDS, load
 from cpg_actor.robots.common.mujoco_runtime import mujoco  # MUJOCO_GL chosen before mujoco
-from cpg_actor.robots.hopper import description as robot
-from cpg_actor.robots.hopper import kinematics
+from cpg_actor.robots.hopper import task
 from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.robots.hopper.mjcf import mjcf_text, set_foot_friction
-from cpg_actor.robots.hopper.reward import apex_reward, reward_terms, total_reward
-from cpg_actor.robots.hopper.simulation import ACTION_HIGH, ACTION_LOW, NOMINAL_POSE, OBS_BOUND
+from cpg_actor.robots.hopper.task import NOMINAL_POSE
 
 jax, mjx = load()
 jnp = jax.numpy
-
-
-# the fields of mjx.Data a step starts from (with ctrl, which the actuator law sets at every
-# substep); every other field is derived from them by mjx.step
-STATE_FIELDS = ("qpos", "qvel", "qacc_warmstart")
 
 
 class Episode(NamedTuple):
@@ -110,10 +102,7 @@ class HopperDynamics:
         self.mj_model = load_model(config)
         self.model = mjx.put_model(self.mj_model)
         self._empty = mjx.make_data(self.model)
-        self.highest_standing_com = kinematics.highest_standing_com()
         self._nominal = jnp.asarray(NOMINAL_POSE, dtype=jnp.float32)
-        self._low = jnp.asarray(ACTION_LOW, dtype=jnp.float32)
-        self._high = jnp.asarray(ACTION_HIGH, dtype=jnp.float32)
         self.reset = jax.jit(self._reset)
         self.step = jax.jit(self._step)
 
@@ -122,9 +111,8 @@ class HopperDynamics:
         """A new episode's first state for one robot, and the key advanced past its noise."""
         key, noise_key = jax.random.split(key)
         scale = episode.reset_noise
-        joint = self._nominal + jax.random.uniform(noise_key, (2,), minval=-scale, maxval=scale)
-        hip = kinematics.standing_hip_height(joint) + episode.reset_clearance
-        qpos = jnp.concatenate([hip[None], joint]).astype(self._empty.qpos.dtype)
+        noise = jax.random.uniform(noise_key, (2,), minval=-scale, maxval=scale)
+        qpos = task.start_qpos(noise, episode.reset_clearance).astype(self._empty.qpos.dtype)
         return self._empty.replace(qpos=qpos), key
 
     def control(self, data, desired):
@@ -144,39 +132,9 @@ class HopperDynamics:
             (data, total), _ = jax.lax.scan(substep, start, None, length=self.config.decimation)
         return data, total / self.config.decimation
 
-    def desired_positions(self, actions):
-        """Actions to desired joint positions within the joint limits (as ``check_actions``)."""
-        actions = actions.astype(jnp.float32)
-        if self.config.normalized_actions:
-            actions = (
-                self._low + (jnp.clip(actions, -1.0, 1.0) + 1.0) * (self._high - self._low) / 2.0
-            )
-        return jnp.clip(actions, self._low, self._high)
-
-    @staticmethod
-    def observation(qpos, qvel, desired):
-        """(N, 8) float32 in the order of ``OBS_NAMES``, non-finite values clipped to +-1e6."""
-        obs = jnp.concatenate(
-            [qpos[:, 1:3], qvel[:, 1:3], desired, qpos[:, 0:1], qvel[:, 0:1]], axis=1
-        )
-        obs = jnp.nan_to_num(obs, nan=0.0, posinf=OBS_BOUND, neginf=-OBS_BOUND)
-        return jnp.clip(obs, -OBS_BOUND, OBS_BOUND).astype(jnp.float32)
-
-    @staticmethod
-    def foot_height(qpos):
-        """(N,) height of the lowest point of the foot sphere above the ground."""
-        return qpos[:, 0] + kinematics.foot_position(qpos[:, 1:3])[:, 1] - robot.FOOT_RADIUS
-
-    def blown_up(self, qpos, qvel):
-        """(N,) bool: non-finite state or absurd velocities (as the CPU simulation's)."""
-        bad = ~jnp.isfinite(qpos).all(axis=1) | ~jnp.isfinite(qvel).all(axis=1)
-        bad |= jnp.abs(qvel[:, 1:3]).max(axis=1) > self.config.blowup_joint_velocity
-        bad |= jnp.abs(qvel[:, 0]) > self.config.blowup_hip_velocity
-        return bad
-
     # -- the env ------------------------------------------------------------------------------
     def _reset(self, keys, episode: Episode):
-        """New episodes for all N robots (``keys``: (N, 2) uint32): ``(state, obs)``."""
+        """New episodes for all N robots (``keys``: (N, 2) uint32): ``(state, obs, info)``."""
         data, keys = jax.vmap(self._fresh, in_axes=(0, None))(keys, episode)
         num = keys.shape[0]
         desired = jnp.tile(self._nominal, (num, 1))
@@ -188,50 +146,27 @@ class HopperDynamics:
             max_hip=jnp.full(num, -jnp.inf, dtype=data.qpos.dtype),
             key=keys,
         )
-        return state, self.observation(data.qpos, data.qvel, desired)
+        info = {
+            "hip_height": data.qpos[:, 0],
+            "foot_height": task.foot_height(data.qpos),
+            "desired_position": desired,
+            "measured_position": data.qpos[:, 1:3],
+        }
+        return state, task.observation(data.qpos, data.qvel, desired), info
 
     def _step(self, state: EnvState, actions, episode: Episode):
         """One control step of all N robots: ``(state, outputs)`` (module docstring)."""
         config = self.config
-        desired = self.desired_positions(actions)
+        desired = task.desired_positions(actions.astype(jnp.float32), config.normalized_actions)
         before = state.data
         data, torque = jax.vmap(self.control)(before, desired)
         qpos, qvel = data.qpos, data.qvel
         elapsed = state.elapsed + 1
 
-        foot_velocity = kinematics.foot_velocity(qpos[:, 1:3], qvel[:, 1:3])
-        foot_velocity_xy = jnp.stack([foot_velocity[:, 0], jnp.zeros_like(qpos[:, 0])], -1)
-        terms = reward_terms(
-            config.reward_weights, qvel[:, 0], desired, qpos[:, 1:3], qvel[:, 1:3], torque,
-            foot_velocity_xy,
-        )  # fmt: skip
-        foot_height = self.foot_height(qpos)
-        if config.hop_reward == "apex":
-            terms["r1"] = apex_reward(
-                config.apex_weight,
-                kinematics.com_vertical_velocity(
-                    before.qvel[:, 0], before.qpos[:, 1:3], before.qvel[:, 1:3]
-                ),
-                kinematics.com_vertical_velocity(qvel[:, 0], qpos[:, 1:3], qvel[:, 1:3]),
-                qpos[:, 0] + kinematics.com_height_offset(qpos[:, 1:3]),
-                self.highest_standing_com,
-                foot_height,
-            )
-        terminated = self.blown_up(qpos, qvel)
-        truncated = (elapsed >= episode.steps) & ~terminated
-        # a blown-up robot: zero reward, finite numbers
-        terms = {name: jnp.where(terminated, 0.0, value) for name, value in terms.items()}
-
-        def finite(value):
-            clean = jnp.clip(jnp.nan_to_num(value), -OBS_BOUND, OBS_BOUND)
-            rows = terminated.reshape((-1,) + (1,) * (value.ndim - 1))
-            return jnp.where(rows, clean, value)
-
-        hip_height = finite(qpos[:, 0])
-        obs = self.observation(qpos, qvel, desired)
-        max_hip = jnp.maximum(state.max_hip, hip_height)
-        done = terminated | truncated
-        hop_height = jnp.where(done, jnp.maximum(0.0, max_hip - state.standing), jnp.nan)
+        out = task.step_outcome(config, qpos, qvel, desired, torque, elapsed, episode.steps,
+                                task.com_velocity(before.qpos, before.qvel))  # fmt: skip
+        max_hip = jnp.maximum(state.max_hip, out["hip_height"])
+        done = out["terminated"] | out["truncated"]
 
         # autoreset (SAME_STEP): the envs that ended start their next episode now
         fresh, fresh_keys = jax.vmap(self._fresh, in_axes=(0, None))(state.key, episode)
@@ -250,20 +185,15 @@ class HopperDynamics:
             max_hip=jnp.where(done, -jnp.inf, max_hip),
             key=pick(fresh_keys, state.key),
         )
-        next_obs = self.observation(next_state.data.qpos, next_state.data.qvel, next_state.desired)
+        final_obs = out.pop("obs")
         outputs = {
-            "obs": next_obs,
-            "reward": total_reward(terms),
-            "terminated": terminated,
-            "truncated": truncated,
-            "final_obs": obs,
-            "hop_height": hop_height,
-            "reward_terms": terms,
-            "hip_height": hip_height,
-            "foot_height": finite(foot_height),
-            "joint_torque": finite(torque),
-            "desired_position": desired,
-            "measured_position": finite(qpos[:, 1:3]),
+            "obs": task.observation(data.qpos, data.qvel, next_state.desired),
+            "reward": out.pop("reward"),
+            "terminated": out.pop("terminated"),
+            "truncated": out.pop("truncated"),
+            "final_obs": final_obs,
+            "episode_metrics": {"hop_height": task.hop_height(done, max_hip, state.standing)},
+            "info": out,  # reward_terms and the step's info
         }
         return next_state, outputs
 
