@@ -225,7 +225,8 @@ def start_gait_file(agent: str, preset: str, values: list[dict]) -> Path | None:
     from cpg_actor.agents.start_gait import packaged_gait_path
     from cpg_actor.robots.registry import get_robot
 
-    return packaged_gait_path(get_robot(config.robot))
+    robot = get_robot(config.robot)
+    return packaged_gait_path(robot.start_gait, robot.name)
 
 
 def search_runs(spec: SearchSpec) -> dict:
