@@ -384,6 +384,10 @@ def apply_dict(obj: Any, data: dict[str, Any], prefix: str) -> None:
                 raise ValueError(f"'{path}' is a section; give a mapping of its keys")
             if hasattr(type(current), "from_dict") and prefix == "" and key == "env":
                 merged = {**_to_plain(current), **value}
+                for name, section in value.items():  # a section of it (the perturbation):
+                    inner = getattr(current, name, None)  # the keys given, the others kept
+                    if dataclasses.is_dataclass(inner) and isinstance(section, dict):
+                        merged[name] = {**_to_plain(inner), **section}
                 try:
                     setattr(obj, key, type(current).from_dict(merged))
                 except (TypeError, ValueError) as error:

@@ -95,6 +95,15 @@ class Robot:
         """The episode metric that says how well a run did (the first of ``metrics``)."""
         return next(iter(self.metrics))
 
+    @property
+    def perturbations(self) -> Any:
+        """The perturbations the robustness suite runs on this robot: its env config's
+        ``perturbation_table()`` (a
+        :class:`~cpg_actor.robots.common.perturbation.PerturbationTable`); None where the
+        config declares none."""
+        table = getattr(self.config_class, "perturbation_table", None)
+        return None if table is None else table()
+
     def simulator(self, config: Any) -> str:
         """The simulator an env config of this robot runs on."""
         return str(config.sim) if len(self.simulators) > 1 else self.simulators[0]

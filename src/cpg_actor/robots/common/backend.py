@@ -42,10 +42,12 @@ class Backend(ABC):
         """Put robots ``index`` (k,) in state ``qpos``, ``qvel`` (k, 3), at rest otherwise."""
 
     @abstractmethod
-    def track(self, desired: np.ndarray, substeps: int) -> np.ndarray:
+    def track(self, desired: np.ndarray, substeps: int, push: np.ndarray | None = None) -> np.ndarray:
         """``substeps`` physics substeps of all robots, the joint actuators
-        (:mod:`cpg_actor.robots.common.actuator`) tracking ``desired`` (K, 2) rad on HFE, KFE at
-        every substep; returns the joint torque applied, mean over the substeps, (K, 2) N m."""
+        (:mod:`cpg_actor.robots.common.actuator`) tracking ``desired`` rad on HFE, KFE: (K, 2)
+        at every substep, or (K, substeps, 2), one per substep; returns the joint torque
+        applied, mean over the substeps, (K, 2) N m. ``push``: (K,) a vertical force on the
+        hip (N, up positive) at every substep (a perturbation's push), or None."""
 
     @abstractmethod
     def unstable(self) -> np.ndarray:
@@ -61,7 +63,8 @@ class Backend(ABC):
 
     @abstractmethod
     def total_mass(self) -> float:
-        """Mass of one robot's moving links, kg, as the simulator loaded it."""
+        """Mass of one robot's moving links, kg, as the simulator loaded it (a payload
+        included)."""
 
     @abstractmethod
     def render(self, index: int, width: int, height: int) -> np.ndarray:

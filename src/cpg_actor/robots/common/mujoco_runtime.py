@@ -39,6 +39,15 @@ from cpg_actor.robots.common.video import RenderingUnavailable  # noqa: E402
 STATE_SPEC = mujoco.mjtState.mjSTATE_FULLPHYSICS.value  # [time, qpos, qvel, (act, ...)]
 CONTROL_SPEC = mujoco.mjtState.mjSTATE_CTRL.value  # desired joint positions
 TORQUE_SPEC = mujoco.mjtState.mjSTATE_QFRC_APPLIED.value  # joint torques (actuator_law "coast")
+PUSH_SPEC = mujoco.mjtState.mjSTATE_XFRC_APPLIED.value  # forces on bodies (a perturbation's push)
+
+
+def add_mass(model: mujoco.MjModel, body: str, mass: float) -> None:
+    """``mass`` kg added to ``body`` of ``model`` at its centre of mass (a point mass there
+    leaves its inertia about the centre as it is), and the model's derived constants
+    recomputed, as compiling it with that mass would (:func:`mujoco.mj_setConst`)."""
+    model.body_mass[model.body(body).id] += mass
+    mujoco.mj_setConst(model, mujoco.MjData(model))
 
 
 def gl_backend() -> str:

@@ -46,3 +46,5 @@ class Go1Config(QuadrupedConfig):
     base_height_target: float = 0.27  # m: Menagerie's home keyframe (the nominal pose stands there)
     fall_height: float = 0.14  # m: about half the standing height, as ANYmal's 0.25 of 0.48
     reward_scales: dict[str, float] = field(default_factory=_go1_scales)
+
+    moving_mass = robot.TOTAL_MASS  # kg: sizes its payloads and pushes (QuadrupedConfig's)

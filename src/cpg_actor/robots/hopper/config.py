@@ -7,14 +7,16 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
+from cpg_actor.robots.common.perturbation import Perturbation
 from cpg_actor.robots.hopper.backends import BACKENDS, BATCHED_ONLY
 
 SIMULATORS = (*BACKENDS, BATCHED_ONLY)  # the backends' and MJX
 ACTUATOR_LAWS = ("dc-motor", "coast")  # see cpg_actor.robots.common.actuator
 HOP_REWARDS = ("hip-velocity", "apex")  # see cpg_actor.robots.hopper.reward
+PUSH_DIRECTIONS = ("up", "down")  # along the rail
 
 
 @dataclass
@@ -69,6 +71,8 @@ class HopperConfig:
     # -- rendering ----------------------------------------------------------------------------
     render_width: int = 640
     render_height: int = 480
+    # -- perturbations (the robustness suite's; docs/robustness.md): none by default -----------
+    perturbation: Perturbation = field(default_factory=Perturbation)
 
     def __post_init__(self) -> None:
         self.validate()
@@ -84,23 +88,27 @@ class HopperConfig:
 
     def validate(self) -> None:
         """Raise ValueError naming the first invalid field."""
-        for field in dataclasses.fields(self):
-            value = getattr(self, field.name)
-            kind = _FIELD_KINDS[field.name]
+        for name, kind in _FIELD_KINDS.items():
+            value = getattr(self, name)
             if kind is str:
                 if not isinstance(value, str):
-                    raise ValueError(f"{field.name} must be a string, got {value!r}")
+                    raise ValueError(f"{name} must be a string, got {value!r}")
             elif kind is bool:
                 if not isinstance(value, bool):
-                    raise ValueError(f"{field.name} must be true or false, got {value!r}")
+                    raise ValueError(f"{name} must be true or false, got {value!r}")
             elif kind is int:
                 if isinstance(value, bool) or not isinstance(value, int):
-                    raise ValueError(f"{field.name} must be an integer, got {value!r}")
+                    raise ValueError(f"{name} must be an integer, got {value!r}")
             else:
                 if isinstance(value, bool) or not isinstance(value, (int, float)):
-                    raise ValueError(f"{field.name} must be a number, got {value!r}")
+                    raise ValueError(f"{name} must be a number, got {value!r}")
                 if not math.isfinite(value):
-                    raise ValueError(f"{field.name} must be finite, got {value!r}")
+                    raise ValueError(f"{name} must be finite, got {value!r}")
+        self.perturbation = Perturbation.from_value(self.perturbation).validate(PUSH_DIRECTIONS)
+        self.perturbation.substeps(self.decimation)  # a whole number of substeps late
+        if self.sim == BATCHED_ONLY and not self.perturbation.nominal:
+            raise ValueError("perturbations run on the CPU simulators (sim='mujoco' or "
+                             "'pybullet'); sim='mjx' takes none")  # fmt: skip
         if self.sim not in SIMULATORS:
             raise ValueError(f"sim must be one of {', '.join(SIMULATORS)}, got {self.sim!r}")
         if self.actuator_law not in ACTUATOR_LAWS:
@@ -161,7 +169,7 @@ class HopperConfig:
         for key, value in data.items():
             # YAML writes 100.0 as 100: accept integers for float fields (bools stay invalid)
             if (
-                _FIELD_KINDS[key] is float
+                _FIELD_KINDS.get(key) is float
                 and isinstance(value, int)
                 and not isinstance(value, bool)
             ):
@@ -173,8 +181,17 @@ class HopperConfig:
         """A copy with some fields changed (validated; unknown keys are a ValueError)."""
         return HopperConfig.from_dict({**self.to_dict(), **changes})
 
+    @classmethod
+    def perturbation_table(cls):
+        """The perturbations the robustness suite runs on the hopper."""
+        from cpg_actor.robots.hopper.perturbations import perturbation_table
 
+        return perturbation_table()
+
+
+# the plain fields' kinds (the perturbation is a section of its own)
 _FIELD_KINDS = {
     f.name: {"str": str, "int": int, "float": float, "bool": bool}[f.type]
     for f in dataclasses.fields(HopperConfig)
+    if f.name != "perturbation"
 }

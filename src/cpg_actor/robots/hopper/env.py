@@ -171,6 +171,8 @@ class HopperEnv(gym.Env):
                 "reset() on a closed environment; make a new one"
             )
         super().reset(seed=seed)
+        if seed is not None or not self.sim.draws.rngs:
+            self.sim.seed_perturbations([seed])
         self.sim.reset_robots(np.array([0]), self.sim.sample_noise(self.np_random)[None])
         self._needs_reset = False
         measured = self.sim.backend.joint_pos[0].copy()

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from cpg_actor.robots.common.perturbation import CommandDelay, EpisodeDraws, push_force
 from cpg_actor.robots.hopper import task
 from cpg_actor.robots.hopper.backends import make_backend
 from cpg_actor.robots.hopper.config import HopperConfig
@@ -34,7 +35,10 @@ class StepResult:
 
 
 class HopperSimulation:
-    """K hoppers on one simulator backend (see ``docs/hopper.md``)."""
+    """K hoppers on one simulator backend (see ``docs/hopper.md``), perturbed as the config's
+    ``perturbation`` says: the backend built with its payload, friction and motor strength,
+    the commands delayed by its latency (:class:`CommandDelay`), its push and sensor noise
+    drawn per env (:class:`EpisodeDraws`, seeded by :meth:`seed_perturbations`)."""
 
     def __init__(
         self, config: HopperConfig, num_robots: int = 1, num_threads: int | None = None
@@ -45,6 +49,17 @@ class HopperSimulation:
         self.backend = make_backend(config, self.num_robots, num_threads)
         self.desired = np.tile(NOMINAL_POSE, (self.num_robots, 1))
         self.elapsed_steps = np.zeros(self.num_robots, dtype=np.int64)
+        perturbation = config.perturbation
+        self.delay = None
+        if perturbation.latency:
+            self.delay = CommandDelay(perturbation, config.decimation, self.num_robots, 2)
+        self.draws = EpisodeDraws(perturbation, self.num_robots, config.control_dt,
+                                  task.SENSOR_NOISE)  # fmt: skip
+        self.push_force = push_force(perturbation, config.control_dt)[2]  # along the rail
+
+    def seed_perturbations(self, seeds) -> None:
+        """The perturbation's generators, robot i's from ``seeds[i]`` (its env's seed)."""
+        self.draws.seed(seeds)
 
     # -- reset -------------------------------------------------------------------------------
     def reset_robots(self, index: np.ndarray, joint_noise: np.ndarray) -> None:
@@ -55,19 +70,32 @@ class HopperSimulation:
         self.backend.reset_robots(index, qpos, np.zeros((len(index), 3)))
         self.desired[index] = NOMINAL_POSE
         self.elapsed_steps[index] = 0
+        if self.delay is not None:
+            self.delay.reset(index, NOMINAL_POSE)
+        self.draws.start(index)
 
     def get_state(self) -> dict[str, np.ndarray]:
-        """The simulator state, the desired positions being tracked and the episode clocks."""
-        return {
+        """The simulator state, the desired positions being tracked and the episode clocks
+        (with a perturbation: the commands on their way and each episode's push step)."""
+        state = {
             "backend": self.backend.get_state(),
             "desired": self.desired.copy(),
             "elapsed_steps": self.elapsed_steps.copy(),
         }
+        if self.delay is not None:
+            state["delayed"] = self.delay.get_state()
+        if self.draws.active:
+            state["push_step"] = self.draws.push_step.copy()
+        return state
 
     def set_state(self, state: dict[str, np.ndarray]) -> None:
         self.backend.set_state(np.asarray(state["backend"]))
         np.copyto(self.desired, np.asarray(state["desired"], dtype=np.float64))
         np.copyto(self.elapsed_steps, np.asarray(state["elapsed_steps"], dtype=np.int64))
+        if self.delay is not None and "delayed" in state:
+            self.delay.set_state(state["delayed"])
+        if "push_step" in state:
+            np.copyto(self.draws.push_step, np.asarray(state["push_step"], dtype=np.int64))
 
     def sample_noise(self, rng: np.random.Generator) -> np.ndarray:
         """Uniform joint noise for one reset, drawn from ``rng``: (2,)."""
@@ -82,19 +110,28 @@ class HopperSimulation:
         before = None
         if config.hop_reward == "apex":
             before = task.com_velocity(backend.qpos, backend.qvel)
-        joint_torque = backend.track(self.desired, config.decimation)
+        # the drives track the command sent `latency` steps ago (the observation and the
+        # reward's tracking term keep the one sent now: what the controller knows)
+        applied = self.desired if self.delay is None else self.delay.schedule(self.desired)
+        push = None
+        if self.draws.active and self.draws.pushed(self.elapsed_steps).any():
+            push = np.where(self.draws.pushed(self.elapsed_steps), self.push_force, 0.0)
+        joint_torque = backend.track(applied, config.decimation, push)
         self.elapsed_steps += 1
         with np.errstate(invalid="ignore", over="ignore"):  # a blown-up robot: zeroed
             out = task.step_outcome(config, backend.qpos, backend.qvel, self.desired.copy(),
                                     joint_torque, self.elapsed_steps, config.episode_steps,
                                     before, backend.unstable())  # fmt: skip
+        self.draws.observe(out["obs"])  # the sensors' noise
         return StepResult(**out)
 
     # -- observation -------------------------------------------------------------------------
-    def observation(self) -> np.ndarray:
-        """(K, 8) float32 in the order of :data:`~cpg_actor.robots.hopper.task.OBS_NAMES`."""
+    def observation(self, index=None) -> np.ndarray:
+        """(K, 8) float32 in the order of :data:`~cpg_actor.robots.hopper.task.OBS_NAMES`, as
+        the sensors read it (with a perturbation's noise on the rows ``index``, default all)."""
         with np.errstate(invalid="ignore", over="ignore"):
-            return task.observation(self.backend.qpos, self.backend.qvel, self.desired)
+            obs = task.observation(self.backend.qpos, self.backend.qvel, self.desired)
+        return self.draws.observe(obs, index)
 
     def foot_height(self) -> np.ndarray:
         """(K,) height of the lowest point of the foot sphere (0: touching the ground)."""

@@ -40,6 +40,10 @@ OBS_SOURCES = (
     {"source": "qpos", "index": 0},  # the rail joint's position is the hip height
     {"source": "qvel", "index": 0},
 )
+# the sensors' noise, std per observation entry (perturbation.obs_noise = 1): legged_gym's noise
+# scales (Rudin et al. 2021) for joint encoders (0.01 rad) and joint speeds (1.5 rad/s),
+# there uniform, here Gaussian; the command sent and the rail's readings carry none
+SENSOR_NOISE = (0.01, 0.01, 1.5, 1.5, 0.0, 0.0, 0.0, 0.0)
 NOMINAL_POSE = np.array(robot.NOMINAL_POSE)
 ACTION_LOW = np.array([robot.JOINT_LIMITS[j][0] for j in robot.JOINT_NAMES])
 ACTION_HIGH = np.array([robot.JOINT_LIMITS[j][1] for j in robot.JOINT_NAMES])

@@ -94,10 +94,12 @@ class HopperVectorEnv(VectorEnv):
         if seed is None:
             if self._rngs is None:
                 self._rngs = [seeding.np_random(None)[0] for _ in range(self.num_envs)]
+                self.sim.seed_perturbations([None] * self.num_envs)
         else:
             seeds = env_seeds(seed, self.num_envs)
             self._rngs = [seeding.np_random(s)[0] for s in seeds]
             self._np_random, self._np_random_seed = seeding.np_random(seeds[0])
+            self.sim.seed_perturbations(seeds)
         index = np.arange(self.num_envs)
         noise = np.stack([self.sim.sample_noise(rng) for rng in self._rngs])
         self.sim.reset_robots(index, noise)
@@ -130,7 +132,7 @@ class HopperVectorEnv(VectorEnv):
             ended = np.flatnonzero(done)
             noise = np.stack([self.sim.sample_noise(self._rngs[i]) for i in ended])
             self.sim.reset_robots(ended, noise)
-            obs[ended] = self.sim.observation()[ended]
+            obs[ended] = self.sim.observation(ended)[ended]
             self._standing[ended] = self.sim.backend.hip_height[ended]
             self._max_hip[ended] = -np.inf
         info = {
@@ -159,11 +161,14 @@ class HopperVectorEnv(VectorEnv):
             raise RuntimeError("call reset() before get_state()")
         sim = {k: torch.from_numpy(np.array(v)) for k, v in self.sim.get_state().items()}
         episodes = {"standing": self._standing.copy(), "max_hip": self._max_hip.copy()}
-        return {
+        state = {
             "simulation": sim,
             "episodes": {k: torch.from_numpy(v) for k, v in episodes.items()},
             "rngs": [rng.bit_generator.state for rng in self._rngs],
         }
+        if self.sim.draws.active:  # the perturbation's own generators
+            state["perturbation_rngs"] = self.sim.draws.get_state()["rngs"]
+        return state
 
     def set_state(self, state: dict[str, Any]) -> None:
         """Restore what :meth:`get_state` returned (ValueError if it does not fit)."""
@@ -182,6 +187,9 @@ class HopperVectorEnv(VectorEnv):
         self._rngs = [seeding.np_random(0)[0] for _ in rngs]
         for rng, rng_state in zip(self._rngs, rngs, strict=True):
             rng.bit_generator.state = rng_state
+        if "perturbation_rngs" in state:
+            push_step = self.sim.draws.push_step.copy()  # restored with the simulation
+            self.sim.draws.set_state({"rngs": state["perturbation_rngs"], "push_step": push_step})
         self._needs_reset = False
 
     def render_frame(self, index: int = 0) -> np.ndarray:

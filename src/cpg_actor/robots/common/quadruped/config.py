@@ -12,6 +12,8 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
+from cpg_actor.robots.common.perturbation import Perturbation
+
 
 def default_scales() -> dict[str, float]:
     # legged_gym's ANYmal scales (Rudin et al. 2021), per second of simulated time (each term is
@@ -35,6 +37,7 @@ def default_scales() -> dict[str, float]:
 
 
 SIMULATORS = ("mujoco", "mjx")  # the quadruped's backends
+PUSH_DIRECTIONS = ("forward", "backward", "left", "right")  # in the base's heading frame
 ACTUATOR_FIELDS = ("kp", "kd", "torque_limit", "velocity_limit", "saturation_torque")
 
 
@@ -86,6 +89,8 @@ class QuadrupedConfig:
     normalized_actions: bool = False  # actions in [-1, 1] mapped onto the joint ranges
     render_width: int = 640  # pixels of render_frame's images (videos)
     render_height: int = 480
+    # perturbations (the robustness suite's; docs/robustness.md): none by default
+    perturbation: Perturbation = field(default_factory=Perturbation)
 
     @property
     def control_dt(self) -> float:
@@ -157,7 +162,22 @@ class QuadrupedConfig:
         if self.actuator_law not in ("dc-motor", "coast"):
             raise ValueError(f"actuator_law must be 'dc-motor' or 'coast', got "
                              f"{self.actuator_law!r}")  # fmt: skip
+        self.perturbation = Perturbation.from_value(self.perturbation).validate(PUSH_DIRECTIONS)
+        self.perturbation.substeps(self.decimation)  # a whole number of substeps late
+        if self.sim == "mjx" and not self.perturbation.nominal:
+            raise ValueError("perturbations run on MuJoCo (sim='mujoco'); sim='mjx' takes none")
         return self
+
+    # the mass the robot moves, kg (ANYmal B's: robots/anymal/description.py TOTAL_MASS), which
+    # sizes its payloads and pushes
+    moving_mass = 30.4214
+
+    @classmethod
+    def perturbation_table(cls):
+        """The perturbations the robustness suite runs on this quadruped."""
+        from cpg_actor.robots.common.quadruped.perturbations import perturbation_table
+
+        return perturbation_table(cls.moving_mass, cls().foot_friction)
 
     def replace(self, **changes) -> QuadrupedConfig:
         """A validated copy with ``changes`` (as the hopper's ``HopperConfig.replace``)."""

@@ -49,11 +49,14 @@ from cpg_actor.robots.common.actuator import Actuator
 from cpg_actor.robots.common.checks import real_actions
 from cpg_actor.robots.common.mujoco_runtime import (
     CONTROL_SPEC,
+    PUSH_SPEC,
     STATE_SPEC,
+    add_mass,
     default_threads,
     mujoco,
     offscreen_renderer,
 )
+from cpg_actor.robots.common.perturbation import CommandDelay, EpisodeDraws, push_force
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.common.quadruped.model import SENSORS, QuadrupedModel
 from cpg_actor.robots.common.seeding import env_seeds
@@ -69,14 +72,19 @@ ADDED_FIELDS = ("slip_sum", "planted_steps")  # zero in states saved before they
 def load_model(quadruped: QuadrupedModel, config: QuadrupedConfig,
                torque_control: bool = False) -> mujoco.MjModel:  # fmt: skip
     """The robot's MjModel under ``config``: its actuators (plain motors with
-    ``torque_control``), timestep and foot-ground friction."""
-    actuator = None if torque_control else Actuator.from_config(config)
+    ``torque_control``), timestep and foot-ground friction, and its perturbation's motor
+    strength, ground friction and payload (on the base)."""
+    perturbation = config.perturbation
+    actuator = None if torque_control else perturbation.actuator(Actuator.from_config(config))
     text = quadruped.mjcf_text(actuator, torque_control=torque_control)
     model = mujoco.MjModel.from_xml_string(text)
     model.opt.timestep = config.physics_dt
+    friction = perturbation.ground_friction(config.foot_friction)
     for leg in quadruped.legs:
-        model.geom_friction[model.geom(f"{leg}_foot").id, 0] = config.foot_friction
-    model.geom_friction[model.geom("ground").id, 0] = config.foot_friction
+        model.geom_friction[model.geom(f"{leg}_foot").id, 0] = friction
+    model.geom_friction[model.geom("ground").id, 0] = friction
+    if perturbation.payload:
+        add_mass(model, quadruped.base_body, perturbation.payload)
     return model
 
 
@@ -196,6 +204,14 @@ class QuadrupedVectorEnv(VectorEnv):
             offsets[name] = slice(start, start + size)
             start += size
         self._offsets = offsets
+        perturbation = config.perturbation
+        self.delay = None  # the perturbation's latency, sensor noise and push
+        if perturbation.latency:
+            self.delay = CommandDelay(perturbation, config.decimation, num_envs, self.model.nu)
+        self.draws = EpisodeDraws(perturbation, num_envs, config.control_dt,
+                                  task.sensor_noise(len(quadruped.joint_names)))  # fmt: skip
+        self._push = push_force(perturbation, config.control_dt)  # N, in the heading frame
+        self._base = self.model.body(quadruped.base_body).id
         self._rngs: list[np.random.Generator] | None = None
         self.episode: task.Episode | None = None  # the task's bookkeeping
         self._needs_reset = True
@@ -254,6 +270,9 @@ class QuadrupedVectorEnv(VectorEnv):
         fresh = task.new_episode(command, joints, self.qpos[:, 0].copy(),
                                  self._feet()[:, :, :2].copy())  # fmt: skip
         self.episode = fresh if self.episode is None else task.restart(self.episode, done, fresh)
+        if self.delay is not None:  # the drives hold the start pose until the first command
+            self.delay.reset(index, joints[index])
+        self.draws.start(index)
 
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
@@ -263,6 +282,7 @@ class QuadrupedVectorEnv(VectorEnv):
         if seed is not None or self._rngs is None:
             seeds = env_seeds(seed, self.num_envs) if seed is not None else [None] * self.num_envs
             self._rngs = [seeding.np_random(s)[0] for s in seeds]
+            self.draws.seed(seeds)
         self._sensors[:] = 0.0
         self.episode = None
         self._start(np.ones(self.num_envs, dtype=bool))
@@ -284,10 +304,30 @@ class QuadrupedVectorEnv(VectorEnv):
         """(N, 4, 3) the feet's positions (world, m), in ``foot_names`` order."""
         return self._sensor("feet").reshape(-1, 4, 3)
 
-    def _observe(self) -> np.ndarray:
+    def _observe(self, index=None) -> np.ndarray:
+        """The observation as the sensors read it (a perturbation's noise on rows ``index``,
+        default all)."""
         episode = self.episode
-        return task.observe(self.qpos, self.qvel, self._sensor("gyro"), episode.command,
-                            episode.last_action, self._nominal)  # fmt: skip
+        obs = task.observe(self.qpos, self.qvel, self._sensor("gyro"), episode.command,
+                           episode.last_action, self._nominal)  # fmt: skip
+        return self.draws.observe(obs, index)
+
+    def _control_with_push(self, control: np.ndarray) -> tuple[np.ndarray, int]:
+        """``control`` and its ``mujoco.rollout`` spec, with the perturbation's push on the
+        bases of the envs whose push comes in this step (their heading turns its direction)."""
+        pushed = self.draws.pushed(self.episode.elapsed) if self.draws.active else None
+        if pushed is None or not pushed.any():
+            return control, CONTROL_SPEC
+        forces = np.zeros((self.num_envs, self.config.decimation, self.model.nbody, 6))
+        for i in np.flatnonzero(pushed):
+            w, x, y, z = self.qpos[i, 3:7]
+            yaw = np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+            c, s = np.cos(yaw), np.sin(yaw)
+            fx, fy, fz = self._push
+            forces[i, :, self._base, :3] = (c * fx - s * fy, s * fx + c * fy, fz)
+        flat = forces.reshape(self.num_envs, self.config.decimation, -1)
+        return np.ascontiguousarray(np.concatenate([control, flat], axis=2)), (
+            CONTROL_SPEC | PUSH_SPEC)  # fmt: skip
 
     # -- stepping ------------------------------------------------------------------------------
     def step(self, actions: Any):
@@ -304,9 +344,12 @@ class QuadrupedVectorEnv(VectorEnv):
         desired = task.desired_positions(actions, self._low, self._high,
                                          self.config.normalized_actions)  # fmt: skip
         cfg, model = self.config, self.model
-        self._control[:] = desired[:, None, :]
+        # the drives track the command sent `latency` steps ago (the task keeps the one sent)
+        self._control[:] = desired[:, None, :] if self.delay is None else self.delay.schedule(
+            desired)  # fmt: skip
+        control, spec = self._control_with_push(self._control)
         self.stepper.rollout(
-            self._state, self._control, self._next, self._sensors, CONTROL_SPEC, cfg.decimation
+            self._state, control, self._next, self._sensors, spec, cfg.decimation
         )
         np.copyto(self._state, self._next[:, -1])
         torque = self._sensors[:, :, : model.nu]  # every substep's
@@ -320,15 +363,15 @@ class QuadrupedVectorEnv(VectorEnv):
             base_touch=self._sensor("base_touch")[:, 0] > 0,
             unstable=~np.isfinite(self._state).all(axis=1),
         )  # fmt: skip
-        weight = self.quadruped.total_mass * self.quadruped.gravity
+        weight = (self.quadruped.total_mass + cfg.perturbation.payload) * self.quadruped.gravity
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # blown up: masked
             self.episode, out = task.step(cfg, self.episode, reading, desired, self._nominal,
                                           self.quadruped.foot_radius, weight)  # fmt: skip
-        final_obs, done = out["obs"], out["terminated"] | out["truncated"]
+        final_obs, done = self.draws.observe(out["obs"]), out["terminated"] | out["truncated"]
         obs = final_obs.copy()
         if done.any():  # SAME_STEP autoreset
             self._start(done)
-            obs = task.rows(done, self._observe(), obs)
+            obs = task.rows(done, self._observe(np.flatnonzero(done)), obs)
         info = {
             **out["info"],
             "command": out["info"]["command"].copy(),  # this step's (not the next episode's)
@@ -348,10 +391,17 @@ class QuadrupedVectorEnv(VectorEnv):
             raise RuntimeError("call reset() before get_state()")
         arrays = {"physics": self._state, "sensors": self._sensors[:, -1]}
         arrays.update({name: getattr(self.episode, name) for name in SAVED_FIELDS})
+        extra = {}  # a perturbation's commands on their way, push steps and generators
+        if self.delay is not None:
+            arrays["delayed"] = self.delay.get_state()
+        if self.draws.active:
+            arrays["push_step"] = self.draws.push_step
+            extra["perturbation_rngs"] = self.draws.get_state()["rngs"]
         return {
             self.quadruped.state_key: {
                 **{name: torch.from_numpy(np.array(value)) for name, value in arrays.items()},
                 "rngs": [rng.bit_generator.state for rng in self._rngs],
+                **extra,
             }
         }
 
@@ -379,6 +429,11 @@ class QuadrupedVectorEnv(VectorEnv):
             rng = np.random.default_rng()
             rng.bit_generator.state = saved
             self._rngs.append(rng)
+        if self.delay is not None and "delayed" in state:
+            self.delay.set_state(state["delayed"])
+        if "perturbation_rngs" in state:
+            self.draws.set_state({"rngs": state["perturbation_rngs"],
+                                  "push_step": state["push_step"]})  # fmt: skip
         self._needs_reset = False
 
     # -- rendering -----------------------------------------------------------------------------

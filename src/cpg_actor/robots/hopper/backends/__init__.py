@@ -24,7 +24,8 @@ BATCHED_ONLY = "mjx"  # the simulator with no single-robot backend
 def make_backend(config, num_robots: int = 1, num_threads: int | None = None) -> Backend:
     """The backend named by ``config.sim`` for ``num_robots`` hoppers (imported on demand),
     built as every backend is: ``(actuator, physics_dt, foot_friction, num_robots,
-    num_threads)``."""
+    num_threads, payload)``, the config's perturbation in the actuator (motor strength), the
+    foot friction and the payload."""
     from cpg_actor.robots.common.actuator import Actuator
 
     if config.sim == BATCHED_ONLY:
@@ -40,12 +41,14 @@ def make_backend(config, num_robots: int = 1, num_threads: int | None = None) ->
         )
     module, name = BACKENDS[config.sim].split(":")
     backend = getattr(importlib.import_module(module), name)
+    perturbation = config.perturbation
     return backend(
-        actuator=Actuator.from_config(config),
+        actuator=perturbation.actuator(Actuator.from_config(config)),
         physics_dt=config.physics_dt,
-        foot_friction=config.foot_friction,
+        foot_friction=perturbation.ground_friction(config.foot_friction),
         num_robots=num_robots,
         num_threads=num_threads,
+        payload=perturbation.payload,
     )
 
 

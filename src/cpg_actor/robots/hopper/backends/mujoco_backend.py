@@ -25,8 +25,10 @@ from cpg_actor.robots.common.actuator import Actuator
 from cpg_actor.robots.common.backend import Backend
 from cpg_actor.robots.common.mujoco_runtime import (
     CONTROL_SPEC,
+    PUSH_SPEC,
     STATE_SPEC,
     TORQUE_SPEC,
+    add_mass,
     default_threads,
     mujoco,
     offscreen_renderer,
@@ -38,16 +40,19 @@ CLOCK_START = 1000.0  # s, simulation time of every robot after a reset (see res
 
 
 def load_model(
-    physics_dt: float, foot_friction: float, actuator: Actuator | None = None
-) -> mujoco.MjModel:
+    physics_dt: float, foot_friction: float, actuator: Actuator | None = None,
+    payload: float = 0.0,
+) -> mujoco.MjModel:  # fmt: skip
     """The hopper's MjModel with the configured actuators, timestep and foot-ground friction
-    (the shipped MJCF, ``MJCF_PATH``, when ``actuator`` is None)."""
+    (the shipped MJCF, ``MJCF_PATH``, when ``actuator`` is None), ``payload`` kg on the hip."""
     if actuator is None:
         model = mujoco.MjModel.from_xml_path(str(MJCF_PATH))
     else:
         model = mujoco.MjModel.from_xml_string(mjcf_text(actuator))
     model.opt.timestep = physics_dt
     set_foot_friction(model, foot_friction)
+    if payload:
+        add_mass(model, "hip", payload)
     return model
 
 
@@ -61,8 +66,9 @@ class MujocoBackend(Backend):
         foot_friction: float,
         num_robots: int = 1,
         num_threads: int | None = None,
+        payload: float = 0.0,
     ) -> None:
-        self.model = load_model(physics_dt, foot_friction, actuator)
+        self.model = load_model(physics_dt, foot_friction, actuator, payload)
         self.actuator = actuator
         if actuator.law == "coast":  # the law in numpy, applied as joint torques: actuators off
             self.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ACTUATION.value
@@ -87,6 +93,7 @@ class MujocoBackend(Backend):
         self._time = self._state[:, 0]
         self._foot_site = self.model.site("foot").id
         self._foot_geom = self.model.geom("foot").id
+        self._hip = self.model.body("hip").id
         self._renderer: mujoco.Renderer | None = None
         self._camera: mujoco.MjvCamera | None = None
 
@@ -99,35 +106,51 @@ class MujocoBackend(Backend):
         self.qpos[index] = qpos
         self.qvel[index] = qvel
 
-    def track(self, desired: np.ndarray, substeps: int) -> np.ndarray:
+    def track(
+        self, desired: np.ndarray, substeps: int, push: np.ndarray | None = None
+    ) -> np.ndarray:
         if self.actuator.law == "coast":
-            return self._track_per_substep(desired, substeps)
+            return self._track_per_substep(desired, substeps, push)
         if substeps != self._substeps:
             shape = (self.num_robots, substeps)
             self._control = np.zeros((*shape, self.model.nu))
             self._next = np.zeros((*shape, self.nstate))
             self._torque = np.zeros((*shape, self.model.nsensordata))  # actuatorfrc sensors
             self._substeps = substeps
-        self._control[:] = desired[:, None, :]
-        self.stepper.rollout(
-            self._state, self._control, self._next, self._torque, CONTROL_SPEC, substeps
-        )
+        self._control[:] = desired if desired.ndim == 3 else desired[:, None, :]
+        control, spec = self._control, CONTROL_SPEC
+        if push is not None:  # the hip's applied force after the controls (mjSTATE_XFRC_APPLIED)
+            control, spec = self._pushed(self._control, push), CONTROL_SPEC | PUSH_SPEC
+        self.stepper.rollout(self._state, control, self._next, self._torque, spec, substeps)
         np.copyto(self._state, self._next[:, -1])
         return self._torque.sum(axis=1) / substeps
 
-    def _track_per_substep(self, desired: np.ndarray, substeps: int) -> np.ndarray:
+    def _pushed(self, control: np.ndarray, push: np.ndarray) -> np.ndarray:
+        """``control`` (K, substeps, n) followed by every body's applied force and torque, the
+        hip's vertical force ``push`` (K,) N."""
+        forces = np.zeros((*control.shape[:2], self.model.nbody, 6))
+        forces[:, :, self._hip, 2] = np.asarray(push, dtype=np.float64)[:, None]
+        return np.ascontiguousarray(
+            np.concatenate([control, forces.reshape(*control.shape[:2], -1)], axis=2)
+        )
+
+    def _track_per_substep(
+        self, desired: np.ndarray, substeps: int, push: np.ndarray | None = None
+    ) -> np.ndarray:
         """``actuator_law="coast"``: the law in numpy before every substep, one ``rollout``
         call per substep with the torques as ``qfrc_applied`` (the MuJoCo actuators are off)."""
         if getattr(self, "_torque_control", None) is None:
             self._torque_control = np.zeros((self.num_robots, 1, self.model.nv))
             self._one_step = np.zeros((self.num_robots, 1, self.nstate))
         torque_sum = np.zeros((self.num_robots, 2))
-        for _ in range(substeps):
-            torque = self.actuator(desired, self.joint_pos, self.joint_vel)
+        for substep in range(substeps):
+            target = desired[:, substep] if desired.ndim == 3 else desired
+            torque = self.actuator(target, self.joint_pos, self.joint_vel)
             self._torque_control[:, 0, 1:3] = torque
-            self.stepper.rollout(
-                self._state, self._torque_control, self._one_step, None, TORQUE_SPEC, 1
-            )
+            control, spec = self._torque_control, TORQUE_SPEC
+            if push is not None:
+                control, spec = self._pushed(control, push), TORQUE_SPEC | PUSH_SPEC
+            self.stepper.rollout(self._state, control, self._one_step, None, spec, 1)
             np.copyto(self._state, self._one_step[:, 0])
             torque_sum += torque
         return torque_sum / substeps

@@ -66,6 +66,7 @@ from cpg_actor.robots.hopper import description as robot  # noqa: E402
 from cpg_actor.robots.hopper.urdf import URDF_PATH  # noqa: E402
 
 RAIL, HFE, KFE = 0, 1, 2  # joint indices in the URDF (the adapter's fixed joint is 3)
+HIP_LINK = 0  # the rail joint's child: the hip, which a payload and a push act on
 FOOT_LINK = 3  # the adapter link carries the foot sphere
 ROBOTS_PER_WORLD = 16  # Bullet's cost per robot grows with the robots sharing a spot
 _FOOT_GROUP, _GROUND_GROUP = 0x1, 0x2
@@ -74,10 +75,12 @@ _FOOT_GROUP, _GROUND_GROUP = 0x1, 0x2
 class _World:
     """One PyBullet DIRECT client: a ground plane and up to ROBOTS_PER_WORLD hoppers."""
 
-    def __init__(self, num_robots: int, physics_dt: float, foot_friction: float) -> None:
+    def __init__(self, num_robots: int, physics_dt: float, foot_friction: float,
+                 payload: float = 0.0) -> None:  # fmt: skip
         self.num_robots = num_robots
         self.physics_dt = physics_dt
         self.foot_friction = foot_friction
+        self.payload = payload
         with quiet_stdout():
             self.client = bullet_client.BulletClient(connection_mode=pybullet.DIRECT)
         self.poisoned = False  # a NaN reached Bullet: rebuild before the next use
@@ -115,6 +118,9 @@ class _World:
                 )  # fmt: skip
                 c.setCollisionFilterGroupMask(body, link, 0, 0)
             c.changeDynamics(body, FOOT_LINK, lateralFriction=self.foot_friction)
+            if self.payload:  # at the hip's centre of mass: its inertia about it unchanged
+                mass = c.getDynamicsInfo(body, HIP_LINK)[0]
+                c.changeDynamics(body, HIP_LINK, mass=mass + self.payload)
             c.setCollisionFilterGroupMask(body, FOOT_LINK, _FOOT_GROUP, _GROUND_GROUP)
             c.setJointMotorControlArray(
                 body, [RAIL, HFE, KFE], pybullet.VELOCITY_CONTROL, forces=[0.0, 0.0, 0.0]
@@ -142,6 +148,7 @@ class PybulletBackend(Backend):
         foot_friction: float,
         num_robots: int = 1,
         num_threads: int | None = None,  # accepted for interface symmetry; unused
+        payload: float = 0.0,
     ) -> None:
         self.actuator = actuator
         self.num_robots = int(num_robots)
@@ -150,7 +157,8 @@ class PybulletBackend(Backend):
             min(ROBOTS_PER_WORLD, self.num_robots - start)
             for start in range(0, self.num_robots, ROBOTS_PER_WORLD)
         ]
-        self._worlds = [_World(size, float(physics_dt), float(foot_friction)) for size in sizes]
+        self._worlds = [_World(size, float(physics_dt), float(foot_friction), float(payload))
+                        for size in sizes]  # fmt: skip
         self.qpos = np.zeros((self.num_robots, 3))
         self.qvel = np.zeros((self.num_robots, 3))
         self._unstable = np.zeros(self.num_robots, dtype=bool)
@@ -203,17 +211,25 @@ class PybulletBackend(Backend):
         self._unstable[index] = False
         self._read()
 
-    def track(self, desired: np.ndarray, substeps: int) -> np.ndarray:
-        """The actuator law in numpy once per substep, applied with TORQUE_CONTROL."""
+    def track(
+        self, desired: np.ndarray, substeps: int, push: np.ndarray | None = None
+    ) -> np.ndarray:
+        """The actuator law in numpy once per substep, applied with TORQUE_CONTROL; a push
+        as an external force at the hip's centre of mass (Bullet clears it every step)."""
         torque_sum = np.zeros((self.num_robots, 2))
-        for _ in range(substeps):
-            torque = self.actuator(desired, self.joint_pos, self.joint_vel)
+        for substep in range(substeps):
+            target = desired[:, substep] if desired.ndim == 3 else desired
+            torque = self.actuator(target, self.joint_pos, self.joint_vel)
             torque_sum += torque
             rows = torque.tolist()
             for i, c, body in self._robots():
                 c.setJointMotorControlArray(
                     body, (HFE, KFE), pybullet.TORQUE_CONTROL, forces=rows[i]
                 )
+                if push is not None and push[i] != 0.0:
+                    centre = c.getLinkState(body, HIP_LINK, computeForwardKinematics=1)[0]
+                    c.applyExternalForce(body, HIP_LINK, (0.0, 0.0, float(push[i])), centre,
+                                         pybullet.WORLD_FRAME)  # fmt: skip
             for world in self._worlds:
                 world.client.stepSimulation()
             self._read()
