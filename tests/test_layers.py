@@ -25,7 +25,7 @@ LAYERS = {
     "config": 8,
     "training": 9,
     "deploy": 10,
-    "experiments": 11, "plots": 11,
+    "experiments": 11, "plots": 11, "robustness": 11,
     "cli": 12, "commands": 12,
 }  # fmt: skip
 

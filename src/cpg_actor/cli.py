@@ -72,6 +72,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "transfer",
         "evaluate a reproduction's final policies in both simulators (cross-simulator transfer)",
     ),
+    "robustness": (
+        "robustness",
+        "evaluate trained runs under perturbations (pushes, payload, friction, latency, ...)",
+    ),
 }
 
 

@@ -56,9 +56,10 @@ def observation_columns(robot) -> dict[str, list[int]]:
 CHECK_EVERY = 50
 
 # the step info an env may report -> its trace: feet on the ground (E, feet) as 1 or 0, the
-# base's forward speed (m/s) and the velocity command (E, 3: forward, lateral, yaw)
+# base's forward speed (m/s), the velocity command (E, 3: forward, lateral, yaw) and, under a
+# perturbation's push, 1 at the step it came
 TRACED_INFO = {"contact": "foot_contact", "forward_speed": "base_forward_speed",
-               "command": "command"}  # fmt: skip
+               "command": "command", "pushed": "push"}  # fmt: skip
 
 
 @torch.no_grad()

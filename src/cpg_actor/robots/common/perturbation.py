@@ -174,11 +174,11 @@ class PerturbationAxis:
 class PerturbationTable:
     """A robot's perturbations for the robustness suite (by name, in the order it runs them),
     the episode metrics it reports per level, and its gait cycle: ``cycles(traces, env)``
-    gives, for episode ``env`` of an evaluation's traces, the control step at which each cycle
-    (hop, stride) starts and the cycle's value (the hop's apex, the stride's speed), from which
-    the suite reads how long a push takes to be recovered from (within 10 % of the nominal
-    episode's cycle, or within ``cycle_floor`` of it, in the value's unit, where that is
-    larger)."""
+    gives, for episode ``env`` of an evaluation's traces, the control steps that bound its
+    whole cycles (hops, strides; n + 1 steps for n cycles) and each cycle's value (the hop's
+    apex, the stride's speed), from which the suite reads how long a push takes to be
+    recovered from (within 10 % of the nominal episode's cycle, or within ``cycle_floor`` of
+    it, in the value's unit, where that is larger)."""
 
     axes: dict[str, PerturbationAxis]
     metrics: tuple[str, ...]
@@ -295,7 +295,7 @@ class EpisodeDraws:
 
     def pushed(self, elapsed: np.ndarray) -> np.ndarray:
         """(N,) bool: the envs pushed during the control step after ``elapsed`` steps."""
-        return (self.push_step == elapsed) & (self.perturbation.push > 0.0)
+        return (self.push_step == elapsed) & self.active & (self.perturbation.push > 0.0)
 
     def observe(self, obs: np.ndarray, index=None) -> np.ndarray:
         """``obs`` (N, D) as the sensors read it: noise added to rows ``index`` (default all),

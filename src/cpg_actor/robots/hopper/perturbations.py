@@ -20,15 +20,16 @@ def touchdowns(touching: np.ndarray) -> np.ndarray:
 
 
 def hops(traces: dict[str, np.ndarray], env: int) -> tuple[np.ndarray, np.ndarray]:
-    """Episode ``env``'s hops: the step each starts at (a touchdown) and its apex, the highest
-    hip height until the next touchdown above the standing one (m). Only whole hops."""
+    """Episode ``env``'s whole hops: the touchdowns that bound them (n + 1 steps: hop k from
+    touchdown k to touchdown k + 1) and each one's apex (n), the highest hip height in it
+    above the standing one (m)."""
     hip = np.asarray(traces["hip_height"], dtype=float)[:, env]
     foot = np.asarray(traces["foot_height"], dtype=float)[:, env]
     steps = int(np.isfinite(hip).sum())  # the rows after the episode ended are NaN
     starts = touchdowns(foot[:steps] < TOUCHING)
     standing = float(traces.get("standing_hip_height", 0.0))
     apex = [hip[a:b].max() - standing for a, b in zip(starts[:-1], starts[1:], strict=True)]
-    return starts[:-1], np.asarray(apex, dtype=float)
+    return starts, np.asarray(apex, dtype=float)
 
 
 def perturbation_table() -> PerturbationTable:

@@ -56,6 +56,7 @@ class HopperSimulation:
         self.draws = EpisodeDraws(perturbation, self.num_robots, config.control_dt,
                                   task.SENSOR_NOISE)  # fmt: skip
         self.push_force = push_force(perturbation, config.control_dt)[2]  # along the rail
+        self.pushed = np.zeros(self.num_robots, dtype=bool)
 
     def seed_perturbations(self, seeds) -> None:
         """The perturbation's generators, robot i's from ``seeds[i]`` (its env's seed)."""
@@ -114,8 +115,9 @@ class HopperSimulation:
         # reward's tracking term keep the one sent now: what the controller knows)
         applied = self.desired if self.delay is None else self.delay.schedule(self.desired)
         push = None
-        if self.draws.active and self.draws.pushed(self.elapsed_steps).any():
-            push = np.where(self.draws.pushed(self.elapsed_steps), self.push_force, 0.0)
+        self.pushed = self.draws.pushed(self.elapsed_steps)  # (K,) the robots pushed now
+        if self.pushed.any():
+            push = np.where(self.pushed, self.push_force, 0.0)
         joint_torque = backend.track(applied, config.decimation, push)
         self.elapsed_steps += 1
         with np.errstate(invalid="ignore", over="ignore"):  # a blown-up robot: zeroed

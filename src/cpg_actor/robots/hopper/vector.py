@@ -147,6 +147,8 @@ class HopperVectorEnv(VectorEnv):
             # per-episode metrics of the envs whose episode ended at this step (NaN elsewhere)
             "episode_metrics": {"hop_height": hop_height},
         }
+        if self.config.perturbation.push:  # the envs a perturbation's push came in this step
+            info["pushed"] = self.sim.pushed.copy()
         return obs, result.reward, result.terminated, result.truncated, info
 
     def get_state(self) -> dict[str, Any]:

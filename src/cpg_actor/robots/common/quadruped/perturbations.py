@@ -15,15 +15,15 @@ PUSHES = {"push_forward": "forward", "push_backward": "backward", "push_sideways
 
 
 def strides(traces: dict[str, np.ndarray], env: int) -> tuple[np.ndarray, np.ndarray]:
-    """Episode ``env``'s strides: the step each starts at (a touchdown of the first foot) and
-    the base's mean forward speed over it (m/s). Only whole strides."""
+    """Episode ``env``'s whole strides: the touchdowns of the first foot that bound them (n + 1
+    steps) and the base's mean forward speed over each (n, m/s)."""
     speed = np.asarray(traces["base_forward_speed"], dtype=float)[:, env]
     contact = np.asarray(traces["foot_contact"], dtype=float)[:, env, 0]
     steps = int(np.isfinite(speed).sum())  # the rows after the episode ended are NaN
     touching = contact[:steps] > 0.5
     starts = np.flatnonzero(touching[1:] & ~touching[:-1]) + 1
     means = [speed[a:b].mean() for a, b in zip(starts[:-1], starts[1:], strict=True)]
-    return starts[:-1], np.asarray(means, dtype=float)
+    return starts, np.asarray(means, dtype=float)
 
 
 def perturbation_table(moving_mass: float, foot_friction: float) -> PerturbationTable:

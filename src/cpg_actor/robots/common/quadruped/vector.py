@@ -315,8 +315,8 @@ class QuadrupedVectorEnv(VectorEnv):
     def _control_with_push(self, control: np.ndarray) -> tuple[np.ndarray, int]:
         """``control`` and its ``mujoco.rollout`` spec, with the perturbation's push on the
         bases of the envs whose push comes in this step (their heading turns its direction)."""
-        pushed = self.draws.pushed(self.episode.elapsed) if self.draws.active else None
-        if pushed is None or not pushed.any():
+        pushed = self.draws.pushed(self.episode.elapsed)
+        if not pushed.any():
             return control, CONTROL_SPEC
         forces = np.zeros((self.num_envs, self.config.decimation, self.model.nbody, 6))
         for i in np.flatnonzero(pushed):
@@ -347,6 +347,7 @@ class QuadrupedVectorEnv(VectorEnv):
         # the drives track the command sent `latency` steps ago (the task keeps the one sent)
         self._control[:] = desired[:, None, :] if self.delay is None else self.delay.schedule(
             desired)  # fmt: skip
+        pushed = self.draws.pushed(self.episode.elapsed)  # before the step's clock moves
         control, spec = self._control_with_push(self._control)
         self.stepper.rollout(
             self._state, control, self._next, self._sensors, spec, cfg.decimation
@@ -380,6 +381,8 @@ class QuadrupedVectorEnv(VectorEnv):
             "_final_obs": done,
             "episode_metrics": out["episode_metrics"],
         }
+        if cfg.perturbation.push:  # the envs a perturbation's push came in this step
+            info["pushed"] = pushed
         return obs, out["reward"], out["terminated"], out["truncated"], info
 
     # -- state ---------------------------------------------------------------------------------

@@ -1,0 +1,60 @@
+"""The runs the suite evaluates: run directories (``cpg-actor train``'s) and reproduction
+directories (``cpg-actor reproduce``'s ``OUT/runs/VARIANT/seedS``, every run of them), each
+with the variant it is grouped under and its seed."""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+CHECKPOINT = Path("checkpoints") / "last.pt"  # a run's final policy
+
+
+@dataclass(frozen=True)
+class RunRef:
+    variant: str  # what it is grouped under: the reproduction's variant, else the agent
+    seed: int
+    path: Path
+    robot: str
+
+
+def find_runs(paths: list[str | Path]) -> list[RunRef]:
+    """Every run the arguments name, in their order: a run directory is one run (its variant
+    its parent folder's name when it is a reproduction's ``seedS``, else its agent's), a
+    reproduction directory (one with ``runs/``) is each of its runs that has a final
+    checkpoint. FileNotFoundError for a path that is neither."""
+    from cpg_actor.experiments.results import Results, read_config, run_robot
+
+    found: list[RunRef] = []
+    for given in paths:
+        path = Path(given)
+        if (path / "runs").is_dir():
+            results = Results.load(path)
+            runs = [run for variant_runs in results.runs.values() for run in variant_runs]
+            runs = [run for run in runs if (run.path / CHECKPOINT).is_file()]
+            if not runs:
+                raise FileNotFoundError(f"{path}: a reproduction directory without a finished "
+                                        f"run ({CHECKPOINT} in runs/VARIANT/seedS)")  # fmt: skip
+            for run in runs:
+                robot = run_robot(read_config(run.path)).name
+                found.append(RunRef(run.variant, run.seed, run.path, robot))
+            continue
+        if not (path / "config.yaml").is_file():
+            raise FileNotFoundError(f"{path} is neither a run directory (config.yaml) nor a "
+                                    "reproduction directory (runs/)")  # fmt: skip
+        if not (path / CHECKPOINT).is_file():
+            raise FileNotFoundError(f"{path / CHECKPOINT} does not exist: the run has no "
+                                    "final policy")  # fmt: skip
+        config = read_config(path)
+        seed_dir = re.fullmatch(r"seed(\d+)", path.name)
+        if seed_dir:
+            variant, seed = path.resolve().parent.name, int(seed_dir.group(1))
+        else:
+            variant, seed = str(config.get("agent", path.name)), int(config.get("seed", 0))
+        found.append(RunRef(variant, seed, path, run_robot(config).name))
+    robots = sorted({run.robot for run in found})
+    if len(robots) > 1:
+        raise ValueError(f"the runs are of several robots ({', '.join(robots)}), whose "
+                         "perturbations differ: run the suite once per robot")  # fmt: skip
+    return found

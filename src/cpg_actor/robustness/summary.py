@@ -1,0 +1,228 @@
+"""The suite's results per variant, over its seeds, and the files: ``robustness.json`` (every
+run's numbers and the summary), ``robustness.md`` (a table per perturbation) and a figure per
+perturbation (``robustness_<name>.png``: the return retained against the level, a line per
+variant with its bootstrap 95% CI band over seeds).
+
+Over seeds (as the reproduction report): the mean of the per-seed values, with a percentile
+bootstrap CI from :data:`~cpg_actor.experiments.metrics.MIN_SEEDS` seeds on
+(:func:`cpg_actor.experiments.metrics.bootstrap`); a push's recovery as the share of episodes
+that recovered and the median steps of those that did.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cpg_actor.experiments import metrics as m
+from cpg_actor.robustness.suite import NO_GAIT, NOT_RECOVERED
+
+JSON_FILE = "robustness.json"
+MARKDOWN_FILE = "robustness.md"
+
+
+def figure_name(perturbation: str) -> str:
+    return f"robustness_{perturbation}.png"
+
+
+def interval(values: list[float]) -> dict[str, float] | None:
+    """Mean over seeds with its bootstrap 95% CI (``low``, ``high`` NaN below MIN_SEEDS
+    seeds); None without a finite value."""
+    finite = m.finite(values)
+    if finite.size == 0:
+        return None
+    if finite.size < m.MIN_SEEDS:
+        return {"estimate": float(finite.mean()), "low": math.nan, "high": math.nan}
+    ci = m.bootstrap(finite, "mean")
+    return {"estimate": ci.estimate, "low": ci.low, "high": ci.high}
+
+
+def _recovery(episodes: list[float | str]) -> tuple[float, float]:
+    """(share recovered of the episodes with a gait, median steps of those recovered)."""
+    gait = [e for e in episodes if e != NO_GAIT]
+    steps = [float(e) for e in gait if e != NOT_RECOVERED]
+    share = len(steps) / len(gait) if gait else math.nan
+    return share, float(np.median(steps)) if steps else math.nan
+
+
+def summarise(runs: list[dict[str, Any]], metrics: tuple[str, ...]) -> dict[str, Any]:
+    """Per variant (in the order of ``runs``): its seeds, the nominal numbers and, per
+    perturbation and level, the retention, return, metrics, p99 |desired velocity| and (for
+    pushes) recovery, each as :func:`interval` over seeds."""
+    variants: dict[str, list[dict[str, Any]]] = {}
+    for run in runs:
+        variants.setdefault(run["variant"], []).append(run)
+    keys = ("return", *metrics, "p99_desired_velocity")
+    out: dict[str, Any] = {}
+    for variant, group in variants.items():
+        nominal = {key: interval([r["nominal"].get(key, math.nan) for r in group])
+                   for key in keys}  # fmt: skip
+        perturbations: dict[str, Any] = {}
+        for name, axis in group[0]["perturbations"].items():
+            levels = []
+            for i, level in enumerate(axis["levels"]):
+                rows = [r["perturbations"][name]["levels"][i] for r in group
+                        if name in r["perturbations"]]  # fmt: skip
+                entry = {"level": level["level"]}
+                for key in ("retention", *keys):
+                    entry[key] = interval([row.get(key, math.nan) for row in rows])
+                if "recovery" in level:
+                    shares, steps = zip(*(_recovery(row["recovery"]) for row in rows),
+                                        strict=True)  # fmt: skip
+                    entry["recovered"] = interval(list(shares))
+                    entry["recovery_steps"] = interval(list(steps))
+                levels.append(entry)
+            perturbations[name] = {key: axis[key] for key in ("field", "unit", "description",
+                                                              "nominal")}  # fmt: skip
+            perturbations[name]["levels"] = levels
+        out[variant] = {"seeds": [r["seed"] for r in group], "nominal": nominal,
+                        "perturbations": perturbations}  # fmt: skip
+    return out
+
+
+def plain(value: Any) -> Any:
+    """``value`` for JSON: NaN and infinities as null, numpy numbers as Python's."""
+    if isinstance(value, dict):
+        return {key: plain(v) for key, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [plain(v) for v in value]
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+def write_json(path: Path, data: dict[str, Any]) -> Path:
+    from cpg_actor.files import atomic_write_text
+
+    atomic_write_text(json.dumps(plain(data), indent=1) + "\n", path)
+    return path
+
+
+def _text(entry: dict[str, float] | None, digits: str = ".3g", scale: float = 1.0,
+          suffix: str = "") -> str:  # fmt: skip
+    if entry is None or entry.get("estimate") is None or not math.isfinite(entry["estimate"]):
+        return "—"
+    text = f"{scale * entry['estimate']:{digits}}{suffix}"
+    low, high = entry.get("low"), entry.get("high")
+    if low is not None and high is not None and math.isfinite(low) and math.isfinite(high):
+        text += f" [{scale * low:{digits}}, {scale * high:{digits}}]"
+    return text
+
+
+def markdown(data: dict[str, Any]) -> str:
+    """``robustness.md``: what was run, then one table per perturbation."""
+    from cpg_actor.experiments.results import label
+    from cpg_actor.robots.registry import all_metrics
+
+    info = all_metrics()
+    metrics = data["metrics"]
+    variants = data["variants"]
+    lines = [
+        "# Robustness",
+        "",
+        f"Robot: {data['robot']}. Each run's final policy evaluated deterministically "
+        f"({data['episodes']} episodes per level, env seed {data['env_seed']}, the same "
+        "episodes at every level) nominally and under each perturbation (`cpg-actor "
+        "robustness`, docs/robustness.md). *Retention*: mean return / nominal mean return, per "
+        "run; per variant the mean over its seeds with a bootstrap 95% CI (from "
+        f"{m.MIN_SEEDS} seeds on). *Recovery* (pushes): the share of episodes whose gait "
+        f"cycle ({data['cycle']}) came back within 10% of the same episode's without the push, "
+        "and the median control steps it took.",
+        "",
+        "| variant | seeds | nominal return |",
+        "| --- | --- | --- |",
+    ]
+    for variant, summary in variants.items():
+        lines.append(f"| {label(variant)} | {len(summary['seeds'])} | "
+                     f"{_text(summary['nominal']['return'], '.1f')} |")  # fmt: skip
+    names = list(next(iter(variants.values()))["perturbations"]) if variants else []
+    for name in names:
+        axis = next(iter(variants.values()))["perturbations"][name]
+        unit = f" ({axis['unit']})" if axis["unit"] else ""
+        push = any("recovered" in level for level in axis["levels"])
+        heads = ["variant", f"level{unit}", "return", "retention"]
+        heads += [info[key].column if key in info else key for key in metrics]
+        heads += ["p99 \\|v_d\\| (rad/s)"]
+        heads += ["recovered", "recovery (steps)"] if push else []
+        lines += ["", f"## {name}: {axis['description']}", "",
+                  "| " + " | ".join(heads) + " |", "|" + " --- |" * len(heads)]  # fmt: skip
+        for variant, summary in variants.items():
+            nominal = summary["nominal"]
+            cells = [label(variant), f"{axis['nominal']:g} (nominal)",
+                     _text(nominal["return"], ".1f"), "100%"]  # fmt: skip
+            cells += [_text(nominal.get(key)) for key in metrics]
+            cells += [_text(nominal["p99_desired_velocity"], ".1f")]
+            cells += ["", ""] if push else []
+            lines.append("| " + " | ".join(cells) + " |")
+            for level in summary["perturbations"][name]["levels"]:
+                cells = ["", f"{level['level']:g}", _text(level["return"], ".1f"),
+                         _text(level["retention"], ".0f", 100.0, "%")]  # fmt: skip
+                cells += [_text(level.get(key)) for key in metrics]
+                cells += [_text(level["p99_desired_velocity"], ".1f")]
+                if push:
+                    cells += [_text(level["recovered"], ".0f", 100.0, "%"),
+                              _text(level["recovery_steps"], ".0f")]  # fmt: skip
+                lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def draw(data: dict[str, Any], out: Path) -> list[Path]:
+    """A figure per perturbation: retention against the level, a line per variant, the
+    nominal point at 1, a band for its CI over seeds."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from cpg_actor.experiments.results import color, label
+    from cpg_actor.plots import save_figure
+
+    variants = data["variants"]
+    paths = []
+    names = list(next(iter(variants.values()))["perturbations"]) if variants else []
+    for name in names:
+        fig, ax = plt.subplots(figsize=(5.5, 3.8))
+        axis = None
+        for variant, summary in variants.items():
+            axis = summary["perturbations"][name]
+            points = [(axis["nominal"], 1.0, 1.0, 1.0)]
+            for level in axis["levels"]:
+                r = level["retention"] or {}
+                points.append((level["level"], *(np.nan if r.get(k) is None else r[k]
+                                                 for k in ("estimate", "low", "high"))))
+            x, y, low, high = (np.array(v, dtype=float) for v in zip(*sorted(points),
+                                                                      strict=True))  # fmt: skip
+            line = ax.plot(x, y, "o-", label=label(variant), color=color(variant))[0]
+            if np.isfinite(low).any():
+                ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, lw=0)
+        unit = f" ({axis['unit']})" if axis and axis["unit"] else ""
+        ax.axhline(1.0, color="0.6", lw=0.8, ls=":")
+        ax.set_xlabel(f"{name}{unit}")
+        ax.set_ylabel("return retained (of nominal)")
+        ax.set_title(f"{data['robot']}: {name}", fontsize=10)
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        paths.append(save_figure(fig, out / figure_name(name)))
+        plt.close(fig)
+    return paths
+
+
+def write_outputs(out: Path, data: dict[str, Any]) -> list[Path]:
+    """``robustness.json``, ``robustness.md`` and the figures in ``out``."""
+    from cpg_actor.files import atomic_write_text
+
+    paths = [write_json(out / JSON_FILE, data)]
+    atomic_write_text(markdown(plain(data)), out / MARKDOWN_FILE)
+    paths.append(out / MARKDOWN_FILE)
+    return paths + draw(plain(data), out)
+
+
+def outputs(out: Path, names: list[str]) -> list[Path]:
+    """The files the suite writes in ``out`` for the perturbations ``names``."""
+    return [out / JSON_FILE, out / MARKDOWN_FILE, *(out / figure_name(n) for n in names)]
