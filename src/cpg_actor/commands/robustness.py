@@ -17,15 +17,20 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "(`cpg-actor reproduce`: every run, grouped by variant)")  # fmt: skip
     parser.add_argument("--out", required=True, help="directory for robustness.json, "
                         "robustness.md and a figure per perturbation")  # fmt: skip
-    parser.add_argument("--episodes", type=int, default=EPISODES,
-                        help=f"episodes per level, run in parallel (default {EPISODES})")
+    parser.add_argument(
+        "--episodes",
+        type=int,
+        default=EPISODES,
+        help=f"episodes per level, run in parallel (default {EPISODES})",
+    )
     parser.add_argument("--perturbations", default=None,
                         help="comma-separated names of the robot's perturbations (default all: "
                         "the hopper's push_up, push_down, payload, friction, latency, obs_noise, "
                         "motor_strength)")  # fmt: skip
     parser.add_argument("--seed", type=int, default=1000, help="environment seed (default 1000)")
-    parser.add_argument("--overwrite", action="store_true",
-                        help="replace the suite's files already in --out")
+    parser.add_argument(
+        "--overwrite", action="store_true", help="replace the suite's files already in --out"
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -70,6 +75,8 @@ def run(args: argparse.Namespace) -> int:
     }  # fmt: skip
     for path in write_outputs(out, data):
         print(f"wrote {path}")
-    print(f"{len(runs)} runs x {1 + sum(len(table.axes[n].levels) for n in names)} "
-          f"evaluations in {data['seconds']:.0f} s")
+    print(
+        f"{len(runs)} runs x {1 + sum(len(table.axes[n].levels) for n in names)} "
+        f"evaluations in {data['seconds']:.0f} s"
+    )
     return 0

@@ -194,8 +194,8 @@ def draw(data: dict[str, Any], out: Path) -> list[Path]:
             points = [(axis["nominal"], 1.0, 1.0, 1.0)]
             for level in axis["levels"]:
                 r = level["retention"] or {}
-                points.append((level["level"], *(np.nan if r.get(k) is None else r[k]
-                                                 for k in ("estimate", "low", "high"))))
+                ci = [np.nan if r.get(k) is None else r[k] for k in ("estimate", "low", "high")]
+                points.append((level["level"], *ci))
             x, y, low, high = (np.array(v, dtype=float) for v in zip(*sorted(points),
                                                                       strict=True))  # fmt: skip
             line = ax.plot(x, y, "o-", label=label(variant), color=color(variant))[0]

@@ -42,7 +42,9 @@ class Backend(ABC):
         """Put robots ``index`` (k,) in state ``qpos``, ``qvel`` (k, 3), at rest otherwise."""
 
     @abstractmethod
-    def track(self, desired: np.ndarray, substeps: int, push: np.ndarray | None = None) -> np.ndarray:
+    def track(
+        self, desired: np.ndarray, substeps: int, push: np.ndarray | None = None
+    ) -> np.ndarray:
         """``substeps`` physics substeps of all robots, the joint actuators
         (:mod:`cpg_actor.robots.common.actuator`) tracking ``desired`` rad on HFE, KFE: (K, 2)
         at every substep, or (K, substeps, 2), one per substep; returns the joint torque

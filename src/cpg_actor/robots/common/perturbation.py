@@ -73,8 +73,8 @@ class Perturbation:
         ``self``."""
 
         def number(name: str, value: Any, low: float, strict: bool) -> None:
-            ok = (not isinstance(value, bool) and isinstance(value, int | float)
-                  and math.isfinite(value) and (value > low if strict else value >= low))  # fmt: skip
+            ok = not isinstance(value, bool) and isinstance(value, int | float)
+            ok = ok and math.isfinite(value) and (value > low if strict else value >= low)
             if not ok:
                 raise ValueError(f"perturbation.{name} must be a finite number "
                                  f"{'>' if strict else '>='} {low:g}, got {value!r}")  # fmt: skip

@@ -349,9 +349,7 @@ class QuadrupedVectorEnv(VectorEnv):
             desired)  # fmt: skip
         pushed = self.draws.pushed(self.episode.elapsed)  # before the step's clock moves
         control, spec = self._control_with_push(self._control)
-        self.stepper.rollout(
-            self._state, control, self._next, self._sensors, spec, cfg.decimation
-        )
+        self.stepper.rollout(self._state, control, self._next, self._sensors, spec, cfg.decimation)
         np.copyto(self._state, self._next[:, -1])
         torque = self._sensors[:, :, : model.nu]  # every substep's
         joint_speed = self._next[:, :, 1 + model.nq + 6 : 1 + model.nq + model.nv]

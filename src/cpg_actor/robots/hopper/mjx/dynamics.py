@@ -65,9 +65,11 @@ class Episode(NamedTuple):
         )
 
 
-# the config fields the jitted functions take as values (Episode) or never read: left out of
-# the key under which dynamics_for shares them
-SHARED_ACROSS = ("episode_steps", "reset_noise", "reset_clearance", "render_width", "render_height")
+# the config fields the jitted functions take as values (Episode) or never read (the
+# perturbation: always the nominal one on MJX): left out of the key under which dynamics_for
+# shares them
+SHARED_ACROSS = ("episode_steps", "reset_noise", "reset_clearance", "render_width",
+                 "render_height", "perturbation")  # fmt: skip
 
 
 class EnvState(NamedTuple):

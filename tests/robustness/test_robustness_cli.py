@@ -1,0 +1,96 @@
+"""`cpg-actor robustness` on tiny trained runs: a reproduction directory grouped by variant,
+a lone run, the files, what it refuses; the summary over seeds."""
+
+import json
+import math
+
+import pytest
+
+from cpg_actor.cli import main
+from cpg_actor.robustness.summary import markdown, plain, summarise
+from tiny import trained_run  # tests/tiny.py (pytest puts tests/ on sys.path)
+
+
+def test_the_suite_on_a_reproduction_and_a_run(tmp_path, capsys):
+    reproduction = tmp_path / "repro"
+    short = {"episode_steps": 250}  # the push comes 1-2 s in
+    for seed in (0, 1):
+        trained_run(reproduction / "runs" / "cpg-actor" / f"seed{seed}", "cpg-actor", seed=seed,
+                    env=short)  # fmt: skip
+    lone = trained_run(tmp_path / "my-mlp", "mlp", env=short)
+    out = tmp_path / "suite"
+    args = ["robustness", str(reproduction), str(lone), "--out", str(out), "--episodes", "1",
+            "--perturbations", "push_down,payload"]  # fmt: skip
+    assert main(args) == 0
+    printed = capsys.readouterr().out
+    assert "[1/3] cpg-actor seed 0" in printed and "payload 1.7 kg" in printed
+    data = json.loads((out / "robustness.json").read_text())
+    assert data["perturbations"] == ["push_down", "payload"]
+    assert [run["variant"] for run in data["runs"]] == ["cpg-actor", "cpg-actor", "mlp"]
+    assert data["variants"]["cpg-actor"]["seeds"] == [0, 1]
+    run = data["runs"][0]
+    payload = run["perturbations"]["payload"]
+    assert [level["level"] for level in payload["levels"]] == [0.34, 0.68, 1.02, 1.7]
+    for level in payload["levels"]:
+        assert level["retention"] == pytest.approx(level["return"] / run["nominal"]["return"])
+        assert "hop_height" in level and "p99_desired_velocity" in level
+    pushes = run["perturbations"]["push_down"]["levels"]
+    assert all(len(level["recovery"]) == 1 for level in pushes)
+    text = (out / "robustness.md").read_text()
+    assert "## push_down" in text and "## payload" in text and "| MLP actor |" in text
+    for name in ("push_down", "payload"):
+        assert (out / f"robustness_{name}.png").is_file()
+    # the suite's files are replaced only when asked
+    assert main(args) == 2
+    assert "pass --overwrite" in capsys.readouterr().err
+    assert main([*args[:-1], "friction"]) == 2  # robustness.json is there
+    capsys.readouterr()
+    again = ["robustness", str(lone), "--out", str(out), "--episodes", "1", "--perturbations",
+             "payload", "--overwrite"]  # fmt: skip
+    assert main(again) == 0
+    assert json.loads((out / "robustness.json").read_text())["perturbations"] == ["payload"]
+    capsys.readouterr()
+    assert main(["robustness", str(lone), "--out", str(out), "--perturbations", "wind"]) == 2
+    assert "unknown wind; the hopper's are push_up, push_down" in capsys.readouterr().err
+    assert main(["robustness", str(tmp_path / "nothing"), "--out", str(out)]) == 2
+
+
+def test_the_suite_on_a_quadruped(tmp_path):
+    run = trained_run(tmp_path / "anymal", "mlp", robot="anymal", env={"episode_seconds": 2.0})
+    out = tmp_path / "suite"
+    assert main(["robustness", str(run), "--out", str(out), "--episodes", "1",
+                 "--perturbations", "push_sideways,latency"]) == 0  # fmt: skip
+    data = json.loads((out / "robustness.json").read_text())
+    levels = data["runs"][0]["perturbations"]["push_sideways"]["levels"]
+    assert [level["level"] for level in levels] == [7.6, 15.2, 30.4, 45.6]
+    assert {"speed_error", "fell"} <= set(levels[0])
+
+
+def synthetic_run(seed, retention):
+    level = {
+        "level": 1.0,
+        "return": 100.0 * retention,
+        "retention": retention,
+        "hop_height": 0.3,
+        "p99_desired_velocity": 10.0,
+        "recovery": [5.0, "not recovered"],
+    }
+    return {"variant": "cpg-actor", "seed": seed,
+            "nominal": {"return": 100.0, "hop_height": 0.4, "p99_desired_velocity": 9.0},
+            "perturbations": {"push_up": {"field": "push", "unit": "N s", "description": "up",
+                                          "nominal": 0.0, "levels": [level]}}}  # fmt: skip
+
+
+def test_the_summary_over_seeds_has_a_ci_from_three_seeds_on():
+    two = summarise([synthetic_run(0, 0.8), synthetic_run(1, 0.9)], ("hop_height",))
+    entry = two["cpg-actor"]["perturbations"]["push_up"]["levels"][0]
+    assert entry["retention"]["estimate"] == pytest.approx(0.85)
+    assert math.isnan(entry["retention"]["low"])  # too few seeds for an interval
+    assert entry["recovered"]["estimate"] == 0.5 and entry["recovery_steps"]["estimate"] == 5
+    three = summarise([synthetic_run(s, r) for s, r in enumerate((0.8, 0.9, 1.0))],
+                      ("hop_height",))  # fmt: skip
+    entry = three["cpg-actor"]["perturbations"]["push_up"]["levels"][0]
+    assert entry["retention"]["low"] <= 0.9 <= entry["retention"]["high"]
+    data = {"robot": "hopper", "episodes": 1, "env_seed": 0, "metrics": ["hop_height"],
+            "cycle": "hop apex (m)", "variants": three}  # fmt: skip
+    assert "| CPG-Actor | 0 (nominal) | 100.0 [100.0, 100.0] | 100% |" in markdown(plain(data))
