@@ -173,12 +173,17 @@ def test_mjx_takes_no_perturbation():
 
 
 def test_command_delay():
-    delay = CommandDelay(Perturbation(latency=1.5), decimation=4, num_envs=1, num_joints=1)
-    assert (delay.steps, delay.substeps) == (1, 2)
-    delay.reset([0], 0.0)
-    schedules = [delay.schedule(np.array([[float(t)]]))[0, :, 0] for t in (1, 2, 3)]
-    # substeps 0-1 of step t track the command of step t - 2, then the one of step t - 1
-    np.testing.assert_array_equal(schedules, [[0, 0, 0, 0], [0, 0, 1, 1], [1, 1, 2, 2]])
+    latency = Perturbation(latency=1.5).substeps(4)
+    delay = CommandDelay(latency, decimation=4, num_envs=2, num_joints=1, longest=8)
+    delay.set_latency(1, 4)  # robot 1: one step late
+    assert latency == 6 and list(delay.steps) == [1, 1]
+    delay.reset([0, 1], 0.0)
+    schedules = [delay.schedule(np.array([[float(t)], [float(t)]]))[:, :, 0] for t in (1, 2, 3)]
+    # robot 0: substeps 0-1 of step t track the command of step t - 2, then that of t - 1
+    np.testing.assert_array_equal([s[0] for s in schedules],
+                                  [[0, 0, 0, 0], [0, 0, 1, 1], [1, 1, 2, 2]])  # fmt: skip
+    np.testing.assert_array_equal([s[1] for s in schedules],
+                                  [[0, 0, 0, 0], [1, 1, 1, 1], [2, 2, 2, 2]])  # fmt: skip
 
 
 def test_every_robot_declares_its_perturbations_sized_to_its_mass():
@@ -213,3 +218,20 @@ def test_the_perturbation_is_a_config_section():
         compose_config(overrides=["env.perturbation.payload=-1"])
     quadruped = compose_config(overrides=["robot=anymal", "env.perturbation.latency=2"])
     assert quadruped.env.perturbation.latency == 2.0
+
+
+def test_randomised_training_gives_each_env_its_episode_physics():
+    randomize = {"payload": (1.0, 6.0), "friction": (0.4, 1.2), "motor_strength": (0.8, 1.2),
+                 "latency": (0.0, 1.0)}  # fmt: skip
+    env = anymal(3, config=QuadrupedConfig(randomize=randomize))
+    env.reset(seed=4)
+    base = env.model.body(ANYMAL.base_body).id
+    nominal = load_model(ANYMAL, QuadrupedConfig())
+    for i, episode in enumerate(env.draws.episodes):
+        model = env.stepper.model_of(i)
+        assert model.body_mass[base] == pytest.approx(nominal.body_mass[base] + episode.payload)
+        assert model.geom_friction[model.geom("ground").id, 0] == pytest.approx(episode.friction)
+        limits = episode.motor_strength * nominal.actuator_forcerange
+        np.testing.assert_allclose(model.actuator_forcerange, limits)
+        assert env.delay.latency[i] == round(episode.latency * 10)
+    assert len({p.payload for p in env.draws.episodes}) == 3

@@ -251,5 +251,72 @@ def test_the_cho2019_env_passes_the_perturbation_to_its_hopper():
     wrapped = get_agent_spec("cho2019-warm").make_env(1, config, 1)
     inner = wrapped.env
     assert inner.sim.backend.total_mass() == pytest.approx(robot.TOTAL_MASS + 0.5)
-    assert inner.sim.delay is not None and inner.sim.delay.steps == 1
+    assert inner.sim.delay is not None and list(inner.sim.delay.steps) == [1]
     wrapped.close()
+
+
+RANDOMIZE = {"payload": (0.0, 1.0), "friction": (0.4, 1.2), "latency": (0.0, 2.0),
+             "obs_noise": (0.0, 1.0), "motor_strength": (0.8, 1.2)}  # fmt: skip
+
+
+@pytest.mark.parametrize("sim", SIMS)
+def test_randomised_training_draws_each_episode_within_its_ranges(sim):
+    config = HopperConfig(sim=sim, episode_steps=5, randomize=RANDOMIZE)
+    e = HopperVectorEnv(3, config=config, num_threads=1)
+    e.reset(seed=2)
+    draws = []
+    for _ in range(3):  # three episodes of each env
+        draws.append(list(e.sim.draws.episodes))
+        for _ in range(5):
+            e.step(np.tile(NOMINAL, (3, 1)))
+    episodes = [p for row in draws for p in row]
+    assert len({p.payload for p in episodes}) == 9  # each episode its own
+    for p in episodes:
+        for name, (low, high) in RANDOMIZE.items():
+            assert low <= getattr(p, name) <= high
+        assert (p.latency * 10) % 1 == 0  # whole substeps
+    # the physics of each robot is its episode's: its own payload and friction
+    backend = e.sim.backend
+    for i, p in enumerate(e.sim.draws.episodes):
+        if sim == "mujoco":
+            model = backend.stepper.model_of(i)
+            assert model.body_mass[backend._hip] == pytest.approx(1.42462 + p.payload)
+            assert model.pair_friction[0, 0] == pytest.approx(p.friction)
+        else:
+            client, body = backend.handle(i)
+            assert client.getDynamicsInfo(body, 0)[0] == pytest.approx(1.42462 + p.payload)
+            assert client.getDynamicsInfo(body, 3)[1] == pytest.approx(p.friction)
+        assert e.sim.delay.latency[i] == round(p.latency * 10)
+    # reproducible from the seed, and the nominal env's start poses
+    again = HopperVectorEnv(3, config=config, num_threads=1)
+    again.reset(seed=2)
+    nominal = HopperVectorEnv(3, config=HopperConfig(sim=sim), num_threads=1)
+    # the unsensed entries (command, hip height and speed): the nominal env's start poses
+    np.testing.assert_array_equal(nominal.reset(seed=2)[0][:, 4:], e.reset(seed=2)[0][:, 4:])
+    assert again.sim.draws.episodes == e.sim.draws.episodes
+    assert again.reset(seed=3) and again.sim.draws.episodes != e.sim.draws.episodes
+
+
+def test_randomised_training_resumes_exactly():
+    config = HopperConfig(episode_steps=15, randomize=RANDOMIZE)
+    commands = actions(60, num_envs=2)
+    first = HopperVectorEnv(2, config=config, num_threads=1)
+    first.reset(seed=1)
+    for command in commands[:20]:
+        first.step(command)
+    state = first.get_state()
+    rest = [first.step(command)[0] for command in commands[20:]]  # episodes end, new draws
+    second = HopperVectorEnv(2, config=config, num_threads=1)
+    second.reset(seed=7)
+    second.set_state(state)
+    again = [second.step(command)[0] for command in commands[20:]]
+    np.testing.assert_array_equal(np.array(rest), np.array(again))
+    assert first.sim.draws.episodes == second.sim.draws.episodes
+
+
+def test_randomisation_and_a_fixed_perturbation_of_the_same_field_are_refused():
+    with pytest.raises(ValueError, match="perturbation.payload and randomize"):
+        HopperConfig(perturbation=Perturbation(payload=1.0), randomize={"payload": (0.0, 1.0)})
+    with pytest.raises(ValueError, match="randomize.friction"):
+        HopperConfig(randomize={"friction": (1.0, 0.5)})
+    HopperConfig(perturbation=Perturbation(push=1.0), randomize={"payload": (0.0, 1.0)})

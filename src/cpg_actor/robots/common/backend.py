@@ -51,6 +51,12 @@ class Backend(ABC):
         applied, mean over the substeps, (K, 2) N m. ``push``: (K,) a vertical force on the
         hip (N, up positive) at every substep (a perturbation's push), or None."""
 
+    def perturb_robots(self, index: np.ndarray, payload: np.ndarray, friction: np.ndarray,
+                       strength: np.ndarray) -> None:  # fmt: skip
+        """Robots ``index`` (k,) simulated from now on with ``payload`` kg on the hip, foot
+        ``friction`` and motor ``strength`` (k,) each (randomised training)."""
+        raise NotImplementedError(f"the {self.name} backend has no per-robot perturbations")
+
     @abstractmethod
     def unstable(self) -> np.ndarray:
         """(K,) bool: robots the simulator found unstable since their last reset."""

@@ -224,21 +224,131 @@ def standard_axes(moving_mass: float, push_directions: dict[str, str],
     return axes
 
 
+# -- randomised training -----------------------------------------------------------------------
+
+RANDOMIZED = ("payload", "friction", "latency", "obs_noise", "motor_strength")
+
+
+@dataclass
+class Randomization:
+    """Randomised training (``env.randomize``): every episode of every env drawn its own
+    payload, friction, latency, sensor noise and motor strength, uniformly within these ranges
+    ([low, high]; a point range is that value, drawn from nothing), from the env's
+    perturbation generator. The defaults are the nominal robot: no randomisation.
+    ``docs/robustness.md`` gives ranges and where they come from."""
+
+    payload: tuple[float, float] = (0.0, 0.0)  # kg
+    friction: tuple[float, float] | None = None  # None: the env's foot_friction
+    latency: tuple[float, float] = (0.0, 0.0)  # control steps, drawn in whole physics substeps
+    obs_noise: tuple[float, float] = (0.0, 0.0)  # x the robot's sensor noise
+    motor_strength: tuple[float, float] = (1.0, 1.0)
+
+    @property
+    def active(self) -> bool:
+        return self != Randomization()
+
+    def validate(self, decimation: int) -> Randomization:
+        """Raise ValueError naming the first bad range (``randomize.NAME``); returns ``self``."""
+        lows = {"payload": 0.0, "friction": 0.0, "latency": 0.0, "obs_noise": 0.0,
+                "motor_strength": 0.0}  # fmt: skip
+        for name in RANDOMIZED:
+            bounds = getattr(self, name)
+            if bounds is None and name == "friction":
+                continue
+            strict = name in ("friction", "motor_strength")
+            ok = isinstance(bounds, list | tuple) and len(bounds) == 2 and all(
+                not isinstance(b, bool) and isinstance(b, int | float) and math.isfinite(b)
+                for b in bounds)  # fmt: skip
+            ok = ok and bounds[0] <= bounds[1]
+            ok = ok and (bounds[0] > lows[name] if strict else bounds[0] >= lows[name])
+            if not ok:
+                raise ValueError(f"randomize.{name} must be [low, high] with "
+                                 f"{lows[name]:g} {'<' if strict else '<='} low <= high, got "
+                                 f"{bounds!r}")  # fmt: skip
+            setattr(self, name, (float(bounds[0]), float(bounds[1])))
+        for bound in self.latency:
+            Perturbation(latency=bound).substeps(decimation)  # whole substeps
+        return self
+
+    def draw(self, rng: np.random.Generator, decimation: int, push: Perturbation) -> Perturbation:
+        """An episode's perturbation: these fields drawn from ``rng`` (in the order of
+        :data:`RANDOMIZED`; only where the range is not a point), the push's from ``push``."""
+
+        def uniform(bounds):
+            return rng.uniform(*bounds) if bounds[1] > bounds[0] else bounds[0]
+
+        low, high = (round(b * decimation) for b in self.latency)
+        substeps = int(rng.integers(low, high + 1)) if high > low else low
+        return dataclasses.replace(
+            push, payload=float(uniform(self.payload)),
+            friction=None if self.friction is None else float(uniform(self.friction)),
+            latency=substeps / decimation, obs_noise=float(uniform(self.obs_noise)),
+            motor_strength=float(uniform(self.motor_strength)),
+        )  # fmt: skip
+
+    @classmethod
+    def from_value(cls, value: Any) -> Randomization:
+        """A :class:`Randomization` from itself or a mapping of its fields."""
+        if isinstance(value, cls):
+            return value
+        if not isinstance(value, dict):
+            raise ValueError(f"randomize must be a mapping of its fields, got {value!r}")
+        names = [f.name for f in dataclasses.fields(cls)]
+        unknown = sorted(str(k) for k in value if k not in names)
+        if unknown:
+            raise ValueError(f"unknown randomize key(s) {', '.join(unknown)}; accepted: "
+                             f"{', '.join(names)}")  # fmt: skip
+        return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in value.items()})
+
+
+def check_perturbations(config: Any, directions: Sequence[str], simulators: Sequence[str]) -> None:
+    """Validate an env config's ``perturbation`` and ``randomize`` (converting mappings from
+    a config file), for a robot with push ``directions`` whose ``simulators`` take them."""
+    config.perturbation = Perturbation.from_value(config.perturbation).validate(directions)
+    config.perturbation.substeps(config.decimation)  # a whole number of substeps late
+    config.randomize = Randomization.from_value(config.randomize).validate(config.decimation)
+    if config.randomize.active:
+        nominal = Perturbation()
+        given = [n for n in RANDOMIZED if getattr(config.perturbation, n) != getattr(nominal, n)]
+        if given:
+            raise ValueError(
+                f"perturbation.{given[0]} and randomize: randomised training draws "
+                f"{', '.join(RANDOMIZED)} per episode; give one or the other"
+            )
+    if config.sim not in simulators and (
+        not config.perturbation.nominal or config.randomize.active
+    ):
+        raise ValueError(f"perturbations run on {' and '.join(simulators)}; "
+                         f"sim={config.sim!r} takes none")  # fmt: skip
+
+
 # -- at run time -------------------------------------------------------------------------------
 
 
 class CommandDelay:
-    """The commands of N robots applied ``latency`` control steps late: ``schedule(desired)``
-    takes this step's commands (N, J) and gives what the drives track at each of the step's
-    ``decimation`` substeps (N, decimation, J). Before an episode's first command arrives the
-    drives track the episode's start command (:meth:`reset`)."""
+    """The commands of N robots applied late: ``schedule(desired)`` takes this step's commands
+    (N, J) and gives what the drives track at each of the step's ``decimation`` substeps
+    (N, decimation, J). Robot i's commands arrive ``latency[i]`` physics substeps late
+    (:meth:`set_latency`; a perturbation's for all at first, ``longest`` substeps at most).
+    Before an episode's first command arrives the drives track its start command
+    (:meth:`reset`)."""
 
-    def __init__(self, perturbation: Perturbation, decimation: int, num_envs: int,
-                 num_joints: int) -> None:  # fmt: skip
-        self.steps, self.substeps = divmod(perturbation.substeps(decimation), decimation)
+    def __init__(self, latency: int, decimation: int, num_envs: int, num_joints: int,
+                 longest: int | None = None) -> None:  # fmt: skip
         self.decimation = decimation
-        # the last steps + 2 commands, oldest first
-        self.history = np.zeros((self.steps + 2, num_envs, num_joints))
+        longest = latency if longest is None else max(longest, latency)
+        # the last commands, oldest first: enough for the longest delay
+        self.history = np.zeros((longest // decimation + 2, num_envs, num_joints))
+        self.latency = np.full(num_envs, latency, dtype=np.int64)
+        self._rows = np.arange(num_envs)
+
+    @property
+    def steps(self) -> np.ndarray:
+        """(N,) whole control steps of each robot's delay."""
+        return self.latency // self.decimation
+
+    def set_latency(self, index, substeps) -> None:
+        self.latency[index] = substeps
 
     def reset(self, index, command) -> None:
         """Robots ``index`` start an episode with the drives on ``command`` (k, J) or (J,)."""
@@ -247,10 +357,12 @@ class CommandDelay:
     def schedule(self, desired: np.ndarray) -> np.ndarray:
         self.history[:-1] = self.history[1:].copy()
         self.history[-1] = desired
-        out = np.empty((desired.shape[0], self.decimation, desired.shape[1]))
-        out[:, : self.substeps] = self.history[0][:, None]  # the step before's command
-        out[:, self.substeps :] = self.history[1][:, None]  # this step's, `steps` steps ago
-        return out
+        steps, substeps = np.divmod(self.latency, self.decimation)
+        newest = len(self.history) - 1
+        before = self.history[newest - steps - 1, self._rows]  # the step before's command
+        arrived = self.history[newest - steps, self._rows]  # this step's, `steps` steps ago
+        early = np.arange(self.decimation)[None, :] < substeps[:, None]  # (N, decimation)
+        return np.where(early[:, :, None], before[:, None], arrived[:, None])
 
     def get_state(self) -> np.ndarray:
         return self.history.copy()
@@ -265,33 +377,45 @@ def perturbation_seed(seed: int | None) -> np.random.SeedSequence | None:
 
 
 class EpisodeDraws:
-    """The random part of a perturbation for N envs: each env's generator of its own (seeded
-    from the env's seed by :func:`perturbation_seed`), the control step of each episode's push
-    and the sensor noise. With a perturbation that draws nothing it does nothing."""
+    """The random part of the perturbations of N envs: each env's generator of its own (seeded
+    from the env's seed by :func:`perturbation_seed`), each episode's perturbation under
+    randomised training, the control step of each episode's push and the sensor noise. With
+    nothing to draw it does nothing."""
 
-    def __init__(self, perturbation: Perturbation, num_envs: int, control_dt: float,
-                 sensor_noise: Sequence[float]) -> None:  # fmt: skip
-        self.perturbation = perturbation
-        self.active = perturbation.random
+    def __init__(self, config: Any, num_envs: int, sensor_noise: Sequence[float]) -> None:
+        perturbation, randomize = config.perturbation, config.randomize
+        self.perturbation, self.randomize = perturbation, randomize
+        self.decimation = config.decimation
+        self.active = perturbation.random or randomize.active
         self.num_envs = num_envs
-        first, last = (round(t / control_dt) for t in perturbation.push_time)
+        first, last = (round(t / config.control_dt) for t in perturbation.push_time)
         self.window = (first, last)
-        self.noise_std = perturbation.obs_noise * np.asarray(sensor_noise, dtype=np.float64)
-        self.noisy = np.flatnonzero(self.noise_std > 0)
+        self.sensor_noise = np.asarray(sensor_noise, dtype=np.float64)
+        self.noisy = np.flatnonzero(self.sensor_noise > 0)
         self.rngs: list[np.random.Generator] = []
         self.push_step = np.full(num_envs, -1, dtype=np.int64)
+        # each env's episode perturbation (randomised training: drawn by start())
+        self.episodes = [perturbation] * num_envs
 
     def seed(self, seeds: Sequence[int | None]) -> None:
         """New generators, env i's from ``seeds[i]``."""
         if self.active:
             self.rngs = [np.random.default_rng(perturbation_seed(s)) for s in seeds]
 
-    def start(self, index) -> None:
-        """Draw the push step of the episodes the envs ``index`` start."""
-        if not self.active or self.perturbation.push == 0.0:
-            return
-        for i in np.atleast_1d(index):
-            self.push_step[i] = self.rngs[i].integers(self.window[0], self.window[1] + 1)
+    def start(self, index) -> np.ndarray:
+        """Draw the episodes the envs ``index`` start: under randomised training their
+        perturbations (:attr:`episodes`), then their push steps. Returns ``index`` as an
+        array."""
+        index = np.atleast_1d(index)
+        if not self.active:
+            return index
+        for i in index:
+            rng = self.rngs[i]
+            if self.randomize.active:
+                self.episodes[i] = self.randomize.draw(rng, self.decimation, self.perturbation)
+            if self.perturbation.push:
+                self.push_step[i] = rng.integers(self.window[0], self.window[1] + 1)
+        return index
 
     def pushed(self, elapsed: np.ndarray) -> np.ndarray:
         """(N,) bool: the envs pushed during the control step after ``elapsed`` steps."""
@@ -303,22 +427,28 @@ class EpisodeDraws:
         if not self.active or self.noisy.size == 0:
             return obs
         rows = range(self.num_envs) if index is None else np.atleast_1d(index)
-        std = self.noise_std[self.noisy]
         for i in rows:
-            obs[i, self.noisy] += self.rngs[i].normal(0.0, std).astype(obs.dtype)
+            level = self.episodes[i].obs_noise
+            if level > 0.0:
+                std = level * self.sensor_noise[self.noisy]
+                obs[i, self.noisy] += self.rngs[i].normal(0.0, std).astype(obs.dtype)
         return obs
 
     def get_state(self) -> dict[str, Any]:
+        """The generators and the episode perturbations, as plain Python values (the push
+        steps, an array, are the env's to save: :attr:`push_step`)."""
         return {"rngs": [rng.bit_generator.state for rng in self.rngs],
-                "push_step": self.push_step.copy()}  # fmt: skip
+                "episodes": [dataclasses.asdict(p) for p in self.episodes]}  # fmt: skip
 
-    def set_state(self, state: dict[str, Any]) -> None:
+    def set_state(self, state: dict[str, Any], push_step=None) -> None:
         self.rngs = []
         for saved in state["rngs"]:
             rng = np.random.default_rng()
             rng.bit_generator.state = saved
             self.rngs.append(rng)
-        np.copyto(self.push_step, np.asarray(state["push_step"], dtype=np.int64))
+        if push_step is not None:
+            np.copyto(self.push_step, np.asarray(push_step, dtype=np.int64))
+        self.episodes = [Perturbation.from_value(dict(p)) for p in state["episodes"]]
 
 
 def push_force(perturbation: Perturbation, control_dt: float) -> np.ndarray:
@@ -329,5 +459,5 @@ def push_force(perturbation: Perturbation, control_dt: float) -> np.ndarray:
 
 __all__ = [
     "CommandDelay", "EpisodeDraws", "PUSH_DIRECTIONS", "Perturbation", "PerturbationAxis",
-    "PerturbationTable", "push_force", "standard_axes",
+    "PerturbationTable", "Randomization", "check_perturbations", "push_force", "standard_axes",
 ]  # fmt: skip

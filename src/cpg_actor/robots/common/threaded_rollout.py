@@ -76,6 +76,14 @@ class ThreadedRollout:
         # the helpers hold no reference to self: they stop when it is closed or collected
         self._stop = weakref.finalize(self, _stop_helpers, self._jobs)
 
+    def set_model(self, index: int, model: mujoco.MjModel) -> None:
+        """Step robot ``index`` with ``model`` from now on: a model of the same sizes (another
+        mass, friction or actuator; randomised training)."""
+        self._models[index] = model
+
+    def model_of(self, index: int) -> mujoco.MjModel:
+        return self._models[index]
+
     def rollout(
         self,
         state: np.ndarray,

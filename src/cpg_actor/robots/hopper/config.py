@@ -10,7 +10,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from cpg_actor.robots.common.perturbation import Perturbation
+from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 from cpg_actor.robots.hopper.backends import BACKENDS, BATCHED_ONLY
 
 SIMULATORS = (*BACKENDS, BATCHED_ONLY)  # the backends' and MJX
@@ -73,6 +73,7 @@ class HopperConfig:
     render_height: int = 480
     # -- perturbations (the robustness suite's; docs/robustness.md): none by default -----------
     perturbation: Perturbation = field(default_factory=Perturbation)
+    randomize: Randomization = field(default_factory=Randomization)  # randomised training
 
     def __post_init__(self) -> None:
         self.validate()
@@ -104,11 +105,7 @@ class HopperConfig:
                     raise ValueError(f"{name} must be a number, got {value!r}")
                 if not math.isfinite(value):
                     raise ValueError(f"{name} must be finite, got {value!r}")
-        self.perturbation = Perturbation.from_value(self.perturbation).validate(PUSH_DIRECTIONS)
-        self.perturbation.substeps(self.decimation)  # a whole number of substeps late
-        if self.sim == BATCHED_ONLY and not self.perturbation.nominal:
-            raise ValueError("perturbations run on the CPU simulators (sim='mujoco' or "
-                             "'pybullet'); sim='mjx' takes none")  # fmt: skip
+        check_perturbations(self, PUSH_DIRECTIONS, tuple(BACKENDS))  # not on MJX
         if self.sim not in SIMULATORS:
             raise ValueError(f"sim must be one of {', '.join(SIMULATORS)}, got {self.sim!r}")
         if self.actuator_law not in ACTUATOR_LAWS:
@@ -189,9 +186,9 @@ class HopperConfig:
         return perturbation_table()
 
 
-# the plain fields' kinds (the perturbation is a section of its own)
+# the plain fields' kinds (the perturbation and the randomisation are sections of their own)
 _FIELD_KINDS = {
     f.name: {"str": str, "int": int, "float": float, "bool": bool}[f.type]
     for f in dataclasses.fields(HopperConfig)
-    if f.name != "perturbation"
+    if f.name not in ("perturbation", "randomize")
 }

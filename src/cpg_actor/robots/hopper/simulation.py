@@ -49,12 +49,13 @@ class HopperSimulation:
         self.backend = make_backend(config, self.num_robots, num_threads)
         self.desired = np.tile(NOMINAL_POSE, (self.num_robots, 1))
         self.elapsed_steps = np.zeros(self.num_robots, dtype=np.int64)
-        perturbation = config.perturbation
+        perturbation, randomize = config.perturbation, config.randomize
+        latency = perturbation.substeps(config.decimation)
+        longest = round(randomize.latency[1] * config.decimation)
         self.delay = None
-        if perturbation.latency:
-            self.delay = CommandDelay(perturbation, config.decimation, self.num_robots, 2)
-        self.draws = EpisodeDraws(perturbation, self.num_robots, config.control_dt,
-                                  task.SENSOR_NOISE)  # fmt: skip
+        if latency or longest:
+            self.delay = CommandDelay(latency, config.decimation, self.num_robots, 2, longest)
+        self.draws = EpisodeDraws(config, self.num_robots, task.SENSOR_NOISE)
         self.push_force = push_force(perturbation, config.control_dt)[2]  # along the rail
         self.pushed = np.zeros(self.num_robots, dtype=bool)
 
@@ -71,9 +72,23 @@ class HopperSimulation:
         self.backend.reset_robots(index, qpos, np.zeros((len(index), 3)))
         self.desired[index] = NOMINAL_POSE
         self.elapsed_steps[index] = 0
+        self.draws.start(index)
+        if self.config.randomize.active:  # each robot's episode perturbation
+            self._perturb(index)
         if self.delay is not None:
             self.delay.reset(index, NOMINAL_POSE)
-        self.draws.start(index)
+
+    def _perturb(self, index: np.ndarray) -> None:
+        """The robots ``index`` simulated under their episode perturbations (randomised
+        training): their physics and their latency."""
+        episodes = [self.draws.episodes[i] for i in index]
+        self.backend.perturb_robots(
+            index, np.array([p.payload for p in episodes]),
+            np.array([p.ground_friction(self.config.foot_friction) for p in episodes]),
+            np.array([p.motor_strength for p in episodes]),
+        )  # fmt: skip
+        if self.delay is not None:
+            self.delay.set_latency(index, [p.substeps(self.config.decimation) for p in episodes])
 
     def get_state(self) -> dict[str, np.ndarray]:
         """The simulator state, the desired positions being tracked and the episode clocks
@@ -88,6 +103,19 @@ class HopperSimulation:
         if self.draws.active:
             state["push_step"] = self.draws.push_step.copy()
         return state
+
+    def perturbation_state(self) -> dict:
+        """The perturbation's generators and episode draws (plain values), or {} if none."""
+        return self.draws.get_state() if self.draws.active else {}
+
+    def set_perturbation_state(self, state: dict) -> None:
+        """Restore :meth:`perturbation_state` (after :meth:`set_state`): the generators, and
+        under randomised training every robot's episode perturbation, physics included."""
+        if not state:
+            return
+        self.draws.set_state(state)
+        if self.config.randomize.active:
+            self._perturb(np.arange(self.num_robots))
 
     def set_state(self, state: dict[str, np.ndarray]) -> None:
         self.backend.set_state(np.asarray(state["backend"]))

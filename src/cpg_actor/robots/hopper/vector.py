@@ -168,8 +168,8 @@ class HopperVectorEnv(VectorEnv):
             "episodes": {k: torch.from_numpy(v) for k, v in episodes.items()},
             "rngs": [rng.bit_generator.state for rng in self._rngs],
         }
-        if self.sim.draws.active:  # the perturbation's own generators
-            state["perturbation_rngs"] = self.sim.draws.get_state()["rngs"]
+        if self.sim.draws.active:  # the perturbation's own generators and draws
+            state["perturbation"] = self.sim.perturbation_state()
         return state
 
     def set_state(self, state: dict[str, Any]) -> None:
@@ -189,9 +189,7 @@ class HopperVectorEnv(VectorEnv):
         self._rngs = [seeding.np_random(0)[0] for _ in rngs]
         for rng, rng_state in zip(self._rngs, rngs, strict=True):
             rng.bit_generator.state = rng_state
-        if "perturbation_rngs" in state:
-            push_step = self.sim.draws.push_step.copy()  # restored with the simulation
-            self.sim.draws.set_state({"rngs": state["perturbation_rngs"], "push_step": push_step})
+        self.sim.set_perturbation_state(state.get("perturbation", {}))
         self._needs_reset = False
 
     def render_frame(self, index: int = 0) -> np.ndarray:

@@ -12,7 +12,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
-from cpg_actor.robots.common.perturbation import Perturbation
+from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 
 
 def default_scales() -> dict[str, float]:
@@ -91,6 +91,7 @@ class QuadrupedConfig:
     render_height: int = 480
     # perturbations (the robustness suite's; docs/robustness.md): none by default
     perturbation: Perturbation = field(default_factory=Perturbation)
+    randomize: Randomization = field(default_factory=Randomization)  # randomised training
 
     @property
     def control_dt(self) -> float:
@@ -162,10 +163,7 @@ class QuadrupedConfig:
         if self.actuator_law not in ("dc-motor", "coast"):
             raise ValueError(f"actuator_law must be 'dc-motor' or 'coast', got "
                              f"{self.actuator_law!r}")  # fmt: skip
-        self.perturbation = Perturbation.from_value(self.perturbation).validate(PUSH_DIRECTIONS)
-        self.perturbation.substeps(self.decimation)  # a whole number of substeps late
-        if self.sim == "mjx" and not self.perturbation.nominal:
-            raise ValueError("perturbations run on MuJoCo (sim='mujoco'); sim='mjx' takes none")
+        check_perturbations(self, PUSH_DIRECTIONS, ("mujoco",))  # not on MJX
         return self
 
     # the mass the robot moves, kg (ANYmal B's: robots/anymal/description.py TOTAL_MASS), which

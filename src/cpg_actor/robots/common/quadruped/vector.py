@@ -37,6 +37,7 @@ checkered ground.
 from __future__ import annotations
 
 import copy
+import dataclasses
 from typing import Any
 
 import gymnasium as gym
@@ -56,7 +57,12 @@ from cpg_actor.robots.common.mujoco_runtime import (
     mujoco,
     offscreen_renderer,
 )
-from cpg_actor.robots.common.perturbation import CommandDelay, EpisodeDraws, push_force
+from cpg_actor.robots.common.perturbation import (
+    CommandDelay,
+    EpisodeDraws,
+    Randomization,
+    push_force,
+)
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.common.quadruped.model import SENSORS, QuadrupedModel
 from cpg_actor.robots.common.seeding import env_seeds
@@ -204,13 +210,16 @@ class QuadrupedVectorEnv(VectorEnv):
             offsets[name] = slice(start, start + size)
             start += size
         self._offsets = offsets
-        perturbation = config.perturbation
+        perturbation, randomize = config.perturbation, config.randomize
+        latency = perturbation.substeps(config.decimation)
+        longest = round(randomize.latency[1] * config.decimation)
         self.delay = None  # the perturbation's latency, sensor noise and push
-        if perturbation.latency:
-            self.delay = CommandDelay(perturbation, config.decimation, num_envs, self.model.nu)
-        self.draws = EpisodeDraws(perturbation, num_envs, config.control_dt,
-                                  task.sensor_noise(len(quadruped.joint_names)))  # fmt: skip
+        if latency or longest:
+            self.delay = CommandDelay(latency, config.decimation, num_envs, self.model.nu,
+                                      longest)  # fmt: skip
+        self.draws = EpisodeDraws(config, num_envs, task.sensor_noise(len(quadruped.joint_names)))
         self._push = push_force(perturbation, config.control_dt)  # N, in the heading frame
+        self._payload = np.full(num_envs, perturbation.payload)  # per env (randomised)
         self._base = self.model.body(quadruped.base_body).id
         self._rngs: list[np.random.Generator] | None = None
         self.episode: task.Episode | None = None  # the task's bookkeeping
@@ -270,9 +279,23 @@ class QuadrupedVectorEnv(VectorEnv):
         fresh = task.new_episode(command, joints, self.qpos[:, 0].copy(),
                                  self._feet()[:, :, :2].copy())  # fmt: skip
         self.episode = fresh if self.episode is None else task.restart(self.episode, done, fresh)
+        self.draws.start(index)
+        if self.config.randomize.active:  # each env's episode perturbation
+            self._perturb(index)
         if self.delay is not None:  # the drives hold the start pose until the first command
             self.delay.reset(index, joints[index])
-        self.draws.start(index)
+
+    def _perturb(self, index: np.ndarray) -> None:
+        """The envs ``index`` simulated under their episode perturbations (randomised
+        training): a model of their own (payload, friction, motor strength), their latency."""
+        for i in index:
+            episode = self.draws.episodes[i]
+            config = dataclasses.replace(self.config, perturbation=episode,
+                                         randomize=Randomization())  # fmt: skip
+            self.stepper.set_model(int(i), load_model(self.quadruped, config))
+            self._payload[i] = episode.payload
+            if self.delay is not None:
+                self.delay.set_latency(i, episode.substeps(self.config.decimation))
 
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
@@ -362,7 +385,7 @@ class QuadrupedVectorEnv(VectorEnv):
             base_touch=self._sensor("base_touch")[:, 0] > 0,
             unstable=~np.isfinite(self._state).all(axis=1),
         )  # fmt: skip
-        weight = (self.quadruped.total_mass + cfg.perturbation.payload) * self.quadruped.gravity
+        weight = (self.quadruped.total_mass + self._payload) * self.quadruped.gravity
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # blown up: masked
             self.episode, out = task.step(cfg, self.episode, reading, desired, self._nominal,
                                           self.quadruped.foot_radius, weight)  # fmt: skip
@@ -397,7 +420,7 @@ class QuadrupedVectorEnv(VectorEnv):
             arrays["delayed"] = self.delay.get_state()
         if self.draws.active:
             arrays["push_step"] = self.draws.push_step
-            extra["perturbation_rngs"] = self.draws.get_state()["rngs"]
+            extra["perturbation"] = self.draws.get_state()
         return {
             self.quadruped.state_key: {
                 **{name: torch.from_numpy(np.array(value)) for name, value in arrays.items()},
@@ -432,9 +455,10 @@ class QuadrupedVectorEnv(VectorEnv):
             self._rngs.append(rng)
         if self.delay is not None and "delayed" in state:
             self.delay.set_state(state["delayed"])
-        if "perturbation_rngs" in state:
-            self.draws.set_state({"rngs": state["perturbation_rngs"],
-                                  "push_step": state["push_step"]})  # fmt: skip
+        if "perturbation" in state:
+            self.draws.set_state(state["perturbation"], state["push_step"])
+            if self.config.randomize.active:
+                self._perturb(np.arange(self.num_envs))
         self._needs_reset = False
 
     # -- rendering -----------------------------------------------------------------------------

@@ -70,6 +70,7 @@ class MujocoBackend(Backend):
     ) -> None:
         self.model = load_model(physics_dt, foot_friction, actuator, payload)
         self.actuator = actuator
+        self.strength = np.ones((int(num_robots), 1))  # per robot (randomised training)
         if actuator.law == "coast":  # the law in numpy, applied as joint torques: actuators off
             self.model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ACTUATION.value
         self.num_robots = int(num_robots)
@@ -96,6 +97,22 @@ class MujocoBackend(Backend):
         self._hip = self.model.body("hip").id
         self._renderer: mujoco.Renderer | None = None
         self._camera: mujoco.MjvCamera | None = None
+
+    def perturb_robots(self, index: np.ndarray, payload: np.ndarray, friction: np.ndarray,
+                       strength: np.ndarray) -> None:  # fmt: skip
+        """Each robot of ``index`` gets a model of its own (a payload, a friction, its
+        actuators scaled by its strength; the coast law scales its torques instead)."""
+        from cpg_actor.robots.common.perturbation import Perturbation
+
+        coast = self.actuator.law == "coast"
+        for row, i in enumerate(np.atleast_1d(index)):
+            scaled = Perturbation(motor_strength=1.0 if coast else float(strength[row]))
+            model = load_model(self.model.opt.timestep, float(friction[row]),
+                               scaled.actuator(self.actuator), float(payload[row]))  # fmt: skip
+            if coast:
+                model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ACTUATION.value
+                self.strength[i] = strength[row]
+            self.stepper.set_model(int(i), model)
 
     # -- state -----------------------------------------------------------------------------
     def reset_robots(self, index: np.ndarray, qpos: np.ndarray, qvel: np.ndarray) -> None:
@@ -145,7 +162,8 @@ class MujocoBackend(Backend):
         torque_sum = np.zeros((self.num_robots, 2))
         for substep in range(substeps):
             target = desired[:, substep] if desired.ndim == 3 else desired
-            torque = self.actuator(target, self.joint_pos, self.joint_vel)
+            # the law is homogeneous in the drive's strength: a robot's own scales its torque
+            torque = self.actuator(target, self.joint_pos, self.joint_vel) * self.strength
             self._torque_control[:, 0, 1:3] = torque
             control, spec = self._torque_control, TORQUE_SPEC
             if push is not None:
@@ -174,10 +192,10 @@ class MujocoBackend(Backend):
         return self._time < CLOCK_START
 
     def _load(self, index: int) -> mujoco.MjData:
-        data = self._data
-        mujoco.mj_setState(self.model, data, self._state[index], STATE_SPEC)
+        data, model = self._data, self.stepper.model_of(index)  # the robot's own model
+        mujoco.mj_setState(model, data, self._state[index], STATE_SPEC)
         data.qfrc_applied[:] = 0.0
-        mujoco.mj_forward(self.model, data)
+        mujoco.mj_forward(model, data)
         return data
 
     def foot_state(self) -> tuple[np.ndarray, np.ndarray]:

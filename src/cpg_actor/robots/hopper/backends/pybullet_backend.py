@@ -79,8 +79,9 @@ class _World:
                  payload: float = 0.0) -> None:  # fmt: skip
         self.num_robots = num_robots
         self.physics_dt = physics_dt
-        self.foot_friction = foot_friction
-        self.payload = payload
+        # each robot's foot friction and payload (one for all but under randomised training)
+        self.foot_friction = [foot_friction] * num_robots
+        self.payload = [payload] * num_robots
         with quiet_stdout():
             self.client = bullet_client.BulletClient(connection_mode=pybullet.DIRECT)
         self.poisoned = False  # a NaN reached Bullet: rebuild before the next use
@@ -117,10 +118,8 @@ class _World:
                     maxJointVelocity=1000.0, restitution=0.0,
                 )  # fmt: skip
                 c.setCollisionFilterGroupMask(body, link, 0, 0)
-            c.changeDynamics(body, FOOT_LINK, lateralFriction=self.foot_friction)
-            if self.payload:  # at the hip's centre of mass: its inertia about it unchanged
-                mass = c.getDynamicsInfo(body, HIP_LINK)[0]
-                c.changeDynamics(body, HIP_LINK, mass=mass + self.payload)
+            self.hip_mass = c.getDynamicsInfo(body, HIP_LINK)[0]
+            self.perturb(len(self.bodies), body)
             c.setCollisionFilterGroupMask(body, FOOT_LINK, _FOOT_GROUP, _GROUND_GROUP)
             c.setJointMotorControlArray(
                 body, [RAIL, HFE, KFE], pybullet.VELOCITY_CONTROL, forces=[0.0, 0.0, 0.0]
@@ -130,6 +129,15 @@ class _World:
         if names != [robot.RAIL_JOINT, *robot.JOINT_NAMES]:
             raise RuntimeError(f"unexpected joint order in {URDF_PATH}: {names}")
         self.poisoned = False
+
+    def perturb(self, local: int, body: int | None = None) -> None:
+        """Robot ``local`` of this world with its foot friction and payload (at the hip's
+        centre of mass: the hip's inertia about it unchanged)."""
+        c = self.client
+        body = self.bodies[local] if body is None else body
+        c.changeDynamics(body, FOOT_LINK, lateralFriction=self.foot_friction[local])
+        if self.payload[local] or c.getDynamicsInfo(body, HIP_LINK)[0] != self.hip_mass:
+            c.changeDynamics(body, HIP_LINK, mass=self.hip_mass + self.payload[local])
 
     def close(self) -> None:
         try:
@@ -162,6 +170,18 @@ class PybulletBackend(Backend):
         self.qpos = np.zeros((self.num_robots, 3))
         self.qvel = np.zeros((self.num_robots, 3))
         self._unstable = np.zeros(self.num_robots, dtype=bool)
+        self.strength = np.ones((self.num_robots, 1))  # per robot (randomised training)
+
+    def perturb_robots(self, index: np.ndarray, payload: np.ndarray, friction: np.ndarray,
+                       strength: np.ndarray) -> None:  # fmt: skip
+        """Each robot of ``index`` with its payload, foot friction and motor strength (its
+        torques scaled: the actuator law is homogeneous in the drive's strength)."""
+        for row, i in enumerate(np.atleast_1d(index)):
+            world, local = self._worlds[i // ROBOTS_PER_WORLD], i % ROBOTS_PER_WORLD
+            world.payload[local] = float(payload[row])
+            world.foot_friction[local] = float(friction[row])
+            world.perturb(local)
+            self.strength[i] = strength[row]
 
     def handle(self, index: int) -> tuple[bullet_client.BulletClient, int]:
         """(client, body id) of robot ``index``, for diagnostics and tests."""
@@ -219,7 +239,7 @@ class PybulletBackend(Backend):
         torque_sum = np.zeros((self.num_robots, 2))
         for substep in range(substeps):
             target = desired[:, substep] if desired.ndim == 3 else desired
-            torque = self.actuator(target, self.joint_pos, self.joint_vel)
+            torque = self.actuator(target, self.joint_pos, self.joint_vel) * self.strength
             torque_sum += torque
             rows = torque.tolist()
             for i, c, body in self._robots():

@@ -69,7 +69,7 @@ class Episode(NamedTuple):
 # perturbation: always the nominal one on MJX): left out of the key under which dynamics_for
 # shares them
 SHARED_ACROSS = ("episode_steps", "reset_noise", "reset_clearance", "render_width",
-                 "render_height", "perturbation")  # fmt: skip
+                 "render_height", "perturbation", "randomize")  # fmt: skip
 
 
 class EnvState(NamedTuple):
