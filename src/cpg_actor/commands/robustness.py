@@ -38,7 +38,7 @@ def run(args: argparse.Namespace) -> int:
     from cpg_actor.robots.registry import get_robot
     from cpg_actor.robustness.runs import find_runs
     from cpg_actor.robustness.suite import evaluate_run
-    from cpg_actor.robustness.summary import outputs, summarise, write_outputs
+    from cpg_actor.robustness.summary import outputs, summarise, verdicts, write_outputs
 
     check_seed(args.seed)
     if args.episodes < 1:
@@ -71,7 +71,8 @@ def run(args: argparse.Namespace) -> int:
         "robot": robot.name, "episodes": args.episodes, "env_seed": args.seed,
         "perturbations": names, "metrics": list(table.metrics), "cycle": table.cycle_name,
         "seconds": time.perf_counter() - start,
-        "variants": summarise(results, table.metrics), "runs": results,
+        "variants": summarise(results, table.metrics),
+        "verdicts": verdicts(results, names), "runs": results,
     }  # fmt: skip
     for path in write_outputs(out, data):
         print(f"wrote {path}")

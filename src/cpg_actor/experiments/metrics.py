@@ -466,6 +466,28 @@ def verdict_best_during_training(cpg: Sequence[float] | None, others: Groups) ->
     )  # fmt: skip
 
 
+def verdict_more_robust(
+    first: Sequence[float] | None,
+    second: Sequence[float] | None,
+    names: tuple[str, str] = ("cpg-actor", "mlp"),
+) -> Verdict:
+    """ "``names[0]`` is more robust than ``names[1]``" under one perturbation: per seed, the
+    return retained under it (:mod:`cpg_actor.robustness`; the mean over its levels of the
+    return / the nominal return); supported if the 95% CI of the difference of the means over
+    seeds (unpaired bootstrap: the two are independent runs) lies above 0."""
+    missing = too_few_seeds({names[0]: first, names[1]: second})
+    if missing:
+        return missing
+    diff = bootstrap_difference(first, second)
+    ok = diff is not None and diff.low > 0
+    return (
+        SUPPORTED if ok else NOT_SUPPORTED,
+        f"mean retention over the levels {np.mean(finite(first)):.3g} ({names[0]}) vs "
+        f"{np.mean(finite(second)):.3g} ({names[1]}), difference of means {diff} (supported if "
+        "the CI is above 0)",
+    )
+
+
 CPG_SIGNALS = ("theta_dot", "r_ddot")
 
 

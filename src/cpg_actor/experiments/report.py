@@ -25,6 +25,7 @@ from cpg_actor.experiments.results import (
     trace_joint_limits,
 )
 from cpg_actor.experiments.transfer import load_transfer, transfer_lines
+from cpg_actor.robustness.summary import report_lines as robustness_lines
 from cpg_actor.machine import cpu_model, git_commit
 from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
 from cpg_actor.robots.hopper.reward import REWARD_TERMS
@@ -773,6 +774,7 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
             )
     lines += [""] + _comparison_lines(summary["comparisons"])
     lines += transfer_lines(load_transfer(out))
+    lines += robustness_lines(out)  # the suite's verdicts, if it ran on this reproduction
     lines += [
         "## The paper's claims",
         "",

@@ -23,6 +23,10 @@ from cpg_actor.robustness.suite import NO_GAIT, NOT_RECOVERED
 
 JSON_FILE = "robustness.json"
 MARKDOWN_FILE = "robustness.md"
+REPORT_FOLDER = "robustness"  # a reproduction's suite, OUT/robustness/, goes into its report
+# a variant trained with env.randomize is named as the nominal one with this suffix: the
+# verdicts compare the two
+RANDOMIZED = "-randomized"
 
 
 def figure_name(perturbation: str) -> str:
@@ -84,6 +88,68 @@ def summarise(runs: list[dict[str, Any]], metrics: tuple[str, ...]) -> dict[str,
     return out
 
 
+def retention_scores(runs: list[dict[str, Any]], variant: str, name: str) -> list[float]:
+    """Per seed of ``variant``: the mean over perturbation ``name``'s levels of the return
+    retained."""
+    scores = []
+    for run in runs:
+        if run["variant"] != variant or name not in run["perturbations"]:
+            continue
+        values = [level.get("retention") for level in run["perturbations"][name]["levels"]]
+        finite = m.finite([math.nan if v is None else v for v in values])
+        scores.append(float(finite.mean()) if finite.size else math.nan)
+    return scores
+
+
+def verdict_pairs(variants: list[str]) -> list[tuple[str, str]]:
+    """The claims judged: the CPG-Actor more robust than the MLP, and each variant trained
+    with randomisation (``NAME-randomized``) more robust than its nominal training (NAME)."""
+    pairs = [("cpg-actor", "mlp")] if {"cpg-actor", "mlp"} <= set(variants) else []
+    pairs += [(v, v.removesuffix(RANDOMIZED)) for v in variants
+              if v.endswith(RANDOMIZED) and v.removesuffix(RANDOMIZED) in variants]  # fmt: skip
+    return pairs
+
+
+def verdicts(runs: list[dict[str, Any]], names: list[str]) -> list[dict[str, Any]]:
+    """Per claim (:func:`verdict_pairs`) and perturbation: its verdict and explanation
+    (:func:`cpg_actor.experiments.metrics.verdict_more_robust`)."""
+    variants = list(dict.fromkeys(run["variant"] for run in runs))
+    out = []
+    for first, second in verdict_pairs(variants):
+        for name in names:
+            verdict, why = m.verdict_more_robust(retention_scores(runs, first, name),
+                                                 retention_scores(runs, second, name),
+                                                 (first, second))  # fmt: skip
+            out.append({"claim": f"{first} more robust than {second}", "perturbation": name,
+                        "verdict": verdict, "why": why})  # fmt: skip
+    return out
+
+
+def verdict_lines(data: dict[str, Any]) -> list[str]:
+    """The verdicts as a Markdown table (none: no lines)."""
+    rows = data.get("verdicts") or []
+    if not rows:
+        return []
+    lines = ["| claim | perturbation | verdict | why |", "| --- | --- | --- | --- |"]
+    lines += [f"| {r['claim']} | {r['perturbation']} | **{r['verdict']}** | {r['why']} |"
+              for r in rows]  # fmt: skip
+    return lines
+
+
+def report_lines(out: Path) -> list[str]:
+    """The reproduction report's robustness section, from ``OUT/robustness/robustness.json``
+    (``cpg-actor robustness OUT --out OUT/robustness``); none without it."""
+    path = Path(out) / REPORT_FOLDER / JSON_FILE
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return []
+    return ["## Robustness", "",
+            f"Per perturbation, the return retained under it (mean over its levels, per seed; "
+            f"`{REPORT_FOLDER}/{MARKDOWN_FILE}` has every level), {data['episodes']} episodes "
+            "per level:", "", *verdict_lines(data), ""]  # fmt: skip
+
+
 def plain(value: Any) -> Any:
     """``value`` for JSON: NaN and infinities as null, numpy numbers as Python's."""
     if isinstance(value, dict):
@@ -141,6 +207,12 @@ def markdown(data: dict[str, Any]) -> str:
     for variant, summary in variants.items():
         lines.append(f"| {label(variant)} | {len(summary['seeds'])} | "
                      f"{_text(summary['nominal']['return'], '.1f')} |")  # fmt: skip
+    if data.get("verdicts"):
+        lines += ["", "## Verdicts", "",
+                  "Per perturbation, per seed the mean over its levels of the return retained; "
+                  "a claim is supported if the bootstrap 95% CI of the difference of the means "
+                  f"over seeds lies above 0 (not tested with fewer than {m.MIN_SEEDS} seeds a "
+                  "side).", "", *verdict_lines(data)]  # fmt: skip
     names = list(next(iter(variants.values()))["perturbations"]) if variants else []
     for name in names:
         axis = next(iter(variants.values()))["perturbations"][name]

@@ -198,7 +198,7 @@ def standard_axes(moving_mass: float, push_directions: dict[str, str],
     * friction: 0.2 (ice-like, wet tiles) to 1.5 (rubber on rough ground);
     * latency: half a control step to 3 steps;
     * sensor noise: 0.5 to 4 x the robot's sensor noise (its task's ``SENSOR_NOISE``);
-    * motor strength: 0.6 to 1.2 (legged_gym's strength randomisation spans 0.9-1.1).
+    * motor strength: 0.6 to 1.2 (the issue's range).
     """
     pushes = tuple(round(moving_mass * dv, 1) for dv in (0.25, 0.5, 1.0, 1.5))
     axes = {
