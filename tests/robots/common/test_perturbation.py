@@ -235,3 +235,19 @@ def test_randomised_training_gives_each_env_its_episode_physics():
         np.testing.assert_allclose(model.actuator_forcerange, limits)
         assert env.delay.latency[i] == round(episode.latency * 10)
     assert len({p.payload for p in env.draws.episodes}) == 3
+
+
+def test_the_single_robot_env_draws_as_env_0_of_the_vector_env():
+    from cpg_actor.robots.anymal.env import AnymalEnv
+
+    config = QuadrupedConfig(episode_seconds=0.3, perturbation=Perturbation(
+        obs_noise=1.0, push=10.0, push_time=(0.1, 0.2), push_direction="left"))  # fmt: skip
+    vector, single = anymal(2, config=config), AnymalEnv(config=config)
+    obs, _ = vector.reset(seed=6)
+    np.testing.assert_array_equal(single.reset(seed=6)[0], obs[0])
+    for command in actions(40, num_envs=2):
+        obs, *_ = vector.step(command)
+        one, _, terminated, truncated, _ = single.step(command[0])
+        if terminated or truncated:
+            one, _ = single.reset()
+        np.testing.assert_array_equal(one, obs[0])

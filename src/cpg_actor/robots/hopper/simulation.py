@@ -38,7 +38,8 @@ class HopperSimulation:
     """K hoppers on one simulator backend (see ``docs/hopper.md``), perturbed as the config's
     ``perturbation`` says: the backend built with its payload, friction and motor strength,
     the commands delayed by its latency (:class:`CommandDelay`), its push and sensor noise
-    drawn per env (:class:`EpisodeDraws`, seeded by :meth:`seed_perturbations`)."""
+    drawn per env (:class:`EpisodeDraws`, seeded by :meth:`seed_perturbations`); under
+    ``randomize``, each robot's episode perturbation drawn there too."""
 
     def __init__(
         self, config: HopperConfig, num_robots: int = 1, num_threads: int | None = None

@@ -110,6 +110,8 @@ class QuadrupedEnv(gym.Env):
             obs, command = self._next_obs, self._vec.command[0].copy()
         else:
             self._vec.env_rngs = [rng]
+            if seed is not None or not self._vec.draws.rngs:  # a perturbation's own generator
+                self._vec.draws.seed([seed])
             batch, info = self._vec.reset()  # draws from rng
             obs, command = batch[0], info["command"][0]
         self._next_obs = None
