@@ -1,0 +1,231 @@
+"""What a perturbation is (:class:`Perturbation`, ``env.perturbation``) and randomised
+training's ranges (:class:`Randomization`, ``env.randomize``), with their validation."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+# the push's direction: along the hopper's rail, or in the quadruped base's heading frame
+PUSH_DIRECTIONS = {
+    "up": (0.0, 0.0, 1.0),
+    "down": (0.0, 0.0, -1.0),
+    "forward": (1.0, 0.0, 0.0),
+    "backward": (-1.0, 0.0, 0.0),
+    "left": (0.0, 1.0, 0.0),
+    "right": (0.0, -1.0, 0.0),
+}
+
+
+@dataclass
+class Perturbation:
+    """What is done to the robot and its world; the defaults are the nominal robot."""
+
+    payload: float = 0.0  # kg added to the hip (hopper) or the base (quadrupeds), at its COM
+    friction: float | None = None  # foot-ground sliding friction; None: the env's foot_friction
+    # control steps between the policy's command and the drives tracking it; a fraction delays
+    # by whole physics substeps within a step (latency x decimation must be an integer)
+    latency: float = 0.0
+    # sensor noise, in multiples of the robot's sensor noise (its task's SENSOR_NOISE: std per
+    # observation entry, 0 for what is not a sensor's); Gaussian, drawn at every observation
+    obs_noise: float = 0.0
+    motor_strength: float = 1.0  # x the PD gains, the torque limit and the stall torque
+    push: float = 0.0  # N s: an impulse on the hip or base, spread over one control step
+    push_direction: str = "up"  # a key of PUSH_DIRECTIONS the robot accepts (with a push)
+    # s: the push comes at a control step drawn uniformly in this window of each episode
+    push_time: tuple[float, float] = (1.0, 2.0)
+
+    @property
+    def nominal(self) -> bool:
+        """Whether it changes nothing (the push's direction and time then do not matter)."""
+        return (self.payload == 0.0 and self.friction is None and self.latency == 0.0
+                and self.obs_noise == 0.0 and self.motor_strength == 1.0
+                and self.push == 0.0)  # fmt: skip
+
+    @property
+    def random(self) -> bool:
+        """Whether it draws random numbers (the push's step, the sensor noise)."""
+        return self.push > 0.0 or self.obs_noise > 0.0
+
+    def validate(self, directions: Sequence[str] = tuple(PUSH_DIRECTIONS)) -> Perturbation:
+        """Raise ValueError naming the first bad field (``perturbation.NAME``); ``directions``:
+        the push directions the robot accepts (any direction goes without a push). Returns
+        ``self``."""
+
+        def number(name: str, value: Any, low: float, strict: bool) -> None:
+            ok = not isinstance(value, bool) and isinstance(value, int | float)
+            ok = ok and math.isfinite(value) and (value > low if strict else value >= low)
+            if not ok:
+                raise ValueError(f"perturbation.{name} must be a finite number "
+                                 f"{'>' if strict else '>='} {low:g}, got {value!r}")  # fmt: skip
+
+        number("payload", self.payload, 0.0, False)
+        if self.friction is not None:
+            number("friction", self.friction, 0.0, True)
+        number("latency", self.latency, 0.0, False)
+        number("obs_noise", self.obs_noise, 0.0, False)
+        number("motor_strength", self.motor_strength, 0.0, True)
+        number("push", self.push, 0.0, False)
+        if self.push_direction not in (directions if self.push else PUSH_DIRECTIONS):
+            raise ValueError(f"perturbation.push_direction must be one of "
+                             f"{', '.join(directions)} on this robot, got "
+                             f"{self.push_direction!r}")  # fmt: skip
+        window = self.push_time
+        if not (isinstance(window, list | tuple) and len(window) == 2
+                and all(not isinstance(t, bool) and isinstance(t, int | float)
+                        and math.isfinite(t) for t in window)
+                and 0.0 <= window[0] <= window[1]):  # fmt: skip
+            raise ValueError(f"perturbation.push_time must be [start, end] in s with "
+                             f"0 <= start <= end, got {window!r}")  # fmt: skip
+        self.push_time = (float(window[0]), float(window[1]))
+        return self
+
+    def substeps(self, decimation: int) -> int:
+        """The latency in physics substeps; ValueError unless it is a whole number of them."""
+        total = self.latency * decimation
+        if abs(total - round(total)) > 1e-9:
+            raise ValueError(f"perturbation.latency x decimation must be a whole number of "
+                             f"physics substeps, got {self.latency} x {decimation}")  # fmt: skip
+        return round(total)
+
+    def actuator(self, actuator):
+        """``actuator`` (:class:`~cpg_actor.robots.common.actuator.Actuator`) at this motor
+        strength: PD gains, torque limit and stall torque scaled (the no-load speed kept)."""
+        if self.motor_strength == 1.0:
+            return actuator
+        s = self.motor_strength
+
+        def scaled(value):
+            return tuple(s * v for v in value) if isinstance(value, tuple) else s * value
+
+        return dataclasses.replace(
+            actuator, kp=scaled(actuator.kp), kd=scaled(actuator.kd),
+            torque_limit=scaled(actuator.torque_limit),
+            saturation_torque=scaled(actuator.saturation_torque),
+        )  # fmt: skip
+
+    def ground_friction(self, nominal: float) -> float:
+        """The foot-ground friction simulated (``nominal``: the env's ``foot_friction``)."""
+        return nominal if self.friction is None else float(self.friction)
+
+    @classmethod
+    def from_value(cls, value: Any) -> Perturbation:
+        """A :class:`Perturbation` from itself or a mapping of its fields (a config file's);
+        unknown keys are a ValueError listing the valid ones."""
+        if isinstance(value, cls):
+            return value
+        if not isinstance(value, dict):
+            raise ValueError(f"perturbation must be a mapping of its fields, got {value!r}")
+        names = [f.name for f in dataclasses.fields(cls)]
+        unknown = sorted(str(k) for k in value if k not in names)
+        if unknown:
+            raise ValueError(f"unknown perturbation key(s) {', '.join(unknown)}; accepted: "
+                             f"{', '.join(names)}")  # fmt: skip
+        values = dict(value)
+        if isinstance(values.get("push_time"), list):
+            values["push_time"] = tuple(values["push_time"])
+        for name in ("payload", "latency", "obs_noise", "motor_strength", "push", "friction"):
+            if isinstance(values.get(name), int) and not isinstance(values[name], bool):
+                values[name] = float(values[name])  # YAML writes 1.0 as 1
+        return cls(**values)
+
+
+RANDOMIZED = ("payload", "friction", "latency", "obs_noise", "motor_strength")
+
+
+@dataclass
+class Randomization:
+    """Randomised training (``env.randomize``): every episode of every env drawn its own
+    payload, friction, latency, sensor noise and motor strength, uniformly within these ranges
+    ([low, high]; a point range is that value, drawn from nothing), from the env's
+    perturbation generator. The defaults are the nominal robot: no randomisation.
+    ``docs/robustness.md`` gives ranges and where they come from."""
+
+    payload: tuple[float, float] = (0.0, 0.0)  # kg
+    friction: tuple[float, float] | None = None  # None: the env's foot_friction
+    latency: tuple[float, float] = (0.0, 0.0)  # control steps, drawn in whole physics substeps
+    obs_noise: tuple[float, float] = (0.0, 0.0)  # x the robot's sensor noise
+    motor_strength: tuple[float, float] = (1.0, 1.0)
+
+    @property
+    def active(self) -> bool:
+        return self != Randomization()
+
+    def validate(self, decimation: int) -> Randomization:
+        """Raise ValueError naming the first bad range (``randomize.NAME``); returns ``self``."""
+        lows = {"payload": 0.0, "friction": 0.0, "latency": 0.0, "obs_noise": 0.0,
+                "motor_strength": 0.0}  # fmt: skip
+        for name in RANDOMIZED:
+            bounds = getattr(self, name)
+            if bounds is None and name == "friction":
+                continue
+            strict = name in ("friction", "motor_strength")
+            ok = isinstance(bounds, list | tuple) and len(bounds) == 2 and all(
+                not isinstance(b, bool) and isinstance(b, int | float) and math.isfinite(b)
+                for b in bounds)  # fmt: skip
+            ok = ok and bounds[0] <= bounds[1]
+            ok = ok and (bounds[0] > lows[name] if strict else bounds[0] >= lows[name])
+            if not ok:
+                raise ValueError(f"randomize.{name} must be [low, high] with "
+                                 f"{lows[name]:g} {'<' if strict else '<='} low <= high, got "
+                                 f"{bounds!r}")  # fmt: skip
+            setattr(self, name, (float(bounds[0]), float(bounds[1])))
+        for bound in self.latency:
+            Perturbation(latency=bound).substeps(decimation)  # whole substeps
+        return self
+
+    def draw(self, rng: np.random.Generator, decimation: int, push: Perturbation) -> Perturbation:
+        """An episode's perturbation: these fields drawn from ``rng`` (in the order of
+        :data:`RANDOMIZED`; only where the range is not a point), the push's from ``push``."""
+
+        def uniform(bounds):
+            return rng.uniform(*bounds) if bounds[1] > bounds[0] else bounds[0]
+
+        low, high = (round(b * decimation) for b in self.latency)
+        substeps = int(rng.integers(low, high + 1)) if high > low else low
+        return dataclasses.replace(
+            push, payload=float(uniform(self.payload)),
+            friction=None if self.friction is None else float(uniform(self.friction)),
+            latency=substeps / decimation, obs_noise=float(uniform(self.obs_noise)),
+            motor_strength=float(uniform(self.motor_strength)),
+        )  # fmt: skip
+
+    @classmethod
+    def from_value(cls, value: Any) -> Randomization:
+        """A :class:`Randomization` from itself or a mapping of its fields."""
+        if isinstance(value, cls):
+            return value
+        if not isinstance(value, dict):
+            raise ValueError(f"randomize must be a mapping of its fields, got {value!r}")
+        names = [f.name for f in dataclasses.fields(cls)]
+        unknown = sorted(str(k) for k in value if k not in names)
+        if unknown:
+            raise ValueError(f"unknown randomize key(s) {', '.join(unknown)}; accepted: "
+                             f"{', '.join(names)}")  # fmt: skip
+        return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in value.items()})
+
+
+def check_perturbations(config: Any, directions: Sequence[str], simulators: Sequence[str]) -> None:
+    """Validate an env config's ``perturbation`` and ``randomize`` (converting mappings from
+    a config file), for a robot with push ``directions`` whose ``simulators`` take them."""
+    config.perturbation = Perturbation.from_value(config.perturbation).validate(directions)
+    config.perturbation.substeps(config.decimation)  # a whole number of substeps late
+    config.randomize = Randomization.from_value(config.randomize).validate(config.decimation)
+    if config.randomize.active:
+        nominal = Perturbation()
+        given = [n for n in RANDOMIZED if getattr(config.perturbation, n) != getattr(nominal, n)]
+        if given:
+            raise ValueError(
+                f"perturbation.{given[0]} and randomize: randomised training draws "
+                f"{', '.join(RANDOMIZED)} per episode; give one or the other"
+            )
+    if config.sim not in simulators and (
+        not config.perturbation.nominal or config.randomize.active
+    ):
+        raise ValueError(f"perturbations run on {' and '.join(simulators)}; "
+                         f"sim={config.sim!r} takes none")  # fmt: skip
