@@ -27,9 +27,10 @@ def cpg_layouts() -> dict[str, CPGLayout]:
 
 
 def mjcf(config: Any) -> str:
-    from cpg_actor.robots.hopper.mjcf import simulated_mjcf
+    from cpg_actor.robots.common.mjcf import simulated_mjcf
+    from cpg_actor.robots.hopper.mjcf import mjcf_text
 
-    return simulated_mjcf(config)
+    return simulated_mjcf(mjcf_text, config)
 
 
 def observation_sources() -> tuple[dict[str, Any], ...]:
