@@ -94,6 +94,10 @@ class Robot:
     # the simulators its envs run on (`--sim`), the first the default; with more than one,
     # its env config's ``sim`` field names the run's
     simulators: tuple[str, ...] = ("mujoco",)
+    # the agents' tuned settings on it, by agent name: config values (a nested mapping, as a
+    # preset's) a run of that agent starts from unless its preset, config file or command line
+    # say otherwise (cpg_actor.config.compose_config)
+    agent_defaults: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
 
     @property
     def episode_steps(self) -> int:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from cpg_actor.robots.hopper.agent_defaults import AGENT_DEFAULTS
 from cpg_actor.robots.hopper.config import SIMULATORS, HopperConfig
 from cpg_actor.robots.plugin import CPGLayout, GymId, MetricInfo, Robot
 
@@ -68,4 +69,5 @@ ROBOT = Robot(
     assets=assets,
     start_gait=START_GAIT,
     simulators=SIMULATORS,
+    agent_defaults=AGENT_DEFAULTS,
 )
