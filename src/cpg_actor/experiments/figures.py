@@ -374,15 +374,19 @@ def cpg_actor_training_over_time(results: Results, directory: Path) -> Output:
     def stage_label(stage: dict) -> str:
         return labels[stage["iteration"]]
 
+    def shaded():
+        """Each stage's traces, its shade and the time and mask of the window drawn."""
+        for i, (stage, traces) in enumerate(stages):
+            t = traces["time"]
+            shade = cmap(i / max(1, len(stages) - 1) * 0.85)
+            yield stage, traces, shade, t, t <= t[0] + TRACE_WINDOW_S
+
     def draw_heights(ax) -> None:
         if "hip_height" not in stages[0][1]:
             ax.text(0.5, 0.5, f"the {robot}'s traces have no hip height", ha="center",
                     transform=ax.transAxes)  # fmt: skip
             return
-        for i, (stage, traces) in enumerate(stages):
-            shade = cmap(i / max(1, len(stages) - 1) * 0.85)
-            t = traces["time"]
-            window = t <= t[0] + TRACE_WINDOW_S
+        for stage, traces, shade, t, window in shaded():
             ax.plot(
                 t[window],
                 traces["hip_height"][window, 0],
@@ -397,10 +401,7 @@ def cpg_actor_training_over_time(results: Results, directory: Path) -> Output:
         if j >= len(joints):
             return
         index, joint = joints[j]
-        for i, (stage, traces) in enumerate(stages):
-            shade = cmap(i / max(1, len(stages) - 1) * 0.85)
-            t = traces["time"]
-            window = t <= t[0] + TRACE_WINDOW_S
+        for stage, traces, shade, t, window in shaded():
             ax.plot(
                 t[window],
                 traces["desired_position"][window, 0, index],
