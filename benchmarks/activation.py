@@ -25,34 +25,40 @@ def layer_loss(activation):
     return loss
 
 
-def median_us(stmt: str, **env) -> float:
+def median_us(stmt: str, min_run_time: float = 0.3, **env) -> float:
     timer = benchmark.Timer(stmt=stmt, globals=env, num_threads=1)
-    return timer.blocked_autorange(min_run_time=0.3).median * 1e6
+    return timer.blocked_autorange(min_run_time=min_run_time).median * 1e6
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--batch-sizes", type=int, nargs="+", default=[256, 2048])
+    parser.add_argument("--min-run-time", type=float, default=0.3, help="seconds per measurement")
     parser.add_argument("--output", default="benchmarks/results/activation.md")
     args = parser.parse_args()
     torch.manual_seed(0)
     weight = (torch.randn(64, 64) / 8).requires_grad_()
     forms = {"torch.tanh": torch.tanh, "2 sigmoid(2x) - 1": tanh}
     rows = []
-    for batch in (256, 2048):
+    time = args.min_run_time
+    for batch in args.batch_sizes:
         x = torch.randn(batch, 64)
-        sigmoid = median_us("torch.sigmoid(x)", x=x)
+        sigmoid = median_us("torch.sigmoid(x)", time, x=x)
         for name, fn in forms.items():
-            alone = median_us("fn(x)", fn=fn, x=x)
-            eager = median_us("loss(x, w).backward()", loss=layer_loss(fn), x=x, w=weight)
+            alone = median_us("fn(x)", time, fn=fn, x=x)
+            eager = median_us("loss(x, w).backward()", time, loss=layer_loss(fn), x=x, w=weight)
             compiled_loss = torch.compile(layer_loss(fn), dynamic=False)
             compiled_loss(x, weight).backward()  # compile outside the timing
-            compiled = median_us("loss(x, w).backward()", loss=compiled_loss, x=x, w=weight)
+            compiled = median_us("loss(x, w).backward()", time, loss=compiled_loss, x=x, w=weight)
             rows.append((batch, name, alone, alone / sigmoid, eager, compiled))
     difference = (torch.tanh(x) - tanh(x)).abs().max().item()
     lines = [
         "# tanh on the CPU",
         "",
-        measured("python benchmarks/activation.py") + ".",
+        measured(
+            f"python benchmarks/activation.py --batch-sizes {' '.join(map(str, args.batch_sizes))}"
+        )
+        + ".",  # fmt: skip
         "",
         f"Machine: {cpu_model()}, 1 torch thread (load {load_average()}), torch "
         f"{torch.__version__}, float32; medians of `torch.utils.benchmark` blocked runs.",

@@ -23,6 +23,7 @@ from bench_report import measured, write
 from cpg_actor.config import TrainConfig, apply_dict
 from cpg_actor.host_reads import host_reads
 from cpg_actor.robots.hopper.mjx.dynamics import jax
+from cpg_actor.robots.registry import ROBOTS
 from cpg_actor.training.evaluation import evaluate
 from cpg_actor.training.policy import Policy
 from cpg_actor.training.runner import Runner
@@ -31,7 +32,8 @@ from cpg_actor.training.runner import Runner
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--agent", default="cpg-actor")
-    parser.add_argument("--robot", default="hopper", choices=("hopper", "anymal"))
+    on_mjx = [name for name, robot in ROBOTS.items() if "mjx" in robot.simulators]
+    parser.add_argument("--robot", default="hopper", choices=on_mjx)
     parser.add_argument("--episodes", type=int, default=5, help="eval_episodes (the envs)")
     parser.add_argument("--steps", type=int, default=500, help="control steps per episode")
     parser.add_argument("--rounds", type=int, default=7)
@@ -42,10 +44,10 @@ def main() -> None:
     config = TrainConfig(agent=args.agent, num_envs=args.episodes, eval_interval=0, device="auto")
     apply_dict(config, {"robot": args.robot}, "")
     apply_dict(config, {"env": {"sim": "mjx"}}, "")
-    if args.robot == "hopper":
-        config.env.episode_steps = args.steps
-    else:
+    if hasattr(config.env, "episode_seconds"):  # the quadrupeds'
         config.env.episode_seconds = args.steps * config.env.control_dt
+    else:
+        config.env.episode_steps = args.steps
     runner = Runner(config, tensorboard=False)  # its env: the eval env's batch, one compile
     env = runner.spec.make_env(args.episodes, config.env, 1, config.agent_config)
     bounds = runner.policy.action_low, runner.policy.action_high

@@ -24,7 +24,7 @@ import numpy as np
 
 from bench_report import measured, write
 from cpg_actor.robots.anymal import description as quadruped
-from cpg_actor.robots.anymal.gaits import open_loop_positions
+from cpg_actor.robots.anymal.gaits import ANYMAL_GAITS
 from cpg_actor.robots.anymal.mjx import MjxAnymalVectorEnv
 from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 from cpg_actor.robots.hopper.mjx.dynamics import jax
@@ -47,8 +47,10 @@ def hop_action(k: int, offsets: np.ndarray | None = None) -> np.ndarray:
 
 def trot_actions(steps: int) -> np.ndarray:
     """The open-loop trot preset at the drive of a 1 m/s command (as the quadruped's test)."""
-    positions = open_loop_positions("trot", 0.02, quadruped.NOMINAL_POSE, ROBOTS, steps, 1.0)
-    return positions.numpy()
+    trot = ANYMAL_GAITS.open_loop_positions(
+        "trot", 0.02, quadruped.NOMINAL_POSE, ROBOTS, steps, 1.0
+    )
+    return trot.numpy()
 
 
 def hopper(caps: tuple[int, int] | None) -> dict:

@@ -25,17 +25,18 @@ import torch
 from bench_report import measured, write
 from cpg_actor.machine import cpu_model, load_average, usable_cores
 from cpg_actor.robots.anymal import description as robot
-from cpg_actor.robots.anymal.gaits import quadruped_cpg, quadruped_joint_map
+from cpg_actor.robots.anymal.gaits import ANYMAL_GAITS
 from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 from cpg_actor.robots.common.mujoco_runtime import CONTROL_SPEC, mujoco
+from cpg_actor.robots.common.quadruped.gaits import joint_map_for
 from cpg_actor.robots.common.threaded_rollout import ThreadedRollout
 
 
 def rates(num_envs: int, seconds: float) -> dict[str, float]:
     env = AnymalVectorEnv(num_envs)
     env.reset(seed=0)
-    cpg = quadruped_cpg(env.config.control_dt, "trot")
-    joint_map = quadruped_joint_map(robot.NOMINAL_POSE)
+    cpg = ANYMAL_GAITS.joint_cpg(env.config.control_dt, "trot")
+    joint_map = joint_map_for(robot.NOMINAL_POSE)
     state = cpg.initial_state(num_envs)
 
     def env_step() -> None:

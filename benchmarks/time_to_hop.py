@@ -504,11 +504,13 @@ def first_reaching(history: list, threshold: tuple[float | None, float] | None):
     return next((h for h in history if reached(evaluation_of(h), threshold)), None)
 
 
-def ceiling(num_envs: int) -> float:
+def ceiling(num_envs: int, budget: int = 50_000) -> float:
+    """``mujoco.rollout``'s control steps per second for ``num_envs`` robots, best of 2 blocks
+    of ``budget`` control steps."""
     sys.path.insert(0, str(Path(__file__).parent))
     from env_throughput import bench_size
 
-    return bench_size("mujoco", num_envs, repeats=2, budget=50_000)["rollout"]
+    return bench_size("mujoco", num_envs, repeats=2, budget=budget)["rollout"]
 
 
 def total_steps(run: dict) -> float:
@@ -638,6 +640,10 @@ def main(argv: list[str] | None = None) -> int:
         "--reference-set", dest="reference_overrides", action="append", default=[],
         metavar="KEY=VALUE", help="a config value for the reference tree's runs",
     )  # fmt: skip
+    parser.add_argument(
+        "--ceiling-steps", type=int, default=50_000,
+        help="control steps per timed block of the physics ceiling (default 50000)",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     if args.search_budget is not None and args.search_budget <= 0:
         parser.error("--search-budget must be a positive number of env steps")
@@ -735,7 +741,7 @@ def main(argv: list[str] | None = None) -> int:
         TrainConfig().num_envs if p == "paper" else preset_values(p).get("num_envs", 16)
         for p in presets
     }
-    ceilings = {n: ceiling(n) for n in sorted(sizes)}
+    ceilings = {n: ceiling(n, args.ceiling_steps) for n in sorted(sizes)}
     command = (
         f"python benchmarks/time_to_hop.py --seeds {args.seeds} --agents {args.agents} "
         f"--presets {args.presets}"

@@ -14,8 +14,10 @@ then the observation read from the state (and the sensors) the last substep left
 
 The printed return is that of ``cpg-actor eval RUN --episodes 1 --seed SEED`` (episode i of
 ``--seed S`` is this script's ``--seed S+i``): the start is drawn as the env draws it and
-the reward is the env's, written out below for the two robots of the project (the hopper's
-eq. 4 with its default ``hop_reward``, the quadruped's legged_gym terms). The library's
+the reward is the env's, written out below for the two tasks of the project: the hopper's
+(eq. 4 with its default ``hop_reward``) and the quadrupeds' (ANYmal B, the Go1, any robot whose
+observation has the velocity command: legged_gym's terms, the feet those of the MJCF's
+``<leg>_foot_pos`` sensors). The library's
 evaluation acting with this same file scores it to float64 rounding; ``cpg-actor eval``'s
 PyTorch policy rounds float32 differently from ONNX Runtime, which moves a legged robot's
 return a little (``docs/training.md``, "Export"). On a real robot, ``Simulation`` is the
@@ -143,9 +145,14 @@ class Simulation:
         if self.hopper and self.env["hop_reward"] != "hip-velocity":
             raise ValueError(f"hop_reward {self.env['hop_reward']!r}: this example computes "
                              "the hopper's default reward only, 'hip-velocity'")  # fmt: skip
-        if meta["robot_model"] not in ("anymal-hopper", "anymal-b"):
+        sources = {entry["source"] for entry in meta["observation_sources"]}
+        if not self.hopper and "command" not in sources:
             raise ValueError(f"robot {meta['robot_model']!r}: this example knows the reset and "
-                             "reward of anymal-hopper and anymal-b")  # fmt: skip
+                             "reward of the hopper and of the velocity task")  # fmt: skip
+        # the quadruped's feet, in the order of its foot sensors (the env's leg order)
+        sensors = [self.model.sensor(i).name for i in range(self.model.nsensor)]
+        self.legs = [name.removesuffix("_foot_pos") for name in sensors
+                     if name.endswith("_foot_pos")]  # fmt: skip
 
     def sensor_slice(self, name: str) -> slice:
         sensor = self.model.sensor(name)
@@ -174,12 +181,12 @@ class Simulation:
                 self.command[column] = rng.uniform(low, high) if high > low else low
             data.qpos[self.qpos_index] = joints
             mujoco.mj_kinematics(model, data)
-            lowest = min(data.site(f"{leg}_foot").xpos[2] for leg in ("LF", "RF", "LH", "RH"))
-            data.qpos[2] += model.geom("LF_foot").size[0] - lowest
+            lowest = min(data.site(f"{leg}_foot").xpos[2] for leg in self.legs)
+            data.qpos[2] += self.foot_radius() - lowest
             self.desired = joints.copy()  # the env's last action at a start
             self.joint_vel_before = np.zeros(len(joints))
-            self.air_time = np.zeros(4)
-            self.in_contact = np.ones(4, dtype=bool)
+            self.air_time = np.zeros(len(self.legs))
+            self.in_contact = np.ones(len(self.legs), dtype=bool)
         mujoco.mj_forward(model, data)  # the sensors of the start
         self.steps = 0
 
@@ -239,10 +246,14 @@ class Simulation:
         return reward, terminated, bool(self.steps >= episode_steps and not terminated)
 
     def feet(self) -> np.ndarray:
-        """(4, 3) the quadruped's feet (world, m), as the last substep's sensors read them."""
+        """(legs, 3) the quadruped's feet (world, m), as the last substep's sensors read them."""
         data = self.data
         return np.stack([data.sensordata[self.sensor_slice(f"{leg}_foot_pos")]
-                         for leg in ("LF", "RF", "LH", "RH")])  # fmt: skip
+                         for leg in self.legs])  # fmt: skip
+
+    def foot_radius(self) -> float:
+        """The quadruped's foot sphere's radius (m): the first foot's geom."""
+        return float(self.model.geom(f"{self.legs[0]}_foot").size[0])
 
     # -- the reward (the env's) --------------------------------------------------------------
     def hopper_reward(self, desired, torque) -> tuple[float, bool]:
@@ -281,7 +292,7 @@ class Simulation:
         height = data.qpos[2]
         joint_vel = data.qvel[self.dof_index].copy()
         feet = self.feet()
-        contact = feet[:, 2] < self.model.geom("LF_foot").size[0] + 0.005
+        contact = feet[:, 2] < self.foot_radius() + 0.005
         planted = contact & self.in_contact
         speed = np.sqrt(np.sum((feet[:, :2] - feet_xy_before) ** 2, axis=-1)) / dt
         slip = np.where(planted, speed, 0.0)

@@ -39,6 +39,25 @@ def test_gaits_writes_its_diagram_and_summary_and_keeps_existing_files(tmp_path,
     assert main(["gaits", "--seconds", "-1", "--out", str(tmp_path / "x")]) == 2
 
 
+def test_gaits_runs_any_robot_with_gait_presets_and_refuses_one_without(tmp_path, capsys):
+    """The Go1 through the registry: its legs, its gaits' footfalls; the hopper's CPG has no
+    gaits: a one-line error naming the robots that have them."""
+    out = tmp_path / "go1"
+    args = ["gaits", "--robot", "go1", "--gaits", "walk", "--seconds", "1", "--robots", "1",
+            "--out", str(out)]  # fmt: skip
+    assert main(args) == 0
+    summary = json.loads((out / "gaits.json").read_text())
+    assert summary["robot"] == "go1" and summary["layout"] == "joint"
+    assert list(summary["gaits"]["walk"]["duty_factor"]) == ["FR", "FL", "RR", "RL"]
+    capsys.readouterr()
+    assert main(["gaits", "--robot", "hopper", "--out", str(tmp_path / "h")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "hopper: its CPG has no gait presets (robots with gaits: anymal, go1)" in err
+    assert len(err.splitlines()) == 1
+    assert main(["gaits", "--robot", "go1", "--gaits", "gallop", "--out", str(tmp_path)]) == 2
+    assert "the go1's joint layout has the gaits trot, pace" in capsys.readouterr().err
+
+
 def test_the_leg_layout_trots_forward_faster_with_the_drive(tmp_path):
     """`--layout leg` (one oscillator per leg, foot-space pattern), the trot open loop, 8 robots
     for 20 s: none falls; the feet land as a trot (the diagonal pairs half a cycle apart, within
@@ -68,7 +87,8 @@ def test_the_gait_figure_draws_each_gaits_reference_next_to_the_cpgs_result():
     """Next to each gait's diagram, one cycle of its reference pattern (grey: each leg's
     touchdown at the gait's phase offset) over the CPG's measured one (blue)."""
     from cpg_actor.commands.gaits import REFERENCE_DUTY, gaits_figure
-    from cpg_actor.robots.anymal.gaits import GAITS
+    from cpg_actor.robots.anymal.gaits import ANYMAL_GAITS
+    from cpg_actor.robots.common.quadruped.gaits import GAITS
 
     contact = np.zeros((100, 4), dtype=bool)
     contact[::2] = True
@@ -78,7 +98,8 @@ def test_the_gait_figure_draws_each_gaits_reference_next_to_the_cpgs_result():
                "touchdown_phase": {"LF": 0.0, "RF": 0.5, "LH": 0.5, "RH": float("nan")}}
         for gait in ("trot", "walk")
     }  # fmt: skip
-    fig = gaits_figure({"trot": (contact, 0.02), "walk": (contact, 0.02)}, summary, 0.5)
+    traces = {"trot": (contact, 0.02), "walk": (contact, 0.02)}
+    fig = gaits_figure(traces, summary, 0.5, ANYMAL_GAITS.legs, ANYMAL_GAITS.footfalls())
     diagrams, references = fig.axes[0::2], fig.axes[1::2]
     assert [axis.get_title(loc="left").split(":")[0] for axis in diagrams] == ["trot", "walk"]
     for gait, axis in zip(("trot", "walk"), references, strict=True):

@@ -29,7 +29,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     ),
     "gaits": (
         "gaits",
-        "run the quadruped's CPG gait presets open loop; write a gait diagram and a summary",
+        "run a quadruped's CPG gait presets open loop; write a gait diagram and a summary",
     ),
     "train": (
         "train",

@@ -1,6 +1,6 @@
 """examples/deploy_onnx.py: the exported ONNX policy run on its robot in MuJoCo with numpy,
 onnxruntime and mujoco alone (no torch, no cpg_actor) scores `cpg-actor eval`'s return, on
-the hopper and the quadruped.
+the hopper and the quadrupeds (ANYmal B, the Go1).
 
 Two comparisons per robot: against the library's deterministic evaluation acting with the
 same ONNX file (the example's simulation, observation and reward mirror the env's: equal to
@@ -84,6 +84,7 @@ class OnnxPolicy:
         # %), so only its agreement with the library's evaluation of the same file is exact
         ("anymal", "cpg-actor", {}, False),
         ("anymal", "mlp", {}, True),
+        ("go1", "mlp", {}, True),  # any quadruped: its feet from the MJCF
         # the stateless MLP, and the actuator law run in numpy (the MJCF's actuators off)
         ("hopper", "mlp", {"env": {"actuator_law": "coast"}}, True),
     ],

@@ -9,7 +9,7 @@ else.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -51,10 +51,8 @@ class AgentSpec:
     ``env_factory(num_envs, env_config, num_threads) -> vector env`` (the robot's env, the
     hopper by default); ``wrapper(env, agent_config) -> env``, an environment around the
     robot's that the agent needs (``cho2019``: the CPG inside the env); an optional supervised
-    warm start; ``defaults``, per robot (``TrainConfig.robot``), config values (a nested
-    mapping, as a preset's) that the agent trains with unless the preset, a config file or the
-    command line say otherwise: its tuned settings (:func:`cpg_actor.config.compose_config`);
-    ``trainer``, what trains it (PPO, or the open-loop search)."""
+    warm start; ``trainer``, what trains it (PPO, or the open-loop search). Its tuned settings
+    on a robot are the robot's (``Robot.agent_defaults``)."""
 
     name: str
     description: str
@@ -67,7 +65,6 @@ class AgentSpec:
     # ``warm_start(agent, normalizer, env, TrainConfig, seed) -> losses``, run once before
     # the first PPO iteration of a new run (not on resume)
     warm_start: Callable[..., list[float]] | None = None
-    defaults: dict[str, dict[str, Any]] = field(default_factory=dict)
     # it starts from agent_config.start_gait where one is set (the CPG agents, cho2019-warm,
     # mlp-warm): a comparison that counts the gait's search charges it its steps
     uses_start_gait: bool = False
@@ -114,28 +111,11 @@ def build_cpg_actor(config: AgentConfig, env: Any, feedback: bool = True) -> Age
     return CPGActorAgent(*env_shapes(env), config, env.robot, feedback=feedback)
 
 
-# The CPG-Actor at its best on the hopper: the start gait of the open-loop search, the command
-# inside the joint range, and the settings chosen by tuning (docs/results/tuning): Gaussian
-# noise on the joint command of 0.3 half-ranges with the gradient through 8 CPG steps.
-# cpg-actor-paper is the paper's method (its preset start, position noise of 1 half-range,
-# the one-step gradient).
-CPG_ACTOR_DEFAULTS: dict[str, Any] = {
-    "agent_config": {
-        "start_gait": "search",
-        "output_bound": True,
-        "exploration": "position",
-        "init_std": 0.3,
-    },
-    "ppo": {"bptt_steps": 8},
-}
-
 register_agent(
     AgentSpec(
         "mlp",
         "classic actor-critic: MLP actor on desired joint positions",
         build_mlp,
-        # chosen by tuning (docs/results/tuning)
-        defaults={"hopper": {"agent_config": {"init_std": 0.3}, "ppo": {"learning_rate": 1e-3}}},
     )
 )
 register_agent(
@@ -144,13 +124,6 @@ register_agent(
         "the MLP actor warm-started by behaviour cloning toward the start gait's motion",
         build_mlp,
         warm_start=warm_start_mlp,
-        # the warm start's noise (warm_start.action_noise) and init_std chosen by tuning
-        defaults={
-            "hopper": {
-                "agent_config": {"start_gait": "search", "init_std": 0.3},
-                "warm_start": {"action_noise": 0.1},
-            }
-        },
         uses_start_gait=True,
     )
 )
@@ -161,7 +134,6 @@ register_agent(
         "(from the open-loop search's gait, inside the joint range, its gradient through 8 "
         "CPG steps)",
         build_cpg_actor,
-        defaults={"hopper": CPG_ACTOR_DEFAULTS},
         uses_start_gait=True,
     )
 )
@@ -200,13 +172,6 @@ register_agent(
         wrapper=cpg_parameter_wrapper,
         warm_start=warm_start_cho2019,
         robots=("hopper",),
-        defaults={
-            "hopper": {
-                "agent_config": {"start_gait": "search"},
-                "warm_start": {"action_noise": 0.05},
-                "ppo": {"learning_rate": 1e-3},  # the best of its tuning
-            }
-        },
         uses_start_gait=True,
     )
 )
@@ -219,8 +184,6 @@ register_agent(
         wrapper=paper_cpg_parameter_wrapper,
         warm_start=warm_start_cho2019_paper,
         robots=("hopper",),
-        # chosen by tuning (docs/results/tuning)
-        defaults={"hopper": {"agent_config": {"init_std": 0.3}}},
     )
 )
 register_agent(
@@ -230,7 +193,5 @@ register_agent(
         "the search baseline, and the gait other CPG agents can start from",
         lambda config, env: build_cpg_actor(config, env, feedback=False),
         trainer="es",
-        # inside the CPG-Actor's output bound, so that the gait it finds is a start it accepts
-        defaults={"hopper": {"agent_config": {"output_bound": True}}},
     )
 )

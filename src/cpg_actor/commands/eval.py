@@ -349,7 +349,9 @@ def traces_figure(traces: dict[str, np.ndarray], title: str = ""):
     groups = _joint_groups(joints)
     kinds = list(dict.fromkeys(_short(joints[i], g) for g, idx in groups.items() for i in idx))
     colour = {kind: f"C{k}" for k, kind in enumerate(kinds)}
-    limit = float(traces["velocity_limit"]) if "velocity_limit" in traces else None
+    # each joint's speed limit (one number for all, or one per joint of a leg, repeated)
+    joint_limits = (np.resize(np.atleast_1d(traces["velocity_limit"]).astype(float), len(joints))
+                    if "velocity_limit" in traces else None)  # fmt: skip
 
     def episode(key: str) -> np.ndarray:
         return _episode(traces, key)[shown]
@@ -366,8 +368,9 @@ def traces_figure(traces: dict[str, np.ndarray], title: str = ""):
                 axis.plot(time, episode(desired)[:, i], color=colour[kind], lw=1.3, label=kind)
                 if measured in traces:
                     axis.plot(time, episode(measured)[:, i], "--", color=colour[kind], lw=1.0)
-            if limits:
-                draw_velocity_limits(axis, limit)
+            if limits and joint_limits is not None:
+                for limit in sorted({float(joint_limits[i]) for i in groups[group]}):
+                    draw_velocity_limits(axis, limit)
 
         rows.append((label, draw, measured in traces))
 

@@ -58,15 +58,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "device": "auto",
         "eval_interval": 10,
         "env": {"sim": "mjx"},
-        "ppo": {
-            "num_steps": 24,
-            "num_epochs": 5,
-            "num_minibatches": 4,
-            "lr_schedule": "adaptive",
-            "learning_rate": 1e-3,
-            "cpg_learning_rate": CPG_LEARNING_RATE,
-            "compile": True,
-        },
+        "ppo": {**THROUGHPUT["ppo"], "num_steps": 24},
     },
     "anymal": {
         **THROUGHPUT,

@@ -26,7 +26,7 @@ from cpg_actor.files import atomic_write_text
 from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.ppo.config import PPOConfig
 from cpg_actor.robots.plugin import Robot
-from cpg_actor.robots.registry import DEFAULT_ROBOT, get_robot
+from cpg_actor.robots.registry import DEFAULT_ROBOT, ROBOTS, get_robot
 
 # the largest seed: torch takes seeds below 2**64, but seeds pass through int64 tensors and
 # arrays (checkpoints, env seeds), so the accepted range is that of an int64
@@ -223,8 +223,8 @@ def compose_config(
     overrides: typing.Iterable[str] = (),
 ) -> TrainConfig:
     """The one place a run's config is put together, in this order (later wins): the
-    defaults, the agent's defaults for the robot (its tuned settings,
-    :attr:`cpg_actor.agents.AgentSpec.defaults`), the preset (``preset``, else the config
+    defaults, the agent's defaults on the robot (its tuned settings there,
+    :attr:`cpg_actor.robots.plugin.Robot.agent_defaults`), the preset (``preset``, else the config
     file's, else ``paper``), the YAML ``config_file``, ``values`` (a nested mapping: the
     command-line flags), then each ``KEY=VALUE`` of ``overrides`` (``--set``). Validated; a
     clear ValueError (or FileNotFoundError) names what is wrong."""
@@ -255,8 +255,10 @@ def compose_config(
             apply_dict(config, override, prefix="")
         return config
 
-    config = compose({})  # which agent and robot: their defaults come first
-    defaults = get_agent_spec(config.agent).defaults.get(config.robot)
+    config = compose({})  # which agent and robot: the agent's defaults on the robot come first
+    get_agent_spec(config.agent)  # an unknown agent: its ValueError now
+    robot = ROBOTS.get(config.robot)  # an unknown robot: validate() says so
+    defaults = robot.agent_defaults.get(config.agent) if robot is not None else None
     if defaults:
         config = compose(defaults)
     config.validate()

@@ -163,40 +163,34 @@ def directory_of(results: Results) -> Path:
     return results.out / "figures"
 
 
-def cpg_output(results: Results, directory: Path) -> Output:
-    return _joint_panels(
-        results,
-        directory,
-        CPG_VARIANTS,
-        "desired_position",
-        "cpg_output",
-        "desired position (rad)",
-        "Desired positions",
-    )
+def _panel_figures(
+    results: Results,
+    directory: Path,
+    variants: tuple[str, ...],
+    panels: tuple[tuple[str, str, str, str, float | None], ...],
+) -> Output:
+    """One :func:`_joint_panels` figure per ``(key, name, ylabel, title, limit_lines)``."""
+    paths: list[Path] = []
+    notes: list[str] = []
+    for key, name, ylabel, title, limit in panels:
+        written, more = _joint_panels(results, directory, variants, key, name, ylabel, title, limit)
+        paths += written
+        notes += more
+    return paths, notes
 
 
-def cpg_theta_dot(results: Results, directory: Path) -> Output:
-    return _joint_panels(
-        results,
-        directory,
-        CPG_VARIANTS,
-        "theta_dot",
-        "cpg_theta_dot",
-        "theta_dot (rad/s)",
-        "Phase velocity theta_dot (eq. 1)",
-    )
+# (trace key, figure, y label, title, no limit lines)
+CPG_PANELS = (
+    ("desired_position", "cpg_output", "desired position (rad)", "Desired positions", None),
+    ("theta_dot", "cpg_theta_dot", "theta_dot (rad/s)", "Phase velocity theta_dot (eq. 1)", None),
+    ("r_ddot", "cpg_r_dot_dot", "r_ddot (rad/s^2)", "Amplitude acceleration r_ddot (eq. 1)", None),
+)
 
 
-def cpg_r_dot_dot(results: Results, directory: Path) -> Output:
-    return _joint_panels(
-        results,
-        directory,
-        CPG_VARIANTS,
-        "r_ddot",
-        "cpg_r_dot_dot",
-        "r_ddot (rad/s^2)",
-        "Amplitude acceleration r_ddot (eq. 1)",
-    )
+def cpg_traces(results: Results, directory: Path) -> Output:
+    """The CPG agents' desired positions, phase velocities and amplitude accelerations over the
+    first seconds of an evaluation episode, one figure each (:data:`CPG_PANELS`)."""
+    return _panel_figures(results, directory, CPG_VARIANTS, CPG_PANELS)
 
 
 # -- fig:des_output (des_pos, des_vel) ---------------------------------------------------------
@@ -204,22 +198,17 @@ def des_output(results: Results, directory: Path) -> Output:
     """Desired positions and velocities of the MLP actor vs the CPG-Actor, lines at +- the
     motor's speed limit (the runs' ``env.velocity_limit``, else 15 rad/s);
     the velocities of both the finite difference of the desired positions sent."""
-    paths, notes = [], []
     variants = ("mlp", "cpg-actor")
     # the motor's speed limit the runs were trained with (their env config), else the paper's
     runs = [run for run in map(results.first, variants) if run is not None]
     velocity_limit = next((float(run.config["env"]["velocity_limit"]) for run in runs
                            if "velocity_limit" in (run.config.get("env") or {})),
                           VELOCITY_LIMIT)  # fmt: skip
-    for key, name, ylabel, limit in (
-        ("desired_position", "des_pos", "desired position (rad)", None),
-        ("desired_velocity", "des_vel", "desired velocity (rad/s)", velocity_limit),
-    ):
-        title = "Desired " + ("positions" if limit is None else "velocities (red: motor limits)")
-        written, more = _joint_panels(results, directory, variants, key, name, ylabel, title, limit)
-        paths += written
-        notes += more
-    return paths, notes
+    return _panel_figures(results, directory, variants, (
+        ("desired_position", "des_pos", "desired position (rad)", "Desired positions", None),
+        ("desired_velocity", "des_vel", "desired velocity (rad/s)",
+         "Desired velocities (red: motor limits)", velocity_limit),
+    ))  # fmt: skip
 
 
 # -- fig:parameters_under_training ----------------------------------------------------------------
@@ -385,15 +374,19 @@ def cpg_actor_training_over_time(results: Results, directory: Path) -> Output:
     def stage_label(stage: dict) -> str:
         return labels[stage["iteration"]]
 
+    def shaded():
+        """Each stage's traces, its shade and the time and mask of the window drawn."""
+        for i, (stage, traces) in enumerate(stages):
+            t = traces["time"]
+            shade = cmap(i / max(1, len(stages) - 1) * 0.85)
+            yield stage, traces, shade, t, t <= t[0] + TRACE_WINDOW_S
+
     def draw_heights(ax) -> None:
         if "hip_height" not in stages[0][1]:
             ax.text(0.5, 0.5, f"the {robot}'s traces have no hip height", ha="center",
                     transform=ax.transAxes)  # fmt: skip
             return
-        for i, (stage, traces) in enumerate(stages):
-            shade = cmap(i / max(1, len(stages) - 1) * 0.85)
-            t = traces["time"]
-            window = t <= t[0] + TRACE_WINDOW_S
+        for stage, traces, shade, t, window in shaded():
             ax.plot(
                 t[window],
                 traces["hip_height"][window, 0],
@@ -408,10 +401,7 @@ def cpg_actor_training_over_time(results: Results, directory: Path) -> Output:
         if j >= len(joints):
             return
         index, joint = joints[j]
-        for i, (stage, traces) in enumerate(stages):
-            shade = cmap(i / max(1, len(stages) - 1) * 0.85)
-            t = traces["time"]
-            window = t <= t[0] + TRACE_WINDOW_S
+        for stage, traces, shade, t, window in shaded():
             ax.plot(
                 t[window],
                 traces["desired_position"][window, 0, index],
@@ -472,9 +462,7 @@ def steps_at_iteration(run: Run, iteration: int) -> int | None:
 
 FIGURES: tuple[Callable[[Results, Path], Output], ...] = (
     ep_reward,
-    cpg_output,
-    cpg_theta_dot,
-    cpg_r_dot_dot,
+    cpg_traces,
     parameters_under_training,
     des_output,
     cpg_actor_training_over_time,

@@ -58,7 +58,8 @@ def compute_gae(
 class RolloutStorage:
     """Fixed-size buffers ``(T, N, ...)`` for one iteration's rollout."""
 
-    FIELDS = (
+    # what the agent saw and drew at each step (each minibatch holds them), then the env's outcome
+    POLICY_FIELDS = (
         "observations",
         "states",
         "actions",
@@ -66,11 +67,8 @@ class RolloutStorage:
         "values",
         "action_mean",
         "action_std",
-        "rewards",
-        "terminated",
-        "truncated",
-        "final_values",
     )
+    FIELDS = (*POLICY_FIELDS, "rewards", "terminated", "truncated", "final_values")
 
     def __init__(
         self,
@@ -183,17 +181,7 @@ class RolloutStorage:
             raise ValueError(f"{num_minibatches} minibatches for a batch of {batch_size} samples")
         flat = {
             name: getattr(self, name).flatten(0, 1)
-            for name in (
-                "observations",
-                "states",
-                "actions",
-                "log_probs",
-                "values",
-                "action_mean",
-                "action_std",
-                "advantages",
-                "returns",
-            )
+            for name in (*self.POLICY_FIELDS, "advantages", "returns")
         }
         if bptt_steps > 1:
             flat.update({k: v.flatten(0, 1) for k, v in self.windows(bptt_steps).items()})

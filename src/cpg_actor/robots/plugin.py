@@ -8,10 +8,17 @@ that imports on call.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+import importlib
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+
+def load(path: str) -> Any:
+    """The object at ``path``, "module:name" (as a Gymnasium entry point), imported now."""
+    module, _, name = path.partition(":")
+    return getattr(importlib.import_module(module), name)
 
 
 @dataclass(frozen=True)
@@ -52,12 +59,15 @@ class CPGLayout:
     order, that each oscillator drives; None: one oscillator per joint, in order; the joints
     no oscillator drives are held at the nominal pose), or through ``pattern``, a module built
     from the nominal pose that maps the oscillators' phase and amplitude to every joint.
+    ``gaits``: the gaits it can start in (``agent_config.cpg_gait``'s choices; the first is the
+    default), each with its footfall pattern: every leg's phase, a fraction of a cycle, in the
+    robot's leg order.
     """
 
     preset: Callable[..., Any]
     joints: tuple[int, ...] | None = None
     pattern: Callable[[Sequence[float]], Any] | None = None
-    gaits: tuple[str, ...] = ()  # agent_config.cpg_gait's choices; the first is the default
+    gaits: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -84,6 +94,10 @@ class Robot:
     # the simulators its envs run on (`--sim`), the first the default; with more than one,
     # its env config's ``sim`` field names the run's
     simulators: tuple[str, ...] = ("mujoco",)
+    # the agents' tuned settings on it, by agent name: config values (a nested mapping, as a
+    # preset's) a run of that agent starts from unless its preset, config file or command line
+    # say otherwise (cpg_actor.config.compose_config)
+    agent_defaults: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
 
     @property
     def episode_steps(self) -> int:

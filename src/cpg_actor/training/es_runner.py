@@ -51,24 +51,8 @@ from cpg_actor.device import resolve_device
 from cpg_actor.ppo import RunningNormalizer
 from cpg_actor.robots.common.torch_env import TorchVectorEnv
 from cpg_actor.training import run_checkpoint
-from cpg_actor.training.checkpoint import (
-    CHECKPOINT_FORMAT,
-    CHECKPOINT_VERSION,
-    check_checkpoint_run,
-    load_checkpoint,
-    rng_state,
-    set_rng_state,
-)
 from cpg_actor.training.evaluation import TrainingEvaluation, finite_mean
-from cpg_actor.training.hooks import (
-    Checkpoints,
-    Evaluation,
-    Hook,
-    Iteration,
-    Logging,
-    Progress,
-    run_loop,
-)
+from cpg_actor.training.hooks import Checkpoints, Hook, Iteration, loop_hooks, run_loop
 from cpg_actor.training.run_log import RunLog
 from cpg_actor.training.seeding import seed_everything
 
@@ -153,11 +137,9 @@ class ESRunner:
             config, self.spec, self.agent, self.normalizer, self.action_low, self.action_high,
             eval_env,
         )  # fmt: skip
-        self.hooks: list[Hook] = [
-            Evaluation(self.evaluation),
-            Logging(ESRunner.scalars),
-            *([Progress(progress_interval, ESRunner.progress_fields)] if progress else []),
-        ]
+        self.hooks: list[Hook] = loop_hooks(
+            self.evaluation, ESRunner.scalars, ESRunner.progress_fields, progress, progress_interval
+        )
         self.iteration = 0  # generations done
         self.global_step = 0  # env steps the search took
         self.best_step = 0  # global_step when the best candidate was found
@@ -270,16 +252,7 @@ class ESRunner:
 
     def state_dict(self) -> dict[str, Any]:
         return {
-            "format": CHECKPOINT_FORMAT,
-            "version": CHECKPOINT_VERSION,
-            "agent": self.config.agent,
-            "config": self.config.to_dict(),
-            "iteration": self.iteration,
-            "global_step": self.global_step,
-            "agent_state": self.agent.state_dict(),
-            "normalizer": self.normalizer.state_dict(),
-            "train_wall": self.train_wall,
-            "rng": rng_state(),
+            **run_checkpoint.run_state(self),
             "es": {
                 **self.search.state_dict(),
                 "best_step": self.best_step,
@@ -325,28 +298,15 @@ class ESRunner:
     def load_checkpoint(self, path: Path) -> None:
         """Continue the search from ``path`` (the agent, CMA-ES, the best candidate, counters,
         RNG streams). To act with the agent, see :func:`cpg_actor.training.policy.load_policy`."""
-        data = load_checkpoint(path)
-        check_checkpoint_run(path, data, self.config.agent)
+        data = run_checkpoint.read(path, self.config.agent)
         if "es" not in data:
             raise ValueError(f"checkpoint {path} holds no search state")
-        try:
-            self.agent.load_state_dict(data["agent_state"])
-            self.normalizer.load_state_dict(data["normalizer"])
-        except RuntimeError as error:
-            raise ValueError(
-                f"checkpoint {path} does not match this agent's networks: {error}"
-            ) from None
+        run_checkpoint.restore_run_state(self, path, data)
         state = data["es"]
         self.search.load_state_dict(state)
         self.best_step = int(state["best_step"])
         self.start_vector = state["start_vector"].to(self.device).clone()
-        self.iteration = int(data["iteration"])
-        self.global_step = int(data["global_step"])
-        self.run_log.purge_step = self.global_step + 1  # TensorBoard points logged after it
-        self.train_wall = float(data.get("train_wall", 0.0))
-        set_rng_state(data["rng"])
         self._resumed = True
-        self.run_log.purge_step = self.global_step + 1  # TensorBoard drops what came after
 
     def close(self) -> None:
         self.run_log.close()

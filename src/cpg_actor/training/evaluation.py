@@ -164,8 +164,9 @@ def evaluate_policy(policy, config, episodes: int, seed: int) -> dict[str, np.nd
     finally:
         env.close()
     traces["agent"] = np.array(config.agent)
-    # the motor's no-load speed (rad/s), drawn on the velocity panels of traces.png
-    traces["velocity_limit"] = np.array(float(config.env.velocity_limit))
+    # the motor's no-load speed (rad/s), drawn on the velocity panels of traces.png: one number,
+    # or one per joint of a leg (the Go1's)
+    traces["velocity_limit"] = np.asarray(config.env.velocity_limit, dtype=float)
     cpg = getattr(policy.agent, "cpg", None)  # a CPG in the agent: its oscillators' names
     if cpg is not None and "theta_dot" in traces:
         traces["oscillator_names"] = np.array(cpg.topology.names, dtype=str)

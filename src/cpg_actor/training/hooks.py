@@ -165,6 +165,20 @@ def _evaluation_text(runner: Any) -> str:
     return evaluation_text(runner.last_evaluation) if runner.last_evaluation else ""
 
 
+def loop_hooks(
+    evaluation: TrainingEvaluation,
+    row: Row,
+    progress_fields: Row,
+    progress: bool,
+    progress_interval: float,
+) -> list[Hook]:
+    """The hooks a runner calls first, in order: the evaluation, the logging of ``row``'s
+    scalars and, with ``progress``, the progress display of ``progress_fields`` every
+    ``progress_interval`` seconds (off a terminal)."""
+    display = [Progress(progress_interval, progress_fields)] if progress else []
+    return [Evaluation(evaluation), Logging(row), *display]
+
+
 class Checkpoints(Hook):
     """``runner.save_checkpoint()`` every ``checkpoint_interval`` iterations, after the last,
     when a hook stops the run, and before the first iteration of a new run (the untrained or

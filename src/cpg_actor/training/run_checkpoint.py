@@ -39,8 +39,10 @@ def save(data: dict[str, Any], run_dir: Path, iteration: int) -> Path:
     return path
 
 
-def ppo_state(runner: Runner) -> dict[str, Any]:
-    """What a PPO run's checkpoint holds (the module docstring)."""
+def run_state(runner: Any) -> dict[str, Any]:
+    """What every run's checkpoint holds (PPO's and the open-loop search's): the format, the
+    run's agent and config, the counters, the agent, the observation normaliser, the time
+    trained and the RNG streams."""
     return {
         "format": checkpoint.CHECKPOINT_FORMAT,
         "version": checkpoint.CHECKPOINT_VERSION,
@@ -50,11 +52,42 @@ def ppo_state(runner: Runner) -> dict[str, Any]:
         "global_step": runner.global_step,
         "agent_state": runner.agent.state_dict(),
         "normalizer": runner.normalizer.state_dict(),
-        "reward_normalizer": runner.reward_normalizer.state_dict(),
         "train_wall": runner.train_wall,
+        "rng": checkpoint.rng_state(),
+    }
+
+
+def read(path: Path, agent: str) -> dict[str, Any]:
+    """The checkpoint at ``path``, checked to be one of a run of ``agent``."""
+    data = checkpoint.load_checkpoint(path)
+    checkpoint.check_checkpoint_run(path, data, agent)
+    return data
+
+
+def restore_run_state(runner: Any, path: Path, data: dict[str, Any]) -> None:
+    """Put :func:`run_state`'s part of checkpoint ``data`` (:func:`read` from ``path``) back
+    into ``runner``; a ValueError if its networks are not the agent's."""
+    try:
+        runner.agent.load_state_dict(data["agent_state"])
+        runner.normalizer.load_state_dict(data["normalizer"])
+    except RuntimeError as error:
+        raise ValueError(
+            f"checkpoint {path} does not match this agent's networks: {error}"
+        ) from None
+    runner.train_wall = float(data.get("train_wall", 0.0))
+    runner.iteration = int(data["iteration"])
+    runner.global_step = int(data["global_step"])
+    runner.run_log.purge_step = runner.global_step + 1  # TensorBoard drops what came after
+    checkpoint.set_rng_state(data["rng"])
+
+
+def ppo_state(runner: Runner) -> dict[str, Any]:
+    """What a PPO run's checkpoint holds (the module docstring)."""
+    return {
+        **run_state(runner),
+        "reward_normalizer": runner.reward_normalizer.state_dict(),
         "optimizer": runner.ppo.optimizer.state_dict(),
         "learning_rate": runner.ppo.learning_rate,
-        "rng": checkpoint.rng_state(),
         "env_seed": runner.env_seed,
         "recent": runner.rollout.episodes.recent_state(),
         "episodes": runner.rollout.state(),
@@ -64,25 +97,13 @@ def ppo_state(runner: Runner) -> dict[str, Any]:
 def load_ppo_state(runner: Runner, path: Path) -> None:
     """Continue ``runner``'s training from ``path``: networks, optimiser, normalisers, RNG
     streams, counters and the episodes in progress."""
-    data = checkpoint.load_checkpoint(path)
-    checkpoint.check_checkpoint_run(path, data, runner.config.agent)
-    try:
-        runner.agent.load_state_dict(data["agent_state"])
-        runner.normalizer.load_state_dict(data["normalizer"])
-    except RuntimeError as error:
-        raise ValueError(
-            f"checkpoint {path} does not match this agent's networks: {error}"
-        ) from None
+    data = read(path, runner.config.agent)
+    restore_run_state(runner, path, data)
     runner.ppo.optimizer.load_state_dict(data["optimizer"])
     runner.ppo.set_learning_rate(data["learning_rate"])
     if "reward_normalizer" in data:  # absent from checkpoints of earlier versions
         runner.reward_normalizer.load_state_dict(data["reward_normalizer"])
-    runner.train_wall = float(data.get("train_wall", 0.0))
-    runner.iteration = data["iteration"]
-    runner.global_step = data["global_step"]
-    runner.run_log.purge_step = runner.global_step + 1  # TensorBoard drops what came after
     runner.rollout.episodes.load_recent(data["recent"])
-    checkpoint.set_rng_state(data["rng"])
     runner.env_seed = data.get("env_seed")
     episodes = data.get("episodes")
     if episodes is not None and runner.env.saves_state:

@@ -39,12 +39,10 @@ from cpg_actor.training.compile_stance import CompileStance
 from cpg_actor.training.evaluation import TrainingEvaluation
 from cpg_actor.training.hooks import (
     Checkpoints,
-    Evaluation,
     Hook,
     Iteration,
-    Logging,
-    Progress,
     StopWhen,
+    loop_hooks,
     ppo_progress,
     ppo_row,
     run_loop,
@@ -100,9 +98,7 @@ class Runner:
             config, self.spec, self.agent, self.normalizer, low, high, eval_env
         )
         self.hooks: list[Hook] = [
-            Evaluation(self.evaluation),
-            Logging(ppo_row),
-            *([Progress(progress_interval, ppo_progress)] if progress else []),
+            *loop_hooks(self.evaluation, ppo_row, ppo_progress, progress, progress_interval),
             *hooks,
         ]
         self.iteration = 0

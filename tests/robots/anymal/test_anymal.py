@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from cpg_actor.robots.anymal import description as robot
-from cpg_actor.robots.anymal.gaits import open_loop_positions
+from cpg_actor.robots.anymal.gaits import ANYMAL_GAITS
 from cpg_actor.robots.anymal.plugin import ENV_ID as ANYMAL_ENV_ID
-from cpg_actor.robots.anymal.vector import ANYMAL, OBS_NAMES, AnymalVectorEnv
+from cpg_actor.robots.anymal.vector import ANYMAL, AnymalVectorEnv
 from cpg_actor.robots.common.mujoco_runtime import mujoco
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.common.quadruped.vector import load_model
@@ -66,7 +66,7 @@ def test_standing_statics_carry_the_weight_level_and_symmetric():
 def test_env_api_spaces_seeds_and_errors():
     env = AnymalVectorEnv(3)
     obs, info = env.reset(seed=7)
-    assert obs.shape == (3, len(OBS_NAMES)) == (3, 45) and obs.dtype == np.float32
+    assert obs.shape == (3, len(ANYMAL.observation_names)) == (3, 45) and obs.dtype == np.float32
     assert env.single_action_space.shape == (12,)
     assert np.all((info["command"][:, 0] >= 0) & (info["command"][:, 0] <= 1))
     again, _ = AnymalVectorEnv(3).reset(seed=7)
@@ -203,7 +203,8 @@ def _open_loop_trot(command: float, n: int = 4) -> dict:
     env.reset(seed=0)
     steps, dt = env.config.episode_steps, env.config.control_dt
     ended = None
-    for action in open_loop_positions("trot", dt, robot.NOMINAL_POSE, n, steps, command).numpy():
+    trot = ANYMAL_GAITS.open_loop_positions("trot", dt, robot.NOMINAL_POSE, n, steps, command)
+    for action in trot.numpy():
         _, _, terminated, truncated, info = env.step(action)
         assert not terminated.any()
         if truncated.any():

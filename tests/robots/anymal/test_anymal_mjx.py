@@ -11,7 +11,7 @@ import torch
 
 from cpg_actor.cli import main
 from cpg_actor.robots.anymal import description as robot
-from cpg_actor.robots.anymal.gaits import open_loop_positions
+from cpg_actor.robots.anymal.gaits import ANYMAL_GAITS
 from cpg_actor.robots.anymal.vector import AnymalVectorEnv
 from cpg_actor.robots.common import mjx_runtime as runtime
 
@@ -39,7 +39,8 @@ def envs():
 
 def trot_actions(steps: int) -> np.ndarray:
     """The open-loop trot preset at the drive of a 1 m/s command (it walks, ~0.3-0.7 m/s)."""
-    return open_loop_positions("trot", 0.02, robot.NOMINAL_POSE, N, steps, drive=1.0).numpy()
+    trot = ANYMAL_GAITS.open_loop_positions("trot", 0.02, robot.NOMINAL_POSE, N, steps, drive=1.0)
+    return trot.numpy()
 
 
 @pytest.mark.slow

@@ -1,6 +1,6 @@
-"""The quadruped's ``leg`` layout: one oscillator per leg, a foot-space pattern through the
-leg's inverse kinematics (cpg_actor.robots.anymal.foot_space), and its CPG (each gait's phase lags
-are where the network settles)."""
+"""The quadruped's ``leg`` layout on ANYmal B: one oscillator per leg, a foot-space pattern
+through the leg's inverse kinematics (cpg_actor.robots.common.quadruped.foot_space), and its CPG
+(each gait's phase lags are where the network settles)."""
 
 import math
 
@@ -10,16 +10,17 @@ import torch
 
 from cpg_actor.cpg import CPGState
 from cpg_actor.robots.anymal import description as robot
-from cpg_actor.robots.anymal.foot_space import CLEARANCE, PENETRATION, FootSpaceMap, front_leg_foot
-from cpg_actor.robots.anymal.gaits import GAITS, quadruped_leg_cpg
+from cpg_actor.robots.anymal.gaits import ANYMAL_GAITS
 from cpg_actor.robots.anymal_leg import kinematics
+from cpg_actor.robots.common.quadruped.foot_space import leg_foot
+from cpg_actor.robots.common.quadruped.gaits import GAITS
 
 NOMINAL = torch.tensor(robot.NOMINAL_POSE, dtype=torch.float64)
 
 
 @pytest.fixture(scope="module")
 def pattern():
-    return FootSpaceMap(robot.NOMINAL_POSE).double()
+    return ANYMAL_GAITS.foot_space(robot.NOMINAL_POSE).double()
 
 
 def feet(joints: torch.Tensor) -> torch.Tensor:
@@ -46,7 +47,7 @@ def test_the_feet_follow_the_pattern(pattern):
     nominal_feet = feet(NOMINAL[None])[0]
     got = feet(joints) - nominal_feet
     s = torch.sin(theta)
-    dz = torch.where(s > 0, CLEARANCE * s, PENETRATION * s)
+    dz = torch.where(s > 0, ANYMAL_GAITS.clearance * s, ANYMAL_GAITS.penetration * s)
     assert torch.allclose(got[..., 0], -r * torch.cos(theta), atol=1e-9)
     assert torch.allclose(got[..., 1], dz, atol=1e-9)
     assert torch.equal(joints.reshape(25, 4, 3)[..., 0], torch.zeros(25, 4, dtype=torch.float64))
@@ -58,7 +59,7 @@ def test_the_feet_follow_the_pattern(pattern):
 def test_inverse_kinematics_inverts_forward_kinematics(pattern):
     hfe = torch.empty(200, dtype=torch.float64).uniform_(-0.3, 1.1)
     kfe = torch.empty(200, dtype=torch.float64).uniform_(-1.6, -0.3)  # the front knee's side
-    x, z = front_leg_foot(hfe, kfe)
+    x, z = leg_foot(hfe, kfe, ANYMAL_GAITS.thigh, ANYMAL_GAITS.shank)
     h, k = pattern.inverse_kinematics(x, z)
     assert torch.allclose(h, hfe, atol=1e-9) and torch.allclose(k, kfe, atol=1e-9)
 
@@ -75,12 +76,12 @@ def test_legs_must_mirror_the_front_leg():
     pose = list(robot.NOMINAL_POSE)
     pose[4] = 0.5  # RF HFE unlike LF's
     with pytest.raises(ValueError, match="front leg or its mirror image"):
-        FootSpaceMap(pose)
+        ANYMAL_GAITS.foot_space(pose)
 
 
 @pytest.mark.parametrize("gait", sorted(GAITS))
 def test_each_gait_is_the_phase_locked_state_of_the_leg_cpg(gait):
-    cpg = quadruped_leg_cpg(0.01, gait).double()
+    cpg = ANYMAL_GAITS.leg_cpg(0.01, gait).double()
     psi = 2 * math.pi * np.array(GAITS[gait])
     start = cpg.initial_state(1, amplitude=0.05)
     pushed = torch.as_tensor(psi + np.random.default_rng(1).uniform(-1.0, 1.0, 4))[None]

@@ -19,7 +19,6 @@ from cpg_actor.robots.common.quadruped.gaits import GAITS
 from cpg_actor.robots.go1 import description as robot
 from cpg_actor.robots.go1.config import Go1Config
 from cpg_actor.robots.go1.env import Go1Env
-from cpg_actor.robots.go1.foot_space import Go1FootSpaceMap
 from cpg_actor.robots.go1.gaits import GO1_GAITS
 from cpg_actor.robots.go1.mjcf import mjcf_text
 from cpg_actor.robots.go1.plugin import ENV_ID
@@ -102,7 +101,7 @@ def test_the_registry_lists_the_go1_and_tells_its_config_from_anymals():
     assert robot_of_model("unitree-go1").name == "go1"
     assert {g.id for g in get_robot("go1").gym_ids} == {ENV_ID, "cpg_actor/Go1-mjx-v0"}
     layouts = get_robot("go1").cpg_layouts()
-    assert set(layouts) == {"joint", "leg"} and layouts["joint"].gaits[:1] == ("trot",)
+    assert set(layouts) == {"joint", "leg"} and next(iter(layouts["joint"].gaits)) == "trot"
     config = TrainConfig()
     apply_dict(config, parse_override("robot=go1"), "")
     apply_dict(config, parse_override("env.torque_limit=[20, 20, 30]"), "")
@@ -173,7 +172,7 @@ def test_the_open_loop_trot_moves_diagonal_feet_together():
 
 
 def test_the_foot_space_pattern_holds_the_nominal_pose_at_zero_amplitude():
-    pattern = Go1FootSpaceMap(robot.NOMINAL_POSE).double()
+    pattern = GO1_GAITS.foot_space(robot.NOMINAL_POSE).double()
     phase = torch.full((1, 4), math.pi)  # mid stance: dz = 0
     joints = pattern(phase.double(), torch.zeros(1, 4, dtype=torch.float64))
     assert joints[0].tolist() == pytest.approx(robot.NOMINAL_POSE, abs=1e-6)

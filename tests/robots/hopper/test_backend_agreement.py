@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from cpg_actor.robots.anymal_leg import kinematics as leg_kinematics
 from cpg_actor.robots.hopper import description as robot
 from cpg_actor.robots.hopper import kinematics
 
@@ -118,8 +119,8 @@ def test_foot_state_and_contact_match_kinematics():
         assert backend.contact().tolist() == [False], sim
         pos, vel = backend.foot_state()
         q, v = backend.qpos[0], backend.qvel[0]
-        foot = kinematics.foot_position(q[1:])
-        foot_vel = kinematics.foot_velocity(q[1:], v[1:])
+        foot = leg_kinematics.foot_position(q[1:])
+        foot_vel = leg_kinematics.foot_velocity(q[1:], v[1:])
         np.testing.assert_allclose(pos[0, [0, 2]], [foot[0], q[0] + foot[1]], atol=1e-6)
         np.testing.assert_allclose(vel[0, [0, 2]], [foot_vel[0], v[0] + foot_vel[1]], atol=1e-5)
         assert abs(vel[0, 1]) < 1e-9 and np.abs(v[1:]).max() > 0.5, sim

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from cpg_actor.robots.anymal_leg import kinematics as leg_kinematics
 from cpg_actor.robots.assets import stale_assets
 from cpg_actor.robots.common.actuator import Actuator
 from cpg_actor.robots.common.mujoco_runtime import mujoco  # MUJOCO_GL chosen first
@@ -152,10 +153,10 @@ def test_link_frames_and_coms_agree_in_every_pose(mj, pb, pose):
         np.testing.assert_allclose(state[4], data.xpos[mj.body(name).id], atol=1e-7)
         np.testing.assert_allclose(state[0], data.xipos[mj.body(name).id], atol=1e-7)
     # and the hand-written planar kinematics (x, z relative to the hip)
-    foot = kinematics.foot_position(np.array(pose))
+    foot = leg_kinematics.foot_position(np.array(pose))
     site = data.site_xpos[mj.site("foot").id]
     np.testing.assert_allclose([site[0], site[2] - 0.7], foot, atol=1e-9)
-    knee = kinematics.knee_position(np.array(pose))
+    knee = leg_kinematics.knee_position(np.array(pose))
     anchor = data.xanchor[mj.joint("KFE").id]
     np.testing.assert_allclose([anchor[0], anchor[2] - 0.7], knee, atol=1e-9)
     for name, (x, z) in kinematics.com_positions(pose).items():
@@ -164,15 +165,15 @@ def test_link_frames_and_coms_agree_in_every_pose(mj, pb, pose):
 
 
 def test_nominal_pose_puts_the_foot_under_the_hip_with_the_knee_bent():
-    hfe_x = kinematics.HFE_ORIGIN[0]
-    foot = kinematics.foot_position(np.array(robot.NOMINAL_POSE))
-    knee = kinematics.knee_position(np.array(robot.NOMINAL_POSE))
+    hfe_x = leg_kinematics.HFE_ORIGIN[0]
+    foot = leg_kinematics.foot_position(np.array(robot.NOMINAL_POSE))
+    knee = leg_kinematics.knee_position(np.array(robot.NOMINAL_POSE))
     lean = np.degrees(np.arctan2(foot[0] - hfe_x, -foot[1]))
     assert 0.0 < lean < 20.0  # foot slightly in front of the hip, 0.47 m below it
     assert -0.48 < foot[1] < -0.45
     assert knee[0] < hfe_x and knee[0] < foot[0]  # knee points backwards: bent
     # positive HFE swings the leg backwards (the sign convention in description.py)
-    assert kinematics.foot_position(np.array([0.6, -0.8]))[0] < foot[0]
+    assert leg_kinematics.foot_position(np.array([0.6, -0.8]))[0] < foot[0]
 
 
 def test_shipped_mjcf_has_the_default_actuators():

@@ -1,8 +1,8 @@
 """The ANYmal B quadruped as plain Python data: the one source of its MJCF (``mjcf.py``).
 
 Every number is a fact of ANYbotics' public ANYmal B description (``anymal.urdf`` of
-ANYbotics/anymal_b_simple_description, commit 988b5df, BSD-3-Clause; the notice is in
-:data:`LICENSE_NOTICE` and in every generated file). This module adds the base and the HAA
+ANYbotics/anymal_b_simple_description, commit 988b5df, BSD-3-Clause; the notice is
+:data:`LICENSE_NOTICE`, in every generated file). This module adds the base and the HAA
 joints to four copies of the leg (:mod:`cpg_actor.robots.anymal_leg`, shared with the hopper)
 mirrored: the URDF's four legs differ only in the signs of x and y, written here as
 ``(sx, sy)``: LF (+, +), RF (+, -), LH (-, +), RH (-, -). ``docs/quadruped.md`` lists each
@@ -53,6 +53,7 @@ JOINT_LIMITS = {
            pose + (HAA_RANGE if name.endswith("HAA") else LEG_RANGE))
     for name, pose in zip(JOINT_NAMES, NOMINAL_POSE, strict=True)
 }  # fmt: skip
+ACTION_LIMITS = JOINT_LIMITS  # the joint stops are the action bounds
 
 
 Body = anymal_leg.Link  # a rigid body: mass, COM and inertia about the COM, in the body's frame
@@ -95,35 +96,4 @@ FOOT_FRICTION = anymal_leg.FOOT_FRICTION
 LEG_MASS = anymal_leg.LEG_MASS  # 3.40697 kg
 TOTAL_MASS = BASE.mass + 4 * LEG_MASS  # 30.4214 kg
 
-LICENSE_NOTICE = """\
-Robot data from ANYbotics' ANYmal B description (anymal_b_simple_description, urdf/anymal.urdf):
-Copyright 2019, ANYbotics AG.
-
-Redistribution and use in source and binary forms, with or without
-modification, are permitted provided that the following conditions
-are met:
-
-1. Redistributions of source code must retain the above copyright
-   notice, this list of conditions and the following disclaimer.
-
-2. Redistributions in binary form must reproduce the above copyright
-   notice, this list of conditions and the following disclaimer in
-   the documentation and/or other materials provided with the
-   distribution.
-
-3. Neither the name of the copyright holder nor the names of its
-   contributors may be used to endorse or promote products derived
-   from this software without specific prior written permission.
-
-THIS SOFTWARE IS PROVIDED BY THE COPYRIGHT HOLDERS AND CONTRIBUTORS
-"AS IS" AND ANY EXPRESS OR IMPLIED WARRANTIES, INCLUDING, BUT NOT
-LIMITED TO, THE IMPLIED WARRANTIES OF MERCHANTABILITY AND FITNESS FOR
-A PARTICULAR PURPOSE ARE DISCLAIMED. IN NO EVENT SHALL THE COPYRIGHT
-HOLDER OR CONTRIBUTORS BE LIABLE FOR ANY DIRECT, INDIRECT, INCIDENTAL,
-SPECIAL, EXEMPLARY, OR CONSEQUENTIAL DAMAGES (INCLUDING, BUT NOT
-LIMITED TO, PROCUREMENT OF SUBSTITUTE GOODS OR SERVICES; LOSS OF USE,
-DATA, OR PROFITS; OR BUSINESS INTERRUPTION) HOWEVER CAUSED AND ON ANY
-THEORY OF LIABILITY, WHETHER IN CONTRACT, STRICT LIABILITY, OR TORT
-(INCLUDING NEGLIGENCE OR OTHERWISE) ARISING IN ANY WAY OUT OF THE USE
-OF THIS SOFTWARE, EVEN IF ADVISED OF THE POSSIBILITY OF SUCH DAMAGE.
-"""
+LICENSE_NOTICE = anymal_leg.LICENSE_NOTICE  # ANYbotics' notice, of the leg and the base

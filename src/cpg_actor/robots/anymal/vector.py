@@ -10,22 +10,14 @@ from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.common.quadruped.model import QuadrupedModel
 from cpg_actor.robots.common.quadruped.vector import QuadrupedVectorEnv
 
-ANYMAL = QuadrupedModel(
+ANYMAL = QuadrupedModel.from_description(
+    robot,
     name="anymal-b",
     state_key="anymal",
     config_class=QuadrupedConfig,
-    legs=robot.LEGS,
-    joint_names=robot.JOINT_NAMES,
-    nominal_pose=robot.NOMINAL_POSE,
-    joint_limits=robot.JOINT_LIMITS,
-    foot_radius=robot.FOOT_RADIUS,
-    total_mass=robot.TOTAL_MASS,
-    gravity=robot.GRAVITY,
     base_body="base",
-    base_box=robot.BASE_BOX,
     mjcf_text=mjcf_text,
 )
-OBS_NAMES = ANYMAL.observation_names
 
 
 class AnymalVectorEnv(QuadrupedVectorEnv):

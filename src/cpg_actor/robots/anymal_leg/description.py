@@ -2,11 +2,10 @@
 (four legs on a base) share.
 
 Every number is a fact of ANYbotics' public ANYmal B description (``anymal.urdf`` of
-ANYbotics/anymal_b_simple_description, BSD-3-Clause; the notice is in
-:data:`cpg_actor.robots.anymal.description.LICENSE_NOTICE`), written for the left-front (LF)
-leg. The URDF's four legs differ only in the signs of x and y, ``(sx, sy)``: LF (+, +),
-RF (+, -), LH (-, +), RH (-, -); :func:`mirrored` and :meth:`Link.mirrored` apply them. The
-hopper is the right-front leg.
+ANYbotics/anymal_b_simple_description, BSD-3-Clause; the notice is :data:`LICENSE_NOTICE`, in
+every file generated from them), written for the left-front (LF) leg. The URDF's four legs
+differ only in the signs of x and y, ``(sx, sy)``: LF (+, +), RF (+, -), LH (-, +), RH (-, -);
+:func:`mirrored` and :meth:`Link.mirrored` apply them. The hopper is the right-front leg.
 
 The leg, from the body it hangs on: the hip link, the HFE joint (hip flexion/extension, about
 +y) to the thigh, the KFE joint (knee, about +y) to the shank, the adapter fixed to the shank,
@@ -17,8 +16,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from cpg_actor.robots.common.notice import bsd_3_clause
+
 Vec3 = tuple[float, float, float]
 Inertia = tuple[float, float, float, float, float, float]  # ixx iyy izz ixy ixz iyz (MuJoCo)
+
+LICENSE_NOTICE = bsd_3_clause(
+    "Robot data from ANYbotics' ANYmal B description (anymal_b_simple_description, "
+    "urdf/anymal.urdf):",
+    "Copyright 2019, ANYbotics AG.",
+)
 
 GRAVITY = 9.81  # m/s^2, every simulator of the project
 

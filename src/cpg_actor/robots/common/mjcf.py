@@ -1,13 +1,33 @@
-"""MJCF pieces every robot's description writes alike: exact numbers, the document's head
-(options, defaults, the ground's texture) and the actuators of the project's actuator law."""
+"""MJCF pieces every robot's description writes alike: numbers, the document's head (options,
+defaults, the ground's texture), the actuators of the project's actuator law, and the model an
+env config simulates."""
 
 from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
 
 
 def exact(value: float) -> str:
     """``value`` as the shortest decimal that reads back as the same double (a configured
     timestep or friction, written into the MJCF of :func:`simulated_mjcf`)."""
     return repr(float(value))
+
+
+def numbers(values, digits: int = 12) -> str:
+    """``values`` as an MJCF (or URDF) list of numbers, ``digits`` significant digits each."""
+    return " ".join(f"{float(v):.{digits}g}" for v in values)
+
+
+def simulated_mjcf(mjcf_text: Callable[..., str], config: Any) -> str:
+    """The MJCF of the model a robot's MuJoCo env simulates under its env ``config``: the
+    robot's ``mjcf_text`` with the config's actuators, timestep and foot-ground friction written
+    in. Loaded, it is the env's model field for field (``tests/deploy/test_export.py``);
+    ``cpg-actor export`` writes it next to the policy (``Robot.mjcf``)."""
+    from cpg_actor.robots.common.actuator import Actuator
+
+    return mjcf_text(Actuator.from_config(config), timestep=config.physics_dt,
+                     foot_friction=config.foot_friction)  # fmt: skip
 
 
 def preamble(

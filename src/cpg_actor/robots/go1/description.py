@@ -26,6 +26,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from cpg_actor.robots.common.notice import bsd_3_clause
+
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]  # w x y z
 
@@ -131,9 +133,9 @@ CALF_GEOMS = (
     ("capsule", (0.01,), {"fromto": (0.0, 0.0, 0.0, 0.02, 0.0, -0.13)}),
     ("capsule", (0.01,), {"fromto": (0.02, 0.0, -0.13, 0.0, 0.0, -0.2)}),
 )
-# the box around the trunk's shapes (centre, half sizes): the MJX env's stand-in for the
-# touch sensor, and the touch sensor's site (2 mm larger)
-TRUNK_BOX = ((0.0, 0.0, 0.0), (0.125, 0.098, 0.058))
+# the box around the trunk's shapes (centre, half sizes; the trunk is the base): the MJX env's
+# stand-in for the touch sensor, and the touch sensor's site (2 mm larger)
+BASE_BOX = ((0.0, 0.0, 0.0), (0.125, 0.098, 0.058))
 
 # contact: the feet's (sliding, torsional, rolling friction; condim 6; soft, Menagerie's solimp
 # to approximate rubber), the other shapes' sliding friction
@@ -143,37 +145,9 @@ FOOT_CONDIM = 6
 FOOT_SOLIMP = (0.015, 1.0, 0.031)
 GEOM_FRICTION = 0.6
 
-LICENSE_NOTICE = """\
-Robot data from the Unitree Go1 description of MuJoCo Menagerie (unitree_go1/go1.xml, derived
-from Unitree Robotics' public URDF, unitree_ros/robots/go1_description):
-Copyright (c) 2016-2022 HangZhou YuShu TECHNOLOGY CO.,LTD. ("Unitree Robotics")
-All rights reserved.
-
-Redistribution and use in source and binary forms, with or without
-modification, are permitted provided that the following conditions
-are met:
-
-1. Redistributions of source code must retain the above copyright
-   notice, this list of conditions and the following disclaimer.
-
-2. Redistributions in binary form must reproduce the above copyright
-   notice, this list of conditions and the following disclaimer in
-   the documentation and/or other materials provided with the
-   distribution.
-
-3. Neither the name of the copyright holder nor the names of its
-   contributors may be used to endorse or promote products derived
-   from this software without specific prior written permission.
-
-THIS SOFTWARE IS PROVIDED BY THE COPYRIGHT HOLDERS AND CONTRIBUTORS
-"AS IS" AND ANY EXPRESS OR IMPLIED WARRANTIES, INCLUDING, BUT NOT
-LIMITED TO, THE IMPLIED WARRANTIES OF MERCHANTABILITY AND FITNESS FOR
-A PARTICULAR PURPOSE ARE DISCLAIMED. IN NO EVENT SHALL THE COPYRIGHT
-HOLDER OR CONTRIBUTORS BE LIABLE FOR ANY DIRECT, INDIRECT, INCIDENTAL,
-SPECIAL, EXEMPLARY, OR CONSEQUENTIAL DAMAGES (INCLUDING, BUT NOT
-LIMITED TO, PROCUREMENT OF SUBSTITUTE GOODS OR SERVICES; LOSS OF USE,
-DATA, OR PROFITS; OR BUSINESS INTERRUPTION) HOWEVER CAUSED AND ON ANY
-THEORY OF LIABILITY, WHETHER IN CONTRACT, STRICT LIABILITY, OR TORT
-(INCLUDING NEGLIGENCE OR OTHERWISE) ARISING IN ANY WAY OUT OF THE USE
-OF THIS SOFTWARE, EVEN IF ADVISED OF THE POSSIBILITY OF SUCH DAMAGE.
-"""
+LICENSE_NOTICE = bsd_3_clause(
+    "Robot data from the Unitree Go1 description of MuJoCo Menagerie (unitree_go1/go1.xml, "
+    "derived\nfrom Unitree Robotics' public URDF, unitree_ros/robots/go1_description):",
+    'Copyright (c) 2016-2022 HangZhou YuShu TECHNOLOGY CO.,LTD. ("Unitree Robotics")\n'
+    "All rights reserved.",
+)

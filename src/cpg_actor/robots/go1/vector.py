@@ -10,19 +10,12 @@ from cpg_actor.robots.go1 import description as robot
 from cpg_actor.robots.go1.config import Go1Config
 from cpg_actor.robots.go1.mjcf import mjcf_text
 
-GO1 = QuadrupedModel(
+GO1 = QuadrupedModel.from_description(
+    robot,
     name="unitree-go1",
     state_key="go1",
     config_class=Go1Config,
-    legs=robot.LEGS,
-    joint_names=robot.JOINT_NAMES,
-    nominal_pose=robot.NOMINAL_POSE,
-    joint_limits=robot.ACTION_LIMITS,
-    foot_radius=robot.FOOT_RADIUS,
-    total_mass=robot.TOTAL_MASS,
-    gravity=robot.GRAVITY,
     base_body="trunk",
-    base_box=robot.TRUNK_BOX,
     mjcf_text=mjcf_text,
     camera={"distance": 1.5, "azimuth": 120.0, "elevation": -20.0},  # a robot half ANYmal's size
 )

@@ -30,6 +30,7 @@ from cpg_actor.robots.anymal_leg import description as leg
 Vec3 = tuple[float, float, float]
 
 GRAVITY = leg.GRAVITY
+LICENSE_NOTICE = leg.LICENSE_NOTICE  # ANYbotics' notice, in both robot files
 RF = (1, -1)  # the leg's signs (sx, sy): the right-front leg
 
 ROBOT_NAME = "anymal_hopper"

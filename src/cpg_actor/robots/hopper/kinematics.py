@@ -16,19 +16,11 @@ from cpg_actor.robots.anymal_leg.kinematics import (
     ADAPTER_IN_SHANK,
     HFE_ORIGIN,
     foot_position,
-    foot_velocity,
     knee_position,
     rotate,
 )
 from cpg_actor.robots.common.array_namespace import as_float, namespace
 from cpg_actor.robots.hopper import description as robot
-
-# the hopper's kinematics: the leg's (foot, knee) and the statics below
-__all__ = [
-    "HFE_ORIGIN", "foot_position", "foot_velocity", "knee_position", "standing_hip_height",
-    "com_positions", "com_height_offset", "com_vertical_velocity", "highest_standing_com",
-    "standing_torques",
-]  # fmt: skip
 
 
 def standing_hip_height(joint_pos: np.ndarray) -> np.ndarray:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+from cpg_actor.robots.hopper.agent_defaults import AGENT_DEFAULTS
 from cpg_actor.robots.hopper.config import SIMULATORS, HopperConfig
 from cpg_actor.robots.plugin import CPGLayout, GymId, MetricInfo, Robot
 
@@ -27,9 +28,10 @@ def cpg_layouts() -> dict[str, CPGLayout]:
 
 
 def mjcf(config: Any) -> str:
-    from cpg_actor.robots.hopper.mjcf import simulated_mjcf
+    from cpg_actor.robots.common.mjcf import simulated_mjcf
+    from cpg_actor.robots.hopper.mjcf import mjcf_text
 
-    return simulated_mjcf(config)
+    return simulated_mjcf(mjcf_text, config)
 
 
 def observation_sources() -> tuple[dict[str, Any], ...]:
@@ -67,4 +69,5 @@ ROBOT = Robot(
     assets=assets,
     start_gait=START_GAIT,
     simulators=SIMULATORS,
+    agent_defaults=AGENT_DEFAULTS,
 )

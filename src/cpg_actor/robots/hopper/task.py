@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from cpg_actor.robots.anymal_leg import kinematics as leg_kinematics
 from cpg_actor.robots.common.array_namespace import as_float, namespace
 from cpg_actor.robots.hopper import description as robot
 from cpg_actor.robots.hopper import kinematics
@@ -81,7 +82,7 @@ def observation(qpos, qvel, desired):
 
 def foot_height(qpos):
     """(N,) height of the lowest point of the foot sphere above the ground (0: touching)."""
-    return qpos[:, 0] + kinematics.foot_position(qpos[:, 1:3])[:, 1] - robot.FOOT_RADIUS
+    return qpos[:, 0] + leg_kinematics.foot_position(qpos[:, 1:3])[:, 1] - robot.FOOT_RADIUS
 
 
 def com_velocity(qpos, qvel):
@@ -110,7 +111,7 @@ def step_outcome(config, qpos, qvel, desired, torque, elapsed, episode_steps,
     info ``hip_height``, ``foot_height``, ``joint_torque``, ``desired_position``,
     ``measured_position``."""
     xp = namespace(qpos)
-    foot_vx = kinematics.foot_velocity(qpos[:, 1:3], qvel[:, 1:3])[:, 0]
+    foot_vx = leg_kinematics.foot_velocity(qpos[:, 1:3], qvel[:, 1:3])[:, 0]
     foot_velocity_xy = xp.stack([foot_vx, xp.zeros_like(foot_vx)], -1)  # the hip is on a rail
     terms = reward_terms(config.reward_weights, qvel[:, 0], desired, qpos[:, 1:3], qvel[:, 1:3],
                          torque, foot_velocity_xy)  # fmt: skip

@@ -14,9 +14,9 @@ planar inverse kinematics (a robot gives its thigh and shank; legs that are the 
 mirrored front to back, as ANYmal's hind legs, solve the mirrored target and negate the angles).
 The abduction joint stays at the nominal pose. Differentiable in theta and r (torch).
 
-A robot's pattern is a subclass that fixes its leg (:class:`cpg_actor.robots.anymal.foot_space.
-FootSpaceMap`, :class:`cpg_actor.robots.go1.foot_space.Go1FootSpaceMap`): called with the
-nominal pose, it is the ``pattern`` of the robot's ``leg`` CPG layout.
+A robot's pattern is this one on its leg (its
+:class:`~cpg_actor.robots.common.quadruped.gaits.GaitCPGs`: ``foot_space(nominal_pose)``, the
+``pattern`` of its ``leg`` CPG layout).
 """
 
 from __future__ import annotations

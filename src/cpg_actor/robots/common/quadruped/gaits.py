@@ -10,7 +10,7 @@ knee; the abduction joints are not driven (held at the nominal pose by
 * each leg's knee oscillator with its own hip oscillator only.
 
 ``leg``: one oscillator per leg, all to all with the gait's lags, driving a foot-space pattern
-(:mod:`cpg_actor.robots.common.quadruped.foot_space`).
+(:mod:`cpg_actor.robots.common.quadruped.foot_space`) on the robot's leg.
 
 Each oscillator has a target phase psi; every coupled pair gets ``phi_ij = psi_j - psi_i``, so
 the network's phase-locked state is the gait, and the network starts in it. The leg phases by
@@ -37,13 +37,16 @@ positive angles (ANYmal's hind knees): ``psi_knee = psi_hip - pi/2``. A robot sa
 The drive d of eq. 3 is the commanded forward speed (m/s): ``nu(d) = c_nu1 d + c_nu0`` and
 ``rho(d) = c_R1 d + c_R0``, so the step's frequency and length follow the command (the
 CPG-Actor reads d from the observation, ``RobotSpec.drive_observation``).
+
+A robot's presets are one :class:`GaitCPGs`: its legs, where each is on the body, which way
+each knee flexes, its leg's lengths for the foot-space pattern (its ``gaits.py``).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import torch
 from torch import Tensor
@@ -51,6 +54,8 @@ from torch import Tensor
 from cpg_actor.cpg.joint_map import JointMap
 from cpg_actor.cpg.network import CPGNetwork
 from cpg_actor.cpg.topology import Topology
+from cpg_actor.robots.common.quadruped.foot_space import FootSpacePattern, Vec2
+from cpg_actor.robots.plugin import CPGLayout
 
 PLACES = ("LF", "RF", "LH", "RH")  # the columns of GAITS
 GAITS: dict[str, tuple[float, float, float, float]] = {  # leg phase, fraction of a cycle
@@ -64,6 +69,33 @@ GAITS: dict[str, tuple[float, float, float, float]] = {  # leg phase, fraction o
 # the joint layout
 OSCILLATOR_JOINTS = tuple(3 * leg + joint for leg in range(4) for joint in (1, 2))
 
+# Initial parameters (eq. 3 with the drive d = the commanded forward speed, m/s), chosen on
+# ANYmal B. The joint layout: a 3 Hz step, hips +-(0.05 + 0.2 d) rad, knees +-(0.3 + 0.1 d) rad;
+# convergence and coupling as the hopper's. Chosen on the open-loop trot (docs/quadruped.md, "The
+# drive"): its forward speed grows with d (-0.08 m/s at d = 0 to 0.32 m/s at d = 1) and no robot
+# falls; with no drive (d = 0) the robot steps nearly in place. The gains are trained with the
+# rest. (The Go1 takes them as they are: its shorter leg takes a proportionally shorter step at
+# the same angles.)
+JOINT_INITIAL = {
+    "frequency": 3.0,  # Hz, c_nu0
+    "frequency_gain": 0.1,  # Hz per (m/s), c_nu1 (> 0 to be trainable)
+    "amplitude": (0.05, 0.3) * 4,  # rad, c_R0 of the hip and the knee of each leg
+    "amplitude_gain": (0.2, 0.1) * 4,  # rad per (m/s), c_R1
+    "convergence": 20.0,  # 1/s
+    "coupling_weight": 10.0,
+}
+# The leg layout: 3 Hz as the joint layout; r is half the foot's step, m: 1 + 8 d cm (at 3 Hz and
+# duty 1/2 a step of 2 r moves the body about 4 r f: 0.5 m/s at d = 0.5 with no slip; the step a
+# speed needs does not depend on the leg).
+LEG_INITIAL = {
+    "frequency": 3.0,  # Hz, c_nu0
+    "frequency_gain": 0.1,  # Hz per (m/s), c_nu1
+    "amplitude": 0.01,  # m, c_R0
+    "amplitude_gain": 0.08,  # m per (m/s), c_R1
+    "convergence": 20.0,  # 1/s
+    "coupling_weight": 10.0,
+}
+
 
 def leg_phase(gait: str, place: str) -> float:
     """The phase (fraction of a cycle) of the leg at ``place`` (one of :data:`PLACES`)."""
@@ -75,20 +107,44 @@ def leg_phase(gait: str, place: str) -> float:
 @dataclass(frozen=True)
 class GaitCPGs:
     """The gait CPGs of one robot: its legs in joint order, where each is on the body, which way
-    each knee flexes, and the initial parameters of each layout (eq. 3, the drive d the
-    commanded forward speed in m/s; keys as :class:`~cpg_actor.cpg.CPGNetwork`'s ``initial``).
-    Its methods are the robot's CPG presets (``Robot.cpg_layouts``)."""
+    each knee flexes, its leg for the foot-space pattern, and the initial parameters of each
+    layout (eq. 3, the drive d the commanded forward speed in m/s; keys as
+    :class:`~cpg_actor.cpg.CPGNetwork`'s ``initial``). Its methods are the robot's CPG presets;
+    :meth:`layouts` are its ``Robot.cpg_layouts``."""
 
     legs: tuple[str, ...]  # the robot's leg names, in joint order
     places: tuple[str, ...]  # each leg's place on the body, one of PLACES
     joints: tuple[str, str]  # the names of a leg's hip and knee joint (the oscillators')
     knee_signs: tuple[int, ...]  # -1: the knee flexes towards negative angles, +1: positive
-    joint_initial: Mapping[str, float | Sequence]  # the joint layout's (angles in rad)
-    leg_initial: Mapping[str, float | Sequence]  # the leg layout's (amplitude: half a step, m)
+    # the front leg in its sagittal plane (x, z; m): the knee in the thigh frame relative to the
+    # hip flexion axis, the foot centre in the shank frame relative to the knee axis
+    thigh: Vec2
+    shank: Vec2
+    clearance: float  # m: the foot's lift at mid swing in the foot-space pattern
+    penetration: float = 0.01  # m: how far the stance foot is pressed below its nominal height
+    joint_initial: Mapping[str, float | Sequence] = field(default_factory=lambda: JOINT_INITIAL)
+    leg_initial: Mapping[str, float | Sequence] = field(default_factory=lambda: LEG_INITIAL)
 
     @property
     def oscillators(self) -> tuple[str, ...]:
         return tuple(f"{leg}_{joint}" for leg in self.legs for joint in self.joints)
+
+    def footfalls(self) -> dict[str, tuple[float, ...]]:
+        """Each gait's leg phases (fractions of a cycle) in the robot's leg order."""
+        return {gait: tuple(leg_phase(gait, place) for place in self.places) for gait in GAITS}
+
+    def layouts(self) -> dict[str, CPGLayout]:
+        """The robot's CPG layouts: ``joint`` (the default) and ``leg``."""
+        gaits = self.footfalls()
+        return {
+            "joint": CPGLayout(self.joint_cpg, joints=OSCILLATOR_JOINTS, gaits=gaits),
+            "leg": CPGLayout(self.leg_cpg, pattern=self.foot_space, gaits=gaits),
+        }
+
+    def foot_space(self, nominal_pose: Sequence[float]) -> FootSpacePattern:
+        """The ``leg`` layout's pattern on the robot's leg, around ``nominal_pose``."""
+        return FootSpacePattern(nominal_pose, self.thigh, self.shank, self.clearance,
+                                self.penetration)  # fmt: skip
 
     def gait_phases(self, gait: str) -> tuple[float, ...]:
         """The target phase psi (rad) of each of the joint layout's 8 oscillators in ``gait``."""

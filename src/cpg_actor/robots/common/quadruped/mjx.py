@@ -40,12 +40,7 @@ from cpg_actor.robots.common.mjx_vector import MjxVectorEnv
 from cpg_actor.robots.common.mujoco_runtime import mujoco
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.common.quadruped.model import QuadrupedModel
-from cpg_actor.robots.common.quadruped.vector import (
-    QuadrupedVectorEnv,
-    init_spaces,
-    load_model,
-    robot_spec,
-)
+from cpg_actor.robots.common.quadruped.vector import QuadrupedVectorEnv, init_spaces, load_model
 from cpg_actor.tasks import velocity as task
 
 jax, mjx = load()
@@ -252,12 +247,7 @@ class MjxQuadrupedVectorEnv(MjxVectorEnv):
         num_threads: int | None = None,
         max_episode_steps: int | None = None,
     ) -> None:
-        init_spaces(self, num_envs, config, max_episode_steps)
-        if self.config.sim != "mjx":
-            raise ValueError(
-                f"{type(self).__name__} simulates with MJX, got sim={self.config.sim!r}"
-            )
-        self.robot = robot_spec(self.quadruped, self.config)
+        init_spaces(self, num_envs, config, max_episode_steps, sim="mjx")
         self._start_mjx(dynamics_for(self.quadruped, self.config))
 
     def saved(self, state: EnvState) -> dict[str, Any]:

@@ -1,7 +1,8 @@
 """`QuadrupedModel`: what the quadruped envs need to know about one robot, in one place.
 
-A robot's folder builds one from its description and MJCF generator; the MuJoCo env, the MJX
-env and the single-robot env read everything robot-specific from it. The MJCF must have a
+A robot's folder builds one from its description and MJCF generator
+(:meth:`QuadrupedModel.from_description`); the MuJoCo env, the MJX env and the single-robot env
+read everything robot-specific from it. The MJCF must have a
 free-jointed base body, the 12 hinge joints in ``joint_names`` order each with an actuator of
 the same name, a site ``<leg>_foot`` at each foot centre, and (for the MuJoCo env) the sensors
 of :data:`SENSORS` after the 12 ``actuatorfrc`` ones: ``gyro`` and ``velocimeter`` on a site
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -21,20 +23,6 @@ from cpg_actor.tasks import velocity as task
 
 # after the 12 actuatorfrc sensors (N m), in this order (the env reads them by these offsets)
 SENSORS = (("gyro", 3), ("velocimeter", 3), ("feet", 12), ("base_touch", 1))
-
-
-def task_sensors(legs: tuple[str, ...]) -> list[str]:
-    """The ``<sensor>`` element of :data:`SENSORS`: base angular and linear velocity (base
-    frame), the feet's world positions, the normal force on the base's touch site."""
-    return [
-        "  <sensor>",
-        '    <gyro name="base_ang_vel" site="imu"/>',
-        '    <velocimeter name="base_lin_vel" site="imu"/>',
-        *(f'    <framepos name="{leg}_foot_pos" objtype="site" objname="{leg}_foot"/>'
-          for leg in legs),
-        '    <touch name="base_touch" site="base_touch"/>',
-        "  </sensor>",
-    ]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -62,6 +50,24 @@ class QuadrupedModel:
     camera: dict[str, float] = field(
         default_factory=lambda: {"distance": 2.5, "azimuth": 120.0, "elevation": -20.0}
     )
+
+    @classmethod
+    def from_description(cls, description: ModuleType, **fields: Any) -> QuadrupedModel:
+        """The model of the robot whose ``description`` module names its facts as every
+        quadruped's does: ``LEGS``, ``JOINT_NAMES``, ``NOMINAL_POSE``, ``ACTION_LIMITS`` (the
+        ``joint_limits``), ``FOOT_RADIUS``, ``TOTAL_MASS``, ``GRAVITY`` and ``BASE_BOX``;
+        ``fields``: the other fields."""
+        return cls(
+            legs=description.LEGS,
+            joint_names=description.JOINT_NAMES,
+            nominal_pose=description.NOMINAL_POSE,
+            joint_limits=description.ACTION_LIMITS,
+            foot_radius=description.FOOT_RADIUS,
+            total_mass=description.TOTAL_MASS,
+            gravity=description.GRAVITY,
+            base_box=description.BASE_BOX,
+            **fields,
+        )
 
     @property
     def low(self) -> np.ndarray:

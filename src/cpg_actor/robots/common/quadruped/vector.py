@@ -109,20 +109,29 @@ def resolve_config(
     return config.validate()
 
 
+SIMULATOR_NAMES = {"mujoco": "MuJoCo", "mjx": "MJX"}
+
+
 def init_spaces(
     env: VectorEnv,
     num_envs: int,
     config: QuadrupedConfig | dict | None,
-    max_episode_steps: int | None = None,
+    max_episode_steps: int | None,
+    sim: str,
 ) -> None:
-    """``env.config`` (validated), ``num_envs`` and the observation and action spaces of a
-    quadruped vector env (MuJoCo's and MJX's alike). ``max_episode_steps`` is what
+    """``env.config`` (validated), ``num_envs``, ``env.robot`` and the observation and action
+    spaces of a quadruped vector env on the simulator ``sim`` (MuJoCo's and MJX's alike):
+    ValueError for a config of another simulator. ``max_episode_steps`` is what
     ``gymnasium.make_vec`` passes from the registered spec: it must equal the config's
     ``episode_steps`` (the env truncates its episodes itself)."""
     if isinstance(num_envs, bool) or not isinstance(num_envs, int) or num_envs < 1:
         raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
     quadruped = env.quadruped
     config = resolve_config(config, quadruped.config_class)
+    if config.sim != sim:
+        other = " (sim='mjx': the robot's MJX env)" if sim == "mujoco" else ""
+        raise ValueError(f"{type(env).__name__} simulates with {SIMULATOR_NAMES[sim]}, got "
+                         f"sim={config.sim!r}{other}")  # fmt: skip
     if max_episode_steps is not None and max_episode_steps != config.episode_steps:
         raise ValueError(
             f"max_episode_steps={max_episode_steps} differs from the config's episode_steps="
@@ -139,6 +148,7 @@ def init_spaces(
         env.single_action_space = gym.spaces.Box(low, high)
     env.observation_space = gym.vector.utils.batch_space(env.single_observation_space, num_envs)
     env.action_space = gym.vector.utils.batch_space(env.single_action_space, num_envs)
+    env.robot = robot_spec(quadruped, config)
 
 
 def robot_spec(quadruped: QuadrupedModel, config: QuadrupedConfig) -> RobotSpec:
@@ -182,14 +192,8 @@ class QuadrupedVectorEnv(VectorEnv):
         num_threads: int | None = None,
         max_episode_steps: int | None = None,
     ) -> None:
-        init_spaces(self, num_envs, config, max_episode_steps)
+        init_spaces(self, num_envs, config, max_episode_steps, sim="mujoco")
         config, quadruped = self.config, self.quadruped
-        if config.sim != "mujoco":
-            raise ValueError(
-                f"{type(self).__name__} simulates with MuJoCo, got sim={config.sim!r} (sim='mjx': "
-                "the robot's MJX env)"
-            )
-        self.robot = robot_spec(quadruped, config)
         self.model = load_model(quadruped, config)
         self._low, self._high = quadruped.low, quadruped.high
         self._nominal = np.asarray(quadruped.nominal_pose)
