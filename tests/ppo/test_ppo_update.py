@@ -51,6 +51,42 @@ def test_the_cpg_learning_rate_stays_fixed_while_the_schedule_moves_the_others()
         PPOConfig(cpg_learning_rate=0.0).validate()
 
 
+def test_a_following_cpg_learning_rate_falls_with_the_others_and_never_rises_above_its_own():
+    """ppo.cpg_lr_schedule="follow": the CPG group's rate is cpg_learning_rate times
+    min(1, lr / learning_rate), after every minibatch of the adaptive rule and at the linear
+    schedule's steps."""
+    falling = fake_runner(
+        "cpg-actor", lr_schedule="adaptive", desired_kl=1e-12, learning_rate=1e-3,
+        cpg_learning_rate=1e-4, cpg_lr_schedule="follow",
+    )  # fmt: skip
+    falling.collect()
+    falling.ppo.update(falling.storage)
+    others, cpg = falling.ppo.optimizer.param_groups
+    assert others["lr"] < 1e-3 / 1.5**5  # KL far above the target at each of the 6 steps
+    assert cpg["lr"] == pytest.approx(1e-4 * others["lr"] / 1e-3, rel=1e-12)
+    falling.close()
+    rising = fake_runner(
+        "cpg-actor", lr_schedule="adaptive", desired_kl=10.0, learning_rate=1e-3,
+        cpg_learning_rate=1e-4, cpg_lr_schedule="follow",
+    )  # fmt: skip
+    rising.collect()
+    rising.ppo.update(rising.storage)
+    others, cpg = rising.ppo.optimizer.param_groups
+    assert others["lr"] > 1e-3 and cpg["lr"] == 1e-4
+    rising.close()
+    linear = fake_runner(
+        "cpg-actor", lr_schedule="linear", learning_rate=1e-3, cpg_learning_rate=1e-4,
+        cpg_lr_schedule="follow",
+    )  # fmt: skip
+    linear.ppo.schedule(3, 4)
+    assert linear.ppo.optimizer.param_groups[1]["lr"] == pytest.approx(2.5e-5, rel=1e-12)
+    linear.close()
+    with pytest.raises(ValueError, match="cpg_lr_schedule=follow needs ppo.cpg_learning_rate"):
+        PPOConfig(cpg_lr_schedule="follow").validate()
+    with pytest.raises(ValueError, match="cpg_lr_schedule must be one of"):
+        PPOConfig(cpg_learning_rate=1e-4, cpg_lr_schedule="decay").validate()
+
+
 def test_linear_schedule_decays_to_zero_and_fixed_stays():
     ppo = PPO(torch.nn.Linear(2, 2), PPOConfig(lr_schedule="linear", learning_rate=1e-3))
     ppo.schedule(5, 10)

@@ -14,18 +14,25 @@ pytestmark = pytest.mark.skipif(
 )
 
 
-@pytest.mark.parametrize("agent, schedule", [("cpg-actor", "adaptive"), ("mlp", "linear")])
-def test_the_fused_step_updates_as_the_separate_calls(agent, schedule):
+@pytest.mark.parametrize(
+    "agent, schedule, cpg_schedule, desired_kl",
+    [
+        ("cpg-actor", "adaptive", "fixed", 0.01),
+        ("cpg-actor", "adaptive", "follow", 1e-12),  # the rate falls, the CPG's with it
+        ("mlp", "linear", "", 0.01),
+    ],
+)
+def test_the_fused_step_updates_as_the_separate_calls(agent, schedule, cpg_schedule, desired_kl):
     """Two updates (12 steps; the CPG-Actor's CPG in an Adam group of its own, at its own
     rate): parameters, Adam moments, statistics and the adaptive learning rate as with the
     compiled loss, autograd, the clip and the fused Adam kernel, within float32 rounding of
     how far the update moved."""
-    cpg_rate = {"cpg_learning_rate": 3e-3} if agent == "cpg-actor" else {}
+    cpg_rate = {"cpg_learning_rate": 3e-3, "cpg_lr_schedule": cpg_schedule} if cpg_schedule else {}
 
     def run(fused: bool):
         runner = fake_runner(
             agent, compile=True, learning_rate=1e-3, lr_schedule=schedule, fused_step=fused,
-            **cpg_rate,
+            desired_kl=desired_kl, **cpg_rate,
         )  # fmt: skip
         assert (runner.ppo.fused_step is not None) == fused
         start = {k: v.clone() for k, v in runner.agent.state_dict().items()}
@@ -45,10 +52,13 @@ def test_the_fused_step_updates_as_the_separate_calls(agent, schedule):
     for a, b in zip(fused_stats, separate_stats, strict=True):
         assert a["num_minibatch_updates"] == b["num_minibatch_updates"] == 6
         assert a["learning_rate"] == pytest.approx(b["learning_rate"], rel=1e-12)
-        if schedule == "adaptive":  # the rule acted (KL below half the target: up by 1.5)
+        if schedule == "adaptive":  # the rule acted (up by 1.5, or down with a tiny target)
             assert a["learning_rate"] != 1e-3
-        if "cpg_learning_rate" in b:
+        if cpg_schedule == "fixed" or (cpg_schedule and a["learning_rate"] > 1e-3):
             assert a["cpg_learning_rate"] == b["cpg_learning_rate"] == 3e-3
+        elif cpg_schedule:  # follows the others' rate down
+            assert a["cpg_learning_rate"] == pytest.approx(b["cpg_learning_rate"], rel=1e-12)
+            assert a["cpg_learning_rate"] == pytest.approx(3 * a["learning_rate"], rel=1e-12)
         for key in ("policy_loss", "value_loss", "entropy"):
             assert a[key] == pytest.approx(b[key], rel=1e-3, abs=1e-6), key
     ours, theirs = fused.ppo.optimizer.state_dict(), separate.ppo.optimizer.state_dict()

@@ -17,7 +17,12 @@ from torch import Tensor
 from cpg_actor.agents.base import Agent
 from cpg_actor.ppo import train_step
 from cpg_actor.ppo.config import PPOConfig
-from cpg_actor.ppo.optimizer import adam_step, adaptive_learning_rate, clip_grad_norm_
+from cpg_actor.ppo.optimizer import (
+    adam_step,
+    adaptive_learning_rate,
+    clip_grad_norm_,
+    cpg_learning_rate,
+)
 from cpg_actor.ppo.storage import RolloutStorage
 
 
@@ -147,7 +152,7 @@ class PPO:
         # fused: one kernel per step for all parameters instead of a Python loop over them
         groups: list[dict] = [{"params": list(agent.parameters())}]
         cpg = agent.cpg_parameters() if config.cpg_learning_rate is not None else []
-        if cpg:  # the CPG's own group, at its fixed rate (set_learning_rate leaves it)
+        if cpg:  # the CPG's own group, at its own rate (ppo.cpg_lr_schedule)
             ids = {id(p) for p in cpg}
             groups = [
                 {"params": [p for p in agent.parameters() if id(p) not in ids]},
@@ -189,6 +194,8 @@ class PPO:
         for group in self.optimizer.param_groups:
             if not group.get("fixed_lr", False):
                 group["lr"] = lr
+            elif self.config.cpg_lr_schedule != "fixed":
+                group["lr"] = cpg_learning_rate(lr, self.config)
 
     def schedule(self, iteration: int, num_iterations: int) -> None:
         """Linear decay to 0 over the run; the adaptive rule acts inside :meth:`update`."""

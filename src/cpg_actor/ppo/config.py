@@ -6,6 +6,7 @@ import math
 from dataclasses import dataclass
 
 SCHEDULES = ("fixed", "linear", "adaptive")
+CPG_SCHEDULES = ("fixed", "follow")
 
 
 @dataclass
@@ -51,6 +52,12 @@ class PPOConfig:
     # drift (on the quadruped the hip and knee frequencies split within 10 iterations and the
     # robots fall; docs/quadruped.md, "Training"). Agents without a CPG ignore it.
     cpg_learning_rate: float | None = None
+    # how that rate moves: "fixed" (as above), or "follow": cpg_learning_rate times
+    # min(1, lr / learning_rate), lr the schedule's rate for the others. With a k-step
+    # gradient (bptt_steps > 1) the KL sees the CPG, and a fixed rate keeps moving V and the
+    # feedback after the KL has pushed the others' rate to its floor; "follow" slows them
+    # with it, never above their own rate
+    cpg_lr_schedule: str = "fixed"
     adam_eps: float = 1e-5
     normalize_observations: bool = True
     # VecNormalize's reward scaling: rewards divided by the running std of each env's
@@ -118,6 +125,14 @@ class PPOConfig:
         ):
             raise ValueError(
                 f"ppo.cpg_learning_rate must be a number in (0, 1) or null, got {rate!r}"
+            )
+        if self.cpg_lr_schedule not in CPG_SCHEDULES:
+            raise ValueError(
+                f"ppo.cpg_lr_schedule must be one of {CPG_SCHEDULES}, got {self.cpg_lr_schedule!r}"
+            )
+        if self.cpg_lr_schedule == "follow" and self.cpg_learning_rate is None:
+            raise ValueError(
+                "ppo.cpg_lr_schedule=follow needs ppo.cpg_learning_rate (the rate it scales)"
             )
         if self.bptt_steps > self.num_steps:
             raise ValueError(

@@ -33,6 +33,19 @@ def adaptive_learning_rate(kl: Tensor, rate: Tensor, config) -> Tensor:
     )
 
 
+def cpg_learning_rate(rate, config):
+    """The CPG group's rate when the others' is ``rate`` (``ppo.cpg_lr_schedule``): its own
+    ``cpg_learning_rate`` ("fixed"), or that times ``min(1, rate / learning_rate)``
+    ("follow"). ``rate`` a float or a float64 tensor (the fused step's)."""
+    base = float(config.cpg_learning_rate)
+    if config.cpg_lr_schedule == "fixed":
+        return base
+    ratio = rate / float(config.learning_rate)
+    if isinstance(ratio, Tensor):
+        return base * torch.clamp(ratio, max=1.0)
+    return base * min(1.0, ratio)
+
+
 def _uniform(tensors: list[Tensor]) -> bool:
     """One device and one dtype: torch's functions then make a single group, in this order."""
     first = tensors[0]

@@ -26,7 +26,7 @@ from torch import Tensor, nn
 from torch.func import functional_call, grad
 
 from cpg_actor.ppo.config import PPOConfig
-from cpg_actor.ppo.optimizer import adaptive_learning_rate
+from cpg_actor.ppo.optimizer import adaptive_learning_rate, cpg_learning_rate
 
 
 class _Loss(nn.Module):
@@ -83,6 +83,12 @@ class FusedTrainStep:
         self.scheduled = [
             g for g, group in enumerate(optimizer.param_groups) if not group.get("fixed_lr")
         ]
+        # the CPG's group when its rate follows the others' (ppo.cpg_lr_schedule="follow")
+        self.following = [
+            g
+            for g, group in enumerate(optimizer.param_groups)
+            if group.get("fixed_lr") and config.cpg_lr_schedule == "follow"
+        ]
         self.config = config
         self._lr = torch.zeros(len(optimizer.param_groups), dtype=torch.float64)
         self.learning_rate = float(optimizer.param_groups[self.scheduled[0]]["lr"])
@@ -113,6 +119,8 @@ class FusedTrainStep:
             rate = adaptive_learning_rate(stats[5], lr[self.scheduled[0]], self.config)
             for group in self.scheduled:
                 lr[group].copy_(rate)
+            for group in self.following:
+                lr[group].copy_(cpg_learning_rate(rate, self.config))
         norms = torch.stack([torch.linalg.vector_norm(g, 2.0) for g in grads])
         total_norm = torch.linalg.vector_norm(norms, 2.0)
         scale = torch.clamp(self.max_norm / (total_norm + 1e-6), max=1.0)
