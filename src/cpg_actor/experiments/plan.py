@@ -57,6 +57,8 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     # seeds that are never reported
     "cpg-actor-bptt32": ("cpg-actor-paper", ("ppo.bptt_steps=32",)),
     "cpg-actor-feedback-noise": ("cpg-actor-paper", ("agent_config.feedback_noise=0.1",)),
+    # the CPG's own learning rate falling with the schedule's (presets that set one)
+    "cpg-actor-follow": ("cpg-actor", ("ppo.cpg_lr_schedule=follow",)),
 }
 
 
