@@ -1,0 +1,58 @@
+"""Peak and final evaluation return of every run of a reproduction, finished or not: the
+"no collapse" check (final >= 0.95 x peak), with the report's own definitions
+(``cpg_actor.experiments.metrics``: the mean of the last evaluations, the best moving mean).
+
+    python docs/results/trio-20M/progress.py results/trio-20M
+    python docs/results/trio-20M/progress.py --curves curves.png RUN [RUN ...]   # eval curves
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from cpg_actor.experiments.metrics import final_return, peak_return
+
+
+def evaluations(run: Path) -> tuple[list[float], list[float]]:
+    rows = [json.loads(line) for line in (run / "metrics.jsonl").open()]
+    rows = [r for r in rows if r.get("eval/return") is not None]
+    return [r["global_step"] for r in rows], [r["eval/return"] for r in rows]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("paths", nargs="+", type=Path)
+    parser.add_argument("--curves", type=Path, help="a figure of the runs' eval returns")
+    args = parser.parse_args()
+    runs = []
+    for path in args.paths:
+        runs += sorted(path.glob("runs/*/seed*")) if (path / "runs").is_dir() else [path]
+    print("| run | steps | peak (at) | final | final / peak |")
+    print("| --- | ---: | --- | ---: | ---: |")
+    for run in runs:
+        steps, returns = evaluations(run)
+        peak, at = peak_return(steps, returns)
+        final = final_return(steps, returns)
+        name = f"{run.parent.name}/{run.name}" if run.name.startswith("seed") else run.name
+        print(f"| {name} | {steps[-1] / 1e6:.1f}M | {peak:.0f} ({at / 1e6:.1f}M) | "
+              f"{final:.0f} | {final / peak:.2f} |")  # fmt: skip
+    if args.curves:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(7, 4))
+        for run in runs:
+            steps, returns = evaluations(run)
+            ax.plot([s / 1e6 for s in steps], returns, label=run.name, lw=1)
+        ax.set(xlabel="env steps (M)", ylabel="deterministic eval return")
+        ax.legend(fontsize=8)
+        fig.tight_layout()
+        fig.savefig(args.curves, dpi=110)
+
+
+if __name__ == "__main__":
+    main()
