@@ -37,6 +37,14 @@ IDENTITY_KEYS = (
 )
 
 
+HOPPER_RANDOMIZE = (
+    "env.randomize.payload=[0,1.02]",
+    "env.randomize.friction=[0.4,1.2]",
+    "env.randomize.latency=[0,1]",
+    "env.randomize.obs_noise=[0,1]",
+    "env.randomize.motor_strength=[0.8,1.2]",
+)
+
 # Variants that are an agent with settings of their own: name -> (agent, --set overrides).
 # Their settings come before the reproduction's own --set, which can still change them. The
 # paper's CPG-Actor (cpg-actor-paper) with one change each, against which they are compared.
@@ -59,6 +67,9 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     "cpg-actor-feedback-noise": ("cpg-actor-paper", ("agent_config.feedback_noise=0.1",)),
     # the CPG's own learning rate falling with the schedule's (presets that set one)
     "cpg-actor-follow": ("cpg-actor", ("ppo.cpg_lr_schedule=follow",)),
+    # randomised training with the hopper's ranges (docs/robustness.md; the payload is in kg)
+    "cpg-actor-randomized": ("cpg-actor", HOPPER_RANDOMIZE),
+    "mlp-randomized": ("mlp", HOPPER_RANDOMIZE),
 }
 
 
