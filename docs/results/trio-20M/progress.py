@@ -21,6 +21,10 @@ def evaluations(run: Path) -> tuple[list[float], list[float]]:
     return [r["global_step"] for r in rows], [r["eval/return"] for r in rows]
 
 
+def label(run: Path) -> str:
+    return f"{run.parent.name}/{run.name}" if run.name.startswith("seed") else run.name
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("paths", nargs="+", type=Path)
@@ -35,8 +39,7 @@ def main() -> None:
         steps, returns = evaluations(run)
         peak, at = peak_return(steps, returns)
         final = final_return(steps, returns)
-        name = f"{run.parent.name}/{run.name}" if run.name.startswith("seed") else run.name
-        print(f"| {name} | {steps[-1] / 1e6:.1f}M | {peak:.0f} ({at / 1e6:.1f}M) | "
+        print(f"| {label(run)} | {steps[-1] / 1e6:.1f}M | {peak:.0f} ({at / 1e6:.1f}M) | "
               f"{final:.0f} | {final / peak:.2f} |")  # fmt: skip
     if args.curves:
         import matplotlib
@@ -47,7 +50,7 @@ def main() -> None:
         fig, ax = plt.subplots(figsize=(7, 4))
         for run in runs:
             steps, returns = evaluations(run)
-            ax.plot([s / 1e6 for s in steps], returns, label=run.name, lw=1)
+            ax.plot([s / 1e6 for s in steps], returns, label=label(run), lw=1)
         ax.set(xlabel="env steps (M)", ylabel="deterministic eval return")
         ax.legend(fontsize=8)
         fig.tight_layout()
