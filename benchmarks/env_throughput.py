@@ -106,10 +106,10 @@ class MotionRecorder:
         self._track = backend.track
         backend.track = self._record  # an instance attribute: shadows the method
 
-    def _record(self, desired: np.ndarray, substeps: int) -> np.ndarray:
+    def _record(self, desired: np.ndarray, substeps: int, push=None) -> np.ndarray:
         self.states.append(self.backend.get_state())
         self.substeps = substeps
-        torque = self._track(desired, substeps)
+        torque = self._track(desired, substeps, push)
         self.torques.append(np.array(torque, dtype=np.float64))
         return torque
 

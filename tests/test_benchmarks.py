@@ -38,6 +38,9 @@ RUNS = {
     "policy_latency.py": (["--steps", "20", "--agents", "mlp"], "--output"),
     "profile_collect.py": (["--num-envs", "4", "--agent", "mlp", "--device", "cpu"], "--output"),
     "quadruped_throughput.py": (["--envs", "2", "--seconds", "0.2"], "--output"),
+    # REPRODUCTION: a tiny trained reproduction the test makes (its runs' episodes 250 steps)
+    "robustness_suite.py": (["REPRODUCTION", "--variants", "mlp", "--seeds", "1", "--episodes",
+                             "1"], "--output"),
     "rollout_threads.py": (["--agent", "mlp", "--num-envs", "2", "--iterations", "1",
                             "--repeats", "1"], "--output"),
     "shared_device.py": (["--runs", "1", "--preset", "paper", "--agent", "mlp", "--seconds", "10",
@@ -60,6 +63,7 @@ MARKS = {
     "mjx_eval.py": [SLOW],
     "mjx_solver_iterations.py": [SLOW],
     "profile_collect.py": [SLOW],
+    "robustness_suite.py": [SLOW],
     "rollout_threads.py": [SLOW],
     "shared_device.py": [SLOW],
     "train_scaling.py": [COMPILER],
@@ -77,6 +81,12 @@ def test_every_script_is_run_here():
 )
 def test_the_script_runs_its_smallest_configuration(script, tmp_path):
     arguments, output_flag = RUNS[script]
+    if "REPRODUCTION" in arguments:
+        from tiny import trained_run  # tests/tiny.py
+
+        reproduction = tmp_path / "repro"
+        trained_run(reproduction / "runs" / "mlp" / "seed0", "mlp", env={"episode_steps": 250})
+        arguments = [str(reproduction) if a == "REPRODUCTION" else a for a in arguments]
     output = tmp_path / "result.md"
     result = subprocess.run(
         [sys.executable, str(BENCHMARKS / script), *arguments, output_flag, str(output)],
