@@ -26,7 +26,7 @@ $(EXTRAS_STAMP): pyproject.toml $(VENV)/.torch
 setup: $(EXTRAS_STAMP)
 
 # A new run directory each time: nothing earlier is overwritten. The default agent (cpg-actor
-# with its tuned settings) and preset (paper): 500k steps, eval return about 800 and a hop
+# with its tuned settings) and preset (paper): 500k steps, eval return about 700-1000 and a hop
 # height about 0.55 m (README, "Status").
 QUICKSTART_STAMP := $(shell date +%Y%m%d-%H%M%S)
 QUICKSTART_DIR ?= runs/quickstart-$(QUICKSTART_STAMP)

@@ -4,6 +4,7 @@ a lone run, the files, what it refuses; the summary over seeds."""
 import json
 import math
 
+import numpy as np
 import pytest
 
 from cpg_actor.cli import main
@@ -66,6 +67,38 @@ def test_the_suite_on_a_quadruped(tmp_path):
     assert {"speed_error", "fell"} <= set(levels[0])
 
 
+def test_a_run_trained_with_randomisation_is_evaluated_on_the_nominal_robot(tmp_path, capsys):
+    from cpg_actor.config import TrainConfig
+    from cpg_actor.deploy import load_policy
+    from cpg_actor.robots.common.perturbation import Randomization
+    from cpg_actor.robustness.runs import CHECKPOINT, find_runs
+    from cpg_actor.robustness.suite import evaluate_run
+    from cpg_actor.training.evaluation import evaluate_policy
+
+    ranges = {"payload": [0.0, 1.0], "friction": [0.4, 1.2], "motor_strength": [0.8, 1.2]}
+    path = trained_run(tmp_path / "randomized", "mlp", env={"episode_steps": 100,
+                                                            "randomize": ranges})  # fmt: skip
+    (run,) = find_runs([str(path)])
+    result = evaluate_run(run, ["payload"], episodes=2, seed=3, progress=lambda line: None)
+    config = TrainConfig.load(path / "config.yaml")
+    assert config.env.randomize.active  # the run was trained with its ranges
+    config.env = config.env.replace(randomize=Randomization())
+    policy = load_policy(path / CHECKPOINT, run_config=config)
+    nominal = evaluate_policy(policy, config, 2, seed=3)
+    assert result["nominal"]["return"] == pytest.approx(float(np.mean(nominal["episode_return"])),
+                                                       rel=1e-6)  # fmt: skip
+    assert len(result["perturbations"]["payload"]["levels"]) == 4
+    # cpg-actor eval too (legged_gym's play convention); --set puts ranges back
+    assert main(["eval", str(path), "--episodes", "2", "--seed", "3"]) == 0
+    evaluated = np.load(path / "eval" / "traces.npz")["episode_return"]
+    assert np.mean(evaluated) == pytest.approx(result["nominal"]["return"], rel=1e-6)
+    assert "evaluated on the nominal robot" in capsys.readouterr().out
+    assert main(["eval", str(path), "--episodes", "2", "--seed", "3", "--set",
+                 "env.randomize.payload=[2,3]"]) == 0  # fmt: skip
+    heavy = np.load(path / "eval" / "traces.npz")["episode_return"]
+    assert not np.allclose(heavy, evaluated)
+
+
 def synthetic_run(seed, retention):
     level = {
         "level": 1.0,
@@ -94,3 +127,18 @@ def test_the_summary_over_seeds_has_a_ci_from_three_seeds_on():
     data = {"robot": "hopper", "episodes": 1, "env_seed": 0, "metrics": ["hop_height"],
             "cycle": "hop apex (m)", "variants": three}  # fmt: skip
     assert "| CPG-Actor | 0 (nominal) | 100.0 [100.0, 100.0] | 100% |" in markdown(plain(data))
+
+
+def test_nominal_env_drops_the_ranges_and_keeps_a_fixed_perturbation():
+    from cpg_actor.robots.common.perturbation import Perturbation
+    from cpg_actor.robots.hopper.config import HopperConfig
+    from cpg_actor.training.evaluation import nominal_env
+
+    plain = HopperConfig()
+    assert nominal_env(plain) is plain
+    randomized = HopperConfig(randomize={"friction": [0.4, 1.2]},
+                              perturbation=Perturbation(push=1.0))  # fmt: skip
+    randomized.validate()
+    nominal = nominal_env(randomized)
+    assert randomized.randomize.active and not nominal.randomize.active
+    assert nominal.perturbation.push == 1.0

@@ -71,7 +71,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import TrainConfig, apply_dict, check_seed, parse_override
     from cpg_actor.deploy import load_policy
-    from cpg_actor.training.evaluation import evaluate_policy
+    from cpg_actor.training.evaluation import evaluate_policy, nominal_env
 
     check_seed(args.seed)
     run_dir = Path(args.run_dir)
@@ -91,6 +91,10 @@ def run(args: argparse.Namespace) -> int:
     if not checkpoint.is_file():
         raise FileNotFoundError(f"checkpoint {checkpoint} does not exist")
     config = TrainConfig.load(config_path)
+    if nominal_env(config.env) is not config.env:
+        config.env = nominal_env(config.env)
+        print("trained with env.randomize: evaluated on the nominal robot (--set "
+              "env.randomize.NAME=[LOW,HIGH] evaluates with ranges)")  # fmt: skip
     if args.sim is not None:
         config.env = config.env.replace(**get_robot(config.robot).simulator_config(args.sim))
     for text in args.set:

@@ -28,9 +28,10 @@ def evaluate_run(run_dir: Path, episodes: int, seed: int) -> dict[str, dict[str,
     from cpg_actor.config import TrainConfig
     from cpg_actor.deploy import load_policy
     from cpg_actor.robots.registry import get_robot
-    from cpg_actor.training.evaluation import evaluate_policy
+    from cpg_actor.training.evaluation import evaluate_policy, nominal_env
 
     config = TrainConfig.load(run_dir / "config.yaml")
+    config.env = nominal_env(config.env)
     robot = get_robot(config.robot)
     if not set(SIMULATORS) <= set(robot.simulators):
         raise ValueError(

@@ -77,7 +77,7 @@ def evaluate_run(run: RunRef, names: list[str], episodes: int, seed: int,
     from cpg_actor.deploy import load_policy
     from cpg_actor.robots.common.perturbation import Perturbation
     from cpg_actor.robots.registry import get_robot
-    from cpg_actor.training.evaluation import evaluate_policy
+    from cpg_actor.training.evaluation import evaluate_policy, nominal_env
 
     config = TrainConfig.load(run.path / "config.yaml")
     robot = get_robot(config.robot)
@@ -86,7 +86,7 @@ def evaluate_run(run: RunRef, names: list[str], episodes: int, seed: int,
     if sim == "mjx":  # perturbations run on the CPU simulators
         config.env = config.env.replace(**robot.simulator_config("mujoco"))
         progress(f"  {run.path}: trained on MJX, evaluated on MuJoCo")
-    base = config.env.replace(perturbation=Perturbation())  # the nominal robot
+    base = nominal_env(config.env).replace(perturbation=Perturbation())  # the nominal robot
     policy = load_policy(run.path / CHECKPOINT, env_config=base, run_config=config)
 
     def measure(perturbation: Perturbation) -> dict[str, np.ndarray]:

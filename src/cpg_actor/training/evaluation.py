@@ -25,6 +25,17 @@ from cpg_actor.robots.common.torch_env import TensorEnv
 from cpg_actor.training.seeding import EVAL_SEED_KEY, derived_seed
 
 
+def nominal_env(env_config):
+    """``env_config`` without its randomised training's ranges (``env.randomize``), as
+    legged_gym's play does: a policy trained on random robots is evaluated on the nominal one
+    (``cpg-actor eval``, the transfer study, the robustness suite). Its other fields, a fixed
+    perturbation included, are kept."""
+    randomize = getattr(env_config, "randomize", None)
+    if randomize is None or not randomize.active:
+        return env_config
+    return env_config.replace(randomize=type(randomize)())
+
+
 def finite_mean(values) -> float:
     """The mean of the finite values; NaN (and no warning) when there is none, as for a
     metric no episode defined (the quadruped's cost of transport of robots that did not walk)."""
@@ -319,7 +330,7 @@ class TrainingEvaluation:
         start = time.perf_counter()
         if self.env is None:
             self.env = self.spec.make_env(
-                cfg.eval_episodes, cfg.env, cfg.env_threads, cfg.agent_config
+                cfg.eval_episodes, nominal_env(cfg.env), cfg.env_threads, cfg.agent_config
             )
         policy = Policy(
             self.agent,
