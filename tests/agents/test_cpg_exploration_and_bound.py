@@ -79,6 +79,28 @@ def test_deterministic_cpg_exploration_is_the_mean_and_the_std_has_a_floor():
     torch.testing.assert_close(vector, torch.full((vector.numel(),), 0.005))
 
 
+def test_the_position_noise_std_has_a_floor_only_when_asked():
+    """action_std_floor: std = floor + exp(log_std), the floor a fraction of init_std in the
+    action's units; starting at init_std either way, and scored with that std."""
+    floored, plain = agent(init_std=0.3, action_std_floor=0.1), agent(init_std=0.3)
+    scale = torch.tensor(SCALE)
+    for a in (floored, plain):
+        torch.testing.assert_close(a.std(1)[0], 0.3 * scale)
+    with torch.no_grad():
+        floored.log_std.fill_(-50.0)
+        plain.log_std.fill_(-50.0)
+    torch.testing.assert_close(floored.std(2), (0.03 * scale).expand(2, 2))
+    assert float(plain.std(1).max()) < 1e-20
+    logged = floored.log_scalars()
+    assert logged["policy/log_std_0"] == pytest.approx(math.log(0.03 * 0.9), rel=1e-5)
+    obs, state = torch.randn(4, 8), floored.initial_state(4)
+    step = floored.act(obs, state)
+    expected = torch.distributions.Normal(step.mean, 0.03 * scale).log_prob(step.action).sum(-1)
+    torch.testing.assert_close(step.log_prob, expected)
+    with pytest.raises(ValueError, match="action_std_floor must be in"):
+        AgentConfig(action_std_floor=1.0).validate()
+
+
 def test_the_bounded_command_stays_inside_the_joint_range_whatever_v_and_the_feedback():
     """output_bound: rho < half-range - kappa_bound, a bounded, kappa in radians of
     amplitude: 2,000 steps with V pushed to extremes and the feedback at its bounds

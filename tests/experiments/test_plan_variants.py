@@ -17,3 +17,5 @@ def test_each_variant_is_its_agent_with_its_settings(variant):
         assert config.env.randomize.active
     if variant == "cpg-actor-follow":
         assert config.ppo.cpg_lr_schedule == "follow"
+    if variant.endswith("-floor"):
+        assert config.agent_config.action_std_floor == 0.1

@@ -74,6 +74,10 @@ class AgentConfig:
     # "cpg": no sampled std falls below this fraction of its initial value
     # (std = floor + exp(log_std)), so exploration cannot collapse to nothing
     std_floor: float = 0.1
+    # the Gaussian noise on the env's action (position exploration, the MLP, Cho et al.'s CPG
+    # parameters): no std falls below this fraction of its initial init_std (std = floor +
+    # exp(log_std)); 0, the paper's and the default, lets it shrink toward nothing
+    action_std_floor: float = 0.0
     # the command inside the joint range: the amplitude rho of each oscillator bounded to
     # (0, joint half-range - kappa_bound), the convergence a to convergence_bounds (and 1/dt),
     # and kappa = kappa_bound a^2 / 4 tanh(out), whose steady-state change of the amplitude
@@ -107,11 +111,10 @@ class AgentConfig:
         for name in ("feedback_std", "cpg_noise", "kappa_bound"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"agent_config.{name} must be > 0, got {getattr(self, name)!r}")
-        if not 0 <= self.std_floor < 1:
-            raise ValueError(
-                f"agent_config.std_floor must be in [0, 1) (a fraction of the initial std), "
-                f"got {self.std_floor!r}"
-            )
+        for name in ("std_floor", "action_std_floor"):
+            if not 0 <= getattr(self, name) < 1:
+                raise ValueError(f"agent_config.{name} must be in [0, 1) (a fraction of the "
+                                 f"initial std), got {getattr(self, name)!r}")  # fmt: skip
         low, high = (tuple(self.convergence_bounds) + (None, None))[:2]
         if len(self.convergence_bounds) != 2 or not 0 < low < high:
             raise ValueError(
@@ -238,7 +241,11 @@ class Agent(nn.Module):
         self.sample_dim = self.action_dim
         # (high - low) / 2 of the action space: the unit of init_std (and of the MLP's mean)
         self.register_buffer("action_scale", scale)
-        self.log_std = nn.Parameter(torch.log(config.init_std * scale))
+        # std = floor + exp(log_std), the floor a fraction of the initial std (action_scale
+        # units); without one, exp(log_std) alone, as in the paper
+        self.std_floor_fraction = float(config.action_std_floor * config.init_std)
+        self.log_std = nn.Parameter(torch.log(config.init_std * scale - self.std_floor_fraction
+                                              * scale))  # fmt: skip
         critic_in = obs_dim + critic_state_features
         self.critic = mlp([critic_in, *config.critic_hidden, 1], config.activation, 1.0)
 
@@ -307,13 +314,23 @@ class Agent(nn.Module):
             out.std,
         )
 
+    def action_std(self) -> Tensor:
+        """The std of the Gaussian noise on each action entry, ``(A,)``: ``exp(log_std)``, plus
+        ``agent_config.action_std_floor`` of the initial std when there is one."""
+        if self.std_floor_fraction == 0.0:
+            return self.log_std.exp()
+        return self.std_floor_fraction * self.action_scale + self.log_std.exp()
+
     def std(self, batch_size: int) -> Tensor:
-        return self.log_std.exp().expand(batch_size, self.action_dim)
+        return self.action_std().expand(batch_size, self.action_dim)
 
     # -- logging (the runner writes what the agent gives) -----------------------------------
     def log_scalars(self) -> dict[str, float]:
-        """Scalars for TensorBoard and ``metrics.jsonl`` at every logged iteration."""
-        return {f"policy/log_std_{i}": v for i, v in enumerate(self.log_std.detach().tolist())}
+        """Scalars for TensorBoard and ``metrics.jsonl`` at every logged iteration: the log of
+        each action std (the floor included)."""
+        logs = self.log_std if self.std_floor_fraction == 0.0 else self.action_std().log()
+        logs = logs.detach().tolist()
+        return {f"policy/log_std_{i}": v for i, v in enumerate(logs)}
 
     def log_histograms(self) -> dict[str, Tensor]:
         """Histograms for TensorBoard every ``histogram_interval`` iterations."""
