@@ -180,6 +180,7 @@ def test_cpg_actor_trains_with_its_tuned_defaults_and_cpg_actor_paper_as_the_pap
     paper = compose_config(values={"agent": "cpg-actor-paper"})
     assert best.agent_config.output_bound and best.agent_config.start_gait == "search"
     assert (best.agent_config.exploration, best.agent_config.init_std) == ("position", 0.3)
+    assert best.agent_config.action_std_floor == 0.1 and paper.agent_config.action_std_floor == 0
     assert best.ppo.bptt_steps == 8
     assert paper.agent_config.exploration == "position" and not paper.agent_config.output_bound
     assert paper.agent_config.start_gait == "" and paper.ppo.bptt_steps == 1

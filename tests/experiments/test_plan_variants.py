@@ -18,4 +18,4 @@ def test_each_variant_is_its_agent_with_its_settings(variant):
     if variant == "cpg-actor-follow":
         assert config.ppo.cpg_lr_schedule == "follow"
     if variant.endswith("-floor"):
-        assert config.agent_config.action_std_floor == 0.1
+        assert config.agent_config.action_std_floor == (0 if "no-floor" in variant else 0.1)

@@ -67,8 +67,9 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     "cpg-actor-feedback-noise": ("cpg-actor-paper", ("agent_config.feedback_noise=0.1",)),
     # the CPG's own learning rate falling with the schedule's (presets that set one)
     "cpg-actor-follow": ("cpg-actor", ("ppo.cpg_lr_schedule=follow",)),
-    # the position noise's std floored at 0.1 of its initial value (agent_config.action_std_floor)
-    "cpg-actor-floor": ("cpg-actor", ("agent_config.action_std_floor=0.1",)),
+    # the action noise's std without its floor (cpg-actor's default, chosen on tuning seeds) and
+    # with one for the MLP (agent_config.action_std_floor)
+    "cpg-actor-no-floor": ("cpg-actor", ("agent_config.action_std_floor=0",)),
     "mlp-floor": ("mlp", ("agent_config.action_std_floor=0.1",)),
     # randomised training with the hopper's ranges (docs/robustness.md; the payload is in kg)
     "cpg-actor-randomized": ("cpg-actor", HOPPER_RANDOMIZE),

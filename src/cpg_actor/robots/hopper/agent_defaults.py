@@ -8,15 +8,17 @@ from __future__ import annotations
 from typing import Any
 
 # The CPG-Actor at its best: the start gait of the open-loop search, the command inside the
-# joint range, Gaussian noise on the joint command of 0.3 half-ranges with the gradient through 8
-# CPG steps. (cpg-actor-paper is the paper's method: its preset start, position noise of 1
-# half-range, the one-step gradient; it has no tuned settings.)
+# joint range, Gaussian noise on the joint command of 0.3 half-ranges whose std never falls
+# below a tenth of that, with the gradient through 8 CPG steps. (cpg-actor-paper is the
+# paper's method: its preset start, position noise of 1 half-range, the one-step gradient; it
+# has no tuned settings.)
 CPG_ACTOR: dict[str, Any] = {
     "agent_config": {
         "start_gait": "search",
         "output_bound": True,
         "exploration": "position",
         "init_std": 0.3,
+        "action_std_floor": 0.1,
     },
     "ppo": {"bptt_steps": 8},
 }
