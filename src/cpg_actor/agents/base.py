@@ -241,11 +241,10 @@ class Agent(nn.Module):
         self.sample_dim = self.action_dim
         # (high - low) / 2 of the action space: the unit of init_std (and of the MLP's mean)
         self.register_buffer("action_scale", scale)
-        # std = floor + exp(log_std), the floor a fraction of the initial std (action_scale
-        # units); without one, exp(log_std) alone, as in the paper
-        self.std_floor_fraction = float(config.action_std_floor * config.init_std)
-        self.log_std = nn.Parameter(torch.log(config.init_std * scale - self.std_floor_fraction
-                                              * scale))  # fmt: skip
+        # std = floor + exp(log_std), the floor in action_scale units (a fraction of init_std);
+        # without one, exp(log_std) alone, as in the paper
+        self.action_floor = float(config.action_std_floor * config.init_std)
+        self.log_std = nn.Parameter(torch.log((config.init_std - self.action_floor) * scale))
         critic_in = obs_dim + critic_state_features
         self.critic = mlp([critic_in, *config.critic_hidden, 1], config.activation, 1.0)
 
@@ -317,9 +316,9 @@ class Agent(nn.Module):
     def action_std(self) -> Tensor:
         """The std of the Gaussian noise on each action entry, ``(A,)``: ``exp(log_std)``, plus
         ``agent_config.action_std_floor`` of the initial std when there is one."""
-        if self.std_floor_fraction == 0.0:
+        if self.action_floor == 0.0:
             return self.log_std.exp()
-        return self.std_floor_fraction * self.action_scale + self.log_std.exp()
+        return self.action_floor * self.action_scale + self.log_std.exp()
 
     def std(self, batch_size: int) -> Tensor:
         return self.action_std().expand(batch_size, self.action_dim)
@@ -328,7 +327,7 @@ class Agent(nn.Module):
     def log_scalars(self) -> dict[str, float]:
         """Scalars for TensorBoard and ``metrics.jsonl`` at every logged iteration: the log of
         each action std (the floor included)."""
-        logs = self.log_std if self.std_floor_fraction == 0.0 else self.action_std().log()
+        logs = self.log_std if self.action_floor == 0.0 else self.action_std().log()
         logs = logs.detach().tolist()
         return {f"policy/log_std_{i}": v for i, v in enumerate(logs)}
 

@@ -91,8 +91,9 @@ def run(args: argparse.Namespace) -> int:
     if not checkpoint.is_file():
         raise FileNotFoundError(f"checkpoint {checkpoint} does not exist")
     config = TrainConfig.load(config_path)
-    if nominal_env(config.env) is not config.env:
-        config.env = nominal_env(config.env)
+    nominal = nominal_env(config.env)
+    if nominal is not config.env:
+        config.env = nominal
         print("trained with env.randomize: evaluated on the nominal robot (--set "
               "env.randomize.NAME=[LOW,HIGH] evaluates with ranges)")  # fmt: skip
     if args.sim is not None:
