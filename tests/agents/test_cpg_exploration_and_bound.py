@@ -182,6 +182,8 @@ def test_cpg_actor_trains_with_its_tuned_defaults_and_cpg_actor_paper_as_the_pap
     assert (best.agent_config.exploration, best.agent_config.init_std) == ("position", 0.3)
     assert best.agent_config.action_std_floor == 0.1 and paper.agent_config.action_std_floor == 0
     assert best.ppo.bptt_steps == 8
+    mlp = compose_config(values={"agent": "mlp"})
+    assert (mlp.agent_config.init_std, mlp.agent_config.action_std_floor) == (0.3, 0.1)
     assert paper.agent_config.exploration == "position" and not paper.agent_config.output_bound
     assert paper.agent_config.start_gait == "" and paper.ppo.bptt_steps == 1
     # the command line wins over an agent's defaults, and the quadruped gets none of them

@@ -28,6 +28,26 @@ def test_transfer_evaluates_each_run_in_both_simulators(tmp_path, capsys):
     assert "pass --overwrite" in capsys.readouterr().err
 
 
+def test_transfer_add_keeps_earlier_runs_and_evaluates_only_new_ones(tmp_path, capsys):
+    out = tmp_path / "out"
+    trained_run(out / "runs" / "mlp" / "seed0", "mlp", seed=0)
+    assert main(["transfer", str(out), "--episodes", "2"]) == 0
+    first = json.loads((out / "transfer.json").read_text())["runs"]["mlp"]["0"]
+    # a later sitting: seed 0 kept its logs but not its checkpoints, seed 1 is new
+    for path in (out / "runs" / "mlp" / "seed0" / "checkpoints").iterdir():
+        path.unlink()
+    trained_run(out / "runs" / "mlp" / "seed1", "mlp", seed=1)
+    assert main(["transfer", str(out), "--episodes", "3", "--add"]) == 2
+    assert "--add needs the same" in capsys.readouterr().err
+    assert main(["transfer", str(out), "--episodes", "2", "--add"]) == 0
+    runs = json.loads((out / "transfer.json").read_text())["runs"]["mlp"]
+    assert set(runs) == {"0", "1"} and runs["0"] == first
+    assert np.isfinite(runs["1"]["pybullet"]["return"])
+    # without --add the run without a checkpoint would be dropped
+    assert main(["transfer", str(out), "--episodes", "2", "--overwrite"]) == 0
+    assert set(json.loads((out / "transfer.json").read_text())["runs"]["mlp"]) == {"1"}
+
+
 def test_kept_share_is_other_over_own_with_a_paired_interval():
     data = {"episodes": 5, "seed": 1000, "runs": {"mlp": {
         str(s): {"trained_in": "mujoco", "mujoco": {"return": 100.0 * (s + 1), "hop_height": 0.3},

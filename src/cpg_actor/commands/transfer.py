@@ -12,7 +12,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("out", help="results directory written by `cpg-actor reproduce`")
     parser.add_argument("--episodes", type=int, default=5, help="episodes per policy and sim")
     parser.add_argument("--seed", type=int, default=1000, help="environment seed (default 1000)")
-    parser.add_argument("--overwrite", action="store_true", help="replace OUT/transfer.json")
+    what = parser.add_mutually_exclusive_group()
+    what.add_argument("--overwrite", action="store_true", help="replace OUT/transfer.json")
+    what.add_argument(
+        "--add",
+        action="store_true",
+        help="keep the runs OUT/transfer.json holds and evaluate only the others (runs "
+        "finished in later sittings)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -26,9 +33,12 @@ def run(args: argparse.Namespace) -> int:
         raise FileNotFoundError(f"{out} is not a reproduce results directory (no runs/)")
     if args.episodes < 1:
         raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
-    if (out / TRANSFER_FILE).exists() and not args.overwrite:
-        raise FileExistsError(f"{out / TRANSFER_FILE} exists; pass --overwrite to replace it")
-    path = write_transfer(out, args.episodes, args.seed)
+    if (out / TRANSFER_FILE).exists() and not (args.overwrite or args.add):
+        raise FileExistsError(
+            f"{out / TRANSFER_FILE} exists; pass --overwrite to replace it or --add to "
+            "evaluate only the runs it lacks"
+        )
+    path = write_transfer(out, args.episodes, args.seed, add=args.add)
     report = write_report(out)
     print(f"transfer results {path}; report {report}")
     return 0

@@ -67,10 +67,11 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     "cpg-actor-feedback-noise": ("cpg-actor-paper", ("agent_config.feedback_noise=0.1",)),
     # the CPG's own learning rate falling with the schedule's (presets that set one)
     "cpg-actor-follow": ("cpg-actor", ("ppo.cpg_lr_schedule=follow",)),
-    # the action noise's std without its floor (cpg-actor's default, chosen on tuning seeds) and
-    # with one for the MLP (agent_config.action_std_floor)
+    # the action noise's std without its floor (cpg-actor's and mlp's default, chosen on
+    # tuning seeds) and with one for Cho et al. (agent_config.action_std_floor; it lost there)
     "cpg-actor-no-floor": ("cpg-actor", ("agent_config.action_std_floor=0",)),
-    "mlp-floor": ("mlp", ("agent_config.action_std_floor=0.1",)),
+    "mlp-no-floor": ("mlp", ("agent_config.action_std_floor=0",)),
+    "cho2019-warm-floor": ("cho2019-warm", ("agent_config.action_std_floor=0.1",)),
     # randomised training with the hopper's ranges (docs/robustness.md; the payload is in kg)
     "cpg-actor-randomized": ("cpg-actor", HOPPER_RANDOMIZE),
     "mlp-randomized": ("mlp", HOPPER_RANDOMIZE),

@@ -51,16 +51,34 @@ def evaluate_run(run_dir: Path, episodes: int, seed: int) -> dict[str, dict[str,
     return out
 
 
-def write_transfer(out: Path, episodes: int = 5, seed: int = 1000, progress=print) -> Path:
-    """Evaluate every run of ``out`` that has a last checkpoint; write ``TRANSFER_FILE``."""
+def write_transfer(
+    out: Path, episodes: int = 5, seed: int = 1000, progress=print, add: bool = False
+) -> Path:
+    """Evaluate every run of ``out`` that has a last checkpoint; write ``TRANSFER_FILE``.
+
+    ``add``: keep the runs ``TRANSFER_FILE`` already holds (it must have been made with the
+    same ``episodes`` and ``seed``) and evaluate only the others, so that a reproduction
+    trained across sittings, whose earlier runs kept their logs but not their checkpoints,
+    is evaluated run by run as it finishes."""
     from cpg_actor.experiments.results import Results, run_robot
     from cpg_actor.files import atomic_write_text
 
     results = Results.load(Path(out))
     runs: dict[str, dict[str, Any]] = {}
     metric = "hop_height"  # the runs' robot's headline metric (the hopper's without runs)
+    if add:
+        earlier = load_transfer(out) or {"episodes": episodes, "seed": seed, "runs": {}}
+        if (earlier.get("episodes"), earlier.get("seed")) != (episodes, seed):
+            raise ValueError(
+                f"{Path(out) / TRANSFER_FILE} was made with --episodes {earlier.get('episodes')}"
+                f" --seed {earlier.get('seed')}; --add needs the same"
+            )
+        runs = {variant: dict(seeds) for variant, seeds in earlier["runs"].items()}
+        metric = earlier.get("metric", metric)
     for variant, variant_runs in results.runs.items():
         for run in variant_runs:
+            if str(run.seed) in runs.get(variant, {}):
+                continue
             if not (run.path / "checkpoints" / "last.pt").is_file():
                 continue
             progress(f"transfer: {variant}/seed{run.seed}")

@@ -24,7 +24,11 @@ CPG_ACTOR: dict[str, Any] = {
 }
 
 AGENT_DEFAULTS: dict[str, dict[str, Any]] = {
-    "mlp": {"agent_config": {"init_std": 0.3}, "ppo": {"learning_rate": 1e-3}},
+    # with the same floor under its std as the CPG-Actor's, which won on its tuning seeds too
+    "mlp": {
+        "agent_config": {"init_std": 0.3, "action_std_floor": 0.1},
+        "ppo": {"learning_rate": 1e-3},
+    },
     # the warm start's noise (warm_start.action_noise) and init_std
     "mlp-warm": {
         "agent_config": {"start_gait": "search", "init_std": 0.3},
