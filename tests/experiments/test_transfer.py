@@ -7,6 +7,8 @@ import pytest
 
 from cpg_actor.cli import main
 from cpg_actor.experiments import metrics as m
+from cpg_actor.experiments.execute import MARKER
+from cpg_actor.experiments.plan import ReproduceSettings, write_settings_file
 from cpg_actor.experiments.transfer import kept, transfer_lines
 from tiny import trained_run  # tests/tiny.py (pytest puts tests/ on sys.path)
 
@@ -28,20 +30,30 @@ def test_transfer_evaluates_each_run_in_both_simulators(tmp_path, capsys):
     assert "pass --overwrite" in capsys.readouterr().err
 
 
-def test_transfer_add_keeps_earlier_runs_and_evaluates_only_new_ones(tmp_path, capsys):
+def test_transfer_add_keeps_earlier_runs_and_evaluates_only_new_finished_ones(tmp_path, capsys):
     out = tmp_path / "out"
-    trained_run(out / "runs" / "mlp" / "seed0", "mlp", seed=0)
+    settings = ReproduceSettings(variants=["mlp"], seeds=3, total_steps=4096)
+    write_settings_file(out, settings, "cpg-actor reproduce ...", {})
+
+    def finished_run(seed):
+        run_dir = trained_run(out / "runs" / "mlp" / f"seed{seed}", "mlp", seed=seed)
+        (run_dir / MARKER).write_text(json.dumps({"status": "done"}))
+
+    finished_run(0)
+    trained_run(out / "runs" / "mlp" / "seed2", "mlp", seed=2)  # still training: no marker
     assert main(["transfer", str(out), "--episodes", "2"]) == 0
-    first = json.loads((out / "transfer.json").read_text())["runs"]["mlp"]["0"]
+    assert "mlp/seed2 skipped (not finished)" in capsys.readouterr().out
+    first = json.loads((out / "transfer.json").read_text())["runs"]["mlp"]
+    assert set(first) == {"0"}
     # a later sitting: seed 0 kept its logs but not its checkpoints, seed 1 is new
     for path in (out / "runs" / "mlp" / "seed0" / "checkpoints").iterdir():
         path.unlink()
-    trained_run(out / "runs" / "mlp" / "seed1", "mlp", seed=1)
+    finished_run(1)
     assert main(["transfer", str(out), "--episodes", "3", "--add"]) == 2
     assert "--add needs the same" in capsys.readouterr().err
     assert main(["transfer", str(out), "--episodes", "2", "--add"]) == 0
     runs = json.loads((out / "transfer.json").read_text())["runs"]["mlp"]
-    assert set(runs) == {"0", "1"} and runs["0"] == first
+    assert set(runs) == {"0", "1"} and runs["0"] == first["0"]
     assert np.isfinite(runs["1"]["pybullet"]["return"])
     # without --add the run without a checkpoint would be dropped
     assert main(["transfer", str(out), "--episodes", "2", "--overwrite"]) == 0

@@ -24,7 +24,7 @@ from pathlib import Path
 
 MARKER = "reproduce_run.json"
 SKIPPED = {"checkpoints", "tensorboard", ".lock"}
-FILES = ("reproduce.yaml", "transfer.json")
+FILES = ("reproduce.yaml", "transfer.json", ".cpg-actor-run")  # the last: the project's marker
 
 
 def finished(run_dir: Path) -> bool:
@@ -61,6 +61,7 @@ def restore(archive: Path, out: Path) -> None:
             continue
         run_dir.parent.mkdir(parents=True, exist_ok=True)
         tmp = Path(tempfile.mkdtemp(dir=run_dir.parent, prefix=".restore-"))
+        tmp.chmod(0o755)  # mkdtemp makes it private; a run directory is not
         with tarfile.open(packed) as tar:
             tar.extractall(tmp, filter="data")
         tmp.rename(run_dir)

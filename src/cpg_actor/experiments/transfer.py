@@ -54,16 +54,20 @@ def evaluate_run(run_dir: Path, episodes: int, seed: int) -> dict[str, dict[str,
 def write_transfer(
     out: Path, episodes: int = 5, seed: int = 1000, progress=print, add: bool = False
 ) -> Path:
-    """Evaluate every run of ``out`` that has a last checkpoint; write ``TRANSFER_FILE``.
+    """Evaluate every run of ``out`` that has a last checkpoint; write ``TRANSFER_FILE``. In a
+    ``cpg-actor reproduce`` directory only its finished runs: another's last checkpoint is
+    not a final policy (it may be training now).
 
     ``add``: keep the runs ``TRANSFER_FILE`` already holds (it must have been made with the
     same ``episodes`` and ``seed``) and evaluate only the others, so that a reproduction
     trained across sittings, whose earlier runs kept their logs but not their checkpoints,
     is evaluated run by run as it finishes."""
+    from cpg_actor.experiments.plan import SETTINGS_FILE
     from cpg_actor.experiments.results import Results, run_robot
     from cpg_actor.files import atomic_write_text
 
     results = Results.load(Path(out))
+    reproduction = (Path(out) / SETTINGS_FILE).is_file()
     runs: dict[str, dict[str, Any]] = {}
     metric = "hop_height"  # the runs' robot's headline metric (the hopper's without runs)
     if add:
@@ -80,6 +84,9 @@ def write_transfer(
             if str(run.seed) in runs.get(variant, {}):
                 continue
             if not (run.path / "checkpoints" / "last.pt").is_file():
+                continue
+            if reproduction and not run.finished:
+                progress(f"transfer: {variant}/seed{run.seed} skipped (not finished)")
                 continue
             progress(f"transfer: {variant}/seed{run.seed}")
             metric = run_robot(run.config).headline_metric
