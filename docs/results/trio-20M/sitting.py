@@ -14,7 +14,6 @@ rest. Nothing that exists is overwritten.
 
 from __future__ import annotations
 
-import json
 import os
 import shutil
 import sys
@@ -22,22 +21,17 @@ import tarfile
 import tempfile
 from pathlib import Path
 
-MARKER = "reproduce_run.json"
+from cpg_actor.experiments.results import Results
+
 SKIPPED = {"checkpoints", "tensorboard", ".lock"}
 FILES = ("reproduce.yaml", "transfer.json", ".cpg-actor-run")  # the last: the project's marker
 
 
-def finished(run_dir: Path) -> bool:
-    try:
-        return json.loads((run_dir / MARKER).read_text()).get("status") == "done"
-    except (OSError, ValueError):
-        return False
-
-
 def save(out: Path, archive: Path) -> None:
-    for run_dir in sorted((out / "runs").glob("*/seed*")):
-        target = archive / run_dir.parent.name / f"{run_dir.name}.tar.gz"
-        if not finished(run_dir) or target.exists():
+    for run in (run for runs in Results.load(out).runs.values() for run in runs):
+        run_dir = run.path
+        target = archive / run.variant / f"{run_dir.name}.tar.gz"
+        if not run.finished or target.exists():
             continue
         target.parent.mkdir(parents=True, exist_ok=True)
         handle, tmp = tempfile.mkstemp(dir=target.parent, suffix=".tmp")
