@@ -4,6 +4,7 @@
 
     python docs/results/trio-20M/progress.py results/trio-20M
     python docs/results/trio-20M/progress.py --curves curves.png RUN [RUN ...]   # eval curves
+    python docs/results/trio-20M/progress.py --at 2M results/trio-20M   # also the return at 2M
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import argparse
 import json
 from pathlib import Path
 
+from cpg_actor.config.train_config import parse_steps
 from cpg_actor.experiments.metrics import final_return, peak_return
 
 
@@ -29,18 +31,25 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("paths", nargs="+", type=Path)
     parser.add_argument("--curves", type=Path, help="a figure of the runs' eval returns")
+    parser.add_argument(
+        "--at", type=parse_steps, help="also the return at this step (the same mean, e.g. 2M)"
+    )
     args = parser.parse_args()
     runs = []
     for path in args.paths:
         runs += sorted(path.glob("runs/*/seed*")) if (path / "runs").is_dir() else [path]
-    print("| run | steps | peak (at) | final | final / peak |")
-    print("| --- | ---: | --- | ---: | ---: |")
+    at = f" return at {args.at / 1e6:g}M |" if args.at else ""
+    print(f"| run | steps | peak (at) | final | final / peak |{at}")
+    print("| --- | ---: | --- | ---: | ---: |" + (" ---: |" if args.at else ""))
     for run in runs:
         steps, returns = evaluations(run)
         peak, at = peak_return(steps, returns)
         final = final_return(steps, returns)
-        print(f"| {label(run)} | {steps[-1] / 1e6:.1f}M | {peak:.0f} ({at / 1e6:.1f}M) | "
-              f"{final:.0f} | {final / peak:.2f} |")  # fmt: skip
+        row = f"| {label(run)} | {steps[-1] / 1e6:.1f}M | {peak:.0f} ({at / 1e6:.1f}M) | "
+        row += f"{final:.0f} | {final / peak:.3f} |"
+        if args.at:
+            row += f" {final_return(steps, returns, at_step=args.at):.0f} |"
+        print(row)
     if args.curves:
         import matplotlib
 
