@@ -121,19 +121,37 @@ def from_tree(module: str, name: str):
 
 def compose(agent: str, preset: str, values: list[dict]):
     """The run's :class:`TrainConfig` as ``cpg-actor train`` composes it: the agent's tuned
-    settings (trees without per-agent defaults have none), the preset, then ``values``."""
-    from cpg_actor.agents import get_agent_spec
+    settings on the robot (trees without per-agent defaults have none), the preset, then
+    ``values``."""
     from cpg_actor.config import TrainConfig, apply_dict
 
     preset_values = from_tree("config.presets", "preset_values")
-    config = TrainConfig()
-    config.agent = agent
-    spec = get_agent_spec(agent)
-    apply_dict(config, getattr(spec, "defaults", {}).get(config.robot, {}), prefix="")
-    apply_dict(config, preset_values(preset), prefix="")
-    for mapping in values:
-        apply_dict(config, mapping, prefix="")
-    return config
+
+    def composed(defaults: dict) -> TrainConfig:
+        config = TrainConfig()
+        config.agent = agent
+        apply_dict(config, defaults, prefix="")
+        apply_dict(config, preset_values(preset), prefix="")
+        for mapping in values:
+            apply_dict(config, mapping, prefix="")
+        return config
+
+    config = composed({})  # which robot: its defaults for the agent come first
+    return composed(agent_defaults(agent, config.robot))
+
+
+def agent_defaults(agent: str, robot: str) -> dict:
+    """The agent's tuned settings on ``robot``: ``Robot.agent_defaults`` in trees with robot
+    plug-ins, ``AgentSpec.defaults[robot]`` in the trees before them, else none."""
+    from cpg_actor.agents import get_agent_spec
+
+    try:
+        from cpg_actor.robots.registry import ROBOTS
+    except ImportError:  # a tree from before the robot registry
+        ROBOTS = {}
+    if robot in ROBOTS and hasattr(ROBOTS[robot], "agent_defaults"):
+        return dict(ROBOTS[robot].agent_defaults.get(agent, {}))
+    return dict(getattr(get_agent_spec(agent), "defaults", {}).get(robot, {}))
 
 
 def project_run(spec: RunSpec) -> dict:

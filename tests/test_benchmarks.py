@@ -103,3 +103,24 @@ def test_the_script_runs_its_smallest_configuration(script, tmp_path):
 def test_the_gpu_check_script_parses():
     """gpu_check.sh runs on a lent GPU machine only: here, its syntax."""
     subprocess.run(["bash", "-n", str(BENCHMARKS / "gpu_check.sh")], check=True)
+
+
+@pytest.mark.parametrize("preset", ["paper", "throughput"])
+def test_time_to_hop_trains_each_agent_with_the_config_cpg_actor_train_gives_it(preset):
+    """The benchmark composes its runs' configs itself (it also runs older trees): on this tree
+    every agent's, its tuned settings on the hopper included, is the one ``cpg-actor train``
+    composes. (Its runs once lost the tuned settings when they moved to the robot.)"""
+    from cpg_actor.agents import AGENTS
+    from cpg_actor.config import compose_config
+
+    sys.path.insert(0, str(BENCHMARKS))
+    try:
+        import time_to_hop
+    finally:
+        sys.path.remove(str(BENCHMARKS))
+    values = [{"num_envs": 8}]
+    for agent in AGENTS:
+        expected = compose_config(preset, None, {"agent": agent, "num_envs": 8})
+        composed = time_to_hop.compose(agent, preset, values)
+        composed.preset = expected.preset  # the benchmark names the preset in its report
+        assert composed == expected, agent
