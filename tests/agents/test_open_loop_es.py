@@ -3,6 +3,7 @@ CPG-Actor's V. Small budgets: hopper episodes of a few dozen control steps, a fe
 
 import json
 import math
+import pickle
 
 import numpy as np
 import pytest
@@ -84,15 +85,66 @@ def test_cma_search_finds_a_quadratic_optimum_and_its_state_continues_exactly():
     assert np.array_equal(copy.mean, search.mean) and copy.sigma == search.sigma
 
 
-def test_a_pickled_search_state_admits_nothing_but_cma_numpy_and_plain_values():
-    import pickle
+def _with_bytes(state: dict, data: bytes) -> dict:
+    return {**state, "cma": torch.frombuffer(bytearray(data), dtype=torch.uint8)}
 
+
+def _text(text: str) -> bytes:
+    raw = text.encode()
+    return pickle.SHORT_BINUNICODE + bytes([len(raw)]) + raw
+
+
+def _global(module: str, name: str) -> bytes:
+    """Protocol-4 opcodes that push ``module.name`` (the unpickler follows a dotted name)."""
+    return _text(module) + _text(name) + pickle.STACK_GLOBAL
+
+
+def _call(module: str, name: str, *args: str) -> bytes:
+    """A pickle that calls ``module.name(*args)`` (REDUCE)."""
+    arguments = pickle.MARK + b"".join(_text(a) for a in args) + pickle.TUPLE
+    return pickle.PROTO + b"\x04" + _global(module, name) + arguments + pickle.REDUCE + pickle.STOP
+
+
+CRAFTED = {
+    # the payload that ran a command: cma + a dotted name reaching subprocess.Popen via numpy
+    "popen": lambda marker: _call("cma", "_np.f2py.subprocess.Popen", "touch", marker),
+    "memmap": lambda marker: _call("numpy", "memmap", marker, "uint8", "w+"),
+    "print": lambda marker: _call("builtins", "print", marker),
+    # a listed class's constructor: cma's creates log files where its options say
+    "cma-constructor": lambda marker: _call(
+        "cma.evolution_strategy", "CMAEvolutionStrategy", marker
+    ),
+    # BUILD on a listed class itself would patch that class for the whole process
+    "build-class": lambda marker: pickle.PROTO + b"\x04"
+    + _global("cma.evolution_strategy", "CMAEvolutionStrategy")
+    + pickle.NONE + pickle.MARK + _text("__setstate__") + _text(marker) + pickle.DICT
+    + pickle.TUPLE2 + pickle.BUILD + pickle.STOP,
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("payload", sorted(CRAFTED))
+def test_a_crafted_search_state_runs_no_code_and_is_one_line(payload, tmp_path):
+    import cma
+
+    marker = tmp_path / "ran"
     search = CMASearch(np.zeros(3), 0.3, 4, seed=0)
-    state = search.state_dict()
-    evil = pickle.dumps(print)  # any function outside CMA-ES's state
-    state["cma"] = torch.frombuffer(bytearray(evil), dtype=torch.uint8)
-    with pytest.raises(ValueError, match=r"builtins\.print"):
+    state = _with_bytes(search.state_dict(), CRAFTED[payload](str(marker)))
+    with pytest.raises(ValueError, match="CMA-ES state") as error:
         search.load_state_dict(state)
+    assert "\n" not in str(error.value)
+    assert list(tmp_path.iterdir()) == []  # nothing ran, nothing was written
+    assert "__setstate__" not in vars(cma.CMAEvolutionStrategy)
+
+
+def test_a_search_state_with_other_options_is_refused():
+    """cma evaluates, calls and writes to disk what its options say: a state whose options
+    differ from the running search's (here: a log file prefix and logging on) is refused."""
+    search = CMASearch(np.zeros(3), 0.3, 4, seed=0)
+    search.es.opts["verb_log"] = 1
+    search.es.opts["verb_filenameprefix"] = "/tmp/elsewhere/"
+    fresh = CMASearch(np.zeros(3), 0.3, 4, seed=0)
+    with pytest.raises(ValueError, match="option 'verb_"):
+        fresh.load_state_dict(search.state_dict())
 
 
 def test_non_finite_fitness_ranks_last_and_is_never_kept():

@@ -28,15 +28,15 @@ search continued from a saved state draws exactly what the uninterrupted one wou
 
 from __future__ import annotations
 
-import io
 import math
-import pickle
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
 import numpy as np
 import torch
 from torch import Tensor, nn
+
+from .cma_state import dump_search_state, load_search_state
 
 ES_EPISODE_SEED_KEY = 2**31 + 2  # SeedSequence([seed, this, generation]): reset seeds
 ES_SEARCH_SEED_KEY = 2**31 + 3  # SeedSequence([seed, this]): CMA-ES's normal draws
@@ -118,43 +118,6 @@ class NormalSource:
         return self.generator.standard_normal(shape)
 
 
-# What a pickled cma.CMAEvolutionStrategy is made of besides cma's own classes (numpy 2 and 1)
-_STATE_GLOBALS = {
-    *(("builtins", name) for name in ("range", "slice", "set", "frozenset", "complex")),
-    ("numpy", "dtype"),
-    ("numpy", "ndarray"),
-    ("numpy.linalg", "eigh"),
-    ("numpy.random._mt19937", "MT19937"),
-    ("numpy.random._pickle", "__bit_generator_ctor"),
-    ("numpy.random._pickle", "__randomstate_ctor"),
-    *((f"numpy.{core}.multiarray", name)
-      for core in ("_core", "core") for name in ("_reconstruct", "scalar")),
-    *((f"numpy.{core}.numeric", "_frombuffer") for core in ("_core", "core")),
-}  # fmt: skip
-_CMA_FUNCTIONS = {"is_feasible", "_pass"}  # functions cma keeps in its state's attributes
-
-
-PICKLE_PROTOCOL = 4  # fixed, not the running Python's highest
-
-
-class _SearchUnpickler(pickle.Unpickler):
-    """Reads back a pickled search state admitting only what CMA-ES's state is made of:
-    cma's classes (and the two functions it stores), numpy's array and random-generator
-    reconstructors, a few plain builtins and :class:`NormalSource`: a checkpoint cannot name
-    other code to run (``torch.load`` reads the rest with ``weights_only``)."""
-
-    def find_class(self, module: str, name: str) -> Any:
-        if (module, name) in _STATE_GLOBALS or (module, name) == (__name__, "NormalSource"):
-            return super().find_class(module, name)
-        if module == "cma" or module.startswith("cma."):
-            found = super().find_class(module, name)
-            if isinstance(found, type) or name in _CMA_FUNCTIONS:
-                return found
-        raise pickle.UnpicklingError(
-            f"the saved search state refers to {module}.{name}, which is not part of a CMA-ES state"
-        )
-
-
 class CMASearch:
     """CMA-ES maximising a fitness over V (``cma.CMAEvolutionStrategy``, which minimises: it
     is told ``-fitness``), and the best candidate evaluated so far.
@@ -224,7 +187,7 @@ class CMASearch:
     def state_dict(self) -> dict[str, Any]:
         """Tensors and plain values (``torch.load(weights_only=True)`` reads them): the
         pickled CMA-ES object as bytes (uint8), the best candidate and the counters."""
-        blob = pickle.dumps(self.es, protocol=PICKLE_PROTOCOL)
+        blob = dump_search_state(self.es)
         return {
             "cma": torch.frombuffer(bytearray(blob), dtype=torch.uint8),
             "generation": self.generation,
@@ -234,10 +197,7 @@ class CMASearch:
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
-        try:
-            es = _SearchUnpickler(io.BytesIO(state["cma"].numpy().tobytes())).load()
-        except (pickle.UnpicklingError, AttributeError, ImportError, EOFError) as error:
-            raise ValueError(f"the saved CMA-ES state cannot be read: {error}") from None
+        es = load_search_state(state["cma"].numpy().tobytes(), self.es)
         if len(es.mean) != len(self.es.mean):
             raise ValueError(
                 f"the saved CMA-ES state searches {len(es.mean)} parameters, this agent's V "
