@@ -47,7 +47,7 @@ part train && timeout "${TRAIN_S:-140}" python3 -m cpg_actor.cli train --preset 
 part train && cat /tmp/gpu-run/config.yaml >>"$OUT/train.log" && cp /tmp/gpu-run/metrics.jsonl "$OUT/"
 # the same with MuJoCo's C simulator on the CPU cores and PPO on CUDA: is the GPU run's weaker
 # learning torch's on CUDA or MJX's (docs/gpu.md, "Learning")? Its training return at
-# iterations 21 and 42 against the train part's and the CPU runs' (docs/results/gpu-preset-mujoco-4096)
+# iterations 21 and 42 against the train part's and the CPU runs' of docs/results/gpu-preset-mujoco-4096
 part split && timeout "${SPLIT_S:-140}" python3 -m cpg_actor.cli train --preset gpu --sim mujoco \
     --device cuda --total-steps 20M --run-dir /tmp/gpu-run-mujoco --no-progress \
     --progress-interval 10 2>&1 | tee -a "$OUT/train.log"
