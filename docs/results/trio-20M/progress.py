@@ -5,6 +5,9 @@
     python docs/results/trio-20M/progress.py results/trio-20M
     python docs/results/trio-20M/progress.py --curves curves.png RUN [RUN ...]   # eval curves
     python docs/results/trio-20M/progress.py --at 2M results/trio-20M   # also the return at 2M
+
+It reads the runs' ``metrics.jsonl``: a results directory of your own (the trio's runs are in
+git history; its README says how to restore them into ``results/trio-20M``).
 """
 
 from __future__ import annotations

@@ -1,8 +1,12 @@
 """Carry a reproduction's finished runs from one sitting (machine) to the next: their logs,
 stage evaluations, traces and config, without checkpoints or TensorBoard files.
 
-    python docs/results/trio-20M/sitting.py save OUT docs/results/trio-20M/runs
-    python docs/results/trio-20M/sitting.py restore docs/results/trio-20M/runs OUT
+    python docs/results/trio-20M/sitting.py save OUT ARCHIVE
+    python docs/results/trio-20M/sitting.py restore ARCHIVE OUT
+
+``ARCHIVE`` is a folder of the user's, outside ``docs/`` (e.g. under the git-ignored
+``results/``). The trio's own archives are in git history, at ``docs/results/trio-20M/runs`` of
+commit 2d29b10 (its README says how to restore them).
 
 ``save`` writes ``ARCHIVE/VARIANT/seedS.tar.gz`` for every finished run of ``OUT`` that has
 none yet, and copies ``OUT/reproduce.yaml`` and ``OUT/transfer.json`` (run ``cpg-actor transfer
