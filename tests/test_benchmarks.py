@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from cpg_actor.ppo.algorithm import cpp_compiler
+from extras import MJX  # noqa: I001 (tests/ is on sys.path)
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCHMARKS = ROOT / "benchmarks"
@@ -56,12 +57,12 @@ RUNS = {
 # longer than ~20 s: a compile, MJX's JIT, or seconds of training
 MARKS = {
     "activation.py": [COMPILER],
-    "gpu_throughput.py": [SLOW],
+    "gpu_throughput.py": [SLOW, MJX],
     "guard_checks.py": [SLOW, COMPILER],
     "learning_curves.py": [SLOW],
-    "mjx_agreement.py": [SLOW],
-    "mjx_eval.py": [SLOW],
-    "mjx_solver_iterations.py": [SLOW],
+    "mjx_agreement.py": [SLOW, MJX],
+    "mjx_eval.py": [SLOW, MJX],
+    "mjx_solver_iterations.py": [SLOW, MJX],
     "profile_collect.py": [SLOW],
     "robustness_suite.py": [SLOW],
     "rollout_threads.py": [SLOW],

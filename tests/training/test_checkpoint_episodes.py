@@ -9,7 +9,8 @@ import torch
 from cpg_actor.config import TrainConfig
 from cpg_actor.robots.hopper.vector import HopperVectorEnv
 from cpg_actor.training.runner import Runner
-from tiny import tiny_config  # tests/tiny.py (pytest puts tests/ on sys.path)
+from extras import MJX  # tests/extras.py (pytest puts tests/ on sys.path)
+from tiny import tiny_config
 
 EPISODE = 12  # control steps: several episodes end inside the 6 iterations of 8 steps
 
@@ -43,12 +44,6 @@ def test_checkpoint_every_iteration_changes_nothing_and_cuts_no_episode(tmp_path
         plain.close()
 
 
-def mjx_available() -> bool:
-    from cpg_actor.robots.common import mjx_runtime as runtime
-
-    return runtime.available()
-
-
 def same_state(a, b) -> bool:
     """Env states (nested dicts / lists of tensors and plain values) equal, bit for bit."""
     if isinstance(a, dict):
@@ -67,10 +62,7 @@ def same_state(a, b) -> bool:
         ("mlp", "mujoco"),
         pytest.param(
             "cpg-actor", "mjx",
-            marks=[
-                pytest.mark.skipif(not mjx_available(), reason='needs pip install -e ".[mjx]"'),
-                pytest.mark.slow,
-            ],
+            marks=[MJX, pytest.mark.slow],
         ),
     ],
 )  # fmt: skip

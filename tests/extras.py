@@ -1,0 +1,9 @@
+"""Marks for tests that need one of the package's optional extras: without it they skip, with
+the install line as the reason, so the README's `make test` (default extras) passes on a fresh
+clone while CI also runs them with every extra."""
+
+import pytest
+
+from cpg_actor.robots.common import mjx_runtime
+
+MJX = pytest.mark.skipif(not mjx_runtime.available(), reason='needs pip install -e ".[mjx]"')
