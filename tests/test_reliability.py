@@ -130,6 +130,127 @@ def test_a_refused_resume_writes_nothing(tmp_path, capsys):
     assert sorted(p.name for p in folder.iterdir()) == ["data.csv"]
 
 
+# -- nothing a user made is lost --------------------------------------------------------------
+def test_eval_output_keeps_the_figures_it_did_not_write(tmp_path, capsys, trained):
+    """The figures drawn next to a named --output replace nothing there without --overwrite."""
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    for name in ("training_curves.png", "traces.png"):
+        (folder / name).write_bytes(b"my figure")
+    before = tree(folder)
+    argv = ["eval", str(trained), "--episodes", "1", "--output", str(folder / "x.npz")]
+    assert main(argv) == 2
+    err = one_line(capsys)
+    assert f"{folder / 'training_curves.png'} exists; pass --overwrite" in err
+    assert tree(folder) == before  # no traces written either
+    assert main([*argv, "--overwrite"]) == 0  # named files the user asked to replace
+    assert (folder / "traces.png").read_bytes() != b"my figure" and (folder / "x.npz").is_file()
+
+
+def test_a_lock_that_is_a_link_is_refused_and_its_target_kept(tmp_path, capsys, trained):
+    target = tmp_path / "elsewhere.txt"
+    target.write_text("precious")
+    run_dir = copy_of(trained, tmp_path)
+    (run_dir / ".lock").unlink(missing_ok=True)
+    (run_dir / ".lock").symlink_to(target)
+    assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "48"]) == 2
+    err = one_line(capsys)
+    assert f"{run_dir / '.lock'} is a symbolic link" in err
+    assert target.read_text() == "precious"
+    assert load_checkpoint(run_dir / "checkpoints" / "last.pt")["iteration"] == 2
+    # a folder holding only the link (a new run there) is not empty: refused, the same
+    fresh = tmp_path / "fresh"
+    fresh.mkdir()
+    (fresh / ".lock").symlink_to(target)
+    assert train(fresh, 1) == 2
+    assert "already exists" in one_line(capsys)
+    assert target.read_text() == "precious" and [p.name for p in fresh.iterdir()] == [".lock"]
+
+
+def test_a_folder_holding_only_a_lock_file_of_its_own_is_not_empty(tmp_path, capsys):
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    (folder / ".lock").write_text("my lock file")
+    assert train(folder, 1) == 2
+    assert "already exists" in one_line(capsys)
+    assert tree(folder) == {".lock": b"my lock file"}
+    # a run's own marker and lock (a start stopped before its first write): a new run starts
+    assert train(tmp_path / "run", 1) == 0
+    for path in (tmp_path / "run").iterdir():
+        if path.name not in (MARKER, ".lock"):
+            shutil.rmtree(path) if path.is_dir() else path.unlink()
+    assert train(tmp_path / "run", 1) == 0
+
+
+def test_a_metrics_file_that_is_a_link_gets_no_rows(tmp_path, capsys, trained):
+    from cpg_actor.training.run_log import RunLog
+
+    target = tmp_path / "elsewhere.jsonl"
+    target.write_text('{"mine": 1}\n')
+    run_dir = copy_of(trained, tmp_path)
+    (run_dir / "metrics.jsonl").unlink()
+    (run_dir / "metrics.jsonl").symlink_to(target)
+    assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "48"]) == 2
+    assert f"{run_dir / 'metrics.jsonl'} is a symbolic link" in one_line(capsys)
+    assert target.read_text() == '{"mine": 1}\n'
+    assert load_checkpoint(run_dir / "checkpoints" / "last.pt")["iteration"] == 2
+    with pytest.raises(FileExistsError, match="is a symbolic link"):  # a link made later
+        RunLog(run_dir, tensorboard=False).write(3, 48, {"x": 1.0})
+    assert target.read_text() == '{"mine": 1}\n'
+
+
+def test_overwrite_keeps_a_users_file_named_like_a_temporary(tmp_path, capsys, trained):
+    run_dir = copy_of(trained, tmp_path)
+    (run_dir / ".notes.tmp1234").write_text("my notes")
+    assert train(run_dir, 1, "--overwrite") == 2
+    assert "did not write (.notes.tmp1234)" in one_line(capsys)
+    assert (run_dir / ".notes.tmp1234").read_text() == "my notes"
+    assert load_checkpoint(run_dir / "checkpoints" / "last.pt")["iteration"] == 2
+    # the temporaries of cpg-actor's own files (a killed write) are its own: cleared
+    (run_dir / ".notes.tmp1234").unlink()
+    (run_dir / ".config.yaml.tmp4242").write_text("partial")
+    (run_dir / "checkpoints" / ".last.pt.tmp17").write_text("partial")
+    assert train(run_dir, 1, "--overwrite") == 0
+    assert not (run_dir / ".config.yaml.tmp4242").exists()
+    assert sorted(p.name for p in (run_dir / "checkpoints").iterdir()) == [
+        "iter_000000.pt", "iter_000001.pt", "last.pt"]  # fmt: skip
+
+
+def test_overwrite_clears_what_eval_export_and_curves_wrote_in_a_run(tmp_path, trained):
+    run_dir = copy_of(trained, tmp_path)
+    written = [  # the files these commands write in a run directory by default
+        "eval/stage0/traces.npz", "eval/stage0/training_curves.png", "eval/stage0/traces.png",
+        "eval/stage1/gait_diagram.png", "eval/stage1/forward_speed.png", "eval/stages.json",
+        "export/policy.onnx", "export/policy.onnx.initial_state.npy",
+        "export/policy.onnx.robot.xml", "export/policy.pt.robot.xml", "curves.png",
+        "curves.json", "reproduce_run.json",
+    ]  # fmt: skip
+    for name in written:
+        (run_dir / name).parent.mkdir(parents=True, exist_ok=True)
+        (run_dir / name).write_bytes(b"written by cpg-actor")
+    assert train(run_dir, 1, "--overwrite") == 0
+    assert [name for name in written if (run_dir / name).exists()] == []
+
+
+def test_a_torn_last_metrics_row_is_dropped_with_a_note_and_resume_continues(
+    tmp_path, capsys, trained
+):
+    run_dir = copy_of(trained, tmp_path)
+    metrics = run_dir / "metrics.jsonl"
+    with open(metrics, "a") as f:
+        f.write('{"iteration": 3, "global_step": 48, "losses/po')  # killed while writing it
+    capsys.readouterr()
+    assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "48"]) == 0
+    err = capsys.readouterr().err
+    assert f"{metrics}: its last row is cut off" in err and "Traceback" not in err
+    rows = [json.loads(line) for line in metrics.read_text().splitlines()]
+    assert [row["global_step"] for row in rows] == [16, 32, 48]
+    # a damaged row before the last is no torn write: refused, naming the file and line
+    metrics.write_text('{"iteration": 1, "global_step": 16}\nnot json\n{"iteration": 2}\n')
+    assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "64"]) == 2
+    assert f"{metrics}, line 2" in one_line(capsys)
+
+
 # -- bad paths and values ---------------------------------------------------------------------
 @pytest.mark.parametrize(
     ("argv", "message"),

@@ -2,11 +2,14 @@
 
 * Atomic writes: a hidden temporary name next to the target (``.NAME.tmpPID``), then
   ``os.replace``; a write that fails says which file it was writing.
-* The marker ``.cpg-actor-run``, written when the project creates a run directory (``train``)
-  or a results directory (``reproduce``, ``sweep``), names what made it. ``--overwrite``
-  deletes only in a directory carrying the marker of its kind, and only files whose names the
-  project writes there; a directory holding anything else (a user's file, a link, a folder
-  of unknown name) is refused whole, so a refused command deletes and writes nothing.
+* Links: a file the project writes in place (appends to, locks) or as a temporary is never
+  written through a symbolic link: a link there is refused (one line), its target untouched.
+* The marker ``.cpg-actor-run``, written when the project creates a run directory (``train``),
+  a results directory (``reproduce``, a ``sweep``'s setting) or a sweep directory, names what
+  made it. ``--overwrite`` deletes only in a directory carrying the marker of its kind, and
+  only files whose names the project writes there (and the temporaries of those names); a
+  directory holding anything else (a user's file, a link, a folder of unknown name) is
+  refused whole, so a refused command deletes and writes nothing.
 """
 
 from __future__ import annotations
@@ -24,54 +27,58 @@ MARKER = ".cpg-actor-run"
 MARKER_FORMAT = "cpg-actor-directory"
 RUN = "run"  # a `cpg-actor train` run directory
 RESULTS = "results"  # a `cpg-actor reproduce` (or one `sweep` setting's) results directory
-LOCK = ".lock"  # cpg_actor.training.run_lock.LOCK_NAME (kept here too: no import cycle)
+SWEEP = "sweep"  # a `cpg-actor sweep` directory: its summary and a results directory per setting
+LOCK = ".lock"  # the run's lock file (cpg_actor.training.run_lock)
 
-# a temporary file of an atomic write: ".NAME.tmpPID" (this module, checkpoints) and the
-# names plots, videos and eval traces use (".STEM.PID.HEX.tmpSUFFIX", ".STEM.tmpPID.npz")
-_TEMPORARY = r"\.[^/]+\.tmp\d+(\.npz)?|\.[^/]+\.\d+\.[0-9a-f]{8}\.tmp\.[a-z0-9]+"
-TEMPORARY = re.compile(r"^\.(?P<name>.+)\.tmp(?P<pid>\d+)$")
+TEMPORARY = re.compile(r"^\.(?P<name>.+)\.tmp(?P<pid>\d+)$")  # an atomic write's ".NAME.tmpPID"
 
-# what the project writes in each kind of directory: file names relative to it, and the
-# folders it makes (regular expressions matched against the whole relative path)
+# what the project writes in each kind of directory: (folder, names), both regular expressions
+# matched against the whole relative path (folder "": the directory itself), and the temporary
+# file of an atomic write of each (a write a killed process left: ".NAME.tmpPID" of one of
+# those names, never of another); then the folders it makes
+_EVAL = r"traces\.npz|training_curves\.png|traces\.png|gait_diagram\.png|forward_speed\.png"
 _RUN_FILES = (
-    MARKER,
-    LOCK,
-    r"config\.yaml",
-    r"metrics\.jsonl",
-    r"warm_start\.json",
-    r"gait\.yaml",
-    r"reproduce_run\.json",
-    r"checkpoints/(iter_\d+|last)\.pt",
-    r"tensorboard/events\.out\.tfevents\.[^/]+",
-    r"eval/(traces\.npz|training_curves\.png|traces\.png|gait_diagram\.png|forward_speed\.png"
-    r"|stages\.json)",
-    r"eval/stage\d+/traces\.npz",
-    r"export/policy\.(onnx|pt)(\.initial_state\.npy)?",
-    rf"({_TEMPORARY})",
-    rf"(checkpoints|eval|eval/stage\d+|export)/({_TEMPORARY})",
-)
+    ("", rf"{re.escape(MARKER)}|{re.escape(LOCK)}|config\.yaml|metrics\.jsonl|warm_start\.json"
+         r"|gait\.yaml|reproduce_run\.json|curves\.(png|json)"),
+    ("checkpoints", r"(iter_\d+|last)\.pt"),
+    ("tensorboard", r"events\.out\.tfevents\.[^/]+"),
+    ("eval", rf"{_EVAL}|stages\.json"),
+    (r"eval/stage\d+", _EVAL),
+    ("export", r"policy\.(onnx|pt)(\.initial_state\.npy|\.robot\.xml)?"),
+)  # fmt: skip
 _RUN_FOLDERS = (r"checkpoints", r"tensorboard", r"eval", r"eval/stage\d+", r"export")
 _RESULTS_FILES = (
-    MARKER,
-    r"reproduce\.yaml",
-    r"summary\.json",
-    r"report\.md",
-    r"open_loop_floor\.json",
-    r"transfer\.json",
-    r"logs/[^/]+\.log",
-    r"figures/[^/]+\.(png|pdf)",
-    rf"({_TEMPORARY})",
-)
+    ("", rf"{re.escape(MARKER)}|reproduce\.yaml|summary\.json|report\.md"
+         r"|open_loop_floor\.json|transfer\.json"),
+    ("logs", r"[^/]+\.log"),
+    ("figures", r"[^/]+\.(png|pdf)"),
+)  # fmt: skip
 _RESULTS_FOLDERS = (r"logs", r"figures", r"runs", r"runs/[^/]+")
-_RESULTS_RUNS = re.compile(r"runs/[^/]+/seed\d+")  # run directories, each checked as a run
+_SWEEP_FILES = (("", rf"{re.escape(MARKER)}|sensitivity\.(md|json|png)"),)
+
+
+def _files(patterns: tuple[tuple[str, str], ...]) -> re.Pattern:
+    """One expression for ``patterns`` (folder, names) and their temporaries."""
+    return re.compile("|".join(
+        f"{folder + '/' if folder else ''}(({names})|\\.({names})\\.tmp\\d+)"
+        for folder, names in patterns))  # fmt: skip
+
+
 KINDS = {
-    RUN: (re.compile("|".join(f"({p})" for p in _RUN_FILES)),
-          re.compile("|".join(f"({p})" for p in _RUN_FOLDERS))),
-    RESULTS: (re.compile("|".join(f"({p})" for p in _RESULTS_FILES)),
-              re.compile("|".join(f"({p})" for p in _RESULTS_FOLDERS))),
-}  # fmt: skip
-_NAMES = {RUN: "run directory", RESULTS: "results directory"}
-_MADE_BY = {RUN: "`cpg-actor train`", RESULTS: "`cpg-actor reproduce` or `sweep`"}
+    RUN: (_files(_RUN_FILES), re.compile("|".join(_RUN_FOLDERS))),
+    RESULTS: (_files(_RESULTS_FILES), re.compile("|".join(_RESULTS_FOLDERS))),
+    SWEEP: (_files(_SWEEP_FILES), re.compile("(?!)")),
+}
+# the project directories inside one of a kind: where, and their kind (checked as that kind)
+_NESTED = {
+    RESULTS: (re.compile(r"runs/[^/]+/seed\d+"), RUN),
+    SWEEP: (re.compile(r"[^/]+"), RESULTS),
+}
+_NAMES = {RUN: "run directory", RESULTS: "results directory", SWEEP: "sweep directory"}
+_MADE_BY = {RUN: "`cpg-actor train`", RESULTS: "`cpg-actor reproduce` or `sweep`",
+            SWEEP: "`cpg-actor sweep`"}  # fmt: skip
+# a file every directory of the kind holds (the sign of one made before the marker existed)
+_SETTINGS = {RUN: "config.yaml", RESULTS: "reproduce.yaml", SWEEP: "sensitivity.json"}
 # the files `train` writes while it runs: their temporaries are removed at the next start
 _TRAIN_WRITES = re.compile(r"config\.yaml|metrics\.jsonl|warm_start\.json|gait\.yaml")
 _CHECKPOINT_WRITES = re.compile(r"(iter_\d+|last)\.pt")
@@ -81,6 +88,14 @@ _CHECKPOINT_WRITES = re.compile(r"(iter_\d+|last)\.pt")
 def temporary_path(path: Path) -> Path:
     """The hidden name an atomic write of ``path`` goes through first."""
     return path.with_name(f".{path.name}.tmp{os.getpid()}")
+
+
+def new_temporary(path: Path) -> Path:
+    """:func:`temporary_path`, with nothing there: one a killed process of this pid left (a
+    file, or a link that writing it would follow) is removed."""
+    tmp = temporary_path(path)
+    tmp.unlink(missing_ok=True)
+    return tmp
 
 
 @contextmanager
@@ -113,6 +128,36 @@ class _Writes:
     def flush(self) -> None:
         self.file.flush()
 
+    def __getattr__(self, name: str):  # the rest of the file's interface (seek, tell, ...)
+        return getattr(self.file, name)
+
+
+def _no_follow(path: str, flags: int) -> int:
+    """``open``'s opener for a file the project writes: a link there is an error, never
+    followed (the file it points to is someone else's)."""
+    return os.open(path, flags | os.O_NOFOLLOW, 0o666)
+
+
+def refuse_link(path: Path) -> None:
+    """FileExistsError (one line) if ``path`` is a symbolic link: the project writes or locks
+    its own files there, never through a link."""
+    if Path(path).is_symlink():
+        raise FileExistsError(
+            f"{path} is a symbolic link; cpg-actor writes its own file there, never through a "
+            "link: remove the link (what it points to is left as it is)"
+        )
+
+
+def open_own(path: Path, mode: str) -> IO:
+    """``open(path, mode)`` for a file the project writes in place (appends to, locks),
+    refusing a symbolic link there (:func:`refuse_link`) rather than following it."""
+    try:
+        return open(path, mode, opener=_no_follow)
+    except OSError as error:
+        if error.errno == errno.ELOOP:
+            refuse_link(path)
+        raise
+
 
 def atomic_write(path: Path, write: Callable[[IO[bytes]], None], fsync: bool = False) -> None:
     """``write(file)`` into a temporary file next to ``path`` (flushed, fsync'ed if asked),
@@ -123,7 +168,7 @@ def atomic_write(path: Path, write: Callable[[IO[bytes]], None], fsync: bool = F
     with naming(path):
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
-            with open(tmp, "wb") as f:
+            with open(new_temporary(path), "wb", opener=_no_follow) as f:
                 writes = _Writes(f)
                 try:
                     write(writes)  # type: ignore[arg-type]
@@ -212,8 +257,10 @@ def marker_kind(directory: Path) -> str | None:
 def _entries(directory: Path, kind: str, prefix: str = "") -> tuple[list[Path], list[Path]]:
     """``(ours, foreign)``: the files and folders under ``directory`` the project writes in a
     directory of ``kind`` (folders after their contents), and everything else. A link is
-    always foreign (the project makes none); a results directory's runs are checked as runs."""
+    always foreign (the project makes none); a project directory inside (a results
+    directory's runs, a sweep's settings) is checked as its own kind."""
     files, folders = KINDS[kind]
+    nested, nested_kind = _NESTED.get(kind, (None, None))
     ours: list[Path] = []
     foreign: list[Path] = []
     for path in sorted(directory.iterdir()):
@@ -221,13 +268,13 @@ def _entries(directory: Path, kind: str, prefix: str = "") -> tuple[list[Path], 
         if path.is_symlink():
             foreign.append(path)
         elif path.is_dir():
-            if kind == RESULTS and _RESULTS_RUNS.fullmatch(relative):
-                if marker_kind(path) != RUN:
+            if nested is not None and nested.fullmatch(relative):
+                if marker_kind(path) != nested_kind:
                     foreign.append(path)
                     continue
-                run_ours, run_foreign = _entries(path, RUN)
-                ours += run_ours + [path]
-                foreign += run_foreign
+                inner_ours, inner_foreign = _entries(path, nested_kind)
+                ours += inner_ours + [path]
+                foreign += inner_foreign
             elif folders.fullmatch(relative):
                 inner_ours, inner_foreign = _entries(path, kind, relative + "/")
                 ours += inner_ours + [path]
@@ -251,7 +298,7 @@ def check_overwritable(directory: Path, kind: str, flag: str = "--overwrite") ->
     if found != kind:
         if found is not None:
             why = f"it is a {_NAMES.get(found, found)}, not a {name}; choose another directory"
-        elif (directory / ("config.yaml" if kind == RUN else "reproduce.yaml")).is_file():
+        elif (directory / _SETTINGS[kind]).is_file():
             why = (
                 f"it has no {MARKER} marker, so it may be a folder of yours (or a {name} made "
                 "before cpg-actor marked its directories); if nothing in it is yours, delete "

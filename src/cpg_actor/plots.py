@@ -6,7 +6,6 @@ motor's velocity limit on a velocity axis, and an atomic ``savefig``."""
 from __future__ import annotations
 
 import os
-import uuid
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -88,15 +87,12 @@ def steps_text(steps: float) -> str:
     return step_labels([steps])[0]
 
 
-def save_figure(fig, path: str | os.PathLike, dpi: int = 110) -> Path:
-    """``fig.savefig`` to a hidden name next to ``path``, then renamed: an existing file is
-    replaced whole or not at all."""
+def save_figure(fig, path: str | os.PathLike, dpi: int | None = 110) -> Path:
+    """``fig.savefig`` atomically (:func:`cpg_actor.files.atomic_write`): an existing file is
+    replaced whole or not at all. The format is the suffix's."""
+    from cpg_actor.files import atomic_write
+
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.stem}.{os.getpid()}.{uuid.uuid4().hex[:8]}.tmp{path.suffix}")
-    try:
-        fig.savefig(tmp, dpi=dpi)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    fmt = path.suffix.removeprefix(".").lower() or None
+    atomic_write(path, lambda f: fig.savefig(f, format=fmt, dpi=dpi))
     return path

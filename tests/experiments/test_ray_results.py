@@ -1,7 +1,8 @@
-"""How a Ray run reaches the head without a shared file system (packed and unpacked whole), and
-the one-line errors for a Ray address that does not answer or refuses this process's token.
-No Ray needed."""
+"""How a Ray run reaches the head without a shared file system (packed, and merged into the
+head's copy), and the one-line errors for a Ray address that does not answer or refuses this
+process's token. No Ray needed."""
 
+import shutil
 import socket
 from pathlib import Path
 
@@ -19,26 +20,63 @@ def closed_port():
         yield holder.getsockname()[1]
 
 
-def test_a_packed_run_replaces_the_older_copy_whole(tmp_path):
-    worker = tmp_path / "worker" / "run"
-    (worker / "checkpoints").mkdir(parents=True)
-    (worker / "checkpoints" / "last.pt").write_bytes(b"trained")
-    (worker / "metrics.jsonl").write_text('{"global_step": 32}\n')
-    (worker / ".lock").write_text("held by a process on the worker")
-    (tmp_path / "worker" / "run.log").write_text("$ cpg-actor train ...\n")
-    data = execute.pack_run(worker, tmp_path / "worker" / "run.log")
-
+def returned_run(tmp_path):
+    """A run's copy on the head, packed and sent to a node, which trains on (and removes a
+    checkpoint of an earlier attempt) and returns it: ``(head, log, sent, returned)``."""
     head = tmp_path / "out" / "runs" / "mlp" / "seed0"
     (head / "checkpoints").mkdir(parents=True)
+    (head / "checkpoints" / "last.pt").write_bytes(b"iteration 1")
     (head / "checkpoints" / "stale.pt").write_bytes(b"from an earlier attempt")
+    (head / ".lock").write_text("the head's lock file")
     log = tmp_path / "out" / "logs" / "mlp_seed0.log"
-    execute.unpack_run(data, head, log)
-    assert (head / "checkpoints" / "last.pt").read_bytes() == b"trained"
-    assert (head / "metrics.jsonl").is_file() and log.read_text() == "$ cpg-actor train ...\n"
-    assert not (head / "checkpoints" / "stale.pt").exists()  # the old copy went
-    assert not (head / ".lock").exists()  # a lock is the node's, not the run's
+    log.parent.mkdir()
+    log.write_text("$ cpg-actor train ...\n")
+    sent = {p.relative_to(head).as_posix(): (p.stat().st_size, p.stat().st_mtime_ns)
+            for p in head.rglob("*") if p.is_file() and p.name != ".lock"}  # fmt: skip
+    data = execute.pack_run(head, log)
+
+    worker = tmp_path / "worker" / "run"
+    worker_log = tmp_path / "worker" / "run.log"
+    execute.unpack_run(data, worker, worker_log)
+    assert not (worker / ".lock").exists()  # a lock is the node's, not the run's
+    (worker / "checkpoints" / "last.pt").write_bytes(b"iteration 2")
+    (worker / "checkpoints" / "stale.pt").unlink()
+    (worker / "metrics.jsonl").write_text('{"global_step": 32}\n')
+    (worker / ".lock").write_text("held by a process on the worker")
+    worker_log.write_text("$ cpg-actor train ...\n$ cpg-actor train --resume ...\n")
+    return head, log, sent, execute.pack_run(worker, worker_log)
+
+
+def test_a_returned_run_is_merged_keeping_the_files_added_on_the_head_meanwhile(tmp_path):
+    head, log, _, returned = returned_run(tmp_path)
+    (head / "notes.md").write_text("mine")
+    (head / "checkpoints" / "best_of_mine.pt").write_bytes(b"mine")
+    execute.unpack_run(returned, head, log)
+    assert (head / "checkpoints" / "last.pt").read_bytes() == b"iteration 2"
+    assert (head / "metrics.jsonl").is_file() and "--resume" in log.read_text()
+    assert (head / "notes.md").read_text() == "mine"
+    assert (head / "checkpoints" / "best_of_mine.pt").read_bytes() == b"mine"
+    assert (head / ".lock").read_text() == "the head's lock file"
     assert sorted(p.name for p in head.parent.iterdir()) == ["seed0"]  # no temporary left
     assert execute.pack_run(tmp_path / "none", tmp_path / "none.log") is None
+
+
+def test_a_returned_run_drops_what_the_run_removed_and_writes_through_no_link(tmp_path):
+    head, log, sent, returned = returned_run(tmp_path)
+    assert execute.run_files(head) == sent  # what run_ray keeps of what it sends
+    (head / "notes.md").write_text("mine")
+    execute.unpack_run(returned, head, log, sent)
+    assert not (head / "checkpoints" / "stale.pt").exists()  # sent, and removed by the run
+    assert (head / "notes.md").read_text() == "mine"
+    assert (head / "checkpoints" / "last.pt").read_bytes() == b"iteration 2"
+
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    shutil.rmtree(head / "checkpoints")
+    (head / "checkpoints").symlink_to(elsewhere)
+    with pytest.raises(FileExistsError, match="checkpoints is a symbolic link"):
+        execute.unpack_run(returned, head, log, sent)
+    assert list(elsewhere.iterdir()) == []
 
 
 def test_a_task_runs_in_its_scratch_directory_with_absolute_paths(tmp_path):

@@ -68,3 +68,46 @@ def test_first_seed_tunes_on_seeds_that_are_never_reported(tmp_path):
     summary = json.loads((out / "sensitivity.json").read_text())
     assert len(summary["settings"]["default"]["variants"]["mlp"]["return"]) == 1
     assert main([*argv[:8], "-1", *argv[9:]]) == 2  # --first-seed -1
+
+
+def test_sweep_writes_only_in_its_own_folder_and_overwrite_deletes_only_its_files(tmp_path, capsys):
+    from cpg_actor.experiments import plan, sweep
+    from cpg_actor.files import MARKER
+
+    def tree(folder):
+        return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*")
+                if p.is_file()}  # fmt: skip
+
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    for name in ("sensitivity.md", "sensitivity.json", "sensitivity.png"):
+        (mine / name).write_text("my own study")
+    before = tree(mine)
+    argv = [
+        "sweep", "--variants", "mlp", "--seeds", "1", "--total-steps", "32", "--workers", "1",
+        "--no-progress", "--set", "num_envs=2", "--set", "ppo.num_steps=16",
+        "--set", "ppo.num_minibatches=2", "--set", "ppo.num_epochs=1",
+        "--set", "eval_interval=0", "--set", "ppo.compile=false",
+    ]  # fmt: skip
+    for extra in ([], ["--overwrite"], ["--summary-only"]):
+        assert main([*argv, "--out", str(mine), *extra]) == 2
+        err = capsys.readouterr().err
+        assert err.count("\n") == 1 and str(mine) in err and "Traceback" not in err, err
+        assert tree(mine) == before and sorted(p.name for p in mine.iterdir()) == sorted(before)
+
+    # a sweep's own directory: --overwrite deletes what the sweep wrote, and only if that is all
+    out = tmp_path / "sweep"
+    sweep.prepare_out_dir(out)
+    settings = sweep.reproduce_settings(sweep.Setting("default", ()), ["mlp"], 1, 32, [])
+    plan.prepare_out_dir(out / "default", settings, overwrite=False)
+    plan.write_settings_file(out / "default", settings, "cpg-actor sweep", {})
+    (out / "default" / "logs").mkdir()
+    (out / "default" / "logs" / "mlp_seed0.log").write_text("log")
+    (out / "sensitivity.md").write_text("summary")
+    (out / "default" / "notes.txt").write_text("mine")
+    assert main([*argv, "--out", str(out), "--overwrite"]) == 2
+    assert "did not write (default/notes.txt)" in capsys.readouterr().err
+    assert (out / "sensitivity.md").is_file() and (out / "default" / "notes.txt").is_file()
+    (out / "default" / "notes.txt").unlink()
+    sweep.prepare_out_dir(out, overwrite=True)
+    assert [p.name for p in out.iterdir()] == [MARKER]

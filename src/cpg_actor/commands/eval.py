@@ -12,19 +12,22 @@ own env, drawn by the env's ``render_frame``.
 from __future__ import annotations
 
 import argparse
-import os
 from pathlib import Path
 
 import numpy as np
 
+from cpg_actor.files import atomic_write
 from cpg_actor.plots import GAIT_WINDOW, draw_gait_diagram, save_figure
 from cpg_actor.robots.registry import all_metrics, all_simulators, get_robot
 
 HELP = "evaluate a trained run deterministically; save per-step traces, figures (and a video)"
-# the figures drawn where the traces have what they need (the quadruped's), next to the traces
+# the figures drawn next to the traces: for every run, and where the traces have what they
+# need (the quadruped's); in a folder the user names, kept unless --overwrite, as the traces
+CURVES_FIGURE = "training_curves.png"
+TRACES_FIGURE = "traces.png"
 GAIT_FIGURE = "gait_diagram.png"
 SPEED_FIGURE = "forward_speed.png"
-FIGURES = (GAIT_FIGURE, SPEED_FIGURE)  # kept unless --overwrite, as the traces
+FIGURES = (CURVES_FIGURE, TRACES_FIGURE, GAIT_FIGURE, SPEED_FIGURE)
 SPEED_SMOOTHING = 0.5  # s: the running mean drawn over the measured forward speed
 
 
@@ -120,22 +123,15 @@ def run(args: argparse.Namespace) -> int:
         return 0
     traces = evaluate_policy(policy, config, args.episodes, seed=args.seed)
 
-    output.parent.mkdir(parents=True, exist_ok=True)
-    tmp = output.with_name(f".{output.stem}.tmp{os.getpid()}.npz")
-    try:  # written next to it, then renamed: an existing file is replaced whole or not at all
-        np.savez(tmp, **traces)
-        os.replace(tmp, output)
-    finally:
-        tmp.unlink(missing_ok=True)
+    atomic_write(output, lambda f: np.savez(f, **traces))  # replaced whole or not at all
     for line in episode_lines(traces):
         print(line)
     print(f"traces in {output}")
     title = f"{run_dir.name}: {config.agent} on the {config.robot}"
     figures = plot_training_curves(
-        run_dir / "metrics.jsonl", output.parent / "training_curves.png", traces["metric_names"],
-        title,
-    )  # fmt: skip
-    figures += plot_traces(traces, output.parent / "traces.png", title)
+        run_dir / "metrics.jsonl", output.parent / CURVES_FIGURE, traces["metric_names"], title
+    )
+    figures += plot_traces(traces, output.parent / TRACES_FIGURE, title)
     figures += plot_gait(traces, output.parent / GAIT_FIGURE)  # [] where the env has no feet
     figures += plot_speed(traces, output.parent / SPEED_FIGURE)
     for figure in figures:

@@ -45,6 +45,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="train nothing: write the summary from the runs in OUT as they are (unfinished "
         "runs are scored at the step they reached, which the table shows)",
     )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="start OUT over: delete what an earlier sweep wrote there (only in a directory "
+        "`cpg-actor sweep` made, holding nothing else)",
+    )
     parser.add_argument("--no-progress", action="store_true", help="no live table")
     parser.add_argument(
         "--progress-interval", type=float, default=30.0, help="seconds between progress blocks"
@@ -75,11 +81,12 @@ def run(args: argparse.Namespace) -> int:
         if sys.argv[1:2] == ["sweep"]
         else "cpg-actor sweep"
     )
+    if args.summary_only and args.overwrite:
+        raise ValueError("--summary-only and --overwrite exclude each other")
+    sweep.prepare_out_dir(out, args.overwrite, args.summary_only)  # before anything is written
     tasks = []
     if args.summary_only:
         plans = []
-        if not out.is_dir():
-            raise FileNotFoundError(f"{out} does not exist; nothing to summarise")
     for setting, reproduction, setting_tasks in plans:
         plan.prepare_out_dir(out / setting.label, reproduction, overwrite=False)
         plan.write_settings_file(

@@ -22,6 +22,8 @@ from cpg_actor.files import (
     check_overwritable,
     check_run_dir_length,
     clear_project_dir,
+    marker_kind,
+    refuse_link,
     remove_stale_temporaries,
     write_marker,
 )
@@ -138,8 +140,12 @@ def build_config(args: argparse.Namespace) -> TrainConfig:
 
 
 def _has_content(run_dir: Path) -> bool:
-    """``run_dir`` holds something besides its lock file and marker."""
-    return run_dir.is_dir() and any(p.name not in (LOCK_NAME, MARKER) for p in run_dir.iterdir())
+    """``run_dir`` holds something: anything but its run marker and lock file (a start
+    stopped before its first write), and those too in a folder without the marker."""
+    if not run_dir.is_dir():
+        return False
+    ours = (MARKER, LOCK_NAME) if marker_kind(run_dir) == RUN else ()
+    return any(p.name not in ours or p.is_symlink() for p in run_dir.iterdir())
 
 
 def check_run_dir_path(run_dir: Path) -> None:
@@ -237,6 +243,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
                 f"{run_dir / 'checkpoints'} holds no checkpoint (last.pt, iter_*.pt); "
                 "nothing to resume"
             )
+        refuse_link(run_dir / "metrics.jsonl")  # appended to: refused before anything is written
         _lock(run_dir, locks)
         remove_stale_temporaries(run_dir)  # of writes a killed run left unfinished
         checkpoint, config = _resume_config(run_dir)
@@ -263,7 +270,11 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
                 f"({runner.global_step:,} steps); pass a larger --total-steps to continue"
             )
         config.save(config_path)
-        _truncate_metrics(run_dir / "metrics.jsonl", runner.iteration)
+        try:
+            _truncate_metrics(run_dir / "metrics.jsonl", runner.iteration)
+        except ValueError:
+            runner.close()
+            raise
         print(f"resuming {run_dir} at iteration {runner.iteration} ({runner.global_step:,} steps)")
         print(_logs_text(run_dir))
     else:
@@ -279,9 +290,11 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
             check_overwritable(run_dir, RUN)
         runner = _runner(config, run_dir, args)
         try:
+            if not _has_content(run_dir):  # marked first: its lock file is then its own
+                run_dir.mkdir(parents=True, exist_ok=True)
+                write_marker(run_dir, RUN)
             _lock(run_dir, locks)  # before --overwrite deletes anything
             prepare_run_dir(run_dir, args.overwrite)  # checked again, under the lock
-            write_marker(run_dir, RUN)
         except BaseException:
             runner.close()
             raise
@@ -440,12 +453,27 @@ def _resume_config(run_dir: Path) -> tuple[Path, TrainConfig]:
 
 
 def _truncate_metrics(path: Path, iteration: int) -> None:
-    """Drop metric rows logged after the checkpoint a run resumes from."""
+    """Drop metric rows logged after the checkpoint a run resumes from, and a last row cut
+    off by a kill while it was written (with a note); a damaged row before it is an error."""
     if not path.is_file():
         return
     import json
 
     lines = [line for line in path.read_text().splitlines() if line.strip()]
-    kept = [line for line in lines if json.loads(line).get("iteration", 0) <= iteration]
+    kept = []
+    for number, line in enumerate(lines, 1):
+        try:
+            row = json.loads(line)
+        except ValueError:
+            if number < len(lines):
+                raise ValueError(
+                    f"{path}, line {number}: not a row of metrics (JSON); resuming would "
+                    "append to a damaged log: repair or remove that line"
+                ) from None
+            print(f"cpg-actor train: {path}: its last row is cut off (a run killed while "
+                  "writing it); dropped", file=sys.stderr)  # fmt: skip
+            break
+        if row.get("iteration", 0) <= iteration:
+            kept.append(line)
     if len(kept) != len(lines):
         atomic_write_text("".join(line + "\n" for line in kept), path)

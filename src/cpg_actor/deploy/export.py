@@ -52,7 +52,7 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
-from cpg_actor.files import naming, temporary_path
+from cpg_actor.files import naming, new_temporary
 from cpg_actor.training.policy import Policy
 
 FORMATS = ("torchscript", "onnx")
@@ -261,7 +261,7 @@ def export_policy(
     obs_dim = int(policy.normalizer.mean.shape[0])
     example = (torch.zeros(batch, obs_dim), torch.as_tensor(initial_state(policy, batch)))
     path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = {target: temporary_path(target) for target in (path, *sidecars.values())}
+    temporary = {target: new_temporary(target) for target in (path, *sidecars.values())}
     try:
         with torch.no_grad(), quiet_export(), naming(path):
             if fmt == "torchscript":

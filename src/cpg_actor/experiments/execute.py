@@ -35,7 +35,14 @@ from pathlib import Path
 from typing import Any
 
 from cpg_actor.experiments.plan import RunTask
-from cpg_actor.files import LOCK, RUN, clear_project_dir
+from cpg_actor.files import (
+    LOCK,
+    RUN,
+    atomic_write_text,
+    clear_project_dir,
+    open_own,
+    refuse_link,
+)
 from cpg_actor.machine import git_commit
 from cpg_actor.training.run_lock import LOCK_NAME
 
@@ -60,7 +67,7 @@ def _cli(args: list[str], log_path: Path) -> int:
         return 130
     log_path.parent.mkdir(parents=True, exist_ok=True)
     command = [sys.executable, "-m", "cpg_actor.cli", *args]
-    with open(log_path, "a") as log:
+    with open_own(log_path, "a") as log:
         log.write(f"$ cpg-actor {' '.join(args)}\n")
         log.flush()
         return subprocess.call(
@@ -178,7 +185,7 @@ def run_one(
     }
     if node is not None:
         marker["node"] = node
-    (run_dir / MARKER).write_text(json.dumps(marker, indent=2) + "\n")
+    atomic_write_text(json.dumps(marker, indent=2) + "\n", run_dir / MARKER)
     report(task.name, "done")
     return {**result, "status": "done", "action": action}
 
@@ -215,7 +222,7 @@ def evaluate_stages(task: RunTask, log: Path) -> list[dict[str, Any]]:
             if code != 0:
                 raise RuntimeError(f"cpg-actor eval exited with {code}; see {log}")
         stages.append(entry)
-        (run_dir / "eval" / STAGES_FILE).write_text(json.dumps(stages, indent=2) + "\n")
+        atomic_write_text(json.dumps(stages, indent=2) + "\n", run_dir / "eval" / STAGES_FILE)
     return stages
 
 
@@ -502,15 +509,40 @@ def pack_run(run_dir: Path, log_path: Path) -> bytes | None:
     buffer = io.BytesIO()
     with tarfile.open(fileobj=buffer, mode="w:gz", compresslevel=1) as tar:
         if run_dir.is_dir():
-            tar.add(run_dir, "run", filter=lambda m: None if m.name.endswith(LOCK_NAME) else m)
+            tar.add(run_dir, "run", filter=lambda m: None if m.name == f"run/{LOCK_NAME}" else m)
         if log_path.is_file():
             tar.add(log_path, RETURNED_LOG)
     return buffer.getvalue()
 
 
-def unpack_run(data: bytes, run_dir: Path, log_path: Path) -> None:
-    """Replace ``run_dir`` and ``log_path`` by what :func:`pack_run` packed (the run
-    directory is swapped in whole, so that nothing of an older copy is left in it)."""
+def _stamp(path: Path) -> tuple[int, int] | None:
+    """``(size, mtime_ns)`` of ``path`` (a link's own), None if there is nothing there."""
+    try:
+        stat = path.lstat()
+    except FileNotFoundError:
+        return None
+    return stat.st_size, stat.st_mtime_ns
+
+
+def run_files(run_dir: Path) -> dict[str, tuple[int, int] | None]:
+    """``{relative path: (size, mtime_ns)}`` of the files :func:`pack_run` packs from
+    ``run_dir`` (links listed, not followed)."""
+    found = {}
+    for folder, _, names in os.walk(run_dir):
+        for name in names:
+            relative = (Path(folder) / name).relative_to(run_dir).as_posix()
+            if relative != LOCK_NAME:
+                found[relative] = _stamp(Path(folder) / name)
+    return found
+
+
+def unpack_run(
+    data: bytes, run_dir: Path, log_path: Path, sent: dict[str, Any] | None = None
+) -> None:
+    """Merge what :func:`pack_run` packed into ``run_dir`` and ``log_path``: each of its files
+    replaces its namesake (a rename); a file of ``sent`` (:func:`run_files` of what was packed
+    for the run) that the run removed is removed if unchanged since; any other file (one added
+    meanwhile) is kept. Folders that are links are refused, never written through."""
     run_dir, log_path = Path(run_dir), Path(log_path)
     run_dir.parent.mkdir(parents=True, exist_ok=True)
     incoming = Path(tempfile.mkdtemp(prefix=f".{run_dir.name}.incoming-", dir=run_dir.parent))
@@ -520,10 +552,20 @@ def unpack_run(data: bytes, run_dir: Path, log_path: Path) -> None:
                 tar.extractall(incoming, filter="data")
             else:
                 tar.extractall(incoming)
-        if (incoming / "run").is_dir():
-            if run_dir.exists():
-                shutil.rmtree(run_dir)
-            (incoming / "run").rename(run_dir)
+        returned = incoming / "run"
+        received = run_files(returned) if returned.is_dir() else {}
+        for relative in received:
+            target = run_dir / relative
+            for folder in (target.parent, *target.parent.parents):
+                refuse_link(folder)
+                if folder == run_dir:
+                    break
+            target.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(returned / relative, target)
+        for relative, stamp in (sent or {}).items():
+            target = run_dir / relative
+            if relative not in received and stamp is not None and _stamp(target) == stamp:
+                target.unlink()  # the run removed it (a checkpoint of an earlier attempt)
         if (incoming / RETURNED_LOG).is_file():
             log_path.parent.mkdir(parents=True, exist_ok=True)
             shutil.move(incoming / RETURNED_LOG, log_path)
@@ -656,6 +698,7 @@ def run_ray(
         remote = ray.remote(**options)(run_one_on_ray)
         collected: list[dict[str, Any]] = []
         pending = {}
+        sent: dict[str, dict[str, Any]] = {}  # what each returned run started from
         for task in tasks:
             if run_is_finished(task):
                 progress.set(task.name, "skipped")
@@ -666,6 +709,7 @@ def run_ray(
                 continue
             files = None
             if results != "shared":
+                sent[task.name] = run_files(Path(task.run_dir))
                 files = pack_run(Path(task.run_dir), Path(task.log_path))
             pending[remote.remote(_absolute(task), results, probe, files)] = task
             progress.set(task.name, "submitted")
@@ -679,7 +723,8 @@ def run_ray(
                         result = ray.get(ref)
                         files = result.pop("files", None)
                         if files is not None:
-                            unpack_run(files, Path(task.run_dir), Path(task.log_path))
+                            unpack_run(files, Path(task.run_dir), Path(task.log_path),
+                                       sent.get(task.name))  # fmt: skip
                     except Exception as error:  # the task raised, died RAY_RETRIES + 1 times
                         result = _failed(task, _one_line(error))
                     progress.set(task.name, result["status"])

@@ -35,12 +35,10 @@ def _plt():
 
 
 def _save(fig, directory: Path, name: str) -> list[Path]:
-    directory.mkdir(parents=True, exist_ok=True)
-    paths = []
-    for ext in FORMATS:
-        path = directory / f"{name}.{ext}"
-        fig.savefig(path, dpi=130 if ext == "png" else None)
-        paths.append(path)
+    from cpg_actor.plots import save_figure
+
+    paths = [save_figure(fig, directory / f"{name}.{ext}", dpi=130 if ext == "png" else None)
+             for ext in FORMATS]  # fmt: skip
     _plt().close(fig)
     return paths
 

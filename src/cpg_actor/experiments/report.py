@@ -25,6 +25,7 @@ from cpg_actor.experiments.results import (
     trace_joint_limits,
 )
 from cpg_actor.experiments.transfer import load_transfer, transfer_lines
+from cpg_actor.files import atomic_write_text
 from cpg_actor.machine import cpu_model, git_commit
 from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
 from cpg_actor.robots.hopper.reward import REWARD_TERMS
@@ -609,7 +610,7 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
     env = environment()
     summary["environment"] = env
     summary["notes"] = notes
-    (out / "summary.json").write_text(json.dumps(summary, indent=2, default=str) + "\n")
+    atomic_write_text(json.dumps(summary, indent=2, default=str) + "\n", out / "summary.json")
 
     lines = [
         "# CPG-Actor reproduction report",
@@ -851,5 +852,5 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
     if notes:
         lines += ["## Notes", ""] + [f"* {note}" for note in notes] + [""]
     path = out / "report.md"
-    path.write_text("\n".join(lines))
+    atomic_write_text("\n".join(lines), path)
     return path

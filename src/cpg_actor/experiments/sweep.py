@@ -6,7 +6,9 @@ changed (``--vary KEY=V1,V2`` or ``--vary KEY1,KEY2=A1:A2,B1:B2``). A setting is
 evaluated once at the end; all runs of all settings share one pool of workers. The summary
 (``OUT/sensitivity.md``, ``OUT/sensitivity.json``, ``OUT/sensitivity.png``) is made from the
 deterministic evaluations logged during training (``eval/return`` and ``eval/`` the robot's
-headline metric, ``Robot.headline_metric``: the hopper's ``hop_height``).
+headline metric, ``Robot.headline_metric``: the hopper's ``hop_height``). ``OUT`` carries the
+project's marker (``cpg_actor.files``): a folder without it is never written in, and
+``--overwrite`` deletes there only what the sweep wrote.
 """
 
 from __future__ import annotations
@@ -21,6 +23,14 @@ import numpy as np
 
 from cpg_actor.experiments import plan
 from cpg_actor.experiments.results import read_config, run_robot
+from cpg_actor.files import (
+    MARKER,
+    SWEEP,
+    atomic_write_text,
+    clear_project_dir,
+    marker_kind,
+    write_marker,
+)
 from cpg_actor.robots.registry import all_metrics
 
 FINAL_EVALS = 3  # the score of a run: the mean of its last FINAL_EVALS evaluations
@@ -65,6 +75,28 @@ def build_settings(varies: list[str]) -> list[Setting]:
     if len(set(labels)) != len(labels):
         raise ValueError(f"two settings have the same label: {labels}")
     return settings
+
+
+def prepare_out_dir(out: Path, overwrite: bool = False, summary_only: bool = False) -> None:
+    """Check ``OUT`` before anything is written there: an existing, non-empty one must be a
+    sweep's (carry its marker), else it is refused whole; ``overwrite`` clears it first, only
+    if it holds nothing but what the sweep wrote (:func:`cpg_actor.files.clear_project_dir`).
+    A new one is made and marked; ``summary_only`` needs a sweep's."""
+    if out.exists() and not out.is_dir():
+        raise NotADirectoryError(f"--out {out} is a file, not a directory")
+    if not (out.is_dir() and any(out.iterdir())):
+        if summary_only:
+            raise FileNotFoundError(f"{out} does not exist or is empty; nothing to summarise")
+        out.mkdir(parents=True, exist_ok=True)
+        write_marker(out, SWEEP)
+    elif overwrite:
+        clear_project_dir(out, SWEEP, keep=(MARKER,))
+    elif marker_kind(out) != SWEEP:
+        raise FileExistsError(
+            f"--out {out} is not empty and was not made by `cpg-actor sweep` (no {MARKER}; "
+            "a sweep made before cpg-actor marked its directories has none either); nothing "
+            "in it is replaced: choose another --out"
+        )
 
 
 def reproduce_settings(
@@ -141,7 +173,7 @@ def _mean_std(values: list[float], digits: int) -> str:
 
 def write_summary(out: Path, summary: dict[str, Any], command: str, seeds: int) -> list[Path]:
     """``sensitivity.json``, ``sensitivity.md`` (table) and ``sensitivity.png`` (curves)."""
-    (out / "sensitivity.json").write_text(json.dumps(summary, indent=1) + "\n")
+    atomic_write_text(json.dumps(summary, indent=1) + "\n", out / "sensitivity.json")
     labels = list(summary["settings"])
     variants = list(next(iter(summary["settings"].values()))["variants"])
     metric = summary.get("metric", "hop_height")
@@ -174,21 +206,21 @@ def write_summary(out: Path, summary: dict[str, Any], command: str, seeds: int) 
                 f"{min(reached) / 1000:.0f}k",
             ]
         lines.append(f"| `{label}` | " + " | ".join(cells) + " |")
-    (out / "sensitivity.md").write_text("\n".join(lines) + "\n")
+    atomic_write_text("\n".join(lines) + "\n", out / "sensitivity.md")
     figure = out / "sensitivity.png"
     _plot(summary, figure)
     return [out / "sensitivity.md", out / "sensitivity.json", figure]
 
 
 def _plot(summary: dict[str, Any], path: Path) -> None:
-    import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from cpg_actor.plots import save_figure
 
     labels = list(summary["settings"])
     variants = list(next(iter(summary["settings"].values()))["variants"])
-    fig, axes = plt.subplots(1, len(variants), figsize=(6 * len(variants), 4), squeeze=False)
+    fig = Figure(figsize=(6 * len(variants), 4))
+    axes = fig.subplots(1, len(variants), squeeze=False)
     for ax, variant in zip(axes[0], variants, strict=True):
         for i, label in enumerate(labels):
             curves = summary["settings"][label]["variants"][variant]["curves"]
@@ -207,5 +239,4 @@ def _plot(summary: dict[str, Any], path: Path) -> None:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)

@@ -14,7 +14,9 @@ import os
 import socket
 from pathlib import Path
 
-LOCK_NAME = ".lock"
+from cpg_actor.files import LOCK, open_own
+
+LOCK_NAME = LOCK
 
 
 class RunInUseError(FileExistsError):
@@ -31,7 +33,7 @@ class RunLock:
         import fcntl
 
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        handle = open(self.path, "a+")
+        handle = open_own(self.path, "a+")  # a link there is refused, never followed
         try:
             fcntl.flock(handle.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:

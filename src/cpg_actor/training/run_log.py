@@ -14,7 +14,7 @@ from pathlib import Path
 
 from torch import Tensor
 
-from cpg_actor.files import naming
+from cpg_actor.files import naming, open_own
 
 
 class RunLog:
@@ -44,7 +44,7 @@ class RunLog:
         record = {"iteration": iteration, "global_step": global_step}
         record.update({k: (None if not math.isfinite(v) else v) for k, v in row.items()})
         path = self.run_dir / "metrics.jsonl"
-        with naming(path), open(path, "a") as f:
+        with naming(path), open_own(path, "a") as f:  # a link there is refused, not followed
             f.write(json.dumps(record) + "\n")
         if self.writer is not None:
             for key, value in row.items():

@@ -138,7 +138,7 @@ def test_eval_writes_the_gait_diagram_and_speed_figures_and_keeps_them(anymal_ru
     before = {name: (eval_dir / name).read_bytes() for name in FIGURES}
     other = eval_dir / "other.npz"
     assert main(["eval", str(anymal_run), "--episodes", "1", "--output", str(other)]) == 2
-    assert "gait_diagram.png exists; pass --overwrite" in capsys.readouterr().err
+    assert "training_curves.png exists; pass --overwrite" in capsys.readouterr().err
     assert not other.exists()
     assert {name: (eval_dir / name).read_bytes() for name in FIGURES} == before
     args = ["eval", str(anymal_run), "--episodes", "1", "--output", str(other), "--overwrite"]
