@@ -60,9 +60,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--preset",
         default=None,
         choices=sorted(PRESETS),
-        help="starting config values: paper (OpenAI Baselines' ppo2 MuJoCo settings, the "
-        "default), throughput (fewer, larger gradient steps; see docs/training.md) or gpu "
-        "(4,096 MJX envs on the GPU; docs/gpu.md)",
+        help="the recipe, the starting config values: paper (OpenAI Baselines' ppo2 MuJoCo "
+        "settings), throughput (fewer, larger gradient steps; see docs/training.md) or gpu "
+        "(4,096 MJX envs on the GPU; docs/gpu.md); default: the robot's (the hopper's paper, "
+        "the quadrupeds' throughput, with each agent's tuned settings on it)",
     )
     parser.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
     parser.add_argument(

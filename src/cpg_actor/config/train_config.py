@@ -12,6 +12,7 @@ import re
 import sys
 import types
 import typing
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -111,12 +112,9 @@ class TrainConfig:
         from cpg_actor.agents import get_agent_spec
 
         get_agent_spec(self.agent)
-        from cpg_actor.config.presets import PRESETS
+        from cpg_actor.config.presets import check_preset
 
-        if self.preset not in PRESETS:
-            raise ValueError(
-                f"unknown preset {self.preset!r}; available: {', '.join(sorted(PRESETS))}"
-            )
+        check_preset(self.preset)
         if (
             isinstance(self.eval_interval, bool)
             or not isinstance(self.eval_interval, int)
@@ -224,10 +222,11 @@ def compose_config(
 ) -> TrainConfig:
     """The one place a run's config is put together, in this order (later wins): the
     defaults, the agent's defaults on the robot (its tuned settings there,
-    :attr:`cpg_actor.robots.plugin.Robot.agent_defaults`), the preset (``preset``, else the config
-    file's, else ``paper``), the YAML ``config_file``, ``values`` (a nested mapping: the
-    command-line flags), then each ``KEY=VALUE`` of ``overrides`` (``--set``). Validated; a
-    clear ValueError (or FileNotFoundError) names what is wrong."""
+    :attr:`cpg_actor.robots.plugin.Robot.agent_defaults`), the recipe (``preset``, else the
+    config file's, else the robot's, :attr:`~cpg_actor.robots.plugin.Robot.recipe`), the YAML
+    ``config_file``, ``values`` (a nested mapping: the command-line flags), then each
+    ``KEY=VALUE`` of ``overrides`` (``--set``). Validated; a clear ValueError (or
+    FileNotFoundError) names what is wrong."""
     from cpg_actor.agents import get_agent_spec
     from cpg_actor.config.presets import preset_values
 
@@ -241,26 +240,26 @@ def compose_config(
         if not path.is_file():
             raise FileNotFoundError(f"config file {path} does not exist")
         file_data = read_config_file(path)
-    preset = preset or file_data.get("preset") or "paper"
-    overrides = [parse_override(text) for text in overrides]
+    chosen = preset or file_data.get("preset")
+    given = [dict(values or {}), *(parse_override(text) for text in overrides)]
 
-    def compose(agent_defaults: dict[str, Any]) -> TrainConfig:
+    def compose(agent_defaults: Mapping[str, Any], recipe: str) -> TrainConfig:
         config = TrainConfig()
-        apply_dict(config, agent_defaults, prefix="")
-        apply_dict(config, preset_values(preset), prefix="")
+        apply_dict(config, dict(agent_defaults), prefix="")
+        apply_dict(config, preset_values(recipe), prefix="")
         apply_dict(config, file_data, prefix="")
-        config.preset = preset
-        apply_dict(config, dict(values or {}), prefix="")
-        for override in overrides:
-            apply_dict(config, override, prefix="")
+        config.preset = recipe
+        for layer in given:
+            apply_dict(config, layer, prefix="")
         return config
 
-    config = compose({})  # which agent and robot: the agent's defaults on the robot come first
+    # which agent and robot (no recipe names one but the old "anymal"); then the robot's recipe,
+    # unless one is named, and its defaults for the agent
+    config = compose({}, chosen or TrainConfig.preset)
     get_agent_spec(config.agent)  # an unknown agent: its ValueError now
     robot = ROBOTS.get(config.robot)  # an unknown robot: validate() says so
-    defaults = robot.agent_defaults.get(config.agent) if robot is not None else None
-    if defaults:
-        config = compose(defaults)
+    if robot is not None:
+        config = compose(robot.agent_defaults.get(config.agent, {}), chosen or robot.recipe)
     config.validate()
     return config
 

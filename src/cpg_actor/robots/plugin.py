@@ -95,9 +95,12 @@ class Robot:
     # its env config's ``sim`` field names the run's
     simulators: tuple[str, ...] = ("mujoco",)
     # the agents' tuned settings on it, by agent name: config values (a nested mapping, as a
-    # preset's) a run of that agent starts from unless its preset, config file or command line
+    # recipe's) a run of that agent starts from unless its recipe, config file or command line
     # say otherwise (cpg_actor.config.compose_config)
     agent_defaults: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    # the recipe (cpg_actor.config.presets.PRESETS) a run on it follows when neither
+    # ``--preset`` nor its config file names one: with ``agent_defaults``, its tuned settings
+    recipe: str = "paper"
 
     @property
     def episode_steps(self) -> int:

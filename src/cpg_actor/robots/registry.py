@@ -24,6 +24,17 @@ ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (HOPPER, ANYMAL, GO1)
 DEFAULT_ROBOT = HOPPER.name
 
 
+def register_robot(robot: Robot) -> Robot:
+    """Add ``robot`` to :data:`ROBOTS` (``--robot``, ``TrainConfig.robot``) and register its
+    Gymnasium ids; ValueError if a robot of its name is registered already. A robot made
+    outside the package registers on import of its module, before the run is built."""
+    if robot.name in ROBOTS:
+        raise ValueError(f"a robot named {robot.name!r} is already registered")
+    ROBOTS[robot.name] = robot
+    _register_gym_ids(robot)
+    return robot
+
+
 def get_robot(name: str) -> Robot:
     """The robot called ``name``; ValueError if there is none."""
     if name not in ROBOTS:
@@ -94,13 +105,17 @@ def register() -> None:
     ``max_episode_steps`` says when, and a longer episode needs both, e.g.
     ``gym.make(ENV_ID, episode_steps=1000, max_episode_steps=1000)``."""
     for robot in ROBOTS.values():
-        for gym_id in robot.gym_ids:
-            if gym_id.id in gymnasium.registry:
-                continue
-            gymnasium.register(
-                id=gym_id.id,
-                entry_point=gym_id.entry_point,
-                vector_entry_point=gym_id.vector_entry_point,
-                kwargs=dict(gym_id.kwargs),
-                max_episode_steps=robot.episode_steps,
-            )
+        _register_gym_ids(robot)
+
+
+def _register_gym_ids(robot: Robot) -> None:
+    for gym_id in robot.gym_ids:
+        if gym_id.id in gymnasium.registry:
+            continue
+        gymnasium.register(
+            id=gym_id.id,
+            entry_point=gym_id.entry_point,
+            vector_entry_point=gym_id.vector_entry_point,
+            kwargs=dict(gym_id.kwargs),
+            max_episode_steps=robot.episode_steps,
+        )
