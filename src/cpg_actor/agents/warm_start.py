@@ -11,12 +11,20 @@ normalised inputs it will see when PPO starts.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import torch
 
 from cpg_actor.agents.base import Agent
-from cpg_actor.ppo.normalizer import RunningNormalizer
+
+
+class Normalizer(Protocol):
+    """The observation normaliser the warm start seeds (PPO's ``RunningNormalizer``)."""
+
+    def update(self, x: torch.Tensor) -> None: ...
+
+    def __call__(self, x: torch.Tensor) -> torch.Tensor: ...
 
 
 @dataclass
@@ -68,7 +76,7 @@ def executed(actions: np.ndarray, noise: float, rng: np.random.Generator) -> np.
 
 def warm_start(
     agent: Agent,
-    normalizer: RunningNormalizer | None,
+    normalizer: Normalizer | None,
     env,
     target_action: np.ndarray,
     config: WarmStartConfig,
@@ -91,7 +99,7 @@ def warm_start(
 
 def fit_actor(
     agent: Agent,
-    normalizer: RunningNormalizer | None,
+    normalizer: Normalizer | None,
     observations: torch.Tensor,
     target: torch.Tensor,
     config: WarmStartConfig,

@@ -24,11 +24,11 @@ from cpg_actor.experiments.results import (
     sent_velocity,
     trace_joint_limits,
 )
+from cpg_actor.experiments.robustness_report import report_lines as robustness_lines
 from cpg_actor.experiments.transfer import load_transfer, transfer_lines
 from cpg_actor.machine import cpu_model, git_commit
 from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
 from cpg_actor.robots.hopper.reward import REWARD_TERMS
-from cpg_actor.robustness.summary import report_lines as robustness_lines
 
 PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
 PAPER_STAGE_STEPS = (1_000_000, 20_000_000, 60_000_000)
