@@ -118,3 +118,13 @@ def test_the_library_never_imports_the_command_line():
             continue
         names = imported(ast.parse(path.read_text(encoding="utf-8")))
         assert not {n for n in names if n.split(".")[0] in ("cli", "commands")}, module
+
+
+def test_the_agents_never_look_a_robot_up():
+    """A run resolves its robot once, where it is built (``TrainConfig.robot``), and hands the
+    entry down: the agents and PPO never import the registry to find one again."""
+    for path in PACKAGE.rglob("*.py"):
+        module = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
+        if module.split(".")[0] in ("agents", "ppo"):
+            names = imported(ast.parse(path.read_text(encoding="utf-8")))
+            assert "robots.registry" not in names, module

@@ -199,29 +199,18 @@ def test_train_resume_equals_straight_run_and_eval_writes_traces(tmp_path, capsy
 
 
 def test_nan_loss_exits_with_status_1_and_keeps_the_last_good_checkpoint(tmp_path, capsys):
-    from cpg_actor.agents import AGENTS, AgentSpec, register_agent
-    from cpg_actor.agents.registry import build_mlp
-    from ppo.fake_env import FakeHopperVectorEnv  # tests/ppo; pytest puts tests/ on sys.path
+    from ppo.fake_env import FakeHopperVectorEnv, fake_robot, registered  # tests/ppo
 
     def make_env(num_envs, env_config, num_threads=None):
-        env = FakeHopperVectorEnv(num_envs)
+        env = FakeHopperVectorEnv(num_envs, env_config)
         env.nan_at_step = 2 * 8 + 3  # in the third iteration's rollout
         return env
 
-    register_agent(
-        AgentSpec(
-            "test-nan",
-            "MLP on an env whose rewards turn NaN",
-            build_mlp,
-            make_env,
-        )
-    )
-    try:
+    with registered(fake_robot("test-nan", make_env)):  # an env whose rewards turn NaN
         run_dir = tmp_path / "run"
-        argv = ["train", "--agent", "test-nan", "--run-dir", str(run_dir), "--total-steps", "96"]
+        argv = ["train", "--agent", "mlp", "--robot", "test-nan", "--run-dir", str(run_dir),
+                "--total-steps", "96"]  # fmt: skip
         assert main([*argv, *TINY]) == 1
-    finally:
-        del AGENTS["test-nan"]
     err = capsys.readouterr().err
     assert "training stopped" in err and "non-finite" in err and "last.pt" in err
     assert load_checkpoint(run_dir / "checkpoints" / "last.pt")["iteration"] == 2

@@ -28,6 +28,7 @@ from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.ppo.config import PPOConfig
 from cpg_actor.robots.plugin import Robot
 from cpg_actor.robots.registry import DEFAULT_ROBOT, ROBOTS, get_robot
+from cpg_actor.robots.spec import EnvConfig
 
 # the largest seed: torch takes seeds below 2**64, but seeds pass through int64 tensors and
 # arrays (checkpoints, env seeds), so the accepted range is that of an int64
@@ -40,7 +41,7 @@ def check_seed(seed: Any, name: str = "--seed") -> None:
         raise ValueError(f"{name} must be an integer from 0 to 2**63-1 ({MAX_SEED}), got {seed!r}")
 
 
-def _default_env_config() -> Any:
+def _default_env_config() -> EnvConfig:
     return get_robot(DEFAULT_ROBOT).config_class()
 
 
@@ -97,7 +98,7 @@ class TrainConfig:
     ppo: PPOConfig = field(default_factory=PPOConfig)
     warm_start: WarmStartConfig = field(default_factory=WarmStartConfig)  # cho2019-warm only
     # the robot's env config (its Robot.config_class: HopperConfig, QuadrupedConfig, ...)
-    env: Any = field(default_factory=_default_env_config)
+    env: EnvConfig = field(default_factory=_default_env_config)
     es: ESConfig = field(default_factory=ESConfig)  # open-loop-es only: the CMA-ES search
 
     @property

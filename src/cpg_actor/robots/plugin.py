@@ -121,6 +121,18 @@ class Robot:
         table = getattr(self.config_class, "perturbation_table", None)
         return None if table is None else table()
 
+    def cpg_layout(self, layout: str = "") -> tuple[str, CPGLayout]:
+        """The name and the :class:`CPGLayout` of its CPG layout ``layout`` (empty: its
+        default, the first); ValueError naming its layouts if it has none of that name."""
+        layouts = self.cpg_layouts()
+        name = layout or next(iter(layouts))
+        if name not in layouts:
+            raise ValueError(
+                f"agent_config.cpg_layout {name!r}: robot '{self.name}' has the CPG layouts "
+                f"{', '.join(layouts)}"
+            )
+        return name, layouts[name]
+
     def simulator(self, config: Any) -> str:
         """The simulator an env config of this robot runs on."""
         return str(config.sim) if len(self.simulators) > 1 else self.simulators[0]
