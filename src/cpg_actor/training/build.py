@@ -63,7 +63,7 @@ def make_env(
 
 def build_ppo_run(config: TrainConfig, env: Any = None) -> PPORun:
     """Seed everything, then build the run's parts in a fixed order (the same seed gives the
-    same initial networks). ``env`` replaces the agent spec's env factory (tests)."""
+    same initial networks). ``env`` replaces the robot's envs (tests)."""
     torch.set_num_threads(config.torch_threads)
     device = resolve_device(config.device)
     seed_everything(config.seed)
