@@ -24,6 +24,7 @@ from cpg_actor.config import TrainConfig, apply_dict
 from cpg_actor.host_reads import host_reads
 from cpg_actor.robots.hopper.mjx.dynamics import jax
 from cpg_actor.robots.registry import ROBOTS
+from cpg_actor.training.build import make_env
 from cpg_actor.training.evaluation import evaluate
 from cpg_actor.training.policy import Policy
 from cpg_actor.training.runner import Runner
@@ -49,7 +50,7 @@ def main() -> None:
     else:
         config.env.episode_steps = args.steps
     runner = Runner(config, tensorboard=False)  # its env: the eval env's batch, one compile
-    env = runner.spec.make_env(args.episodes, config.env, 1, config.agent_config)
+    env = make_env(config, runner.robot, args.episodes, 1)
     bounds = runner.policy.action_low, runner.policy.action_high
     policy = Policy(runner.agent, runner.normalizer, *bounds)
     control_dt = float(config.env.control_dt)

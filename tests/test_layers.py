@@ -1,7 +1,8 @@
 """The package's layers: no module imports from a layer above its own (the CLI above the
 experiments, above deployment, above training, above the configuration, above the agents
 and PPO, above the robots' registry, above the robots, above their tasks and shared
-machinery (and the parts they share), above the CPG; small shared utilities at the bottom)."""
+machinery (and the parts they share), above the CPG; small shared utilities at the bottom),
+and the folders of one layer import each other one way only (no cycle)."""
 
 import ast
 from pathlib import Path
@@ -64,6 +65,52 @@ def test_no_module_imports_from_a_layer_above_its_own():
     assert upward == [], "\n".join(upward)
 
 
+def folder_of(name: str) -> str:
+    """The folder a module belongs to, for the cycle check: its entry of ``LAYERS`` (the
+    longest that names it), a robot's own folder under ``robots``."""
+    parts = (name or "__init__").split(".")
+    key = next(".".join(parts[:end]) for end in range(len(parts), 0, -1)
+               if ".".join(parts[:end]) in LAYERS)  # fmt: skip
+    return f"robots.{parts[1]}" if key == "robots" and len(parts) > 1 else key
+
+
+def import_cycles(edges: dict[str, set[str]]) -> list[list[str]]:
+    """The cycles of the directed graph ``edges`` (node -> the nodes it imports), each once,
+    as the list of its nodes from the smallest."""
+    cycles: set[tuple[str, ...]] = set()
+
+    def walk(path: list[str]) -> None:
+        for nxt in sorted(edges.get(path[-1], ())):
+            if nxt == path[0]:
+                cycles.add(tuple(path))
+            elif nxt not in path and nxt > path[0]:  # each cycle found from its smallest node
+                walk([*path, nxt])
+
+    for node in sorted(edges):
+        walk([node])
+    return sorted(list(cycle) for cycle in cycles)
+
+
+def folder_imports() -> dict[str, set[str]]:
+    """Folder -> the other folders its modules import."""
+    edges: dict[str, set[str]] = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        module = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
+        module = module.removesuffix(".__init__").removesuffix("__init__")
+        source = folder_of(module)
+        for name in imported(ast.parse(path.read_text(encoding="utf-8"))):
+            if folder_of(name) != source:
+                edges.setdefault(source, set()).add(folder_of(name))
+    return edges
+
+
+def test_no_two_folders_import_each_other():
+    """Folders of one layer (agents and ppo, experiments and robustness, the robots) import
+    each other one way only; the check finds a cycle through any number of folders."""
+    assert import_cycles(folder_imports()) == []
+    assert import_cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
 def test_the_library_never_imports_the_command_line():
     for path in PACKAGE.rglob("*.py"):
         module = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
@@ -71,3 +118,13 @@ def test_the_library_never_imports_the_command_line():
             continue
         names = imported(ast.parse(path.read_text(encoding="utf-8")))
         assert not {n for n in names if n.split(".")[0] in ("cli", "commands")}, module
+
+
+def test_the_agents_never_look_a_robot_up():
+    """A run resolves its robot once, where it is built (``TrainConfig.robot``), and hands the
+    entry down: the agents and PPO never import the registry to find one again."""
+    for path in PACKAGE.rglob("*.py"):
+        module = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
+        if module.split(".")[0] in ("agents", "ppo"):
+            names = imported(ast.parse(path.read_text(encoding="utf-8")))
+            assert "robots.registry" not in names, module

@@ -10,6 +10,7 @@ import torch
 
 from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig, apply_dict, compose_config, parse_override, parse_steps
+from cpg_actor.robots.registry import ROBOTS
 from cpg_actor.training.checkpoint import load_checkpoint
 
 # tiny runs: 2 envs x 8 steps per iteration, eager (compiling costs seconds per run; the
@@ -198,29 +199,18 @@ def test_train_resume_equals_straight_run_and_eval_writes_traces(tmp_path, capsy
 
 
 def test_nan_loss_exits_with_status_1_and_keeps_the_last_good_checkpoint(tmp_path, capsys):
-    from cpg_actor.agents import AGENTS, AgentSpec, register_agent
-    from cpg_actor.agents.registry import build_mlp
-    from ppo.fake_env import FakeHopperVectorEnv  # tests/ppo; pytest puts tests/ on sys.path
+    from ppo.fake_env import FakeHopperVectorEnv, fake_robot, registered  # tests/ppo
 
     def make_env(num_envs, env_config, num_threads=None):
-        env = FakeHopperVectorEnv(num_envs)
+        env = FakeHopperVectorEnv(num_envs, env_config)
         env.nan_at_step = 2 * 8 + 3  # in the third iteration's rollout
         return env
 
-    register_agent(
-        AgentSpec(
-            "test-nan",
-            "MLP on an env whose rewards turn NaN",
-            build_mlp,
-            make_env,
-        )
-    )
-    try:
+    with registered(fake_robot("test-nan", make_env)):  # an env whose rewards turn NaN
         run_dir = tmp_path / "run"
-        argv = ["train", "--agent", "test-nan", "--run-dir", str(run_dir), "--total-steps", "96"]
+        argv = ["train", "--agent", "mlp", "--robot", "test-nan", "--run-dir", str(run_dir),
+                "--total-steps", "96"]  # fmt: skip
         assert main([*argv, *TINY]) == 1
-    finally:
-        del AGENTS["test-nan"]
     err = capsys.readouterr().err
     assert "training stopped" in err and "non-finite" in err and "last.pt" in err
     assert load_checkpoint(run_dir / "checkpoints" / "last.pt")["iteration"] == 2
@@ -301,7 +291,8 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
     assert (gpu.ppo.lr_schedule, gpu.ppo.cpg_learning_rate) == ("adaptive", 3e-4)
     assert (fast.ppo.lr_schedule, fast.ppo.learning_rate) == ("adaptive", 1e-3)
     assert fast.ppo.cpg_learning_rate == gpu.ppo.cpg_learning_rate  # the CPG outside it too
-    # the quadruped's: the throughput recipe plus the CPG-Actor settings of its results
+    # "anymal", the old name of the quadruped's recipe: the throughput recipe plus the CPG-Actor
+    # settings of its results, as its saved runs have it
     anymal = build_config(parser.parse_args(["--preset", "anymal"]))
     spelled = build_config(parser.parse_args(
         ["--preset", "throughput", "--robot", "anymal", "--set", "agent_config.cpg_layout=leg",
@@ -339,8 +330,34 @@ def test_presets_set_values_under_config_flags_and_set_and_are_recorded(tmp_path
     assert main(["train", "--run-dir", str(run_dir), "--resume", "--preset", "paper"]) == 2
     with pytest.raises(SystemExit):
         parser.parse_args(["--preset", "fastest"])
-    with pytest.raises(ValueError, match="unknown preset 'fastest'; available: anymal, gpu, pap"):
+    with pytest.raises(ValueError, match="unknown preset 'fastest'; the recipes are paper, thr"):
         TrainConfig(preset="fastest").validate()
+
+
+def test_a_robot_alone_trains_with_its_recipe_and_its_agents_tuned_settings():
+    """``--robot NAME`` alone: the robot's recipe (``Robot.recipe``) under each agent's tuned
+    settings on it (``Robot.agent_defaults``), for every robot of the registry; a recipe
+    named on the command line wins over the robot's."""
+    from cpg_actor.commands.train import add_arguments, build_config
+    from cpg_actor.config.presets import PRESETS
+
+    parser = argparse.ArgumentParser()
+    add_arguments(parser)
+    go1 = build_config(parser.parse_args(["--robot", "go1"]))  # the Go1's results' settings
+    assert (go1.preset, go1.num_envs, go1.ppo.lr_schedule) == ("throughput", 256, "adaptive")
+    agent = go1.agent_config
+    assert (agent.cpg_layout, agent.init_std, agent.feedback_noise) == ("leg", 0.1, 0.2)
+    for name, robot in ROBOTS.items():
+        for agent in dict.fromkeys((TrainConfig.agent, "mlp", *robot.agent_defaults)):
+            expected = TrainConfig()
+            for values in (robot.agent_defaults.get(agent, {}), PRESETS[robot.recipe],
+                           {"robot": name, "agent": agent, "preset": robot.recipe}):  # fmt: skip
+                apply_dict(expected, dict(values), prefix="")
+            argv = ["--robot", name, "--agent", agent, "--set", "ppo.compile=false"]
+            expected.ppo.compile = False  # as with no C++ compiler
+            assert build_config(parser.parse_args(argv)).to_dict() == expected.to_dict(), name
+        paper = build_config(parser.parse_args(["--robot", name, "--preset", "paper"]))
+        assert (paper.preset, paper.num_envs) == ("paper", TrainConfig.num_envs)
 
 
 def test_presets_compile_the_loss_unless_no_cpp_compiler_is_found(monkeypatch, capsys):

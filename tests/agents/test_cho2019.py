@@ -13,6 +13,8 @@ from cpg_actor.ppo import PPOConfig
 from cpg_actor.robots.hopper.cho2019 import action_to_parameters
 from cpg_actor.robots.hopper.cho2019_reference import REFERENCE_PARAMETERS
 from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.registry import get_robot
+from cpg_actor.training.build import make_env
 from cpg_actor.training.runner import Runner
 
 
@@ -129,8 +131,7 @@ def test_cho2019_agents_declare_the_cpg_wrapper_around_the_robot_env():
     from cpg_actor.robots.hopper.cho2019 import CPGParameterVectorEnv
     from cpg_actor.robots.hopper.vector import HopperVectorEnv
 
-    spec = get_agent_spec("cho2019")
-    env = spec.make_env(2, HopperConfig(), 1)
+    env = make_env(TrainConfig(agent="cho2019"), get_robot("hopper"), 2, 1)
     try:
         assert isinstance(env, CPGParameterVectorEnv) and isinstance(env.env, HopperVectorEnv)
         assert env.robot == env.env.robot and env.single_action_space.shape == (5,)
@@ -214,8 +215,8 @@ def test_mlp_warm_clones_the_start_gait_and_hops_with_it(tmp_path):
     losses = runner.run_warm_start()
     assert losses[-1] < 0.05 * losses[0]
     cloned = runner.run_evaluation()["eval/hop_height"]
-    env = runner.spec.make_env(2, run.env, 1, run.agent_config)
-    observations, commands = collect_gait(env, run.agent_config, 200, seed=5)
+    env = make_env(run, runner.robot, 2, 1)
+    observations, commands = collect_gait(env, run.agent_config, runner.robot, 200, seed=5)
     assert observations.shape == (400, 8) and commands.shape == (400, 2)
     env.close()
     cpg = Runner(TrainConfig(**{**run.__dict__, "agent": "cpg-actor-open-loop"}), tensorboard=False)

@@ -9,12 +9,14 @@ from cpg_actor.cpg import CPGState
 from cpg_actor.ppo import PPOConfig
 from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.robots.hopper.env import robot_spec
+from cpg_actor.robots.registry import get_robot
 from cpg_actor.training.runner import Runner
 
 # tests/ppo/fake_env.py: pytest puts tests/ on sys.path (tests/ is not a package)
-from ppo.fake_env import FakeConfig, FakeHopperVectorEnv  # noqa: I001
+from ppo.fake_env import FakeConfig, FakeHopperVectorEnv, fake_robot, registered  # noqa: I001
 
 HOPPER = robot_spec(HopperConfig())  # the robot the CPG-Actor is built for
+ROBOT = get_robot("hopper")  # its registry entry: the CPG layouts and the start gait
 
 
 def make_runner(agent="cpg-actor", num_envs=6, num_steps=32, seed=0, **env_kwargs):
@@ -99,7 +101,7 @@ def test_update_changes_cpg_parameters_and_feedback_output_layer():
 
 
 def test_gradient_reaches_cpg_and_feedback_from_one_replayed_step():
-    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER)
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER, ROBOT)
     state = agent.cpg.initial_state(4, amplitude=0.2).as_tensor()
     obs = torch.randn(4, 8)
     log_prob, *_ = agent.evaluate(obs, state, torch.zeros(4, 2))
@@ -110,7 +112,7 @@ def test_gradient_reaches_cpg_and_feedback_from_one_replayed_step():
 
 
 def test_open_loop_agent_has_no_feedback_and_trains_only_cpg_and_log_std():
-    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER, feedback=False)
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER, ROBOT, feedback=False)
     actor_params = {n for n, _ in agent.named_parameters() if not n.startswith("critic")}
     assert actor_params == {"log_std", "cpg.parametrisation.vector"}
     out = agent.actor(torch.randn(3, 8), agent.initial_state(3))
@@ -118,7 +120,7 @@ def test_open_loop_agent_has_no_feedback_and_trains_only_cpg_and_log_std():
 
 
 def test_initial_feedback_is_small_and_mean_starts_at_nominal_pose():
-    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER)
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER, ROBOT)
     out = agent.actor(torch.randn(16, 8), agent.initial_state(16))
     assert out.extras["xi"].abs().max() < 0.5  # rad/s, vs 2 pi nu = 12.6
     state = CPGState.from_tensor(out.next_state)
@@ -144,8 +146,9 @@ def test_unknown_agent_name_lists_the_registered_ones():
         get_agent_spec("cpg-actr")
 
 
-def test_a_new_agent_with_its_own_env_factory_is_one_registry_entry():
-    """How a later baseline (e.g. cho2019 on a wrapped env) plugs in: no runner change."""
+def test_a_new_agent_on_a_new_robot_is_one_registry_entry_each():
+    """How a later baseline plugs in, on a robot of its own (the robot builds the env, the
+    agent is built for it): no runner change."""
     from cpg_actor.agents import AGENTS, AgentSpec, register_agent
     from cpg_actor.agents.registry import env_shapes
 
@@ -157,31 +160,32 @@ def test_a_new_agent_with_its_own_env_factory_is_one_registry_entry():
 
     register_agent(
         AgentSpec(
-            "test-wrapped",
+            "test-agent",
             "MLP on a stand-in env",
-            lambda cfg, env: MLPAgent(*env_shapes(env), cfg, (0.4, -0.8)),
-            make_env,
+            lambda cfg, env, robot: MLPAgent(*env_shapes(env), cfg, (0.4, -0.8)),
         )
     )
     try:
         with pytest.raises(ValueError, match="already registered"):
-            register_agent(AGENTS["test-wrapped"])
-        config = TrainConfig(
-            agent="test-wrapped",
-            num_envs=3,
-            total_steps=3 * 8,
-            ppo=PPOConfig(num_steps=8, num_minibatches=2),
-            env=FakeConfig(),
-        )
-        runner = Runner(config)
-        runner.learn()
+            register_agent(AGENTS["test-agent"])
+        with registered(fake_robot("test-robot", make_env)):
+            config = TrainConfig(
+                agent="test-agent",
+                robot="test-robot",
+                num_envs=3,
+                total_steps=3 * 8,
+                ppo=PPOConfig(num_steps=8, num_minibatches=2),
+                env=FakeConfig(),
+            )
+            runner = Runner(config)
+            runner.learn()
         assert made == [3, 5] and runner.iteration == 1  # training envs, eval envs
     finally:
-        del AGENTS["test-wrapped"]
+        del AGENTS["test-agent"]
 
 
 def test_agents_supply_their_own_scalars_and_histograms():
-    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER)
+    agent = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER, ROBOT)
     scalars = agent.log_scalars()
     assert {"policy/log_std_0", "cpg/nu_HFE", "cpg/rho_KFE", "cpg/a_HFE"} <= set(scalars)
     assert scalars["cpg/phi_HFE_KFE"] == pytest.approx(-scalars["cpg/phi_KFE_HFE"])
@@ -193,7 +197,7 @@ def test_agents_supply_their_own_scalars_and_histograms():
         "feedback/output_weight",
         "feedback/output_bias",
     }
-    open_loop = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER, feedback=False)
+    open_loop = CPGActorAgent(8, [0.9, 0.9], AgentConfig(), HOPPER, ROBOT, feedback=False)
     assert "feedback/output_weight" not in open_loop.log_histograms()
     mlp = MLPAgent(8, [0.9, 0.9], AgentConfig(), nominal_pose=(0.4, -0.8))
     assert set(mlp.log_scalars()) == {"policy/log_std_0", "policy/log_std_1"}
@@ -208,14 +212,16 @@ def test_agents_are_built_from_the_env_robot():
 
     env = FakeHopperVectorEnv(2, FakeConfig(control_dt=0.02))
     assert env.robot.nominal_pose == tuple(description.NOMINAL_POSE) == HOPPER.nominal_pose
-    agent = build_cpg_actor(AgentConfig(), env)
+    agent = build_cpg_actor(AgentConfig(), env, ROBOT)
     assert agent.cpg.dt == 0.02
     assert torch.equal(agent.joint_map.offset, torch.tensor([0.4, -0.8]))
     assert torch.equal(build_mlp(AgentConfig(), env).nominal_pose, torch.tensor([0.4, -0.8]))
-    assert env.robot.name == "fake-hopper"  # its CPG layouts are its spec's, not a name's
+    # its CPG layouts and start gait are the run's robot's, whatever the env's model is called
     env.robot = RobotSpec("a-biped", ("HFE", "KFE"), (0.4, -0.8), (-1, -2), (1, 0), 0.01, ())
-    with pytest.raises(ValueError, match="no robot is registered for the robot model 'a-biped'"):
-        build_cpg_actor(AgentConfig(), env)
+    agent = build_cpg_actor(AgentConfig(start_gait="search"), env, ROBOT)
+    assert agent.cpg.num_oscillators == 2
+    with pytest.raises(ValueError, match="robot 'hopper' has the CPG layouts joint"):
+        build_cpg_actor(AgentConfig(cpg_layout="leg"), env, ROBOT)
     with pytest.raises(ValueError, match=r"traced_observations \['hip'\] are not observed"):
         RobotSpec("x", ("HFE", "KFE"), (0.4, -0.8), (-1, -2), (1, 0), 0.01, ("q",),
                   traced_observations=("hip",))  # fmt: skip

@@ -13,14 +13,16 @@ from cpg_actor.config import compose_config
 from cpg_actor.cpg import CPGState
 from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.robots.hopper.env import robot_spec
+from cpg_actor.robots.registry import get_robot
 
 HOPPER = robot_spec(HopperConfig())
+ROBOT = get_robot("hopper")
 SCALE = [0.9, 0.9]
 
 
 def agent(**fields) -> CPGActorAgent:
     torch.manual_seed(0)
-    return CPGActorAgent(8, SCALE, AgentConfig(**fields), HOPPER)
+    return CPGActorAgent(8, SCALE, AgentConfig(**fields), HOPPER, ROBOT)
 
 
 def test_cpg_exploration_scores_exactly_the_sampled_feedback_and_vector():
@@ -146,7 +148,7 @@ def test_kappa_is_bounded_in_radians_of_amplitude_change():
 
 
 def test_the_packaged_start_gait_is_where_the_cpg_starts(tmp_path):
-    gait = start_parameters("search", robot_spec(HopperConfig()))
+    gait = start_parameters("search", ROBOT)
     a = agent(start_gait="search", output_bound=True)
     values = a.cpg.parametrisation.values()
     torch.testing.assert_close(
@@ -217,7 +219,7 @@ def test_the_k_step_gradient_matches_finite_differences():
     """d/dV of a function of the state after k replayed CPG steps (float64), against central
     differences: the gradient ppo.bptt_steps gives is the true one of the k-step map."""
     torch.manual_seed(0)
-    a = CPGActorAgent(8, SCALE, AgentConfig(), HOPPER).double()
+    a = CPGActorAgent(8, SCALE, AgentConfig(), HOPPER, ROBOT).double()
     obs = torch.randn(6, 3, 8, dtype=torch.float64)
     state0 = a.initial_state(3).double()
     with torch.no_grad():  # a state in mid-gait

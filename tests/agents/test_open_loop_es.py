@@ -16,6 +16,8 @@ from cpg_actor.cli import main
 from cpg_actor.config import TrainConfig, compose_config
 from cpg_actor.deploy import Policy, load_policy
 from cpg_actor.robots.hopper.config import HopperConfig
+from cpg_actor.robots.registry import get_robot
+from cpg_actor.training.build import make_env
 from cpg_actor.training.checkpoint import load_checkpoint
 from cpg_actor.training.es_runner import ESRunner
 from cpg_actor.training.evaluation import evaluate
@@ -163,7 +165,7 @@ def test_candidates_act_as_the_agent_with_their_vector_acts():
         candidates = runner.search.ask()
         seeds = episode_seeds(0, 0, 1)
         rollouts = runner.rollouts.run(torch.as_tensor(candidates, dtype=torch.float32), seeds)
-        env = get_agent_spec("open-loop-es").make_env(1, runner.config.env)
+        env = make_env(runner.config, runner.robot, 1, None)
         try:
             for c in (0, POPSIZE - 1):
                 with torch.no_grad():
@@ -345,9 +347,9 @@ def test_the_gait_file_round_trips_into_an_agent_and_bad_ones_are_clear_errors(t
     # the search's agent settings (on the hopper its V is inside the output bound)
     config.agent_config = TrainConfig.load(run / "config.yaml").agent_config
     config.agent_config.cpg_initial = gait["cpg_initial"]
-    env = get_agent_spec(config.agent).make_env(1, config.env)
+    env = make_env(config, get_robot(config.robot), 1, None)
     try:
-        agent = get_agent_spec(config.agent).build(config.agent_config, env)
+        agent = get_agent_spec(config.agent).build(config.agent_config, env, get_robot("hopper"))
     finally:
         env.close()
     searched = policy.agent.cpg.parametrisation.vector

@@ -19,10 +19,11 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from cpg_actor.agents import get_agent_spec
 from cpg_actor.config import TrainConfig
 from cpg_actor.deploy import load_policy
 from cpg_actor.deploy.export import export_policy
+from cpg_actor.robots.registry import get_robot
+from cpg_actor.training.build import make_env
 from cpg_actor.training.evaluation import evaluate, evaluate_policy
 from tiny import trained_run  # tests/tiny.py
 
@@ -95,7 +96,7 @@ def test_the_example_scores_the_evaluations_return(
     config, policy_path = exported_run(tmp_path / "run", agent, robot, **changes)
     total, steps, ended = run_example(policy_path, SEED)
 
-    env = get_agent_spec(agent).make_env(1, config.env, 1, config.agent_config)
+    env = make_env(config, get_robot(config.robot), 1, 1)
     try:
         same_file = evaluate(OnnxPolicy(policy_path), env, seed=SEED,
                              control_dt=float(config.env.control_dt),

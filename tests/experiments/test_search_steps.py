@@ -7,6 +7,7 @@ import pytest
 
 from cpg_actor.agents.start_gait import search_steps
 from cpg_actor.experiments.plan import ReproduceSettings, build_tasks, resolve_config
+from cpg_actor.robots.registry import get_robot
 from cpg_actor.training.runner import Runner
 from tiny import tiny_config
 
@@ -37,7 +38,7 @@ def test_reproduce_charges_the_search_to_the_agents_that_start_from_its_gait(tmp
         "robot: hopper\nfitness: 500.0\nsteps: 100000\nsteps_searched: 123456\nseed: 100\n"
         "cpg_initial:\n  frequency: [1.5, 1.5]\n  amplitude: [0.5, 0.6]\n  convergence: 20.0\n"
     )
-    assert search_steps(str(gait), "hopper") == 123_456
+    assert search_steps(str(gait), get_robot("hopper")) == 123_456
     settings = ReproduceSettings(
         variants=["cpg-actor", "cho2019-warm", "mlp-warm", "mlp", "cho2019-paper"],
         seeds=1,
@@ -58,6 +59,6 @@ def test_reproduce_charges_the_search_to_the_agents_that_start_from_its_gait(tmp
     settings.count_search_steps = False
     assert resolve_config(settings, "cpg-actor").search_steps == 0
     # the packaged gait's own search
-    packaged = search_steps("search", "hopper")
+    packaged = search_steps("search", get_robot("hopper"))
     settings = ReproduceSettings(["cpg-actor"], 1, 2_000_000, count_search_steps=True)
     assert resolve_config(settings, "cpg-actor").search_steps == packaged

@@ -6,12 +6,16 @@ speed. Episodes end by time limit (truncated) or, at random, by a fall (terminat
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from gymnasium import spaces
 
 from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
+from cpg_actor.robots.plugin import Robot
+from cpg_actor.robots.registry import ROBOTS, register_robot
 from cpg_actor.robots.spec import RobotSpec
 
 
@@ -31,7 +35,7 @@ class FakeHopperVectorEnv:
             np.array([-1.0, -2.5], dtype=np.float32), np.array([1.5, 0.0], dtype=np.float32)
         )
         self.single_observation_space = spaces.Box(-np.inf, np.inf, (8,), np.float32)
-        # the hopper's joints and CPG, so that the hopper's agents build on it
+        # the hopper's joints, so that the hopper's agents build on it
         self.robot = RobotSpec(
             name="fake-hopper",
             joint_names=("HFE", "KFE"),
@@ -40,8 +44,6 @@ class FakeHopperVectorEnv:
             action_high=(1.5, 0.0),
             control_dt=self.config.control_dt,
             observation_names=tuple(f"o{i}" for i in range(8)),
-            cpg_layouts=HOPPER.cpg_layouts,
-            start_gait=HOPPER.start_gait,
         )
         self.rng = np.random.default_rng(0)
         self.nan_at_step: int | None = None  # inject a NaN reward at this global step
@@ -144,3 +146,25 @@ def fake_runner(agent: str = "mlp", **ppo):
     runner = Runner(config, env=FakeHopperVectorEnv(4, config.env), tensorboard=False)
     runner.start_episodes()
     return runner
+
+
+def fake_robot(name: str = "fake-hopper", make: Callable[..., Any] | None = None) -> Robot:
+    """The stand-in env as a robot (``--robot NAME`` once registered): the hopper's entry
+    (its CPG layouts, start gait, metrics) on :class:`FakeHopperVectorEnv`, or on ``make``'s
+    envs (``make(num_envs, config, num_threads)``)."""
+    return replace(HOPPER, name=name, model=name, config_class=FakeConfig,
+                   make=make or FakeHopperVectorEnv, gym_ids=(), simulators=("fake",),
+                   agent_defaults={})  # fmt: skip
+
+
+class registered:
+    """``with registered(robot):`` the robot is in the registry, and only inside."""
+
+    def __init__(self, robot: Robot) -> None:
+        self.robot = robot
+
+    def __enter__(self) -> Robot:
+        return register_robot(self.robot)
+
+    def __exit__(self, *exc: object) -> None:
+        ROBOTS.pop(self.robot.name, None)

@@ -7,7 +7,8 @@ import json
 import pytest
 
 from cpg_actor.experiments import metrics as m
-from cpg_actor.robustness.summary import report_lines, retention_scores, verdicts
+from cpg_actor.experiments.robustness_report import report_lines
+from cpg_actor.robustness.summary import retention_scores, verdicts
 
 
 def run(variant, seed, retentions):

@@ -23,23 +23,32 @@ from cpg_actor.agents.base import Agent, AgentConfig
 from cpg_actor.agents.mlp import MLPAgent
 from cpg_actor.agents.start_gait import hopper_gait_parameters, start_parameters
 from cpg_actor.agents.warm_start import warm_start
-from cpg_actor.robots.spec import RobotSpec
+from cpg_actor.robots.plugin import Robot
 
 
-def cpg_parameter_wrapper(env: Any, agent_config: AgentConfig | None = None):
+def cpg_parameter_wrapper(
+    env: Any, agent_config: AgentConfig | None = None, robot: Robot | None = None
+):
     """The CPG put inside the hopper env: actions become CPG parameters in [-1, 1]. With a
-    start gait (``agent_config.start_gait``), its CPG has the gait's convergence rate and
-    coupling weight, the parameters the actions do not set."""
+    start gait (``agent_config.start_gait``, on the run's robot ``robot``, the hopper's if
+    None), its CPG has the gait's convergence rate and coupling weight, the parameters the
+    actions do not set."""
     from cpg_actor.robots.hopper.cho2019 import CPGParameterVectorEnv
 
     initial = None
     if agent_config is not None and agent_config.start_gait:
-        gait = start_parameters(agent_config.start_gait, env.robot)
+        gait = start_parameters(agent_config.start_gait, robot or _hopper())
         initial = {k: gait[k] for k in ("convergence", "coupling_weight") if k in gait}
     return CPGParameterVectorEnv(env, cpg_initial=initial)
 
 
-def build_cho2019(config: AgentConfig, env: Any) -> Agent:
+def _hopper() -> Robot:
+    from cpg_actor.robots.hopper.plugin import ROBOT
+
+    return ROBOT
+
+
+def build_cho2019(config: AgentConfig, env: Any, robot: Robot | None = None) -> Agent:
     """Actor MLP 64x64 -> Gaussian over the CPG parameter actions (in [-1, 1]), centred at 0."""
     obs_dim = int(env.single_observation_space.shape[0])
     space = env.single_action_space
@@ -47,31 +56,28 @@ def build_cho2019(config: AgentConfig, env: Any) -> Agent:
     return MLPAgent(obs_dim, action_scale, config, nominal_pose=[0.0] * len(action_scale))
 
 
-def reference_action(start_gait: str = "", robot: RobotSpec | None = None) -> np.ndarray:
+def reference_action(start_gait: str = "", robot: Robot | None = None) -> np.ndarray:
     """The warm start's target as an action in [-1, 1]: the reference hopping parameters
     (``cpg-actor cho2019-reference``), or with ``start_gait`` the frequency, amplitude and
     phase bias of that gait (:mod:`cpg_actor.agents.start_gait`), each moved inside the
     action range by 5 % of it if it lies outside (a target on the clip would pull the
-    Gaussian mean onto the edge). ``robot``: the env's (None: the hopper's)."""
+    Gaussian mean onto the edge). ``robot``: the run's (None: the hopper's)."""
     from cpg_actor.robots.hopper.cho2019 import PARAMETER_RANGES, parameters_to_action
     from cpg_actor.robots.hopper.cho2019_reference import REFERENCE_PARAMETERS
-    from cpg_actor.robots.hopper.config import HopperConfig
-    from cpg_actor.robots.hopper.env import robot_spec
 
     parameters = np.asarray(REFERENCE_PARAMETERS, dtype=np.float64)
     if start_gait:
-        robot = robot if robot is not None else robot_spec(HopperConfig())
-        gait = hopper_gait_parameters(start_parameters(start_gait, robot))
+        gait = hopper_gait_parameters(start_parameters(start_gait, robot or _hopper()))
         low, high = PARAMETER_RANGES[:, 0], PARAMETER_RANGES[:, 1]
         margin = 0.05 * (high - low)
         parameters = np.clip(np.asarray(gait), low + margin, high - margin)
     return parameters_to_action(parameters).astype(np.float32)
 
 
-def warm_start_cho2019(agent: Agent, normalizer, env, config, seed: int):
+def warm_start_cho2019(agent: Agent, normalizer, env, config, seed: int, robot: Robot):
     """Fit the actor's mean to :func:`reference_action` (``config`` the run's
-    :class:`TrainConfig`); returns the loss of each epoch."""
-    target = reference_action(config.agent_config.start_gait, env.robot)
+    :class:`TrainConfig`, ``robot`` its robot); returns the loss of each epoch."""
+    target = reference_action(config.agent_config.start_gait, robot)
     return warm_start(agent, normalizer, env, target, config.warm_start, seed)
 
 
@@ -91,7 +97,9 @@ def ijspeert_2007_parameters() -> np.ndarray:
     return np.array([nu, nu, rho, rho])
 
 
-def paper_cpg_parameter_wrapper(env: Any, agent_config: AgentConfig | None = None):
+def paper_cpg_parameter_wrapper(
+    env: Any, agent_config: AgentConfig | None = None, robot: Robot | None = None
+):
     """The CPG inside the hopper env as the paper has it: frequency and amplitude actions,
     no CPG state in the observation."""
     from cpg_actor.robots.hopper.cho2019 import CPGParameterVectorEnv
@@ -99,7 +107,7 @@ def paper_cpg_parameter_wrapper(env: Any, agent_config: AgentConfig | None = Non
     return CPGParameterVectorEnv(env, action_set="paper", observe_cpg=False)
 
 
-def warm_start_cho2019_paper(agent: Agent, normalizer, env, config, seed: int):
+def warm_start_cho2019_paper(agent: Agent, normalizer, env, config, seed: int, robot: Robot):
     """Fit the actor's mean to :func:`ijspeert_2007_parameters` (as a paper-set action)."""
     from cpg_actor.robots.hopper.cho2019 import PAPER_PARAMETER_RANGES, parameters_to_action
 

@@ -29,7 +29,7 @@ from cpg_actor.agents.base import (
 from cpg_actor.agents.start_gait import start_parameters
 from cpg_actor.cpg import CPGNetwork, CPGState, JointMap
 from cpg_actor.cpg.hopf import STATE_FIELDS
-from cpg_actor.robots.registry import cpg_layout
+from cpg_actor.robots.plugin import Robot
 from cpg_actor.robots.spec import RobotSpec
 
 
@@ -64,6 +64,9 @@ def output_bounds(
 class CPGActorAgent(Agent):
     """Gaussian policy whose mean is ``JointMap(x)``, x the CPG output of eq. 1 (or, in the
     quadruped's ``leg`` layout, ``FootSpaceMap(theta, r)`` of the CPG's next state).
+
+    Built for the env's robot ``robot`` (its joints, pose and control period) from the run's
+    robot entry ``plugin`` (its CPG layout ``agent_config.cpg_layout`` and start gait).
 
     * ``feedback=True`` (``cpg-actor``): ``[xi, kappa] = scale * MLP(obs)`` per oscillator, or
       ``scale * tanh(MLP(obs))`` with ``feedback_tanh`` (bounded feedback).
@@ -112,9 +115,10 @@ class CPGActorAgent(Agent):
         action_scale: Sequence[float],
         config: AgentConfig,
         robot: RobotSpec,
+        plugin: Robot,
         feedback: bool = True,
     ) -> None:
-        layout, cpg = cpg_layout(robot, config.cpg_layout)  # the robot's CPG layouts
+        layout, cpg = plugin.cpg_layout(config.cpg_layout)  # the run's robot's CPG layouts
         preset, joints, pattern = cpg.preset, cpg.joints, cpg.pattern
         options = {"gait": config.cpg_gait} if config.cpg_gait else {}
         if options and not cpg.gaits:
@@ -122,7 +126,7 @@ class CPGActorAgent(Agent):
                 f"agent_config.cpg_gait: the CPG preset of robot '{robot.name}' has no gaits; "
                 "leave it empty"
             )
-        initial = {**start_parameters(config.start_gait, robot), **config.cpg_initial}
+        initial = {**start_parameters(config.start_gait, plugin), **config.cpg_initial}
         if config.output_bound:
             if pattern is not None:
                 raise ValueError(

@@ -73,15 +73,9 @@ class ESConfig:
 
 
 # -- the budget -----------------------------------------------------------------------------
-def episode_steps(env_config: Any) -> int:
-    """The longest episode of the robot's env, in control steps (the runner's default when
-    the config names none)."""
-    return int(getattr(env_config, "episode_steps", 10_000))
-
-
 def generation_steps(config: Any) -> int:
     """The most env steps one generation can take: ``popsize x episodes x episode_steps``."""
-    return config.es.popsize * config.es.episodes * episode_steps(config.env)
+    return config.es.popsize * config.es.episodes * config.env.episode_steps
 
 
 def num_generations(config: Any) -> int:
@@ -93,7 +87,7 @@ def num_generations(config: Any) -> int:
         raise ValueError(
             f"total_steps {config.total_steps:,} is less than one generation of the open-loop "
             f"search: es.popsize {config.es.popsize} x es.episodes {config.es.episodes} x "
-            f"env.episode_steps {episode_steps(config.env)} = {per_generation:,} steps"
+            f"env.episode_steps {config.env.episode_steps} = {per_generation:,} steps"
         )
     return count
 

@@ -1,5 +1,5 @@
 """Agents selectable by name. An entry names the network and, if it needs one, a wrapper
-around the robot's environment.
+around the robot's environment (the robot builds the env: ``Robot.make``).
 
 A baseline such as ``cho2019`` (an MLP actor acting on a wrapped env whose actions are CPG
 parameters) registers an :class:`AgentSpec` with its ``wrapper``; the runner needs nothing
@@ -25,14 +25,7 @@ from cpg_actor.agents.cho2019 import (
 from cpg_actor.agents.cpg_actor import CPGActorAgent
 from cpg_actor.agents.mlp import MLPAgent
 from cpg_actor.agents.warm_start import warm_start_mlp
-
-
-def make_robot_env(num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
-    """The plain vector env of the robot whose config ``env_config`` is
-    (:mod:`cpg_actor.robots.registry`): actions are desired joint positions."""
-    from cpg_actor.robots.registry import make_robot_env as make
-
-    return make(num_envs, env_config, num_threads)
+from cpg_actor.robots.plugin import Robot
 
 
 def env_shapes(env: Any) -> tuple[int, np.ndarray]:
@@ -46,24 +39,24 @@ def env_shapes(env: Any) -> tuple[int, np.ndarray]:
 
 @dataclass(frozen=True)
 class AgentSpec:
-    """``build(agent_config, env) -> Agent``: the agent for an env, from its spaces and its
-    ``robot`` (:class:`cpg_actor.robots.spec.RobotSpec`: joints, nominal pose, control period);
-    ``env_factory(num_envs, env_config, num_threads) -> vector env`` (the robot's env, the
-    hopper by default); ``wrapper(env, agent_config) -> env``, an environment around the
-    robot's that the agent needs (``cho2019``: the CPG inside the env); an optional supervised
-    warm start; ``trainer``, what trains it (PPO, or the open-loop search). Its tuned settings
-    on a robot are the robot's (``Robot.agent_defaults``)."""
+    """``build(agent_config, env, robot) -> Agent``: the agent for an env, from its spaces
+    and its ``robot`` attribute (:class:`cpg_actor.robots.spec.RobotSpec`: joints, nominal
+    pose, control period) and the run's robot entry ``robot``
+    (:class:`cpg_actor.robots.plugin.Robot`: the CPG layouts and the start gait);
+    ``wrapper(env, agent_config, robot) -> env``, an environment around the robot's that the
+    agent needs (``cho2019``: the CPG inside the env); an optional supervised warm start;
+    ``trainer``, what trains it (PPO, or the open-loop search). Its tuned settings on a robot
+    are the robot's (``Robot.agent_defaults``)."""
 
     name: str
     description: str
-    build: Callable[[AgentConfig, Any], Agent]
-    env_factory: Callable[..., Any] = make_robot_env
-    wrapper: Callable[[Any], Any] | None = None
+    build: Callable[[AgentConfig, Any, Robot], Agent]
+    wrapper: Callable[[Any, AgentConfig, Robot], Any] | None = None
     # the robots (``TrainConfig.robot``) it is built for; None: any robot whose env follows the
     # contract (cho2019: its CPG sits in the hopper's env)
     robots: tuple[str, ...] | None = None
-    # ``warm_start(agent, normalizer, env, TrainConfig, seed) -> losses``, run once before
-    # the first PPO iteration of a new run (not on resume)
+    # ``warm_start(agent, normalizer, env, TrainConfig, seed, robot) -> losses``, run once
+    # before the first PPO iteration of a new run (not on resume)
     warm_start: Callable[..., list[float]] | None = None
     # it starts from agent_config.start_gait where one is set (the CPG agents, cho2019-warm,
     # mlp-warm): a comparison that counts the gait's search charges it its steps
@@ -72,17 +65,10 @@ class AgentSpec:
     # (cpg_actor.training.es_runner.ESRunner)
     trainer: str = "ppo"
 
-    def make_env(
-        self,
-        num_envs: int,
-        env_config: Any,
-        num_threads: int | None = None,
-        agent_config: AgentConfig | None = None,
-    ) -> Any:
-        """The env this agent acts on: the robot's env, wrapped if the agent declares it
+    def wrap(self, env: Any, agent_config: AgentConfig, robot: Robot) -> Any:
+        """The env this agent acts on: the robot's ``env``, wrapped if the agent declares it
         (the wrapper sees ``agent_config``: e.g. the start gait of the CPG inside the env)."""
-        env = self.env_factory(num_envs, env_config, num_threads)
-        return env if self.wrapper is None else self.wrapper(env, agent_config)
+        return env if self.wrapper is None else self.wrapper(env, agent_config, robot)
 
 
 AGENTS: dict[str, AgentSpec] = {}
@@ -101,14 +87,14 @@ def get_agent_spec(name: str) -> AgentSpec:
     return AGENTS[name]
 
 
-def build_mlp(config: AgentConfig, env: Any) -> Agent:
+def build_mlp(config: AgentConfig, env: Any, robot: Robot | None = None) -> Agent:
     """Actor MLP on desired joint positions, centred on the robot's nominal pose."""
     return MLPAgent(*env_shapes(env), config, env.robot.nominal_pose)
 
 
-def build_cpg_actor(config: AgentConfig, env: Any, feedback: bool = True) -> Agent:
-    """The CPG-Actor with the CPG preset of the env's robot."""
-    return CPGActorAgent(*env_shapes(env), config, env.robot, feedback=feedback)
+def build_cpg_actor(config: AgentConfig, env: Any, robot: Robot, feedback: bool = True) -> Agent:
+    """The CPG-Actor with the CPG layout of the run's robot."""
+    return CPGActorAgent(*env_shapes(env), config, env.robot, robot, feedback=feedback)
 
 
 register_agent(
@@ -150,7 +136,7 @@ register_agent(
     AgentSpec(
         "cpg-actor-open-loop",
         "CPG-Actor without feedback (xi = kappa = 0): only the CPG parameters are trained",
-        lambda config, env: build_cpg_actor(config, env, feedback=False),
+        lambda config, env, robot: build_cpg_actor(config, env, robot, feedback=False),
         uses_start_gait=True,
     )
 )
@@ -191,7 +177,7 @@ register_agent(
         "open-loop-es",
         "the open-loop CPG (no feedback) with its parameters V tuned by CMA-ES on the return: "
         "the search baseline, and the gait other CPG agents can start from",
-        lambda config, env: build_cpg_actor(config, env, feedback=False),
+        lambda config, env, robot: build_cpg_actor(config, env, robot, feedback=False),
         trainer="es",
     )
 )

@@ -14,8 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from cpg_actor.agents.gait_file import load_gait
-from cpg_actor.robots.registry import cpg_choices, get_robot
-from cpg_actor.robots.spec import RobotSpec
+from cpg_actor.robots.plugin import Robot
 
 SEARCH = "search"  # the packaged gait found by the open-loop search for the robot
 
@@ -41,27 +40,27 @@ def packaged_gait_path(path: Path | None, robot: str) -> Path:
     return path
 
 
-def start_parameters(start_gait: str, robot: RobotSpec) -> dict[str, Any]:
-    """The CPG parameters ``start_gait`` names for the env's robot ``robot``: ``{}`` for ""
-    (the preset), the packaged gait for "search"
-    (:func:`cpg_actor.robots.registry.cpg_choices`), else the gait file at that path."""
+def start_parameters(start_gait: str, plugin: Robot) -> dict[str, Any]:
+    """The CPG parameters ``start_gait`` names on the run's robot ``plugin``: ``{}`` for ""
+    (the preset), its packaged gait (``Robot.start_gait``) for "search", else the gait file
+    at that path."""
     if not start_gait:
         return {}
     if start_gait == SEARCH:
-        return read_gait(packaged_gait_path(cpg_choices(robot)[1], robot.name))
+        return read_gait(packaged_gait_path(plugin.start_gait, plugin.name))
     return read_gait(start_gait)
 
 
-def search_steps(start_gait: str, robot: str) -> int:
+def search_steps(start_gait: str, plugin: Robot) -> int:
     """The env steps the search behind ``start_gait`` took (the gait file's
-    ``steps_searched``, else ``steps``), for robot ``robot`` (``TrainConfig.robot``); 0 for
-    the preset. What ``TrainConfig.search_steps`` counts when a comparison charges a start's
-    search to the agents that use it."""
+    ``steps_searched``, else ``steps``), on the run's robot ``plugin``; 0 for the preset.
+    What ``TrainConfig.search_steps`` counts when a comparison charges a start's search to the
+    agents that use it."""
     if not start_gait:
         return 0
     path = start_gait
     if start_gait == SEARCH:
-        path = packaged_gait_path(get_robot(robot).start_gait, robot)
+        path = packaged_gait_path(plugin.start_gait, plugin.name)
     try:
         gait = load_gait(path)
     except FileNotFoundError as error:

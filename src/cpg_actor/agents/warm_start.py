@@ -11,12 +11,20 @@ normalised inputs it will see when PPO starts.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import torch
 
 from cpg_actor.agents.base import Agent
-from cpg_actor.ppo.normalizer import RunningNormalizer
+
+
+class Normalizer(Protocol):
+    """The observation normaliser the warm start seeds (PPO's ``RunningNormalizer``)."""
+
+    def update(self, x: torch.Tensor) -> None: ...
+
+    def __call__(self, x: torch.Tensor) -> torch.Tensor: ...
 
 
 @dataclass
@@ -68,7 +76,7 @@ def executed(actions: np.ndarray, noise: float, rng: np.random.Generator) -> np.
 
 def warm_start(
     agent: Agent,
-    normalizer: RunningNormalizer | None,
+    normalizer: Normalizer | None,
     env,
     target_action: np.ndarray,
     config: WarmStartConfig,
@@ -91,7 +99,7 @@ def warm_start(
 
 def fit_actor(
     agent: Agent,
-    normalizer: RunningNormalizer | None,
+    normalizer: Normalizer | None,
     observations: torch.Tensor,
     target: torch.Tensor,
     config: WarmStartConfig,
@@ -133,19 +141,20 @@ def fit_actor(
 
 
 def collect_gait(
-    env, agent_config, steps: int, seed: int, noise: float = 0.0
+    env, agent_config, robot, steps: int, seed: int, noise: float = 0.0
 ) -> tuple[torch.Tensor, torch.Tensor]:
-    """Drive every env with the open-loop CPG of ``agent_config.start_gait`` (the CPG-Actor
-    without feedback, deterministic; Gaussian ``noise`` on what is executed) for ``steps``
-    steps: raw observations ``(T*N, D)`` and the CPG's joint commands ``(T*N, A)``, clipped
-    to the action space."""
+    """Drive every env with the open-loop CPG of ``agent_config.start_gait`` on the run's
+    robot ``robot`` (its :class:`~cpg_actor.robots.plugin.Robot` entry; the CPG-Actor without
+    feedback, deterministic; Gaussian ``noise`` on what is executed) for ``steps`` steps: raw
+    observations ``(T*N, D)`` and the CPG's joint commands ``(T*N, A)``, clipped to the action
+    space."""
     from dataclasses import replace
 
     from cpg_actor.agents.cpg_actor import CPGActorAgent
     from cpg_actor.agents.registry import env_shapes
 
     config = replace(agent_config, exploration="position", feedback_noise=0.0)
-    cpg = CPGActorAgent(*env_shapes(env), config, env.robot, feedback=False)
+    cpg = CPGActorAgent(*env_shapes(env), config, env.robot, robot, feedback=False)
     low = torch.as_tensor(env.single_action_space.low, dtype=torch.float32)
     high = torch.as_tensor(env.single_action_space.high, dtype=torch.float32)
     obs, _ = env.reset(seed=seed)
@@ -167,13 +176,13 @@ def collect_gait(
     return torch.cat(observations), torch.cat(commands)
 
 
-def warm_start_mlp(agent: Agent, normalizer, env, config, seed: int) -> list[float]:
+def warm_start_mlp(agent: Agent, normalizer, env, config, seed: int, robot) -> list[float]:
     """``mlp-warm``: behaviour cloning of the start gait (``config`` the run's
     :class:`TrainConfig`): the MLP's mean fitted to the open-loop CPG's joint commands on the
     observations that CPG meets; the loss per epoch."""
     cfg = config.warm_start
     cfg.validate()
     observations, commands = collect_gait(
-        env, config.agent_config, cfg.rollout_steps, seed, cfg.action_noise
+        env, config.agent_config, robot, cfg.rollout_steps, seed, cfg.action_noise
     )
     return fit_actor(agent, normalizer, observations, commands, cfg)

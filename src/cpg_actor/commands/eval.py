@@ -180,16 +180,17 @@ def episode_lines(traces: dict[str, np.ndarray]) -> list[str]:
 def record_video(policy, config, path: Path, seed: int, overwrite: bool) -> None:
     """One deterministic episode in the agent's own environment (one env), rendered offscreen
     by its ``render_frame`` (the hopper's or the quadruped's scene) and encoded as it runs."""
-    from cpg_actor.agents import get_agent_spec
     from cpg_actor.robots.common.video import write_video
+    from cpg_actor.robots.registry import get_robot
+    from cpg_actor.training.build import make_env
 
-    env = get_agent_spec(config.agent).make_env(1, config.env, 1, config.agent_config)
+    env = make_env(config, get_robot(config.robot), 1, 1)
 
     def frames():
         obs, _ = env.reset(seed=seed)
         policy.reset(1)
         yield env.render_frame(0)
-        for _ in range(int(config.env.episode_steps)):
+        for _ in range(config.env.episode_steps):
             obs, _, terminated, truncated, _ = env.step(policy.act(obs).action)
             if terminated[0] or truncated[0]:
                 break  # the env has already reset: the frame would show the next episode

@@ -49,6 +49,8 @@ def build_policy(run: str | None, seed: int):
     from cpg_actor.config import TrainConfig
     from cpg_actor.deploy import Policy, load_policy
     from cpg_actor.ppo.normalizer import RunningNormalizer
+    from cpg_actor.robots.registry import get_robot
+    from cpg_actor.training.build import make_env
 
     if run is not None:
         if not (Path(run) / "checkpoints" / "last.pt").is_file():
@@ -58,8 +60,9 @@ def build_policy(run: str | None, seed: int):
     else:
         config = TrainConfig(agent="cpg-actor", seed=seed)
         torch.manual_seed(seed)
-        env = get_agent_spec("cpg-actor").make_env(1, config.env, 1)
-        agent = get_agent_spec("cpg-actor").build(config.agent_config, env)
+        robot = get_robot(config.robot)
+        env = make_env(config, robot, 1, 1)
+        agent = get_agent_spec("cpg-actor").build(config.agent_config, env, robot)
         low, high = env.single_action_space.low, env.single_action_space.high
         normalizer = RunningNormalizer(int(env.single_observation_space.shape[0]))
         env.close()
@@ -119,13 +122,10 @@ def run(args: argparse.Namespace) -> int:
         if out.exists() and not args.overwrite:
             raise FileExistsError(f"{out} exists; pass --overwrite to replace it")
     policy, config = build_policy(args.run, args.seed)
-    from cpg_actor.agents import get_agent_spec
+    from cpg_actor.robots.registry import get_robot
+    from cpg_actor.training.build import make_env
 
-    env = TorchVectorEnv(
-        get_agent_spec(config.agent).make_env(
-            args.envs, config.env, agent_config=config.agent_config
-        )
-    )
+    env = TorchVectorEnv(make_env(config, get_robot(config.robot), args.envs, None))
     try:
         rollout = collect_rollout(policy, env, args.steps, args.seed, config.ppo.gamma)
     finally:

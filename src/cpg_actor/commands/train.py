@@ -1,4 +1,5 @@
-"""`cpg-actor train`: train an agent with PPO on the hopper; resumable run directory."""
+"""`cpg-actor train`: train an agent (PPO, or the open-loop search) on a robot; resumable run
+directory."""
 
 from __future__ import annotations
 
@@ -62,9 +63,10 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--preset",
         default=None,
         choices=sorted(PRESETS),
-        help="starting config values: paper (OpenAI Baselines' ppo2 MuJoCo settings, the "
-        "default), throughput (fewer, larger gradient steps; see docs/training.md) or gpu "
-        "(4,096 MJX envs on the GPU; docs/gpu.md)",
+        help="the recipe, the starting config values: paper (OpenAI Baselines' ppo2 MuJoCo "
+        "settings), throughput (fewer, larger gradient steps; see docs/training.md) or gpu "
+        "(4,096 MJX envs on the GPU; docs/gpu.md); default: the robot's (the hopper's paper, "
+        "the quadrupeds' throughput, with each agent's tuned settings on it)",
     )
     parser.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
     parser.add_argument(
@@ -208,118 +210,160 @@ def _runner(config: TrainConfig, run_dir: Path, args: argparse.Namespace):
 
 
 def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
+    """Build the run (a new one, or the one in ``--run-dir`` resumed), train it, report."""
+    if args.resume:
+        runner, run_dir = _resumed_runner(args, locks)
+        if runner is None:  # a search that has ended: nothing to continue, no error
+            return 0
+    else:
+        runner, run_dir = _new_runner(args, locks)
+    code = _learn(runner, run_dir)
+    if code is None:
+        print(_search_done_text(runner) if _searches(runner.config) else _done_text(runner))
+    return code or 0
+
+
+def _check_resume_flags(args: argparse.Namespace) -> None:
+    """A resumed run takes its saved config: only ``--total-steps`` may change."""
+    if args.run_dir is None:
+        raise ValueError("--resume needs --run-dir")
+    given = [
+        flag
+        for flag, value in (
+            ("--agent", args.agent),
+            ("--preset", args.preset),
+            ("--sim", args.sim),
+            ("--device", args.device),
+            ("--seed", args.seed),
+            ("--num-envs", args.num_envs),
+            ("--config", args.config),
+            ("--set", args.overrides or None),
+        )
+        if value is not None
+    ]
+    if given:
+        raise ValueError(
+            f"a resumed run uses its saved config.yaml; only --total-steps may change "
+            f"(got {', '.join(given)})"
+        )
+    if args.overwrite:
+        raise ValueError("--resume and --overwrite exclude each other")
+
+
+def _resumed_runner(args: argparse.Namespace, locks: list[RunLock]):
+    """The runner of ``--run-dir`` at its last checkpoint, under the run's lock, and the run
+    directory; no runner for a search that has ended (said so)."""
+    _check_resume_flags(args)
+    run_dir = Path(args.run_dir)
+    check_run_dir_path(run_dir)
+    if not run_dir.is_dir():
+        raise FileNotFoundError(f"run directory {run_dir} does not exist; nothing to resume")
+    if not any((run_dir / "checkpoints").glob("*.pt")):  # refused before the lock is made
+        raise FileNotFoundError(
+            f"{run_dir / 'checkpoints'} holds no checkpoint (last.pt, iter_*.pt); nothing to resume"
+        )
+    refuse_link(run_dir / "metrics.jsonl")  # appended to: refused before anything is written
+    _lock(run_dir, locks)
+    remove_stale_temporaries(run_dir)  # of writes a killed run left unfinished
+    checkpoint, config = _resume_config(run_dir)
+    if args.total_steps is not None:
+        config.total_steps = parse_steps(args.total_steps)
+    config.validate()
+    runner = _runner(config, run_dir, args)
+    try:
+        runner.load_checkpoint(checkpoint)
+        _check_unfinished(runner)
+    except (ValueError, FileNotFoundError):
+        runner.close()
+        raise
+    if _searches(config) and runner.finished:
+        runner.close()
+        print(_search_finished_text(runner))
+        return None, run_dir
+    config.save(run_dir / "config.yaml")
+    try:
+        _truncate_metrics(run_dir / "metrics.jsonl", runner.iteration)
+    except ValueError:
+        runner.close()
+        raise
+    print(f"resuming {run_dir} at iteration {runner.iteration} ({runner.global_step:,} steps)")
+    print(_logs_text(run_dir))
+    return runner, run_dir
+
+
+def _check_unfinished(runner) -> None:
+    """ValueError unless the resumed run has steps left (a search that CMA-ES stopped has
+    none, and is no error)."""
+    config = runner.config
+    if _searches(config):
+        if runner.finished and not runner.stop_reason:
+            raise ValueError(_search_finished_text(runner))
+    elif runner.iteration >= config.num_iterations:
+        raise ValueError(
+            f"the run is already at iteration {runner.iteration} "
+            f"({runner.global_step:,} steps); pass a larger --total-steps to continue"
+        )
+
+
+def _new_runner(args: argparse.Namespace, locks: list[RunLock]):
+    """The runner of a new run from the flags, its run directory prepared under its lock
+    (an existing one is refused before anything is built, unless ``--overwrite``)."""
+    config = build_config(args)
+    run_dir = Path(
+        args.run_dir
+        or DEFAULT_RUN_DIR.format(agent=config.agent, sim=simulator(config), seed=config.seed)
+    )
+    check_run_dir_path(run_dir)
+    if _has_content(run_dir):  # refused before anything is built or written
+        if not args.overwrite:
+            prepare_run_dir(run_dir, overwrite=False)
+        check_overwritable(run_dir, RUN)
+    runner = _runner(config, run_dir, args)
+    try:
+        if not _has_content(run_dir):  # marked first: its lock file is then its own
+            run_dir.mkdir(parents=True, exist_ok=True)
+            write_marker(run_dir, RUN)
+        _lock(run_dir, locks)  # before --overwrite deletes anything
+        prepare_run_dir(run_dir, args.overwrite)  # checked again, under the lock
+    except BaseException:
+        runner.close()
+        raise
+    config.save(run_dir / "config.yaml")
+    if _searches(config):
+        print(_search_start_text(runner, run_dir, args))
+    else:
+        print(_start_text(config, run_dir, args))
+    print(_logs_text(run_dir))
+    return runner, run_dir
+
+
+def _start_text(config: TrainConfig, run_dir: Path, args: argparse.Namespace) -> str:
+    """What a new PPO run will do (and a note when the budget is not whole iterations)."""
+    lines = []
+    planned = config.search_steps + config.num_iterations * config.steps_per_iteration
+    if planned != config.total_steps and _budget_asked(args):
+        lines.append(
+            f"note: {config.total_steps:,} steps is not a whole number of iterations "
+            f"of {config.steps_per_iteration:,}; training {planned:,}"
+        )
+    searched = (
+        f", the first {config.search_steps:,} spent by the search for its start gait"
+        if config.search_steps
+        else ""
+    )
+    lines.append(
+        f"training {config.agent} ({config.preset} preset) on {simulator(config)} for "
+        f"{config.total_steps:,} steps "
+        f"({config.num_iterations} iterations of {config.steps_per_iteration} steps"
+        f"{searched}), run directory {run_dir}"
+    )
+    return "\n".join(lines)
+
+
+def _learn(runner, run_dir: Path) -> int | None:
+    """Train; the exit status of a run that stopped early (None: it ran to its end)."""
     from cpg_actor.training.runner import TrainingDiverged
 
-    if args.resume:
-        if args.run_dir is None:
-            raise ValueError("--resume needs --run-dir")
-        given = [
-            flag
-            for flag, value in (
-                ("--agent", args.agent),
-                ("--preset", args.preset),
-                ("--sim", args.sim),
-                ("--device", args.device),
-                ("--seed", args.seed),
-                ("--num-envs", args.num_envs),
-                ("--config", args.config),
-                ("--set", args.overrides or None),
-            )
-            if value is not None
-        ]
-        if given:
-            raise ValueError(
-                f"a resumed run uses its saved config.yaml; only --total-steps may change "
-                f"(got {', '.join(given)})"
-            )
-        if args.overwrite:
-            raise ValueError("--resume and --overwrite exclude each other")
-        run_dir = Path(args.run_dir)
-        check_run_dir_path(run_dir)
-        if not run_dir.is_dir():
-            raise FileNotFoundError(f"run directory {run_dir} does not exist; nothing to resume")
-        if not any((run_dir / "checkpoints").glob("*.pt")):  # refused before the lock is made
-            raise FileNotFoundError(
-                f"{run_dir / 'checkpoints'} holds no checkpoint (last.pt, iter_*.pt); "
-                "nothing to resume"
-            )
-        refuse_link(run_dir / "metrics.jsonl")  # appended to: refused before anything is written
-        _lock(run_dir, locks)
-        remove_stale_temporaries(run_dir)  # of writes a killed run left unfinished
-        checkpoint, config = _resume_config(run_dir)
-        config_path = run_dir / "config.yaml"
-        if args.total_steps is not None:
-            config.total_steps = parse_steps(args.total_steps)
-        config.validate()
-        runner = _runner(config, run_dir, args)
-        try:
-            runner.load_checkpoint(checkpoint)
-        except (ValueError, FileNotFoundError):
-            runner.close()
-            raise
-        if _searches(config) and runner.finished:
-            runner.close()
-            if runner.stop_reason:  # a search that has ended: nothing to continue, no error
-                print(_search_finished_text(runner))
-                return 0
-            raise ValueError(_search_finished_text(runner))
-        if not _searches(config) and runner.iteration >= config.num_iterations:
-            runner.close()
-            raise ValueError(
-                f"the run is already at iteration {runner.iteration} "
-                f"({runner.global_step:,} steps); pass a larger --total-steps to continue"
-            )
-        config.save(config_path)
-        try:
-            _truncate_metrics(run_dir / "metrics.jsonl", runner.iteration)
-        except ValueError:
-            runner.close()
-            raise
-        print(f"resuming {run_dir} at iteration {runner.iteration} ({runner.global_step:,} steps)")
-        print(_logs_text(run_dir))
-    else:
-        config = build_config(args)
-        run_dir = Path(
-            args.run_dir
-            or DEFAULT_RUN_DIR.format(agent=config.agent, sim=simulator(config), seed=config.seed)
-        )
-        check_run_dir_path(run_dir)
-        if _has_content(run_dir):  # refused before anything is built or written
-            if not args.overwrite:
-                prepare_run_dir(run_dir, overwrite=False)
-            check_overwritable(run_dir, RUN)
-        runner = _runner(config, run_dir, args)
-        try:
-            if not _has_content(run_dir):  # marked first: its lock file is then its own
-                run_dir.mkdir(parents=True, exist_ok=True)
-                write_marker(run_dir, RUN)
-            _lock(run_dir, locks)  # before --overwrite deletes anything
-            prepare_run_dir(run_dir, args.overwrite)  # checked again, under the lock
-        except BaseException:
-            runner.close()
-            raise
-        config.save(run_dir / "config.yaml")
-        if _searches(config):
-            print(_search_start_text(runner, run_dir, args))
-        else:
-            planned = config.search_steps + config.num_iterations * config.steps_per_iteration
-            if planned != config.total_steps and _budget_asked(args):
-                print(
-                    f"note: {config.total_steps:,} steps is not a whole number of iterations "
-                    f"of {config.steps_per_iteration:,}; training {planned:,}"
-                )
-            searched = (
-                f", the first {config.search_steps:,} spent by the search for its start gait"
-                if config.search_steps
-                else ""
-            )
-            print(
-                f"training {config.agent} ({config.preset} preset) on {simulator(config)} for "
-                f"{config.total_steps:,} steps "
-                f"({config.num_iterations} iterations of {config.steps_per_iteration} steps"
-                f"{searched}), run directory {run_dir}"
-            )
-        print(_logs_text(run_dir))
     try:
         runner.learn()
     except TrainingDiverged as error:
@@ -334,14 +378,16 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         return 130
     finally:
         runner.close()
-    if _searches(config):
-        print(_search_done_text(runner))
-        return 0
+    return None
+
+
+def _done_text(runner) -> str:
+    """The last line of a PPO run: steps, time, the training episodes' return and metrics,
+    the last evaluation, the checkpoint."""
     row = getattr(runner, "last_row", {})
-    nan = float("nan")
     evaluation = getattr(runner, "last_evaluation", None)
     evaluated = f"; deterministic {evaluation_text(evaluation)}" if evaluation else ""
-    episode_return = row.get("charts/episode_return", nan)
+    episode_return = row.get("charts/episode_return", float("nan"))
     training = (
         " ".join(
             [
@@ -352,11 +398,10 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
         if episode_return == episode_return
         else "no training episode finished (runs shorter than an episode)"
     )
-    print(
+    return (
         f"done: {runner.global_step:,} steps in {runner.train_wall:.0f} s of training, "
         f"{training}{evaluated}; checkpoint {runner.last_checkpoint_path()}"
     )
-    return 0
 
 
 def _budget_asked(args: argparse.Namespace) -> bool:

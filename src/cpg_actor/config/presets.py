@@ -1,12 +1,15 @@
-"""Named starting points for a training run: ``cpg-actor train --preset NAME``.
+"""Recipes, the named starting points of a training run: ``cpg-actor train --preset NAME``.
 
-A preset is a set of config values applied over :class:`cpg_actor.config.TrainConfig`'s
-defaults, before ``--config``, the flags and ``--set`` (which all win over it); its name is
-saved in the run's ``config.yaml`` (``preset``).
+A recipe is a set of config values applied over :class:`cpg_actor.config.TrainConfig`'s
+defaults and the agent's tuned settings on the robot (``Robot.agent_defaults``), before
+``--config``, the flags and ``--set`` (which all win over it); its name is saved in the run's
+``config.yaml`` (``preset``). A recipe names no robot: each robot names the recipe its runs
+follow when none is given (``Robot.recipe``: the hopper ``paper``, the quadrupeds
+``throughput``), so ``--robot NAME`` alone trains with that robot's tuned settings.
 
 * ``paper``: OpenAI Baselines' ppo2 settings for MuJoCo tasks, the framework the paper used
   (every number and its source: :class:`cpg_actor.ppo.PPOConfig`). These are the dataclass
-  defaults; the preset only adds ``ppo.compile`` (the same algorithm, its gradient step,
+  defaults; the recipe only adds ``ppo.compile`` (the same algorithm, its gradient step,
   the rollout's policy step and reward scaling compiled by ``torch.compile`` into fewer,
   fused kernels).
 * ``throughput``: the massively parallel recipe of legged_gym / rsl_rl (Rudin et al. 2021):
@@ -16,17 +19,17 @@ saved in the run's ``config.yaml`` (``preset``).
   CPG and its feedback at a fixed 3e-4 outside that schedule (``ppo.cpg_learning_rate``: the
   KL the schedule follows hardly sees them, so its rate, up to 1e-2, would drive them). It
   spends a small CPU's time on the physics rather than the update and learns less per
-  sample; what it reaches and when: ``docs/training.md``, "Presets".
+  sample; what it reaches and when: ``docs/training.md``, "Presets". The quadrupeds' recipe.
 * ``gpu``: the same recipe at GPU scale on the MJX simulator (``docs/gpu.md``): 4,096 envs x 24
   steps = 98,304 samples per iteration (legged_gym's rollout length for 4,096 envs), 5 epochs
   of 4 minibatches of 24,576, learning rate 1e-3 adapted to KL 0.01 and the CPG's own 3e-4
   as ``throughput`` (no effect on agents whose policy holds no CPG: ``mlp``, ``cho2019*``);
   ``device`` auto (CUDA if torch sees it). It runs on a CPU too (JAX's CPU backend), slowly.
-* ``anymal``: the ANYmal B quadruped (``robot: anymal``) with the ``throughput`` recipe and the
-  CPG-Actor settings its results were trained with (``docs/quadruped.md``, "Training"): one
-  oscillator per leg (``cpg_layout: leg``), action noise 0.1 of the joint ranges, feedback
-  noise 0.2. The ``mlp`` results add ``--set agent_config.init_std=0.3``; the open-loop
-  CPG-Actor needs ``--set agent_config.feedback_noise=0`` (it has no feedback).
+
+``anymal`` is the name ANYmal B's recipe had when presets named robots, kept so that saved runs
+(``preset: anymal``) and their commands keep their values: ``robot: anymal``, ``throughput``
+and the CPG-Actor's settings for every agent (one oscillator per leg, action noise 0.1, feedback
+noise 0.2). ``--robot anymal`` alone now gives the same to ``cpg-actor``.
 """
 
 from __future__ import annotations
@@ -50,6 +53,9 @@ THROUGHPUT: dict[str, Any] = {
     },
 }
 
+# the recipes a user picks (--preset); PRESETS adds the old name kept for saved runs
+RECIPES = ("paper", "throughput", "gpu")
+
 PRESETS: dict[str, dict[str, Any]] = {
     "paper": {"ppo": {"compile": True}},
     "throughput": THROUGHPUT,
@@ -60,7 +66,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "env": {"sim": "mjx"},
         "ppo": {**THROUGHPUT["ppo"], "num_steps": 24},
     },
-    "anymal": {
+    "anymal": {  # ANYmal B's recipe under its old name, for saved runs (above)
         **THROUGHPUT,
         "robot": "anymal",
         "agent_config": {"cpg_layout": "leg", "init_std": 0.1, "feedback_noise": 0.2},
@@ -68,8 +74,16 @@ PRESETS: dict[str, dict[str, Any]] = {
 }
 
 
-def preset_values(name: str) -> dict[str, Any]:
-    """The config values of preset ``name`` (a nested mapping); ValueError if unknown."""
+def check_preset(name: str) -> None:
+    """ValueError unless ``name`` is a recipe (or the old name kept for saved runs)."""
     if name not in PRESETS:
-        raise ValueError(f"unknown preset {name!r}; available: {', '.join(sorted(PRESETS))}")
+        raise ValueError(
+            f"unknown preset {name!r}; the recipes are {', '.join(RECIPES)} (a robot's own: "
+            "--robot NAME alone)"
+        )
+
+
+def preset_values(name: str) -> dict[str, Any]:
+    """The config values of recipe ``name`` (a nested mapping); ValueError if unknown."""
+    check_preset(name)
     return {"preset": name, **PRESETS[name]}

@@ -12,6 +12,7 @@ import re
 import sys
 import types
 import typing
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -27,6 +28,7 @@ from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.ppo.config import PPOConfig
 from cpg_actor.robots.plugin import Robot
 from cpg_actor.robots.registry import DEFAULT_ROBOT, ROBOTS, get_robot
+from cpg_actor.robots.spec import EnvConfig
 
 # the largest seed: torch takes seeds below 2**64, but seeds pass through int64 tensors and
 # arrays (checkpoints, env seeds), so the accepted range is that of an int64
@@ -39,7 +41,7 @@ def check_seed(seed: Any, name: str = "--seed") -> None:
         raise ValueError(f"{name} must be an integer from 0 to 2**63-1 ({MAX_SEED}), got {seed!r}")
 
 
-def _default_env_config() -> Any:
+def _default_env_config() -> EnvConfig:
     return get_robot(DEFAULT_ROBOT).config_class()
 
 
@@ -96,7 +98,7 @@ class TrainConfig:
     ppo: PPOConfig = field(default_factory=PPOConfig)
     warm_start: WarmStartConfig = field(default_factory=WarmStartConfig)  # cho2019-warm only
     # the robot's env config (its Robot.config_class: HopperConfig, QuadrupedConfig, ...)
-    env: Any = field(default_factory=_default_env_config)
+    env: EnvConfig = field(default_factory=_default_env_config)
     es: ESConfig = field(default_factory=ESConfig)  # open-loop-es only: the CMA-ES search
 
     @property
@@ -111,12 +113,9 @@ class TrainConfig:
         from cpg_actor.agents import get_agent_spec
 
         get_agent_spec(self.agent)
-        from cpg_actor.config.presets import PRESETS
+        from cpg_actor.config.presets import check_preset
 
-        if self.preset not in PRESETS:
-            raise ValueError(
-                f"unknown preset {self.preset!r}; available: {', '.join(sorted(PRESETS))}"
-            )
+        check_preset(self.preset)
         if (
             isinstance(self.eval_interval, bool)
             or not isinstance(self.eval_interval, int)
@@ -224,10 +223,11 @@ def compose_config(
 ) -> TrainConfig:
     """The one place a run's config is put together, in this order (later wins): the
     defaults, the agent's defaults on the robot (its tuned settings there,
-    :attr:`cpg_actor.robots.plugin.Robot.agent_defaults`), the preset (``preset``, else the config
-    file's, else ``paper``), the YAML ``config_file``, ``values`` (a nested mapping: the
-    command-line flags), then each ``KEY=VALUE`` of ``overrides`` (``--set``). Validated; a
-    clear ValueError (or FileNotFoundError) names what is wrong."""
+    :attr:`cpg_actor.robots.plugin.Robot.agent_defaults`), the recipe (``preset``, else the
+    config file's, else the robot's, :attr:`~cpg_actor.robots.plugin.Robot.recipe`), the YAML
+    ``config_file``, ``values`` (a nested mapping: the command-line flags), then each
+    ``KEY=VALUE`` of ``overrides`` (``--set``). Validated; a clear ValueError (or
+    FileNotFoundError) names what is wrong."""
     from cpg_actor.agents import get_agent_spec
     from cpg_actor.config.presets import preset_values
 
@@ -241,26 +241,26 @@ def compose_config(
         if not path.is_file():
             raise FileNotFoundError(f"config file {path} does not exist")
         file_data = read_config_file(path)
-    preset = preset or file_data.get("preset") or "paper"
-    overrides = [parse_override(text) for text in overrides]
+    chosen = preset or file_data.get("preset")
+    given = [dict(values or {}), *(parse_override(text) for text in overrides)]
 
-    def compose(agent_defaults: dict[str, Any]) -> TrainConfig:
+    def compose(agent_defaults: Mapping[str, Any], recipe: str) -> TrainConfig:
         config = TrainConfig()
-        apply_dict(config, agent_defaults, prefix="")
-        apply_dict(config, preset_values(preset), prefix="")
+        apply_dict(config, dict(agent_defaults), prefix="")
+        apply_dict(config, preset_values(recipe), prefix="")
         apply_dict(config, file_data, prefix="")
-        config.preset = preset
-        apply_dict(config, dict(values or {}), prefix="")
-        for override in overrides:
-            apply_dict(config, override, prefix="")
+        config.preset = recipe
+        for layer in given:
+            apply_dict(config, layer, prefix="")
         return config
 
-    config = compose({})  # which agent and robot: the agent's defaults on the robot come first
+    # which agent and robot (no recipe names one but the old "anymal"); then the robot's recipe,
+    # unless one is named, and its defaults for the agent
+    config = compose({}, chosen or TrainConfig.preset)
     get_agent_spec(config.agent)  # an unknown agent: its ValueError now
     robot = ROBOTS.get(config.robot)  # an unknown robot: validate() says so
-    defaults = robot.agent_defaults.get(config.agent) if robot is not None else None
-    if defaults:
-        config = compose(defaults)
+    if robot is not None:
+        config = compose(robot.agent_defaults.get(config.agent, {}), chosen or robot.recipe)
     config.validate()
     return config
 

@@ -17,6 +17,8 @@ import torch
 from cpg_actor.agents import get_agent_spec
 from cpg_actor.config import TrainConfig
 from cpg_actor.ppo.normalizer import RunningNormalizer
+from cpg_actor.robots.registry import get_robot
+from cpg_actor.training.build import make_env
 from cpg_actor.training.checkpoint import check_checkpoint_run, load_checkpoint
 from cpg_actor.training.policy import Policy
 
@@ -47,13 +49,13 @@ def load_policy(
     config = TrainConfig.from_dict(data["config"])
     if env_config is not None:
         config.env = env_config
-    spec = get_agent_spec(config.agent)
-    env = spec.make_env(1, config.env, 1, config.agent_config)
+    spec, plugin = get_agent_spec(config.agent), get_robot(config.robot)
+    env = make_env(config, plugin, 1, 1)
     try:
         low = np.asarray(env.single_action_space.low, dtype=np.float32)
         high = np.asarray(env.single_action_space.high, dtype=np.float32)
         obs_dim = int(env.single_observation_space.shape[0])
-        agent = spec.build(config.agent_config, env)
+        agent = spec.build(config.agent_config, env, plugin)
         robot = getattr(env, "robot", None)
     finally:
         env.close()

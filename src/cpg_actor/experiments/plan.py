@@ -167,6 +167,7 @@ def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
     """The :class:`TrainConfig` ``cpg-actor train`` will build for one run (validates it)."""
     from cpg_actor.agents.start_gait import search_steps
     from cpg_actor.config import compose_config, without_compile_if_no_compiler
+    from cpg_actor.robots.registry import get_robot
 
     agent, variant_overrides = variant_agent(variant)
     values = {"agent": agent, "seed": seed, "total_steps": settings.total_steps}
@@ -179,7 +180,7 @@ def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
     from cpg_actor.agents import get_agent_spec
 
     if settings.count_search_steps and get_agent_spec(config.agent).uses_start_gait:
-        steps = search_steps(config.agent_config.start_gait, config.robot)
+        steps = search_steps(config.agent_config.start_gait, get_robot(config.robot))
         if steps:
             values["search_steps"] = steps
             config = compose_config(preset=settings.preset, values=values, overrides=overrides)
@@ -210,8 +211,7 @@ def checkpoint_interval(config) -> int:
     A search generation runs whole episodes: about ``TARGET_CHECKPOINTS`` of them."""
     if searches(config):
         return max(1, planned_iterations(config)[0] // TARGET_CHECKPOINTS)
-    episode_steps = int(getattr(config.env, "episode_steps", 500))
-    at_least = math.ceil(2 * episode_steps / config.ppo.num_steps)
+    at_least = math.ceil(2 * config.env.episode_steps / config.ppo.num_steps)
     return max(1, at_least, config.num_iterations // TARGET_CHECKPOINTS)
 
 

@@ -24,12 +24,12 @@ from cpg_actor.experiments.results import (
     sent_velocity,
     trace_joint_limits,
 )
+from cpg_actor.experiments.robustness_report import report_lines as robustness_lines
 from cpg_actor.experiments.transfer import load_transfer, transfer_lines
 from cpg_actor.files import atomic_write_text
 from cpg_actor.machine import cpu_model, git_commit
 from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
 from cpg_actor.robots.hopper.reward import REWARD_TERMS
-from cpg_actor.robustness.summary import report_lines as robustness_lines
 
 PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
 PAPER_STAGE_STEPS = (1_000_000, 20_000_000, 60_000_000)
@@ -586,33 +586,57 @@ def _seed_cell(row: dict[str, Any], key: str, digits: int = 3, percent: bool = F
 
 
 def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> Path:
-    """Figures, ``summary.json`` and ``report.md`` for the results directory ``out``."""
+    """Figures, ``summary.json`` and ``report.md`` for the results directory ``out``
+    (``run_results``: the runs of the ``cpg-actor reproduce`` that wrote it, if any)."""
     out = Path(out)
     saved = load_settings_file(out) or {}
     settings = saved.get("settings", {})
     variants = list(settings.get("variants") or [])
-    total_steps = int(settings.get("total_steps") or 0)
     results = Results.load(out, variants or None)
-    if not total_steps:
-        total_steps = max(
-            (
-                int(run.return_curve()[0].max(initial=0))
-                for runs in results.runs.values()
-                for run in runs
-            ),
-            default=0,
-        )
+    total_steps = int(settings.get("total_steps") or 0) or _longest_run(results)
     figures, notes = make_figures(results)
-    for variant in variants:
-        if not results.has(variant):
-            notes.append(f"{variant}: no run directory")
+    notes += [f"{variant}: no run directory" for variant in variants if not results.has(variant)]
     summary = summarise(results, total_steps)
-    env = environment()
-    summary["environment"] = env
+    summary["environment"] = environment()
     summary["notes"] = notes
     atomic_write_text(json.dumps(summary, indent=2, default=str) + "\n", out / "summary.json")
-
     lines = [
+        *_setup_lines(saved, results, total_steps, summary["environment"]),
+        *_invocation_lines(run_results or []),
+        *_variant_lines(summary, load_floor(out)),
+        *_feedback_lines(summary),
+        *_reward_term_lines(summary),
+        "",
+        *_learning_lines(summary),
+        *_stage_lines(summary),
+        "",
+        *_comparison_lines(summary["comparisons"]),
+        *transfer_lines(load_transfer(out)),
+        *robustness_lines(out),  # the suite's verdicts, if it ran on this reproduction
+        *_claim_lines(summary, total_steps),
+        *_figure_lines(figures, out),
+        *_definition_lines(),
+    ]
+    if notes:
+        lines += ["## Notes", ""] + [f"* {note}" for note in notes] + [""]
+    path = out / "report.md"
+    atomic_write_text("\n".join(lines), path)
+    return path
+
+
+def _longest_run(results: Results) -> int:
+    """The most steps any run logged (the budget of a results directory without settings)."""
+    curves = (run.return_curve()[0] for runs in results.runs.values() for run in runs)
+    return max((int(steps.max(initial=0)) for steps in curves), default=0)
+
+
+def _setup_lines(
+    saved: dict[str, Any], results: Results, total_steps: int, env: dict[str, Any]
+) -> list[str]:
+    """The report's title and "Setup": the command, budget, variants, machine and code."""
+    settings = saved.get("settings", {})
+    variants = list(settings.get("variants") or [])
+    return [
         "# CPG-Actor reproduction report",
         "",
         f"Generated {datetime.now(timezone.utc).strftime('%Y-%m-%d %H:%M UTC')} by "
@@ -636,31 +660,42 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
         "* versions: " + ", ".join(f"{k} {v}" for k, v in env["versions"].items()),
         "",
     ]
-    if run_results:
-        failed = [r for r in run_results if r.get("status") == "failed"]
-        lines += [
-            f"Runs this invocation: {len(run_results)} "
-            f"({sum(r['status'] == 'done' for r in run_results)} completed, "
-            f"{sum(r['status'] == 'skipped' for r in run_results)} skipped as finished, "
-            f"{len(failed)} failed).",
-            "",
-        ]
-        for r in failed:
-            lines.append(f"* **failed** {r['name']}: {r.get('error', '')}")
-        if failed:
-            lines.append("")
-        nodes: dict[str, list[str]] = {}
-        for r in run_results:
-            if r.get("node"):
-                node = r["node"]
-                key = f"{node['hostname']} ({node['ip']}, node {node['id'][:8]})"
-                nodes.setdefault(key, []).append(r["name"])
-        if nodes:
-            lines += [f"Ray nodes this invocation ({len(nodes)}):", ""]
-            lines += [f"* {key}: {', '.join(names)}" for key, names in nodes.items()]
-            lines.append("")
 
-    lines += [
+
+def _invocation_lines(run_results: list[dict[str, Any]]) -> list[str]:
+    """The runs of this invocation: how many finished, skipped and failed, and on which Ray
+    nodes (none without runs)."""
+    if not run_results:
+        return []
+    failed = [r for r in run_results if r.get("status") == "failed"]
+    lines = [
+        f"Runs this invocation: {len(run_results)} "
+        f"({sum(r['status'] == 'done' for r in run_results)} completed, "
+        f"{sum(r['status'] == 'skipped' for r in run_results)} skipped as finished, "
+        f"{len(failed)} failed).",
+        "",
+    ]
+    for r in failed:
+        lines.append(f"* **failed** {r['name']}: {r.get('error', '')}")
+    if failed:
+        lines.append("")
+    nodes: dict[str, list[str]] = {}
+    for r in run_results:
+        if r.get("node"):
+            node = r["node"]
+            key = f"{node['hostname']} ({node['ip']}, node {node['id'][:8]})"
+            nodes.setdefault(key, []).append(r["name"])
+    if nodes:
+        lines += [f"Ray nodes this invocation ({len(nodes)}):", ""]
+        lines += [f"* {key}: {', '.join(names)}" for key, names in nodes.items()]
+        lines.append("")
+    return lines
+
+
+def _variant_lines(summary: dict[str, Any], floor: Any) -> list[str]:
+    """The section "Results per variant": the table of per-seed numbers, the open-loop grid's
+    floor and the ratio of the CPG-Actor's return to Cho et al.'s."""
+    lines = [
         "## Results per variant",
         "",
         f"Per seed one number; per variant the **median over seeds [its bootstrap 95% CI]** "
@@ -690,7 +725,6 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
             f"{_seed_cell(row, 'velocity_share', percent=True)} | "
             f"{_seed_cell(row, 'time_at_stop', percent=True)} |"
         )
-    floor = load_floor(out)
     floor_reward = _floor_reward(floor)
     lines += [""] + _floor_lines(floor, seeds_of(summary, floor_reward))
     if "cpg-actor" in summary["variants"] and "cho2019-warm" in summary["variants"]:
@@ -709,33 +743,42 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
             f"**{text}**.",
             "",
         ]
+    return lines
 
+
+def _feedback_lines(summary: dict[str, Any]) -> list[str]:
+    """The section "CPG signals and feedback", for the variants whose traces have them (none
+    else)."""
     feedback_rows = [
         (variant, row)
         for variant, row in summary["variants"].items()
         if np.isfinite(row["xi_at_bound"][0]) or np.isfinite(row["theta_dot_variability"][0])
     ]
-    if feedback_rows:
-        lines += [
-            "## CPG signals and feedback",
-            "",
-            f"From the final evaluation traces, {SPREAD}: the standard deviation "
-            "over an episode (after 50 steps) of theta_dot and r_ddot (how much the CPG "
-            "responds), and for bounded feedback the share of xi and kappa values at 95 % or "
-            "more of their bound (near 100 %: bang-bang feedback).",
-            "",
-            "| variant | std theta_dot (rad/s) | std r_ddot (rad/s^2) | xi at bound | "
-            "kappa at bound |",
-            "| --- | --- | --- | --- | --- |",
-        ]
-        for variant, row in feedback_rows:
-            lines.append(
-                f"| {label(variant)} | {_pm(row['theta_dot_variability'])} | "
-                f"{_pm(row['r_ddot_variability'])} | {_pct(row['xi_at_bound'])} | "
-                f"{_pct(row['kappa_at_bound'])} |"
-            )
-        lines += [""]
-    lines += [
+    if not feedback_rows:
+        return []
+    lines = [
+        "## CPG signals and feedback",
+        "",
+        f"From the final evaluation traces, {SPREAD}: the standard deviation "
+        "over an episode (after 50 steps) of theta_dot and r_ddot (how much the CPG "
+        "responds), and for bounded feedback the share of xi and kappa values at 95 % or "
+        "more of their bound (near 100 %: bang-bang feedback).",
+        "",
+        "| variant | std theta_dot (rad/s) | std r_ddot (rad/s^2) | xi at bound | kappa at bound |",
+        "| --- | --- | --- | --- | --- |",
+    ]
+    for variant, row in feedback_rows:
+        lines.append(
+            f"| {label(variant)} | {_pm(row['theta_dot_variability'])} | "
+            f"{_pm(row['r_ddot_variability'])} | {_pct(row['xi_at_bound'])} | "
+            f"{_pct(row['kappa_at_bound'])} |"
+        )
+    return [*lines, ""]
+
+
+def _reward_term_lines(summary: dict[str, Any]) -> list[str]:
+    """The section "The return split into its reward terms" (paper eq. 4), per variant."""
+    lines = [
         "## The return split into its reward terms",
         "",
         "Paper eq. 4: r1 pays upward hip speed, r2..r5 penalise tracking error, joint speed, "
@@ -755,8 +798,12 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
             + " | ".join(_pm(row[f"term_{name}"]) for name in REWARD_TERMS)
             + f" | {'-' if not np.isfinite(share) else f'{100 * share:.0f}%'} |"
         )
-    lines += [""] + _learning_lines(summary)
-    lines += [
+    return lines
+
+
+def _stage_lines(summary: dict[str, Any]) -> list[str]:
+    """The section "Stages of training": the evaluations at 1/60, 1/3 and 1 of the budget."""
+    lines = [
         "## Stages of training",
         "",
         "Deterministic evaluation at the checkpoints nearest to 1/60, 1/3 and 1 of the budget "
@@ -773,10 +820,12 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
                 f"| {label(variant)} | {name} | {steps} | {_pm(stage['eval_return'])} | "
                 f"{_pm(stage['hop_height'])} |"
             )
-    lines += [""] + _comparison_lines(summary["comparisons"])
-    lines += transfer_lines(load_transfer(out))
-    lines += robustness_lines(out)  # the suite's verdicts, if it ran on this reproduction
-    lines += [
+    return lines
+
+
+def _claim_lines(summary: dict[str, Any], total_steps: int) -> list[str]:
+    """The section "The paper's claims": each verdict with its evidence."""
+    lines = [
         "## The paper's claims",
         "",
         f"Verdicts computed from the numbers above, at a budget of {total_steps:,} steps per "
@@ -788,7 +837,13 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
     for claim in summary["claims"]:
         detail = claim["detail"].replace("|", "\\|")  # a | would end the table cell
         lines.append(f"| {claim['claim']} | **{claim['verdict']}** | {detail} |")
-    lines += ["", "## Figures", ""]
+    return lines
+
+
+def _figure_lines(figures: list[Path], out: Path) -> list[str]:
+    """The section "Figures": each of the paper's with its caption (or why it was not drawn),
+    then the single panels."""
+    lines = ["", "## Figures", ""]
     by_name = {p.stem: p for p in figures if p.suffix == ".png"}
     captions = {
         "ep_reward": "fig:ep_reward - episode reward against steps (mean, min-max band)",
@@ -814,7 +869,12 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
         + " (and a PDF of every figure).",
         "",
     ]
-    lines += [
+    return lines
+
+
+def _definition_lines() -> list[str]:
+    """The section "Definitions": what each column and claim threshold means."""
+    return [
         "## Definitions",
         "",
         "* desired position: the joint position command the env tracked (the agent's command "
@@ -849,8 +909,3 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
         "lower bound >= 3.",
         "",
     ]
-    if notes:
-        lines += ["## Notes", ""] + [f"* {note}" for note in notes] + [""]
-    path = out / "report.md"
-    atomic_write_text("\n".join(lines), path)
-    return path

@@ -95,9 +95,12 @@ class Robot:
     # its env config's ``sim`` field names the run's
     simulators: tuple[str, ...] = ("mujoco",)
     # the agents' tuned settings on it, by agent name: config values (a nested mapping, as a
-    # preset's) a run of that agent starts from unless its preset, config file or command line
+    # recipe's) a run of that agent starts from unless its recipe, config file or command line
     # say otherwise (cpg_actor.config.compose_config)
     agent_defaults: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    # the recipe (cpg_actor.config.presets.PRESETS) a run on it follows when neither
+    # ``--preset`` nor its config file names one: with ``agent_defaults``, its tuned settings
+    recipe: str = "paper"
 
     @property
     def episode_steps(self) -> int:
@@ -117,6 +120,18 @@ class Robot:
         config declares none."""
         table = getattr(self.config_class, "perturbation_table", None)
         return None if table is None else table()
+
+    def cpg_layout(self, layout: str = "") -> tuple[str, CPGLayout]:
+        """The name and the :class:`CPGLayout` of its CPG layout ``layout`` (empty: its
+        default, the first); ValueError naming its layouts if it has none of that name."""
+        layouts = self.cpg_layouts()
+        name = layout or next(iter(layouts))
+        if name not in layouts:
+            raise ValueError(
+                f"agent_config.cpg_layout {name!r}: robot '{self.name}' has the CPG layouts "
+                f"{', '.join(layouts)}"
+            )
+        return name, layouts[name]
 
     def simulator(self, config: Any) -> str:
         """The simulator an env config of this robot runs on."""

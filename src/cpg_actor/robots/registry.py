@@ -3,13 +3,13 @@
 ``TrainConfig.robot`` (``--robot``) names one; ``TrainConfig.env`` then holds that robot's env
 config. Everything the project knows about a robot comes from its :class:`Robot` entry
 (:mod:`cpg_actor.robots.plugin`): the env factory, the Gymnasium ids, the CPG layouts, the
-start gait and the headline metrics. A robot is added as a folder with a ``plugin.py`` and one
-line here.
+start gait, the headline metrics and its defaults. A run looks its robot up here once, by
+that name, and hands the entry down to the env, the agent and the evaluation. A robot is added
+as a folder with a ``plugin.py`` and one line here (or by :func:`register_robot`).
 """
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 import gymnasium
@@ -17,11 +17,21 @@ import gymnasium
 from cpg_actor.robots.anymal.plugin import ROBOT as ANYMAL
 from cpg_actor.robots.go1.plugin import ROBOT as GO1
 from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
-from cpg_actor.robots.plugin import CPGLayout, MetricInfo, Robot
-from cpg_actor.robots.spec import RobotSpec
+from cpg_actor.robots.plugin import MetricInfo, Robot
 
 ROBOTS: dict[str, Robot] = {robot.name: robot for robot in (HOPPER, ANYMAL, GO1)}
 DEFAULT_ROBOT = HOPPER.name
+
+
+def register_robot(robot: Robot) -> Robot:
+    """Add ``robot`` to :data:`ROBOTS` (``--robot``, ``TrainConfig.robot``) and register its
+    Gymnasium ids; ValueError if a robot of its name is registered already. A robot made
+    outside the package registers on import of its module, before the run is built."""
+    if robot.name in ROBOTS:
+        raise ValueError(f"a robot named {robot.name!r} is already registered")
+    ROBOTS[robot.name] = robot
+    _register_gym_ids(robot)
+    return robot
 
 
 def get_robot(name: str) -> Robot:
@@ -37,42 +47,6 @@ def robot_of_config(env_config: Any) -> Robot:
         if type(env_config) is robot.config_class:  # a subclass is another robot's config
             return robot
     raise ValueError(f"{type(env_config).__name__} is no robot's env config")
-
-
-def robot_of_model(model: str) -> Robot:
-    """The robot whose envs describe it as ``model`` (``RobotSpec.name``)."""
-    for robot in ROBOTS.values():
-        if robot.model == model:
-            return robot
-    known = ", ".join(robot.model for robot in ROBOTS.values())
-    raise ValueError(f"no robot is registered for the robot model {model!r} (known: {known})")
-
-
-def make_robot_env(num_envs: int, env_config: Any, num_threads: int | None = None) -> Any:
-    """The vector env of the robot whose config ``env_config`` is."""
-    return robot_of_config(env_config).make(num_envs, env_config, num_threads)
-
-
-def cpg_choices(spec: RobotSpec) -> tuple[dict[str, CPGLayout], Path | None]:
-    """The CPG layouts and the start gait of the robot an env simulates: those its
-    :class:`RobotSpec` gives, else those of the registered robot whose envs are named as it."""
-    if spec.cpg_layouts is not None:
-        return spec.cpg_layouts(), spec.start_gait
-    robot = robot_of_model(spec.name)
-    return robot.cpg_layouts(), robot.start_gait
-
-
-def cpg_layout(spec: RobotSpec, layout: str = "") -> tuple[str, CPGLayout]:
-    """The name and the :class:`CPGLayout` of the env's robot's CPG layout ``layout``
-    (empty: its default, the first)."""
-    layouts, _ = cpg_choices(spec)
-    name = layout or next(iter(layouts))
-    if name not in layouts:
-        raise ValueError(
-            f"agent_config.cpg_layout {name!r}: robot '{spec.name}' has the CPG layouts "
-            f"{', '.join(layouts)}"
-        )
-    return name, layouts[name]
 
 
 def all_simulators() -> tuple[str, ...]:
@@ -94,13 +68,17 @@ def register() -> None:
     ``max_episode_steps`` says when, and a longer episode needs both, e.g.
     ``gym.make(ENV_ID, episode_steps=1000, max_episode_steps=1000)``."""
     for robot in ROBOTS.values():
-        for gym_id in robot.gym_ids:
-            if gym_id.id in gymnasium.registry:
-                continue
-            gymnasium.register(
-                id=gym_id.id,
-                entry_point=gym_id.entry_point,
-                vector_entry_point=gym_id.vector_entry_point,
-                kwargs=dict(gym_id.kwargs),
-                max_episode_steps=robot.episode_steps,
-            )
+        _register_gym_ids(robot)
+
+
+def _register_gym_ids(robot: Robot) -> None:
+    for gym_id in robot.gym_ids:
+        if gym_id.id in gymnasium.registry:
+            continue
+        gymnasium.register(
+            id=gym_id.id,
+            entry_point=gym_id.entry_point,
+            vector_entry_point=gym_id.vector_entry_point,
+            kwargs=dict(gym_id.kwargs),
+            max_episode_steps=robot.episode_steps,
+        )

@@ -2,25 +2,43 @@
 by the environment (from the robot's description) and read by everything else.
 
 Agents are built from it (the number of joints, the nominal pose the actions are centred on,
-the control period of the CPG, for the CPG agents the CPG layouts and the start gait), so a
-new robot is a new environment, not a change to the trainer.
+the control period of the CPG) and, for the CPG agents, from the robot's registry entry (its
+CPG layouts and start gait, :class:`cpg_actor.robots.plugin.Robot`), so a new robot is a new
+environment, not a change to the trainer.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
+
+
+class EnvConfig(Protocol):
+    """What the trainer reads of every robot's env config (``TrainConfig.env``, an instance
+    of its ``Robot.config_class``): the control period and the length of an episode, each read
+    as this attribute and nowhere guessed. A config class may give more, each used where it
+    is there: ``from_dict(values)`` (``--set env.KEY=...``), ``replace(**changes)``, ``sim``
+    (a robot on several simulators), ``perturbation`` and ``randomize``
+    (``docs/robustness.md``)."""
+
+    @property
+    def control_dt(self) -> float:
+        """Seconds of one control step (one env step)."""
+        ...
+
+    @property
+    def episode_steps(self) -> int:
+        """Control steps of an episode, after which it is truncated."""
+        ...
 
 
 @dataclass(frozen=True)
 class RobotSpec:
     """The robot behind an environment's joint-position actions."""
 
-    name: str  # e.g. "anymal-hopper": selects the CPG preset of the CPG-Actor
+    name: str  # the robot model, e.g. "anymal-hopper" (Robot.model; an exported policy's)
     joint_names: tuple[str, ...]  # actuated joints, in action order
     nominal_pose: tuple[float, ...]  # rad, the standing pose actions are centred on
     action_low: tuple[float, ...]  # rad, joint limits (the action space)
@@ -34,12 +52,6 @@ class RobotSpec:
     # observations evaluation records as traces of their own, by name (the hopper's
     # hip_height), with their value after reset as standing_<name>
     traced_observations: tuple[str, ...] = ()
-    # what the CPG agents build on: the robot's CPG layouts (``Robot.cpg_layouts``: name ->
-    # CPGLayout, the first the default) and the gait of agent_config.start_gait "search"
-    # (``Robot.start_gait``). None: both are those of the registered robot whose envs are
-    # named ``name`` (:func:`cpg_actor.robots.registry.cpg_choices`)
-    cpg_layouts: Callable[[], dict[str, Any]] | None = field(default=None, repr=False)
-    start_gait: Path | None = None
 
     def __post_init__(self) -> None:
         n = len(self.joint_names)

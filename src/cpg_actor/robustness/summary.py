@@ -19,11 +19,9 @@ from typing import Any
 import numpy as np
 
 from cpg_actor.experiments import metrics as m
+from cpg_actor.experiments.robustness_report import JSON_FILE, MARKDOWN_FILE, verdict_lines
 from cpg_actor.robustness.suite import NO_GAIT, NOT_RECOVERED
 
-JSON_FILE = "robustness.json"
-MARKDOWN_FILE = "robustness.md"
-REPORT_FOLDER = "robustness"  # a reproduction's suite, OUT/robustness/, goes into its report
 # a variant trained with env.randomize is named as the nominal one with this suffix: the
 # verdicts compare the two
 RANDOMIZED = "-randomized"
@@ -123,31 +121,6 @@ def verdicts(runs: list[dict[str, Any]], names: list[str]) -> list[dict[str, Any
             out.append({"claim": f"{first} more robust than {second}", "perturbation": name,
                         "verdict": verdict, "why": why})  # fmt: skip
     return out
-
-
-def verdict_lines(data: dict[str, Any]) -> list[str]:
-    """The verdicts as a Markdown table (none: no lines)."""
-    rows = data.get("verdicts") or []
-    if not rows:
-        return []
-    lines = ["| claim | perturbation | verdict | why |", "| --- | --- | --- | --- |"]
-    lines += [f"| {r['claim']} | {r['perturbation']} | **{r['verdict']}** | {r['why']} |"
-              for r in rows]  # fmt: skip
-    return lines
-
-
-def report_lines(out: Path) -> list[str]:
-    """The reproduction report's robustness section, from ``OUT/robustness/robustness.json``
-    (``cpg-actor robustness OUT --out OUT/robustness``); none without it."""
-    path = Path(out) / REPORT_FOLDER / JSON_FILE
-    try:
-        data = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return []
-    return ["## Robustness", "",
-            f"Per perturbation, the return retained under it (mean over its levels, per seed; "
-            f"`{REPORT_FOLDER}/{MARKDOWN_FILE}` has every level), {data['episodes']} episodes "
-            "per level:", "", *verdict_lines(data), ""]  # fmt: skip
 
 
 def plain(value: Any) -> Any:

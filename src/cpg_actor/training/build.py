@@ -2,8 +2,10 @@
 policy, the normalisers, PPO and the rollout storage, apart from the loop that trains them
 (:mod:`cpg_actor.training.runner`).
 
-The agent's spec (:func:`cpg_actor.agents.get_agent_spec`) gives the env and builds the agent
-for it: nothing here knows a robot or an agent's insides.
+The run's robot is looked up once, by its name (``TrainConfig.robot``), and handed down: its
+entry (:class:`cpg_actor.robots.plugin.Robot`) builds the env, the agent's spec
+(:func:`cpg_actor.agents.get_agent_spec`) wraps it if the agent needs it and builds the agent
+from it and the robot: nothing here knows a robot or an agent's insides.
 """
 
 from __future__ import annotations
@@ -26,6 +28,8 @@ from cpg_actor.ppo import (
     compile_reproducibly,
 )
 from cpg_actor.robots.common.torch_env import TorchVectorEnv
+from cpg_actor.robots.plugin import Robot
+from cpg_actor.robots.registry import get_robot
 from cpg_actor.training.policy import Policy
 from cpg_actor.training.seeding import seed_everything
 
@@ -35,6 +39,7 @@ class PPORun:
     """What a PPO run trains with (:func:`build_ppo_run`)."""
 
     device: torch.device
+    robot: Robot  # the run's robot (TrainConfig.robot), resolved once
     spec: AgentSpec
     env: TorchVectorEnv  # the training envs, torch tensors on ``device``
     agent: Agent
@@ -45,9 +50,20 @@ class PPORun:
     storage: RolloutStorage
 
 
+def make_env(
+    config: TrainConfig, robot: Robot, num_envs: int, num_threads: int | None,
+    env_config: Any = None,
+) -> Any:  # fmt: skip
+    """The env a run's agent acts on: ``num_envs`` of ``robot``'s envs on ``env_config`` (the
+    run's env config if None), wrapped as the run's agent needs (``AgentSpec.wrapper``)."""
+    env_config = config.env if env_config is None else env_config
+    env = robot.make(num_envs, env_config, num_threads)
+    return get_agent_spec(config.agent).wrap(env, config.agent_config, robot)
+
+
 def build_ppo_run(config: TrainConfig, env: Any = None) -> PPORun:
     """Seed everything, then build the run's parts in a fixed order (the same seed gives the
-    same initial networks). ``env`` replaces the agent spec's env factory (tests)."""
+    same initial networks). ``env`` replaces the robot's envs (tests)."""
     torch.set_num_threads(config.torch_threads)
     device = resolve_device(config.device)
     seed_everything(config.seed)
@@ -57,14 +73,15 @@ def build_ppo_run(config: TrainConfig, env: Any = None) -> PPORun:
             f"agent '{config.agent}' is trained by {spec.trainer}, not PPO; use "
             "cpg_actor.training.es_runner.ESRunner (cpg-actor train picks it)"
         )
+    robot = get_robot(config.robot)
     if env is None:
-        env = spec.make_env(config.num_envs, config.env, config.env_threads, config.agent_config)
+        env = make_env(config, robot, config.num_envs, config.env_threads)
     env = TorchVectorEnv(env, device)
     if env.num_envs != config.num_envs:
         raise ValueError(f"the env has {env.num_envs} sub-envs, the config {config.num_envs}")
     action_space = env.single_action_space
     obs_dim = int(env.single_observation_space.shape[0])
-    agent = spec.build(config.agent_config, env)
+    agent = spec.build(config.agent_config, env, robot)
     agent.to(device)
     if config.ppo.bptt_steps > 1 and math.prod(agent.state_shape) == 0:
         raise ValueError(
@@ -93,4 +110,6 @@ def build_ppo_run(config: TrainConfig, env: Any = None) -> PPORun:
         tuple(agent.state_shape),
         device,
     )
-    return PPORun(device, spec, env, agent, normalizer, policy, reward_normalizer, ppo, storage)
+    return PPORun(
+        device, robot, spec, env, agent, normalizer, policy, reward_normalizer, ppo, storage
+    )

@@ -42,7 +42,6 @@ from cpg_actor.agents.open_loop_es import (
     CMASearch,
     Rollouts,
     episode_seeds,
-    episode_steps,
     generation_steps,
     num_generations,
 )
@@ -50,7 +49,9 @@ from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
 from cpg_actor.ppo import RunningNormalizer
 from cpg_actor.robots.common.torch_env import TorchVectorEnv
+from cpg_actor.robots.registry import get_robot
 from cpg_actor.training import run_checkpoint
+from cpg_actor.training.build import make_env
 from cpg_actor.training.evaluation import TrainingEvaluation, finite_mean
 from cpg_actor.training.hooks import Checkpoints, Hook, Iteration, loop_hooks, run_loop
 from cpg_actor.training.run_log import RunLog
@@ -99,8 +100,9 @@ class ESRunner:
         self.num_generations = num_generations(config)
         self.generation_steps = generation_steps(config)
         num_envs = es.popsize * es.episodes
+        self.robot = get_robot(config.robot)  # the run's robot, resolved once
         if env is None:
-            env = self.spec.make_env(num_envs, config.env, config.env_threads, config.agent_config)
+            env = make_env(config, self.robot, num_envs, config.env_threads)
         self.env = TorchVectorEnv(env, self.device)
         if self.env.num_envs != num_envs:
             raise ValueError(
@@ -110,7 +112,7 @@ class ESRunner:
         action_space = self.env.single_action_space
         self.action_low = np.asarray(action_space.low, dtype=np.float32)
         self.action_high = np.asarray(action_space.high, dtype=np.float32)
-        self.agent = self.spec.build(config.agent_config, self.env)
+        self.agent = self.spec.build(config.agent_config, self.env, self.robot)
         if not isinstance(self.agent, CPGActorAgent) or self.agent.feedback is not None:
             raise ValueError(
                 f"agent '{config.agent}' must build an open-loop CPGActorAgent (feedback=False) "
@@ -125,7 +127,7 @@ class ESRunner:
         self.vector = self.agent.cpg.parametrisation.vector
         self.start_vector = self.vector.detach().clone()
         self.rollouts = CandidateRollouts(
-            self.agent, self.env, es.episodes, episode_steps(config.env)
+            self.agent, self.env, es.episodes, config.env.episode_steps
         )
         self.search = CMASearch(
             self.start_vector.double().cpu().numpy(),
@@ -134,7 +136,7 @@ class ESRunner:
             search_seed(config.seed),
         )
         self.evaluation = TrainingEvaluation(
-            config, self.spec, self.agent, self.normalizer, self.action_low, self.action_high,
+            config, self.robot, self.agent, self.normalizer, self.action_low, self.action_high,
             eval_env,
         )  # fmt: skip
         self.hooks: list[Hook] = loop_hooks(

@@ -159,18 +159,17 @@ def evaluate_policy(policy, config, episodes: int, seed: int) -> dict[str, np.nd
     run's ``config`` (``cpg-actor eval``, the transfer study): traces ``(T, E, ...)`` (rows
     after an env's episode ended are NaN), with the agent's name, the motor's speed limit and
     the CPG's oscillator names."""
-    from cpg_actor.agents import get_agent_spec
+    from cpg_actor.robots.registry import get_robot
+    from cpg_actor.training.build import make_env
 
-    env = get_agent_spec(config.agent).make_env(
-        episodes, config.env, config.env_threads, config.agent_config
-    )
+    env = make_env(config, get_robot(config.robot), episodes, config.env_threads)
     try:
         traces = evaluate(
             policy,
             env,
             seed=seed,
             control_dt=float(config.env.control_dt),
-            max_steps=int(getattr(config.env, "episode_steps", 10_000)),
+            max_steps=config.env.episode_steps,
         )
     finally:
         env.close()
@@ -308,15 +307,16 @@ def evaluation_row(policy, env, seed: int, control_dt: float, max_steps: int) ->
 
 class TrainingEvaluation:
     """The evaluation during training, of both runners: one episode with the mean action on
-    each of ``config.eval_episodes`` envs of its own (built at the first evaluation; ``env``
-    replaces them), always reset with the run's evaluation seed, by a policy of its own
-    around the run's agent and normaliser (the training envs' CPG states stay untouched)."""
+    each of ``config.eval_episodes`` envs of its own (the run's ``robot``'s, built at the first
+    evaluation; ``env`` replaces them), always reset with the run's evaluation seed, by a
+    policy of its own around the run's agent and normaliser (the training envs' CPG states
+    stay untouched)."""
 
     def __init__(
-        self, config: Any, spec: Any, agent, normalizer, action_low, action_high, env: Any = None
+        self, config: Any, robot: Any, agent, normalizer, action_low, action_high, env: Any = None
     ) -> None:
         self.config = config
-        self.spec = spec
+        self.robot = robot
         self.agent, self.normalizer = agent, normalizer
         self.action_low, self.action_high = action_low, action_high
         self.env = env
@@ -329,8 +329,10 @@ class TrainingEvaluation:
         cfg = self.config
         start = time.perf_counter()
         if self.env is None:
-            self.env = self.spec.make_env(
-                cfg.eval_episodes, nominal_env(cfg.env), cfg.env_threads, cfg.agent_config
+            from cpg_actor.training.build import make_env
+
+            self.env = make_env(
+                cfg, self.robot, cfg.eval_episodes, cfg.env_threads, nominal_env(cfg.env)
             )
         policy = Policy(
             self.agent,
@@ -344,7 +346,7 @@ class TrainingEvaluation:
             self.env,
             seed=derived_seed(cfg.seed, EVAL_SEED_KEY),
             control_dt=float(cfg.env.control_dt),
-            max_steps=int(getattr(cfg.env, "episode_steps", 10_000)),
+            max_steps=cfg.env.episode_steps,
         )
         row["time/eval"] = time.perf_counter() - start
         return row

@@ -61,7 +61,8 @@ class Runner:
     """Builds env, agent, normaliser and PPO from a :class:`TrainConfig` and trains.
 
     ``run_dir`` (optional) receives checkpoints, ``metrics.jsonl`` and TensorBoard events;
-    ``env`` and ``eval_env`` replace the agent spec's environment factory (tests); ``hooks``
+    ``env`` and ``eval_env`` replace the robot's envs (tests; the agent is still built for the
+    config's robot, ``TrainConfig.robot``: its CPG layouts and start gait); ``hooks``
     are called after evaluation, logging and progress, before checkpoints (a hook that sets
     ``Iteration.stop`` ends the run with a checkpoint).
     """
@@ -88,14 +89,14 @@ class Runner:
         self.show_progress = progress
         self.run_log = RunLog(self.run_dir, tensorboard)
         run = build_ppo_run(config, env)
-        self.device, self.spec, self.env = run.device, run.spec, run.env
+        self.device, self.robot, self.spec, self.env = run.device, run.robot, run.spec, run.env
         self.agent, self.normalizer, self.policy = run.agent, run.normalizer, run.policy
         self.reward_normalizer, self.ppo, self.storage = run.reward_normalizer, run.ppo, run.storage
         self.rollout = Rollout(config, run)
         self.compile_stance = CompileStance(config.ppo, self.device)
         low, high = self.policy.action_low, self.policy.action_high
         self.evaluation = TrainingEvaluation(
-            config, self.spec, self.agent, self.normalizer, low, high, eval_env
+            config, self.robot, self.agent, self.normalizer, low, high, eval_env
         )
         self.hooks: list[Hook] = [
             *loop_hooks(self.evaluation, ppo_row, ppo_progress, progress, progress_interval),
@@ -200,7 +201,9 @@ class Runner:
         cfg = self.config
         seed = derived_seed(cfg.seed, WARM_START_SEED_KEY)
         normalizer = self.normalizer if cfg.ppo.normalize_observations else None
-        losses = self.spec.warm_start(self.agent, normalizer, self.env.unwrapped, cfg, seed)
+        losses = self.spec.warm_start(
+            self.agent, normalizer, self.env.unwrapped, cfg, seed, self.robot
+        )
         self.rollout.started = False
         if self.show_progress:
             print(

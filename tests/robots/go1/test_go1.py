@@ -23,7 +23,7 @@ from cpg_actor.robots.go1.gaits import GO1_GAITS
 from cpg_actor.robots.go1.mjcf import mjcf_text
 from cpg_actor.robots.go1.plugin import ENV_ID
 from cpg_actor.robots.go1.vector import Go1VectorEnv
-from cpg_actor.robots.registry import ROBOTS, get_robot, robot_of_config, robot_of_model
+from cpg_actor.robots.registry import ROBOTS, get_robot, robot_of_config
 
 ORDER = tuple(f"{leg}_{kind}_joint" for leg in ("FR", "FL", "RR", "RL")
               for kind in ("hip", "thigh", "calf"))  # fmt: skip
@@ -98,7 +98,6 @@ def test_the_registry_lists_the_go1_and_tells_its_config_from_anymals():
     assert "go1" in ROBOTS and get_robot("go1").config_class is Go1Config
     assert robot_of_config(Go1Config()).name == "go1"
     assert robot_of_config(QuadrupedConfig()).name == "anymal"
-    assert robot_of_model("unitree-go1").name == "go1"
     assert {g.id for g in get_robot("go1").gym_ids} == {ENV_ID, "cpg_actor/Go1-mjx-v0"}
     layouts = get_robot("go1").cpg_layouts()
     assert set(layouts) == {"joint", "leg"} and next(iter(layouts["joint"].gaits)) == "trot"

@@ -245,10 +245,12 @@ def test_mjx_takes_no_perturbation():
 
 
 def test_the_cho2019_env_passes_the_perturbation_to_its_hopper():
-    from cpg_actor.agents import get_agent_spec
+    from cpg_actor.config import TrainConfig
+    from cpg_actor.robots.registry import get_robot
+    from cpg_actor.training.build import make_env
 
     config = HopperConfig(perturbation=Perturbation(payload=0.5, latency=1.0))
-    wrapped = get_agent_spec("cho2019-warm").make_env(1, config, 1)
+    wrapped = make_env(TrainConfig(agent="cho2019-warm"), get_robot("hopper"), 1, 1, config)
     inner = wrapped.env
     assert inner.sim.backend.total_mass() == pytest.approx(robot.TOTAL_MASS + 0.5)
     assert inner.sim.delay is not None and list(inner.sim.delay.steps) == [1]

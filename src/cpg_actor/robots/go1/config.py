@@ -48,3 +48,4 @@ class Go1Config(QuadrupedConfig):
     reward_scales: dict[str, float] = field(default_factory=_go1_scales)
 
     moving_mass = robot.TOTAL_MASS  # kg: sizes its payloads and pushes (QuadrupedConfig's)
+    body = "unitree-go1"

@@ -19,7 +19,6 @@ from gymnasium.vector.utils import batch_space
 from cpg_actor.robots.common.checks import check_render_mode, real_actions
 from cpg_actor.robots.hopper import description as robot
 from cpg_actor.robots.hopper.config import HopperConfig
-from cpg_actor.robots.hopper.plugin import START_GAIT, cpg_layouts
 from cpg_actor.robots.hopper.simulation import HopperSimulation, StepResult
 from cpg_actor.robots.hopper.task import (
     ACTION_HIGH,
@@ -88,8 +87,6 @@ def robot_spec(config: HopperConfig) -> RobotSpec:
         control_dt=float(config.control_dt),
         observation_names=tuple(OBS_NAMES),
         traced_observations=("hip_height",),  # the hop, drawn in eval's traces
-        cpg_layouts=cpg_layouts,
-        start_gait=START_GAIT,
     )
 
 

@@ -169,6 +169,9 @@ class QuadrupedConfig:
     # the mass the robot moves, kg (ANYmal B's: robots/anymal/description.py TOTAL_MASS), which
     # sizes its payloads and pushes
     moving_mass = 30.4214
+    # the body these numbers are for (its QuadrupedModel's name): a subclass for another body
+    # names its own, one that changes only numbers (a variant of the robot) keeps it
+    body = "anymal-b"
 
     @classmethod
     def perturbation_table(cls):

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from cpg_actor.robots.common.mjcf import simulated_mjcf
+from cpg_actor.robots.common.quadruped.agent_defaults import AGENT_DEFAULTS
 from cpg_actor.robots.common.quadruped.config import SIMULATORS
 from cpg_actor.robots.common.quadruped.metrics import METRICS
 from cpg_actor.robots.plugin import CPGLayout, GymId, Robot, load
@@ -45,8 +46,10 @@ def quadruped_robot(
             MuJoCo, N robots on MJX.
         gaits: its :class:`~cpg_actor.robots.common.quadruped.gaits.GaitCPGs`, "module:NAME".
         mjcf: its MJCF writer's module.
-        **fields: any other ``Robot`` field (e.g. ``agent_defaults``).
+        **fields: any other ``Robot`` field; by default its recipe is ``throughput`` and
+            its ``agent_defaults`` are the quadrupeds' tuned settings.
     """
+    fields = {"recipe": "throughput", "agent_defaults": AGENT_DEFAULTS, **fields}
     env_id, mjx_env_id = env_ids
     return Robot(
         name=name,

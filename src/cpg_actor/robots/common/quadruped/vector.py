@@ -97,13 +97,15 @@ def load_model(quadruped: QuadrupedModel, config: QuadrupedConfig,
 def resolve_config(
     config: QuadrupedConfig | dict | None, config_class: type = QuadrupedConfig
 ) -> QuadrupedConfig:
-    """``config`` (a ``config_class`` or a dict of its fields; defaults if None), validated."""
+    """``config`` (a ``config_class``, a variant of it, or a dict of its fields; defaults if
+    None), validated."""
     name = config_class.__name__
     if config is None:
         config = config_class()
     elif isinstance(config, dict):
         config = config_class.from_dict(config)
-    elif type(config) is not config_class:  # another robot's subclass is not this robot's
+    # a subclass for another body (the Go1's of ANYmal's) is not this robot's; a variant is
+    elif not (isinstance(config, config_class) and config.body == config_class.body):
         raise ValueError(f"config must be a {name} or a dict of its fields, got "
                          f"{type(config).__name__}")  # fmt: skip
     return config.validate()
