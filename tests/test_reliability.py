@@ -402,6 +402,12 @@ def test_tensorboard_holds_each_point_once_after_a_resume(tmp_path):
     checkpoints = run_dir / "checkpoints"
     (checkpoints / "iter_000003.pt").unlink()  # killed before its checkpoint at iteration 3
     shutil.copyfile(checkpoints / "iter_000002.pt", checkpoints / "last.pt")
+    # TensorBoard reads event files in name order, and a name starts with the second it was
+    # made: a real resume comes later, here the same second would leave the order to the
+    # process's writer counter (".10" sorts before ".9"), so the first run's file is dated back
+    (old,) = (run_dir / "tensorboard").glob("events.out.tfevents.*")
+    stamp = old.name.split(".")[3]
+    old.rename(old.with_name(old.name.replace(f".{stamp}.", f".{int(stamp) - 1:010d}.", 1)))
     assert main(["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "48"]) == 0
     rows = [json.loads(line) for line in (run_dir / "metrics.jsonl").read_text().splitlines()]
     assert [row["global_step"] for row in rows] == [16, 32, 48]
