@@ -240,66 +240,61 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         return seeds[variant][key] if variant in seeds else None
 
     cho_variants = [variant for variant in variants if agent_kind(variant) == "cho"]
-    claims: list[dict[str, str]] = []
+    # the claims (claim, its evidence, a prefix of its explanation), judged as one family
+    claims: list[tuple[str, m.Claim, str]] = []
     # 1. about 6x the reward of Cho et al. (warm)
-    verdict, detail = m.verdict_reward_ratio(
-        per_seed("cpg-actor", "return_at_comparison"),
-        per_seed("cho2019-warm", "return_at_comparison"),
-    )
     claims.append(
-        {
-            "claim": "CPG-Actor reaches about 6x the reward of Cho et al. (warm) after 20M steps",
-            "verdict": verdict,
-            "detail": f"final returns at {comparison_step:,} steps: {detail}",
-        }
+        (
+            "CPG-Actor reaches about 6x the reward of Cho et al. (warm) after 20M steps",
+            m.verdict_reward_ratio(
+                per_seed("cpg-actor", "return_at_comparison"),
+                per_seed("cho2019-warm", "return_at_comparison"),
+            ),
+            f"final returns at {comparison_step:,} steps: ",
+        )
     )
     # 2. open-loop CPG-Actor beats Cho et al.
-    verdict, detail = m.verdict_better(
-        per_seed("cpg-actor-open-loop", "final_return"),
-        {cho: per_seed(cho, "final_return") for cho in cho_variants},
-    )
     claims.append(
-        {
-            "claim": "the open-loop CPG-Actor beats Cho et al.",
-            "verdict": verdict,
-            "detail": f"final returns: {detail}",
-        }
+        (
+            "the open-loop CPG-Actor beats Cho et al.",
+            m.verdict_better(
+                per_seed("cpg-actor-open-loop", "final_return"),
+                {cho: per_seed(cho, "final_return") for cho in cho_variants},
+            ),
+            "final returns: ",
+        )
     )
     # 3. smooth vs bang-bang
-    verdict, detail = m.verdict_smooth(per_seed("cpg-actor", "smoothness"),
-                                       per_seed("mlp", "smoothness"))  # fmt: skip
     claims.append(
-        {
-            "claim": "CPG-Actor desired positions are smooth where the MLP actor is bang-bang",
-            "verdict": verdict,
-            "detail": detail,
-        }
+        (
+            "CPG-Actor desired positions are smooth where the MLP actor is bang-bang",
+            m.verdict_smooth(per_seed("cpg-actor", "smoothness"), per_seed("mlp", "smoothness")),
+            "",
+        )
     )
     # 4. near the motor limits
-    verdict, detail = m.verdict_near_limits(
-        per_seed("cpg-actor", "velocity_p99"), per_seed("cpg-actor", "velocity_share")
-    )
     claims.append(
-        {
-            "claim": "CPG-Actor desired velocities stay near (within) the +-15 rad/s motor limits",
-            "verdict": verdict,
-            "detail": detail,
-        }
+        (
+            "CPG-Actor desired velocities stay near (within) the +-15 rad/s motor limits",
+            m.verdict_near_limits(
+                per_seed("cpg-actor", "velocity_p99"), per_seed("cpg-actor", "velocity_share")
+            ),
+            "",
+        )
     )
     # 5. the hop height about doubles: 1M steps -> the end, as in the paper (1M -> 60M)
-    verdict, detail = m.verdict_hop_doubles(
-        per_seed("cpg-actor", "final_hop_height_logged"),
-        per_seed("cpg-actor", "hop_height_at_1M"),
-        PAPER_STAGE_STEPS[0],
-        total_steps,
-    )
     claims.append(
-        {
-            "claim": "the CPG-Actor's hop height about doubles with training (1M -> 60M steps "
-            "in the paper; here 1M -> the end)",
-            "verdict": verdict,
-            "detail": detail,
-        }
+        (
+            "the CPG-Actor's hop height about doubles with training (1M -> 60M steps in the paper; "
+            "here 1M -> the end)",
+            m.verdict_hop_doubles(
+                per_seed("cpg-actor", "final_hop_height_logged"),
+                per_seed("cpg-actor", "hop_height_at_1M"),
+                PAPER_STAGE_STEPS[0],
+                total_steps,
+            ),
+            "",
+        )
     )
     # 6. the CPG-Actor performs best during training (paper Fig. 6)
     # against the variants trained on the same reward only (returns of other rewards differ),
@@ -312,14 +307,12 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         and variants[other]["reward"] == variants["cpg-actor"]["reward"]
         and m.seeds_with_data(seeds[other]["mean_eval_return"])
     }
-    verdict, detail = m.verdict_best_during_training(per_seed("cpg-actor", "mean_eval_return"),
-                                                     others)  # fmt: skip
     claims.append(
-        {
-            "claim": "the CPG-Actor performs best during training",
-            "verdict": verdict,
-            "detail": detail,
-        }
+        (
+            "the CPG-Actor performs best during training",
+            m.verdict_best_during_training(per_seed("cpg-actor", "mean_eval_return"), others),
+            "",
+        )
     )
 
     # 7. Cho et al.'s theta_dot and r_ddot stay flat; the CPG-Actor's respond (section V)
@@ -328,22 +321,24 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
             return None
         return {n: seeds[variant][f"{n}_variability"] for n in m.CPG_SIGNALS}
 
-    verdict, detail = m.verdict_cho_flat(
-        flatness("cpg-actor"), {cho: flatness(cho) for cho in cho_variants}
-    )
     claims.append(
-        {
-            "claim": "Cho et al.'s theta_dot and r_ddot stay almost flat, the CPG-Actor's are "
-            "reshaped by its feedback",
-            "verdict": verdict,
-            "detail": detail,
-        }
+        (
+            "Cho et al.'s theta_dot and r_ddot stay almost flat, the CPG-Actor's are reshaped by "
+            "its feedback",
+            m.verdict_cho_flat(flatness("cpg-actor"), {cho: flatness(cho) for cho in cho_variants}),
+            "",
+        )
     )
+    verdicts = m.decide([claim for _, claim, _ in claims])
+    judged = [
+        {"claim": claim, "verdict": verdict, "detail": prefix + detail}
+        for (claim, _, prefix), (verdict, detail) in zip(claims, verdicts, strict=True)
+    ]
     return {
         "total_steps": total_steps,
         "comparison_step": comparison_step,
         "variants": variants,
-        "claims": claims,
+        "claims": judged,
         "comparisons": _comparisons(seeds),
     }
 
@@ -369,32 +364,41 @@ COMPARISONS = (
 )
 
 
+# the metrics of the comparisons: (per-seed key, name in a row, key of m.MINIMUM_EFFECT)
+COMPARED = (("final_return", "return", "return"), ("final_hop_height_logged", "hop", "hop_height"))
+
+
 def _comparisons(seeds: dict[str, dict[str, list[float]]]) -> list[dict[str, Any]]:
     """For each pair of :data:`COMPARISONS` that ran: the differences of the final
-    (logged, deterministic) return and hop height, with bootstrap CIs over seeds, and which
-    one is better where a CI excludes 0; neither with fewer than ``MIN_SEEDS`` seeds a side."""
-    rows = []
+    (logged, deterministic) return and hop height, with bootstrap CIs over seeds (shown), and
+    which one is better: Welch's t-test, Holm-corrected over every test of the table (one
+    family), the difference at least the metric's minimum effect (of the second's mean);
+    neither with fewer than ``MIN_SEEDS`` seeds a side. Each row keeps ``NAME_p``: [p, Holm
+    p] and the family's size."""
+    rows, tests = [], []
     for first, second, question in COMPARISONS:
         if first not in seeds or second not in seeds:
             continue
         row: dict[str, Any] = {"first": first, "second": second, "question": question}
-        for key, name in (("final_return", "return"), ("final_hop_height_logged", "hop")):
-            if not m.enough_seeds(seeds[first][key], seeds[second][key]):
-                row[name], row[f"{name}_better"] = None, TOO_FEW
+        for key, name, metric in COMPARED:
+            a, b = seeds[first][key], seeds[second][key]
+            if not m.enough_seeds(a, b):
+                row[name], row[f"{name}_better"], row[f"{name}_p"] = None, TOO_FEW, None
                 continue
-            interval = m.bootstrap_difference(seeds[first][key], seeds[second][key])
-            row[name] = (
-                None if interval is None else [interval.estimate, interval.low, interval.high]
-            )
-            if interval is None:
-                row[f"{name}_better"] = "-"
-            elif interval.low > 0:
-                row[f"{name}_better"] = first
-            elif interval.high < 0:
-                row[f"{name}_better"] = second
-            else:
-                row[f"{name}_better"] = "not resolved"
+            interval = m.bootstrap_difference(a, b)
+            row[name] = [interval.estimate, interval.low, interval.high]
+            difference, p = m.welch_test(a, b)
+            minimum = m.MINIMUM_EFFECT[metric].threshold(float(np.mean(m.finite(b))))
+            tests.append((row, name, difference, p, minimum))
         rows.append(row)
+    adjusted = m.holm([p for *_, p, _ in tests])
+    for (row, name, difference, p, minimum), holm_p in zip(tests, adjusted, strict=True):
+        row[f"{name}_p"] = [p, holm_p]
+        resolved = holm_p < m.ALPHA and abs(difference) >= minimum and difference != 0
+        better = row["first"] if difference > 0 else row["second"]
+        row[f"{name}_better"] = better if resolved else "not resolved"
+    for row in rows:
+        row["family"] = len(tests)
     return rows
 
 
@@ -500,21 +504,30 @@ def _comparison_lines(comparisons: list[dict[str, Any]]) -> list[str]:
         value, low, high = values
         return f"{value:+.{digits}f} [{low:+.{digits}f}, {high:+.{digits}f}]"
 
+    def p_cell(values: list[float] | None) -> str:
+        return "-" if values is None else f"{values[0]:.2g} / {values[1]:.2g}"
+
+    minimum = {name: m.MINIMUM_EFFECT[metric] for _, name, metric in COMPARED}
     lines = [
         "## Comparisons beyond the paper",
         "",
         "First minus second variant: final return (the last logged deterministic evaluations) "
         "and hop height (the last 3 logged evaluations), mean difference over seeds with its "
-        "bootstrap 95% CI; *better* names the variant a CI excluding 0 favours.",
+        f"bootstrap 95% CI (shown). *p*: {m.WELCH} (two-sided) / its p after the "
+        f"{m.family_text(comparisons[0]['family'])} (every test of this table). *Better* "
+        f"names a variant where the {m.HOLM} p < {m.ALPHA:g} and the difference is at least "
+        f"the minimum effect ({minimum['return']} for returns, {minimum['hop']} for hop "
+        "heights; the baseline: the second variant's mean).",
         "",
-        "| question | first - second | return difference | better (return) | "
-        "hop height difference (m) | better (hop) |",
-        "| --- | --- | --- | --- | --- | --- |",
+        "| question | first - second | return difference | p (return) | better (return) | "
+        "hop height difference (m) | p (hop) | better (hop) |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for row in comparisons:
         lines.append(
             f"| {row['question']} | `{row['first']}` - `{row['second']}` | "
-            f"{cell(row['return'], 1)} | {row['return_better']} | {cell(row['hop'], 3)} | "
+            f"{cell(row['return'], 1)} | {p_cell(row.get('return_p'))} | "
+            f"{row['return_better']} | {cell(row['hop'], 3)} | {p_cell(row.get('hop_p'))} | "
             f"{row['hop_better']} |"
         )
     return lines + [""]
@@ -835,17 +848,24 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
         "(one draw of seeds for both: the same runs);",
         f"* fewer than {m.MIN_SEEDS} seeds with data on a side: no interval and no verdict "
         "(*not tested in this run*);",
-        "* claim thresholds: reward ratio of means within [3, 12] with CI above 1; open-loop "
-        "beats Cho et al. if the CI of the difference of mean final returns is above 0 for each "
-        "Cho variant run; smooth vs bang-bang if the CI of the ratio of medians MLP / CPG-Actor "
-        "has its lower bound >= 10; near the limits if the CI of the median over seeds of the "
-        "per-seed 99th percentile of |desired velocity| lies in [9, 18] rad/s; hop height "
-        "doubles if the ratio of mean hop heights at the end / at 1M steps (paired) is >= 1.5 "
-        "with its CI above 1; best during training if the CI of the difference of mean returns "
-        "over the run is above 0 against every variant of the same reward; Cho et al. flat if, "
-        "for theta_dot and r_ddot and every Cho variant, the CI of the ratio of medians "
-        "CPG-Actor / Cho of the standard deviation over an episode (after 50 steps) has its "
-        "lower bound >= 3.",
+        f"* verdicts: the CIs are shown, the verdicts rest on tests: {m.WELCH} (two-sided) "
+        f"between variants (independent runs), a {m.PAIRED} for the hop height at two times "
+        f"(the same runs), {m.BAND} for the velocity band; the p-values of every test behind "
+        f"the claims are one family, {m.HOLM}-corrected to a family-wise error rate of "
+        f"{m.ALPHA:g}; a claim is supported if each of its tests has a {m.HOLM} p < "
+        f"{m.ALPHA:g}, a difference in the claimed direction of at least the minimum effect "
+        f"({m.MINIMUM_EFFECT['return']} for returns, {m.MINIMUM_EFFECT['hop_height']} for hop "
+        "heights) and the claim's other conditions hold;",
+        "* claim thresholds: reward ratio of means within [3, 12] with the CPG-Actor's return "
+        "higher; open-loop beats Cho et al. if its mean final return is higher than each Cho "
+        "variant's run; smooth vs bang-bang if the MLP's mean smoothness is more than 10 times "
+        "the CPG-Actor's (the test: mean MLP - 10 x mean CPG-Actor > 0); near the limits if the "
+        "mean over seeds of the per-seed 99th percentile of |desired velocity| lies in [9, 18] "
+        "rad/s; hop height doubles if the ratio of mean hop heights at the end / at 1M steps "
+        "is >= 1.5 and the hop height rose (paired); best during training if the mean return "
+        "over the run is higher than every variant's of the same reward; Cho et al. flat if, "
+        "for theta_dot and r_ddot and every Cho variant, the CPG-Actor's mean standard "
+        "deviation over an episode (after 50 steps) is more than 3 times Cho's.",
         "",
     ]
     if notes:

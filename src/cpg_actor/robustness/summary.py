@@ -112,17 +112,39 @@ def verdict_pairs(variants: list[str]) -> list[tuple[str, str]]:
 
 def verdicts(runs: list[dict[str, Any]], names: list[str]) -> list[dict[str, Any]]:
     """Per claim (:func:`verdict_pairs`) and perturbation: its verdict and explanation
-    (:func:`cpg_actor.experiments.metrics.verdict_more_robust`)."""
+    (:func:`cpg_actor.experiments.metrics.verdict_more_robust`), all of them one family
+    (:func:`cpg_actor.experiments.metrics.decide`: Welch's t-tests, Holm-corrected), with the
+    test, its p, its Holm p and the family's size."""
     variants = list(dict.fromkeys(run["variant"] for run in runs))
-    out = []
+    rows, claims = [], []
     for first, second in verdict_pairs(variants):
         for name in names:
-            verdict, why = m.verdict_more_robust(retention_scores(runs, first, name),
-                                                 retention_scores(runs, second, name),
-                                                 (first, second))  # fmt: skip
-            out.append({"claim": f"{first} more robust than {second}", "perturbation": name,
-                        "verdict": verdict, "why": why})  # fmt: skip
-    return out
+            claims.append(m.verdict_more_robust(retention_scores(runs, first, name),
+                                                retention_scores(runs, second, name),
+                                                (first, second)))  # fmt: skip
+            rows.append({"claim": f"{first} more robust than {second}", "perturbation": name})
+    family = sum(len(claim.tests) for claim in claims if claim.fixed is None)
+    for row, claim, (verdict, why) in zip(rows, claims, m.decide(claims), strict=True):
+        row.update(verdict=verdict, why=why, family=family)
+        if claim.fixed is None:
+            (test,) = claim.tests
+            row.update(test=test.name, p=test.p, p_holm=test.adjusted)
+    return rows
+
+
+def verdict_rule(data: dict[str, Any]) -> list[str]:
+    """How the suite's verdicts are judged: the test, the family and the correction (none for
+    verdicts of a file that does not record its family: each explanation says its rule)."""
+    families = [row["family"] for row in data.get("verdicts") or [] if "family" in row]
+    if not families:
+        return []
+    family = max(families)
+    return [f"Per perturbation, per seed the mean over its levels of the return retained. A "
+            f"claim is supported if the mean over seeds is higher by {m.WELCH} (two-sided), "
+            f"with the {m.family_text(family)} (every claim and perturbation of this suite), "
+            f"and the difference is at least {m.MINIMUM_EFFECT['retention']} (the minimum "
+            f"effect of retention); not tested with fewer than {m.MIN_SEEDS} seeds a side. "
+            "The bootstrap 95% CI of the difference is shown.", ""]  # fmt: skip
 
 
 def verdict_lines(data: dict[str, Any]) -> list[str]:
@@ -147,7 +169,7 @@ def report_lines(out: Path) -> list[str]:
     return ["## Robustness", "",
             f"Per perturbation, the return retained under it (mean over its levels, per seed; "
             f"`{REPORT_FOLDER}/{MARKDOWN_FILE}` has every level), {data['episodes']} episodes "
-            "per level:", "", *verdict_lines(data), ""]  # fmt: skip
+            "per level.", "", *verdict_rule(data), *verdict_lines(data), ""]  # fmt: skip
 
 
 def plain(value: Any) -> Any:
@@ -209,10 +231,7 @@ def markdown(data: dict[str, Any]) -> str:
                      f"{_text(summary['nominal']['return'], '.1f')} |")  # fmt: skip
     if data.get("verdicts"):
         lines += ["", "## Verdicts", "",
-                  "Per perturbation, per seed the mean over its levels of the return retained; "
-                  "a claim is supported if the bootstrap 95% CI of the difference of the means "
-                  f"over seeds lies above 0 (not tested with fewer than {m.MIN_SEEDS} seeds a "
-                  "side).", "", *verdict_lines(data)]  # fmt: skip
+                  *verdict_rule(data), *verdict_lines(data)]  # fmt: skip
     names = list(next(iter(variants.values()))["perturbations"]) if variants else []
     for name in names:
         axis = next(iter(variants.values()))["perturbations"][name]
