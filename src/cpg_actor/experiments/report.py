@@ -234,6 +234,25 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
             "per_seed": seeds[variant],
             "stages": _stages(results, variant),
         }
+    rewards = {variant: row["reward"] for variant, row in variants.items()}
+    return {
+        "total_steps": total_steps,
+        "comparison_step": comparison_step,
+        "variants": variants,
+        "claims": judge_claims(seeds, rewards, total_steps),
+        "comparisons": _comparisons(seeds),
+    }
+
+
+def judge_claims(
+    seeds: dict[str, dict[str, list[float]]], rewards: dict[str, str], total_steps: int
+) -> list[dict[str, str]]:
+    """The paper's claims judged on the per-seed numbers (``seeds``: variant -> key -> values,
+    as ``summary.json``'s ``per_seed``; ``rewards``: variant -> :func:`reward_of`) of runs of
+    ``total_steps``: each claim's verdict and detail, all claims one family
+    (:func:`cpg_actor.experiments.metrics.decide`)."""
+    comparison_step = min(total_steps, PAPER_COMPARISON_STEPS)
+    variants = list(seeds)
 
     def per_seed(variant: str, key: str) -> list[float] | None:
         """A variant's per-seed values; None when it did not run."""
@@ -304,7 +323,7 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         for other in variants
         if other != "cpg-actor"
         and "cpg-actor" in variants
-        and variants[other]["reward"] == variants["cpg-actor"]["reward"]
+        and rewards[other] == rewards["cpg-actor"]
         and m.seeds_with_data(seeds[other]["mean_eval_return"])
     }
     claims.append(
@@ -330,17 +349,10 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         )
     )
     verdicts = m.decide([claim for _, claim, _ in claims])
-    judged = [
+    return [
         {"claim": claim, "verdict": verdict, "detail": prefix + detail}
         for (claim, _, prefix), (verdict, detail) in zip(claims, verdicts, strict=True)
     ]
-    return {
-        "total_steps": total_steps,
-        "comparison_step": comparison_step,
-        "variants": variants,
-        "claims": judged,
-        "comparisons": _comparisons(seeds),
-    }
 
 
 TOO_FEW = f"not tested (< {m.MIN_SEEDS} seeds)"
