@@ -35,6 +35,13 @@ def test_welch_and_paired_p_values_match_scipy():
         m.welch_test([1.0], SECOND)
 
 
+def test_one_sample_t_test_matches_scipy():
+    difference, p = m.one_sample_t_test(FIRST, 0.8)
+    assert difference == pytest.approx(sum(FIRST) / 5 - 0.8)
+    assert p == pytest.approx(stats.ttest_1samp(FIRST, 0.8).pvalue, rel=1e-9)
+    assert m.one_sample_t_test([3.0, 3.0, 3.0], 2.0) == (1.0, 0.0)  # no spread: exact
+
+
 def test_band_test_is_two_one_sided_tests():
     values = [14.0, 15.0, 16.0, 13.0, 14.5]
     margin, p = m.band_test(values, 9.0, 18.0)

@@ -45,12 +45,14 @@ Verdicts (:func:`decide`): the bootstrap intervals are shown, the verdicts rest 
   normal. A **paired t-test** (:func:`paired_t_test`) where the same runs are measured twice
   (a run's hop height at 1M steps and at the end); not an exact sign-flip test, whose smallest
   two-sided p with 5 pairs is 2/32 = 0.0625. A band claim about one variant (the desired
-  velocities near the motor limit) is two one-sided one-sample t-tests (:func:`band_test`);
-* **the family**: every test behind the verdicts of one report (the reproduction report's
-  claims; a robustness suite's claims over all its perturbations; the table of comparisons
-  beyond the paper) is one family; their p-values are corrected together with Holm's
-  step-down method (:func:`holm`) to a family-wise error rate of ``ALPHA``. A claim that needs
-  several tests to pass (better than every Cho et al. variant) counts each of them;
+  velocities near the motor limit) is two one-sided one-sample t-tests (:func:`band_test`),
+  and variants against one fixed number (the open-loop grid floor) one-sample t-tests
+  (:func:`one_sample_t_test`);
+* **the family**: every test behind one set of verdicts (the reproduction report's claims; a
+  robustness suite's claims over all its perturbations; the table of comparisons beyond the
+  paper; the variants against the floor) is one family; their p-values are corrected together
+  with Holm's step-down method (:func:`holm`) to a family-wise error rate of ``ALPHA``. A
+  claim that needs several tests to pass (better than every Cho et al. variant) counts each;
 * **the minimum effect**: a test must also find a difference of at least
   :data:`MINIMUM_EFFECT` of its metric (a share of the baseline's mean, or an absolute amount)
   in the claimed direction; claims of a ratio test against the ratio itself
@@ -383,6 +385,16 @@ def paired_t_test(first: Sequence[float], second: Sequence[float]) -> tuple[floa
     _two_or_more(d)
     difference = float(d.mean())
     return difference, _two_sided(difference, d.var(ddof=1) / d.size, d.size - 1)
+
+
+def one_sample_t_test(values: Sequence[float], value: float) -> tuple[float, float]:
+    """The one-sample t-test of ``mean(values) = value`` over the finite values (a variant
+    against one fixed number, e.g. the open-loop grid floor): ``mean - value`` and its
+    two-sided p."""
+    a = finite(values)
+    _two_or_more(a)
+    difference = float(a.mean() - value)
+    return difference, _two_sided(difference, a.var(ddof=1) / a.size, a.size - 1)
 
 
 def band_test(values: Sequence[float], low: float, high: float) -> tuple[float, float]:

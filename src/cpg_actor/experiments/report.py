@@ -445,15 +445,20 @@ def _floor_lines(
     value = best["episode_return"]
     described = ", ".join(f"{k} {v:.3g}" for k, v in best["parameters"].items())
     above, below, unresolved, few = [], [], [], []
+    tests = []  # (variant, difference, p): one-sample t-tests against the floor, one family
     for variant, per_seed in seeds.items():
         if not m.seeds_with_data(per_seed["final_return"]):
             continue
-        if not m.enough_seeds(per_seed["final_return"]):  # no interval: listed apart
+        if not m.enough_seeds(per_seed["final_return"]):  # no test: listed apart
             few.append(f"`{variant}`")
             continue
-        interval = m.bootstrap_difference(per_seed["final_return"], [value])
-        target = above if interval.low > 0 else below if interval.high < 0 else unresolved
-        target.append(f"`{variant}` ({interval.estimate:+.0f})")
+        tests.append((variant, *m.one_sample_t_test(per_seed["final_return"], value)))
+    minimum = m.MINIMUM_EFFECT["return"].threshold(value)
+    adjusted = m.holm([p for *_, p in tests])
+    for (variant, difference, _), holm_p in zip(tests, adjusted, strict=True):
+        resolved = holm_p < m.ALPHA and abs(difference) >= minimum
+        target = (above if difference > 0 else below) if resolved else unresolved
+        target.append(f"`{variant}` ({difference:+.0f})")
     few_text = f"; fewer than {m.MIN_SEEDS} seeds, not tested: {', '.join(few)}" if few else ""
     return [
         f"**Open-loop grid floor** (no learning; `{FLOOR_FILE}`): the best of "
@@ -461,8 +466,10 @@ def _floor_lines(
         f"one episode, no reset noise, eq. 4's reward with this reproduction's env settings) "
         f"returns **{value:.0f}** (hop height p90 {best['hop_height_p90']:.2f} m; the highest "
         f"hopping set: {floor['best_hop']['hop_height_p90']:.2f} m, return "
-        f"{floor['best_hop']['episode_return']:.0f}). Final return minus the floor, CI over "
-        f"seeds (variants trained on this reward): above it {', '.join(above) or 'none'}; "
+        f"{floor['best_hop']['episode_return']:.0f}). Final return minus the floor, mean over "
+        f"seeds (variants trained on this reward), by a one-sample t-test with the "
+        f"{m.family_text(len(tests))} (every variant here) and a minimum effect of "
+        f"{m.MINIMUM_EFFECT['return']} (the floor): above it {', '.join(above) or 'none'}; "
         f"below it {', '.join(below) or 'none'}; not resolved {', '.join(unresolved) or 'none'}"
         f"{few_text}.",
         "",
