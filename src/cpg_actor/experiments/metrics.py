@@ -53,8 +53,9 @@ Verdicts (:func:`decide`): the bootstrap intervals are shown, the verdicts rest 
   paper; the variants against the floor) is one family; their p-values are corrected together
   with Holm's step-down method (:func:`holm`) to a family-wise error rate of ``ALPHA``. A
   claim that needs several tests to pass (better than every Cho et al. variant) counts each;
-* **the minimum effect**: a test must also find a difference of at least
-  :data:`MINIMUM_EFFECT` of its metric (a share of the baseline's mean, or an absolute amount)
+* **the minimum effect** (:data:`MINIMUM_EFFECT`, per metric): a test must also find a
+  difference of at least 5 % of the baseline's mean for returns (final, over the run) and hop
+  heights, 0.05 for the return retained under a perturbation (a share of the nominal return),
   in the claimed direction; claims of a ratio test against the ratio itself
   (``mean(first) - factor * mean(second)``), so the factor is their minimum effect;
 * **supported**: every test of the claim passes (Holm-adjusted p < ``ALPHA``, difference in
