@@ -265,6 +265,12 @@ def test_results_that_agree_with_the_paper_are_supported(tmp_path):
         _curve_run(out, "mlp", seed, 600.0 * rising + jitter, np.full(n, 0.2), square=True)
     verdicts = _claims(out)
     assert set(verdicts.values()) == {"supported"}, verdicts
+    # every verdict names its test and the family the claims' tests make together
+    summary = json.loads((out / "summary.json").read_text())
+    families = {c["detail"].split("Holm correction over a family of ")[1].split(" ")[0]
+                for c in summary["claims"]}  # fmt: skip
+    assert len(families) == 1 and int(families.pop()) >= 7
+    assert all("t-test" in c["detail"] for c in summary["claims"])
     # the return split into its terms: the means of the last 10 logged values, over seeds
     summary = json.loads((out / "summary.json").read_text())
     mlp_final = np.mean([np.mean(600.0 * rising[-10:] + 5.0 * seed) for seed in range(3)])
@@ -310,7 +316,11 @@ def test_comparisons_beyond_the_paper_name_the_better_variant_only_when_resolved
     assert bptt["hop_better"] == "not resolved"
     apex = rows[("mlp-apex", "cpg-actor-apex")]
     assert apex["hop_better"] == "cpg-actor-apex" and apex["return_better"] == "not resolved"
-    assert "## Comparisons beyond the paper" in (out / "report.md").read_text()
+    # Welch's p and its Holm p over the table's 6 tests (3 pairs x return, hop height)
+    assert all(r["family"] == 6 and r["return_p"][1] >= r["return_p"][0] for r in rows.values())
+    text = (out / "report.md").read_text()
+    assert "## Comparisons beyond the paper" in text
+    assert "Holm correction over a family of 6 tests" in text
 
 
 def test_open_loop_floor_is_the_best_grid_return_and_the_report_places_variants_against_it(

@@ -156,7 +156,8 @@ def test_the_paired_bootstrap_resamples_seed_indices_once_for_both():
     assert (paired.estimate, paired.low, paired.high) == pytest.approx((2.0, 2.0, 2.0))
     unpaired = m.bootstrap_ratio(final, early)
     assert unpaired.low < 1.0 < unpaired.high  # the seeds' spread, not the change
-    assert m.verdict_hop_doubles(final, early, 1e6, 2e6)[0] == m.SUPPORTED
+    # so does the t-test of the same runs: pairs remove the seeds' spread
+    assert m.paired_t_test(final, early)[1] < m.welch_test(final, early)[1] / 4
     with pytest.raises(ValueError, match="one pair per seed"):
         m.bootstrap_ratio([1.0, 2.0], [1.0], paired=True)
 
@@ -166,6 +167,11 @@ def test_smoothness_uses_medians_not_means():
     cpg = [4.3e-4, 7.4e-4, 4.9e-3, 6.9e-3, 6.1e-4]  # the CPG-Actor at 20M steps, per seed
     assert m.mean_std(cpg)[0] == pytest.approx(2.72e-3, rel=0.01)
     assert m.bootstrap(cpg).estimate == pytest.approx(7.4e-4)
+
+
+def alone(claim):
+    """A claim's verdict with its own tests as the family."""
+    return m.decide([claim])[0]
 
 
 # Each verdict on synthetic per-seed results: (supporting results, contradicting results),
@@ -228,47 +234,49 @@ _PASS_FAIL = {
 def test_each_verdict_both_ways_and_not_tested_with_fewer_than_3_seeds(claim):
     supporting, contradicting = _PASS_FAIL[claim]
     for n in (3, 4):
-        assert supporting(n)[0] == m.SUPPORTED, (n, supporting(n))
-        assert contradicting(n)[0] == m.NOT_SUPPORTED, (n, contradicting(n))
+        assert alone(supporting(n))[0] == m.SUPPORTED, (n, alone(supporting(n)))
+        assert alone(contradicting(n))[0] == m.NOT_SUPPORTED, (n, alone(contradicting(n)))
     for n in (0, 1, 2):
         for verdict in (supporting, contradicting):
-            result, detail = verdict(n)
+            result, detail = alone(verdict(n))
             assert result == m.NOT_TESTED, (n, detail)
             assert "[" not in detail  # no interval without enough seeds
 
 
 def test_verdict_edge_cases():
     # any side short of seeds: not tested, with the counts
-    verdict, detail = m.verdict_better([1.0, 2.0, 3.0], {"cho2019-warm": [1.0] * 3,
-                                                         "cho2019": [1.0, 2.0]})  # fmt: skip
+    verdict, detail = alone(m.verdict_better([1.0, 2.0, 3.0], {"cho2019-warm": [1.0] * 3,
+                                                               "cho2019": [1.0, 2.0]}))  # fmt: skip
     assert verdict == m.NOT_TESTED and "cho2019 2" in detail
-    verdict, detail = m.verdict_smooth(None, [1.0, 2.0, 3.0])
+    verdict, detail = alone(m.verdict_smooth(None, [1.0, 2.0, 3.0]))
     assert verdict == m.NOT_TESTED and "cpg-actor not run" in detail
-    assert m.verdict_better([1.0] * 3, {})[0] == m.NOT_TESTED
-    assert m.verdict_best_during_training([1.0] * 3, {})[0] == m.NOT_TESTED
-    assert m.verdict_cho_flat(None, {})[0] == m.NOT_TESTED
+    assert alone(m.verdict_better([1.0] * 3, {}))[0] == m.NOT_TESTED
+    assert alone(m.verdict_best_during_training([1.0] * 3, {}))[0] == m.NOT_TESTED
+    assert alone(m.verdict_cho_flat(None, {}))[0] == m.NOT_TESTED
     # NaN seeds (no data) do not count
-    assert m.verdict_near_limits([14.0, 15.0, float("nan")])[0] == m.NOT_TESTED
+    assert alone(m.verdict_near_limits([14.0, 15.0, float("nan")]))[0] == m.NOT_TESTED
     # a ratio of returns needs a positive denominator
-    assert m.verdict_reward_ratio([1.0, 2.0, 3.0], [-1.0, -2.0, -3.0])[0] == m.NOT_SUPPORTED
-    # the reward ratio needs its CI above 1 as well as the estimate near 6
-    wide = m.verdict_reward_ratio([10.0, 1200.0, 600.0], [100.0, 100.0, 100.0])
+    assert alone(m.verdict_reward_ratio([1.0, 2.0, 3.0], [-1.0, -2.0, -3.0]))[0] == m.NOT_SUPPORTED
+    # the reward ratio needs a significant difference as well as the estimate near 6
+    wide = alone(m.verdict_reward_ratio([10.0, 1200.0, 600.0], [100.0, 100.0, 100.0]))
     assert wide[0] == m.NOT_SUPPORTED
     # the hop height: too short a run, or not logged at 1M steps
-    assert m.verdict_hop_doubles([0.4] * 3, [0.2] * 3, 1e6, 1.5e6)[0] == m.NOT_TESTED
+    assert alone(m.verdict_hop_doubles([0.4] * 3, [0.2] * 3, 1e6, 1.5e6))[0] == m.NOT_TESTED
     nan3 = [float("nan")] * 3
-    assert m.verdict_hop_doubles([0.4] * 3, nan3, 1e6, 2e6)[0] == m.NOT_TESTED
+    assert alone(m.verdict_hop_doubles([0.4] * 3, nan3, 1e6, 2e6))[0] == m.NOT_TESTED
     # ratios of medians: a flat (0) smaller side is an infinite ratio, a flat larger side none
     assert m.ratio_of_medians([5.0, 6.0, 7.0], [0.0, 0.0, 0.0]).low == math.inf
     assert m.ratio_of_medians([0.0, 0.0, 1.0], [1.0, 2.0, 3.0]) is None
-    assert m.verdict_smooth([0.0] * 3, [5e-3, 6e-3, 7e-3])[0] == m.SUPPORTED  # straight lines
-    assert m.verdict_smooth([1e-5] * 3, [0.0] * 3)[0] == m.NOT_SUPPORTED  # the MLP flat too
+    assert (
+        alone(m.verdict_smooth([0.0] * 3, [5e-3, 6e-3, 7e-3]))[0] == m.SUPPORTED
+    )  # straight lines
+    assert alone(m.verdict_smooth([1e-5] * 3, [0.0] * 3))[0] == m.NOT_SUPPORTED  # the MLP flat too
     flat_cho = {"cho2019": {"theta_dot": [0.0] * 3, "r_ddot": [0.0] * 3}}
     moving = {"theta_dot": [3.0, 3.1, 2.9], "r_ddot": [20.0, 21.0, 22.0]}
-    assert m.verdict_cho_flat(moving, flat_cho)[0] == m.SUPPORTED
-    assert m.verdict_cho_flat(flat_cho["cho2019"], {"cho2019": moving})[0] == m.NOT_SUPPORTED
-    # the velocity band is judged by the CI: a median inside it with seeds far outside fails
-    assert m.verdict_near_limits([14.0, 15.0, 40.0, 3.0, 16.0])[0] == m.NOT_SUPPORTED
+    assert alone(m.verdict_cho_flat(moving, flat_cho))[0] == m.SUPPORTED
+    assert alone(m.verdict_cho_flat(flat_cho["cho2019"], {"cho2019": moving}))[0] == m.NOT_SUPPORTED
+    # the velocity band is judged by a test: a mean inside it with seeds far outside fails
+    assert alone(m.verdict_near_limits([14.0, 15.0, 40.0, 3.0, 16.0]))[0] == m.NOT_SUPPORTED
 
 
 def test_stage_checkpoints_are_the_nearest():

@@ -6,7 +6,8 @@ Prints (Markdown) per perturbation and level the mean over seeds of the speed er
 the share of episodes that fell, for ``cpg-actor`` and ``untrained``, then the verdict
 "cpg-actor more robust than untrained" per perturbation, judged as the suite judges its
 claims (`cpg_actor.experiments.metrics.verdict_more_robust`: the return retained, averaged
-over the levels, per seed; the bootstrap CI of the difference of means above 0).
+over the levels, per seed; Welch's t-test, Holm-corrected over the perturbations, and the
+minimum effect of retention).
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ import sys
 
 import numpy as np
 
-from cpg_actor.experiments.metrics import verdict_more_robust
+from cpg_actor.experiments.metrics import decide, verdict_more_robust
 from cpg_actor.robustness.summary import retention_scores
 
 VARIANTS = ("cpg-actor", "untrained")
@@ -51,12 +52,12 @@ def main(path: str) -> None:
                      for v in VARIANTS]  # fmt: skip
             print(f"| {name} | {level['level']:g} {unit} | {' | '.join(cells)} |")
     print("\n| perturbation | verdict | why |\n| --- | --- | --- |")
-    for name in data["perturbations"]:
-        verdict, why = verdict_more_robust(
-            retention_scores(runs, VARIANTS[0], name),
-            retention_scores(runs, VARIANTS[1], name),
-            VARIANTS,
-        )
+    claims = [
+        verdict_more_robust(retention_scores(runs, VARIANTS[0], name),
+                            retention_scores(runs, VARIANTS[1], name), VARIANTS)
+        for name in data["perturbations"]
+    ]  # fmt: skip
+    for name, (verdict, why) in zip(data["perturbations"], decide(claims), strict=True):
         print(f"| {name} | {verdict} | {why} |")
 
 

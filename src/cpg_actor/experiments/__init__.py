@@ -5,7 +5,7 @@
 * :mod:`~cpg_actor.experiments.execute`: one run (train, resume, staged evaluations) and the
   local / Ray schedulers with progress;
 * :mod:`~cpg_actor.experiments.metrics`: final return, smoothness, velocity share, bootstrap
-  confidence intervals, claim verdicts;
+  confidence intervals, the tests (Welch, Holm) behind the claim verdicts;
 * :mod:`~cpg_actor.experiments.results`: reading a results directory;
 * :mod:`~cpg_actor.experiments.figures` and :mod:`~cpg_actor.experiments.report`: the paper's
   figures and ``report.md``.

@@ -33,12 +33,41 @@ Definitions (also in ``docs/reproduction.md`` and in each report):
   applied to both) when the same seeds are measured twice;
 * **not tested**: a verdict (and an interval) needs at least ``MIN_SEEDS`` seeds with data on
   every side; with fewer it is "not tested", never a verdict.
+
+Verdicts (:func:`decide`): the bootstrap intervals are shown, the verdicts rest on tests.
+
+* **the test**: Welch's t-test (:func:`welch_test`, two-sided, unequal variances) between
+  variants, whose seeds are independent runs (seed k of one agent draws other numbers than seed
+  k of another; they share only the packaged start gait, which every seed has alike). Not an
+  exact permutation test: with 5 seeds a side its smallest two-sided p is 2/252 = 0.0079, so a
+  Holm correction over 7 comparisons at 0.05 (smallest threshold 0.05/7 = 0.0071) could never
+  reject, whatever the data. Welch's p can, at the price of assuming the per-seed means roughly
+  normal. A **paired t-test** (:func:`paired_t_test`) where the same runs are measured twice
+  (a run's hop height at 1M steps and at the end); not an exact sign-flip test, whose smallest
+  two-sided p with 5 pairs is 2/32 = 0.0625. A band claim about one variant (the desired
+  velocities near the motor limit) is two one-sided one-sample t-tests (:func:`band_test`),
+  and variants against one fixed number (the open-loop grid floor) one-sample t-tests
+  (:func:`one_sample_t_test`);
+* **the family**: every test behind one set of verdicts (the reproduction report's claims; a
+  robustness suite's claims over all its perturbations; the table of comparisons beyond the
+  paper; the variants against the floor) is one family; their p-values are corrected together
+  with Holm's step-down method (:func:`holm`) to a family-wise error rate of ``ALPHA``. A
+  claim that needs several tests to pass (better than every Cho et al. variant) counts each;
+* **the minimum effect** (:data:`MINIMUM_EFFECT`, per metric): a test must also find a
+  difference of at least 5 % of the baseline's mean for returns (final, over the run) and hop
+  heights, 0.05 for the return retained under a perturbation (a share of the nominal return),
+  in the claimed direction; claims of a ratio test against the ratio itself
+  (``mean(first) - factor * mean(second)``), so the factor is their minimum effect;
+* **supported**: every test of the claim passes (Holm-adjusted p < ``ALPHA``, difference in
+  the claimed direction and at least the minimum effect) and the claim's other conditions
+  hold; the verdict's text names the test, the family size and the correction.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -55,6 +84,33 @@ CONFIDENCE = 0.95
 # rad: a desired position this close to a joint limit is "at the stop"; the env clips in
 # float32 (1e-7 rad off the float64 limit), a command pushed past the limit sits on it exactly
 JOINT_STOP_TOLERANCE = 1e-3
+ALPHA = 0.05  # the family-wise error rate of a report's verdicts (Holm)
+
+
+@dataclass(frozen=True)
+class MinimumEffect:
+    """The smallest difference a "supported" needs: ``relative`` x |the baseline's mean| or
+    ``absolute`` (in the metric's units), whichever is larger."""
+
+    relative: float = 0.0
+    absolute: float = 0.0
+
+    def threshold(self, baseline_mean: float) -> float:
+        return max(self.absolute, self.relative * abs(baseline_mean))
+
+    def __str__(self) -> str:
+        parts = [f"{100 * self.relative:g}% of the baseline"] if self.relative else []
+        parts += [f"{self.absolute:g}"] if self.absolute or not parts else []
+        return " or ".join(parts)
+
+
+# per metric: a difference smaller than this is no evidence of "better", however small its p
+MINIMUM_EFFECT = {
+    "return": MinimumEffect(relative=0.05),  # final return, eval return over the run
+    "hop_height": MinimumEffect(relative=0.05),
+    # the return retained under a perturbation (a share of the nominal return): 5 points
+    "retention": MinimumEffect(absolute=0.05),
+}
 
 
 def final_return(
@@ -276,12 +332,189 @@ def bootstrap_difference(
     return Interval(float(a.mean() - b.mean()), *_percentiles(diff, confidence))
 
 
-# -- verdicts: (verdict, explanation) -----------------------------------------------------------
-Verdict = tuple[str, str]
+# -- tests and the family's correction ----------------------------------------------------------
+WELCH = "Welch's t-test"
+PAIRED = "paired t-test"
+BAND = "one-sided one-sample t-tests"
+HOLM = "Holm"
+Verdict = tuple[str, str]  # (verdict, explanation)
+
+
+def _t_tail(t: float, df: float) -> float:
+    """P(T > t) for Student's t with ``df`` degrees of freedom (scipy)."""
+    from scipy import stats
+
+    return float(stats.t.sf(t, df))
+
+
+def _two_sided(difference: float, variance: float, df: float) -> float:
+    """Two-sided p of ``difference`` with the squared standard error ``variance``; without any
+    spread the difference is exact: p 0 if it is not 0, else 1."""
+    if variance == 0:
+        return 0.0 if difference != 0 else 1.0
+    return min(1.0, 2.0 * _t_tail(abs(difference) / math.sqrt(variance), df))
+
+
+def _two_or_more(*groups: np.ndarray) -> None:
+    if any(group.size < 2 for group in groups):
+        raise ValueError(f"a t-test needs 2 or more values a side, got {[g.size for g in groups]}")
+
+
+def welch_test(
+    first: Sequence[float], second: Sequence[float], scale: float = 1.0
+) -> tuple[float, float]:
+    """Welch's t-test (unequal variances, Welch-Satterthwaite degrees of freedom) of
+    ``mean(first) = scale * mean(second)`` over the finite per-seed values: the difference
+    ``mean(first) - scale * mean(second)`` and its two-sided p. ``scale`` tests a ratio of
+    means (the second group's values are scaled, and its variance with them)."""
+    a, b = finite(first), scale * finite(second)
+    _two_or_more(a, b)
+    var_a, var_b = a.var(ddof=1) / a.size, b.var(ddof=1) / b.size
+    variance = var_a + var_b
+    df = variance**2 / (var_a**2 / (a.size - 1) + var_b**2 / (b.size - 1)) if variance else 1.0
+    difference = float(a.mean() - b.mean())
+    return difference, _two_sided(difference, variance, df)
+
+
+def paired_t_test(first: Sequence[float], second: Sequence[float]) -> tuple[float, float]:
+    """The paired t-test of ``first[i] - second[i]`` (the same runs measured twice; pairs with
+    a non-finite member left out): the mean difference and its two-sided p."""
+    a, b = np.asarray(first, dtype=float).ravel(), np.asarray(second, dtype=float).ravel()
+    if a.shape != b.shape:
+        raise ValueError(f"paired values need one pair per seed, got {a.size} and {b.size}")
+    d = (a - b)[np.isfinite(a) & np.isfinite(b)]
+    _two_or_more(d)
+    difference = float(d.mean())
+    return difference, _two_sided(difference, d.var(ddof=1) / d.size, d.size - 1)
+
+
+def one_sample_t_test(values: Sequence[float], value: float) -> tuple[float, float]:
+    """The one-sample t-test of ``mean(values) = value`` over the finite values (a variant
+    against one fixed number, e.g. the open-loop grid floor): ``mean - value`` and its
+    two-sided p."""
+    a = finite(values)
+    _two_or_more(a)
+    difference = float(a.mean() - value)
+    return difference, _two_sided(difference, a.var(ddof=1) / a.size, a.size - 1)
+
+
+def band_test(values: Sequence[float], low: float, high: float) -> tuple[float, float]:
+    """Whether the mean of the finite ``values`` lies inside ``[low, high]``: two one-sided
+    one-sample t-tests (mean > low, mean < high), both needed, so the p is the larger of the
+    two. Returns the distance of the mean to the nearer bound (negative outside) and that p."""
+    a = finite(values)
+    _two_or_more(a)
+    mean, variance = float(a.mean()), a.var(ddof=1) / a.size
+    ps = []
+    for distance in (mean - low, high - mean):
+        if variance == 0:
+            ps.append(0.0 if distance > 0 else 1.0)
+        else:
+            ps.append(_t_tail(distance / math.sqrt(variance), a.size - 1))
+    return min(mean - low, high - mean), max(ps)
+
+
+def holm(pvalues: Sequence[float]) -> list[float]:
+    """Holm's step-down adjusted p-values of a family (in the given order): the i-th smallest p
+    times (family size - i + 1), never below an earlier one, at most 1. Rejecting where the
+    adjusted p < alpha keeps the family-wise error rate at alpha."""
+    p = np.asarray(pvalues, dtype=float)
+    adjusted = np.empty_like(p)
+    running = 0.0
+    for rank, index in enumerate(np.argsort(p, kind="stable")):
+        running = max(running, min(1.0, (p.size - rank) * p[index]))
+        adjusted[index] = running
+    return [float(x) for x in adjusted]
+
+
+@dataclass
+class Test:
+    """One test behind a claim, oriented so that a positive ``difference`` is the claimed
+    direction: ``name`` (which test), ``label`` (what it compares), ``difference`` (the
+    estimate tested against 0), ``p`` (its p-value), ``minimum`` (the smallest difference
+    that counts, :data:`MINIMUM_EFFECT`) and ``adjusted`` (its Holm-adjusted p, set by
+    :func:`decide`)."""
+
+    name: str
+    label: str
+    difference: float
+    p: float
+    minimum: float = 0.0
+    adjusted: float = math.nan
+
+    def passed(self, alpha: float = ALPHA) -> bool:
+        return self.adjusted < alpha and self.difference > 0 and self.difference >= self.minimum
+
+    def __str__(self) -> str:
+        minimum = f" (minimum {self.minimum:.3g})" if self.minimum else ""
+        return (f"{self.label} {self.difference:+.3g}{minimum}, p = {self.p:.2g}, "
+                f"{HOLM} p = {self.adjusted:.2g}")  # fmt: skip
+
+
+def better_test(first: Sequence[float], second: Sequence[float], metric: str, label: str) -> Test:
+    """``first`` better (higher) than ``second`` in ``metric`` (a key of
+    :data:`MINIMUM_EFFECT`): Welch's t-test, the minimum effect taken of ``second``'s mean."""
+    difference, p = welch_test(first, second)
+    minimum = MINIMUM_EFFECT[metric].threshold(float(np.mean(finite(second))))
+    return Test(WELCH, label, difference, p, minimum)
+
+
+def ratio_test(
+    larger: Sequence[float], smaller: Sequence[float], factor: float, label: str
+) -> Test:
+    """``mean(larger) > factor * mean(smaller)``: Welch's t-test of their difference (the
+    factor is the claim's minimum effect)."""
+    return Test(WELCH, label, *welch_test(larger, smaller, scale=factor))
+
+
+@dataclass
+class Claim:
+    """A claim's evidence before its family's correction: the ``tests`` that must all pass,
+    ``condition`` (its other conditions hold), the text (``evidence``: estimates and bootstrap
+    CIs, for display; ``rule``: what "supported" needs besides the tests); or a verdict
+    ``fixed`` without tests (not tested, undefined)."""
+
+    evidence: str
+    tests: list[Test] = field(default_factory=list)
+    condition: bool = True
+    rule: str = ""
+    fixed: str | None = None
+
+
+def family_text(size: int, alpha: float = ALPHA) -> str:
+    return f"{HOLM} correction over a family of {size} tests at alpha {alpha:g}"
+
+
+def decide(claims: Sequence[Claim], alpha: float = ALPHA) -> list[Verdict]:
+    """The verdicts of a report's claims, one family: the p-values of every test of every
+    claim (those not ``fixed``) are Holm-corrected together; a claim is supported when each of
+    its tests passes (:meth:`Test.passed`) and its ``condition`` holds. Each explanation names
+    the tests, the family's size and the correction."""
+    tests = [test for claim in claims if claim.fixed is None for test in claim.tests]
+    for test, adjusted in zip(tests, holm([test.p for test in tests]), strict=True):
+        test.adjusted = adjusted
+    verdicts = []
+    for claim in claims:
+        if claim.fixed is not None:
+            verdicts.append((claim.fixed, claim.evidence))
+            continue
+        ok = claim.condition and all(test.passed(alpha) for test in claim.tests)
+        names = ", ".join(dict.fromkeys(test.name for test in claim.tests))
+        rule = f"; {claim.rule}" if claim.rule else ""
+        text = (
+            f"{claim.evidence}; {names}: " + "; ".join(map(str, claim.tests))
+            + f" ({family_text(len(tests), alpha)}; supported if every {HOLM} p < {alpha:g} "
+            f"with the difference above 0 and its minimum{rule})"
+        )  # fmt: skip
+        verdicts.append((SUPPORTED if ok else NOT_SUPPORTED, text))
+    return verdicts
+
+
+# -- claims -------------------------------------------------------------------------------------
 Groups = Mapping[str, Sequence[float] | None]
 
 
-def too_few_seeds(groups: Groups) -> Verdict | None:
+def too_few_seeds(groups: Groups) -> Claim | None:
     """ "Not tested" when a group (a variant's per-seed values; None: not run) has fewer than
     :data:`MIN_SEEDS` finite values, with every group's count; None when all have enough."""
     counts = {name: seeds_with_data(values) for name, values in groups.items()}
@@ -291,56 +524,52 @@ def too_few_seeds(groups: Groups) -> Verdict | None:
         f"{name} not run" if groups[name] is None else f"{name} {count}"
         for name, count in counts.items()
     ]
-    return NOT_TESTED, (
+    return Claim(
         f"needs at least {MIN_SEEDS} seeds with data for each of "
-        f"{', '.join(counts) or 'the variants'}; seeds here: {', '.join(parts) or 'none'}"
+        f"{', '.join(counts) or 'the variants'}; seeds here: {', '.join(parts) or 'none'}",
+        fixed=NOT_TESTED,
     )
 
 
 def verdict_reward_ratio(
     cpg: Sequence[float] | None, cho: Sequence[float] | None, target: float = 6.0
-) -> Verdict:
+) -> Claim:
     """ "About 6x the reward of Cho et al. (warm)": the ratio of mean final returns over seeds
-    (unpaired bootstrap) is within a factor 2 of ``target`` and its 95% CI lies above 1."""
+    is within a factor 2 of ``target`` and the CPG-Actor's return is higher (Welch's t-test,
+    :data:`MINIMUM_EFFECT` of returns); the ratio's unpaired bootstrap CI is shown."""
     missing = too_few_seeds({"cpg-actor": cpg, "cho2019-warm": cho})
     if missing:
         return missing
     ratio = bootstrap_ratio(cpg, cho)
     if ratio is None:
-        return NOT_SUPPORTED, "ratio undefined (Cho et al. (warm) return not positive)"
-    ok = target / 2 <= ratio.estimate <= target * 2 and ratio.low > 1
-    return (
-        SUPPORTED if ok else NOT_SUPPORTED,
-        f"ratio of means {ratio} (supported if within [{target / 2:g}, {target * 2:g}] and CI "
-        "above 1)",
+        return Claim("ratio undefined (Cho et al. (warm) return not positive)",
+                     fixed=NOT_SUPPORTED)  # fmt: skip
+    return Claim(
+        f"ratio of means {ratio}",
+        [better_test(cpg, cho, "return", "cpg-actor - cho2019-warm")],
+        target / 2 <= ratio.estimate <= target * 2,
+        f"the ratio of means within [{target / 2:g}, {target * 2:g}]",
     )
 
 
-def _differences_above_zero(first: Sequence[float], others: Groups) -> tuple[bool, list[str]]:
-    """Whether the 95% CI of ``mean(first) - mean(other)`` lies above 0 for every other,
-    and a ``"vs NAME: ..."`` part per other."""
-    parts, ok = [], True
-    for name, values in others.items():
-        diff = bootstrap_difference(first, values)
-        ok &= diff is not None and diff.low > 0
-        parts.append(f"vs {name}: {diff}" if diff is not None else f"vs {name}: no data")
-    return ok, parts
-
-
-def verdict_better(open_loop: Sequence[float] | None, cho: Groups) -> Verdict:
-    """ "Open-loop CPG-Actor beats Cho et al.": the 95% CI of the difference of mean final
-    returns lies above 0 for every Cho et al. variant that ran (``cho``: variant -> per-seed
-    final returns)."""
+def verdict_better(open_loop: Sequence[float] | None, cho: Groups) -> Claim:
+    """ "Open-loop CPG-Actor beats Cho et al.": its mean final return is higher than every Cho
+    et al. variant's that ran (``cho``: variant -> per-seed final returns), by Welch's t-test
+    and the minimum effect of returns."""
     if not cho:
-        return NOT_TESTED, "needs cpg-actor-open-loop and cho2019-warm, cho2019 or cho2019-paper"
+        return Claim("needs cpg-actor-open-loop and cho2019-warm, cho2019 or cho2019-paper",
+                     fixed=NOT_TESTED)  # fmt: skip
     missing = too_few_seeds({"cpg-actor-open-loop": open_loop, **cho})
     if missing:
         return missing
-    ok, parts = _differences_above_zero(open_loop, cho)
-    return (
-        SUPPORTED if ok else NOT_SUPPORTED,
-        "difference of mean final returns " + "; ".join(parts) + " (supported if CI above 0)",
-    )
+    parts = [
+        f"vs {name}: {bootstrap_difference(open_loop, values)}" for name, values in cho.items()
+    ]
+    return Claim(
+        "difference of mean final returns " + "; ".join(parts),
+        [better_test(open_loop, values, "return", f"cpg-actor-open-loop - {name}")
+         for name, values in cho.items()],
+    )  # fmt: skip
 
 
 def ratio_of_medians(larger: Sequence[float], smaller: Sequence[float]) -> Interval | None:
@@ -359,28 +588,22 @@ def ratio_of_medians(larger: Sequence[float], smaller: Sequence[float]) -> Inter
 
 def verdict_smooth(
     cpg: Sequence[float] | None, mlp: Sequence[float] | None, factor: float = 10.0
-) -> Verdict:
-    """ "CPG outputs are smooth where the MLP is bang-bang": the ratio of the per-seed
-    smoothness medians, MLP / CPG-Actor (:func:`ratio_of_medians`; unpaired: the two agents'
-    seeds are independent runs, seed k of one has nothing to do with seed k of the other), has
-    a 95% CI whose lower bound is at least ``factor``. Medians, as one rough seed can carry a
-    mean."""
+) -> Claim:
+    """ "CPG outputs are smooth where the MLP is bang-bang": the MLP's mean smoothness (squared
+    second difference) is more than ``factor`` times the CPG-Actor's, by Welch's t-test of
+    ``mean(mlp) - factor * mean(cpg)`` (unpaired: the two agents' seeds are independent runs).
+    The medians over seeds and their ratio with its bootstrap CI (:func:`ratio_of_medians`)
+    are shown, as one rough seed can carry a mean."""
     missing = too_few_seeds({"cpg-actor": cpg, "mlp": mlp})
     if missing:
         return missing
     ratio = ratio_of_medians(mlp, cpg)
     cpg_median, mlp_median = np.median(finite(cpg)), np.median(finite(mlp))
-    medians = (
+    ratio_text = ratio if ratio is not None else "undefined (the MLP's median is 0: flat)"
+    return Claim(
         f"median squared 2nd difference {cpg_median:.3g} (CPG-Actor) vs {mlp_median:.3g} rad^2 "
-        "(MLP)"
-    )
-    if ratio is None:
-        return NOT_SUPPORTED, f"{medians}; the MLP's median is 0 on resampled seeds: not bang-bang"
-    ok = ratio.low >= factor
-    return (
-        SUPPORTED if ok else NOT_SUPPORTED,
-        f"{medians}; ratio of medians MLP / CPG-Actor {ratio} (supported if the CI's lower "
-        f"bound >= {factor:g})",
+        f"(MLP), ratio of medians MLP / CPG-Actor {ratio_text}",
+        [ratio_test(mlp, cpg, factor, f"mean MLP - {factor:g} x mean CPG-Actor")],
     )
 
 
@@ -389,26 +612,25 @@ def verdict_near_limits(
     share: Sequence[float] | None = None,
     limit: float = VELOCITY_LIMIT,
     band: tuple[float, float] = (0.6, 1.2),
-) -> Verdict:
-    """ "Desired velocities stay near the motor limits": the median over seeds of the per-seed
-    99th percentile of |desired velocity| has a 95% CI inside ``band`` x the limit (the range
-    is used, and only just exceeded if at all). ``share``: per-seed shares within the limit,
-    reported only."""
+) -> Claim:
+    """ "Desired velocities stay near the motor limits": the mean over seeds of the per-seed
+    99th percentile of |desired velocity| lies inside ``band`` x the limit (the range is
+    used, and only just exceeded if at all), by two one-sided t-tests (:func:`band_test`).
+    The median over seeds with its bootstrap CI is shown; ``share``: per-seed shares within
+    the limit, shown only."""
     missing = too_few_seeds({"cpg-actor": p99})
     if missing:
         return missing
     median = bootstrap(p99, "median")
     low, high = band[0] * limit, band[1] * limit
-    ok = low <= median.low and median.high <= high
     within = finite(share)
     within_text = (
         f", median {100 * np.median(within):.1f}% within +-{limit:g} rad/s" if within.size else ""
     )
-    return (
-        SUPPORTED if ok else NOT_SUPPORTED,
-        f"p99 |v| median over seeds {median} rad/s{within_text}; supported if the CI lies in "
-        f"[{low:g}, {high:g}]",
-    )
+    distance, p = band_test(p99, low, high)
+    label = f"mean {np.mean(finite(p99)):.3g} rad/s inside [{low:g}, {high:g}], margin"
+    return Claim(f"p99 |v| median over seeds {median} rad/s{within_text}",
+                 [Test(BAND, label, distance, p)])  # fmt: skip
 
 
 def verdict_hop_doubles(
@@ -417,52 +639,61 @@ def verdict_hop_doubles(
     early_step: float,
     total_steps: float,
     threshold: float = 1.5,
-) -> Verdict:
+) -> Claim:
     """ "The hop height about doubles with training" (paper: 1M -> 60M steps): the CPG-Actor's
     mean hop height in the deterministic evaluations at the end over that at ``early_step``
-    (1M), per seed ``final[i]`` and ``early[i]`` of the same run, is >= ``threshold`` and the
-    95% CI of the ratio of means lies above 1. The bootstrap is paired: the same seeds are
-    measured at two times, so one draw of seed indices serves both. Judged only on runs of at
-    least twice ``early_step``: the hop height of an untrained agent is no baseline."""
+    (1M), per seed ``final[i]`` and ``early[i]`` of the same run, is >= ``threshold``, and the
+    hop height rose (paired t-test: the same runs measured at two times; the minimum effect of
+    hop heights). The ratio's paired bootstrap CI is shown. Judged only on runs of at least
+    twice ``early_step``: the hop height of an untrained agent is no baseline."""
     if total_steps < 2 * early_step:
-        return NOT_TESTED, (
+        return Claim(
             f"needs runs of at least {2 * early_step:,.0f} steps (the paper compares "
-            f"{early_step:,.0f} steps with the end); this run: {total_steps:,.0f}"
+            f"{early_step:,.0f} steps with the end); this run: {total_steps:,.0f}",
+            fixed=NOT_TESTED,
         )
     if final is None or early is None:
-        return NOT_TESTED, "needs cpg-actor"
+        return Claim("needs cpg-actor", fixed=NOT_TESTED)
     a, b = np.asarray(final, dtype=float), np.asarray(early, dtype=float)
-    pairs = int(np.sum(np.isfinite(a) & np.isfinite(b))) if a.shape == b.shape else 0
+    keep = np.isfinite(a) & np.isfinite(b) if a.shape == b.shape else np.zeros(0, bool)
+    pairs = int(keep.sum())
     if pairs < MIN_SEEDS:
-        return NOT_TESTED, (
+        return Claim(
             f"needs at least {MIN_SEEDS} cpg-actor seeds with hop heights logged at "
-            f"{early_step:,.0f} steps and at the end; seeds here: {pairs}"
+            f"{early_step:,.0f} steps and at the end; seeds here: {pairs}",
+            fixed=NOT_TESTED,
         )
     ratio = bootstrap_ratio(a, b, paired=True)
     if ratio is None:
-        return NOT_TESTED, f"ratio undefined (hop height at {early_step:,.0f} steps not positive)"
-    ok = ratio.estimate >= threshold and ratio.low > 1
-    return (
-        SUPPORTED if ok else NOT_SUPPORTED,
+        return Claim(f"ratio undefined (hop height at {early_step:,.0f} steps not positive)",
+                     fixed=NOT_TESTED)  # fmt: skip
+    difference, p = paired_t_test(a, b)
+    minimum = MINIMUM_EFFECT["hop_height"].threshold(float(b[keep].mean()))
+    return Claim(
         f"hop height at the end / at {early_step:,.0f} steps, ratio of means over {pairs} "
-        f"seeds, paired: x{ratio} (supported if >= x{threshold:g} and CI above 1)",
+        f"seeds, paired: x{ratio}",
+        [Test(PAIRED, "end - early (m)", difference, p, minimum)],
+        ratio.estimate >= threshold,
+        f"the ratio of means >= x{threshold:g}",
     )
 
 
-def verdict_best_during_training(cpg: Sequence[float] | None, others: Groups) -> Verdict:
-    """ "The CPG-Actor performs best during training": the mean evaluation return over the
-    whole run (the area under the curve, per seed) is above every other variant's, the 95% CI
-    of each difference of means above 0 (``others``: variant -> per-seed values)."""
+def verdict_best_during_training(cpg: Sequence[float] | None, others: Groups) -> Claim:
+    """ "The CPG-Actor performs best during training": its mean evaluation return over the
+    whole run (the area under the curve, per seed) is higher than every other variant's
+    (``others``: variant -> per-seed values), each by Welch's t-test and the minimum effect of
+    returns."""
     if not others:
-        return NOT_TESTED, "needs cpg-actor and another variant with evaluation curves"
+        return Claim("needs cpg-actor and another variant with evaluation curves",
+                     fixed=NOT_TESTED)  # fmt: skip
     missing = too_few_seeds({"cpg-actor": cpg, **others})
     if missing:
         return missing
-    ok, parts = _differences_above_zero(cpg, others)
-    return (
-        SUPPORTED if ok else NOT_SUPPORTED,
-        "mean eval return over the run, difference of means " + "; ".join(parts)
-        + " (supported if every CI is above 0)",
+    parts = [f"vs {name}: {bootstrap_difference(cpg, values)}" for name, values in others.items()]
+    return Claim(
+        "mean eval return over the run, difference of means " + "; ".join(parts),
+        [better_test(cpg, values, "return", f"cpg-actor - {name}")
+         for name, values in others.items()],
     )  # fmt: skip
 
 
@@ -470,21 +701,19 @@ def verdict_more_robust(
     first: Sequence[float] | None,
     second: Sequence[float] | None,
     names: tuple[str, str] = ("cpg-actor", "mlp"),
-) -> Verdict:
+) -> Claim:
     """ "``names[0]`` is more robust than ``names[1]``" under one perturbation: per seed, the
     return retained under it (:mod:`cpg_actor.robustness`; the mean over its levels of the
-    return / the nominal return); supported if the 95% CI of the difference of the means over
-    seeds (unpaired bootstrap: the two are independent runs) lies above 0."""
+    return / the nominal return); supported if its mean over seeds is higher by Welch's t-test
+    (the two are independent runs) and by the minimum effect of retention."""
     missing = too_few_seeds({names[0]: first, names[1]: second})
     if missing:
         return missing
-    diff = bootstrap_difference(first, second)
-    ok = diff is not None and diff.low > 0
-    return (
-        SUPPORTED if ok else NOT_SUPPORTED,
+    return Claim(
         f"mean retention over the levels {np.mean(finite(first)):.3g} ({names[0]}) vs "
-        f"{np.mean(finite(second)):.3g} ({names[1]}), difference of means {diff} (supported if "
-        "the CI is above 0)",
+        f"{np.mean(finite(second)):.3g} ({names[1]}), difference of means "
+        f"{bootstrap_difference(first, second)}",
+        [better_test(first, second, "retention", f"{names[0]} - {names[1]}")],
     )
 
 
@@ -495,15 +724,15 @@ def verdict_cho_flat(
     cpg: Mapping[str, Sequence[float]] | None,
     cho: Mapping[str, Mapping[str, Sequence[float]]],
     factor: float = 3.0,
-) -> Verdict:
+) -> Claim:
     """ "Cho et al.'s theta_dot and r_ddot stay almost flat (not responsive to the
     environment) where the CPG-Actor's are reshaped by feedback" (paper section V): for both
-    signals and every Cho variant, the ratio of per-seed :func:`variability` medians,
-    CPG-Actor / Cho (:func:`ratio_of_medians`, unpaired), has a 95% CI whose lower bound is at
-    least ``factor`` (infinite for a Cho signal that is exactly flat). ``cpg`` and each
-    ``cho[variant]`` map ``theta_dot`` and ``r_ddot`` to per-seed values."""
+    signals and every Cho variant, the CPG-Actor's mean per-seed :func:`variability` is more
+    than ``factor`` times Cho's (Welch's t-test of ``mean(cpg) - factor * mean(cho)``,
+    unpaired). The ratio of medians with its bootstrap CI (:func:`ratio_of_medians`) is shown.
+    ``cpg`` and each ``cho[variant]`` map ``theta_dot`` and ``r_ddot`` to per-seed values."""
     if not cho:
-        return NOT_TESTED, "needs cpg-actor and a Cho et al. variant with CPG traces"
+        return Claim("needs cpg-actor and a Cho et al. variant with CPG traces", fixed=NOT_TESTED)
     groups: dict[str, Sequence[float] | None] = {}
     for name in CPG_SIGNALS:
         groups[f"cpg-actor {name}"] = None if cpg is None else cpg[name]
@@ -512,19 +741,19 @@ def verdict_cho_flat(
     missing = too_few_seeds(groups)
     if missing:
         return missing
-    ok, parts = True, []
+    parts, tests = [], []
     for variant, values in cho.items():
         for name in CPG_SIGNALS:
             ratio = ratio_of_medians(cpg[name], values[name])
-            ok &= ratio is not None and ratio.low >= factor
             text = ratio if ratio else "undefined (the CPG-Actor's median is 0 on resampled seeds)"
             parts.append(f"{name} CPG-Actor / {variant}: {text}")
+            label = f"{name} mean CPG-Actor - {factor:g} x mean {variant}"
+            tests.append(ratio_test(cpg[name], values[name], factor, label))
     cpg_text = ", ".join(f"{name} {np.median(finite(cpg[name])):.3g}" for name in CPG_SIGNALS)
-    return (
-        SUPPORTED if ok else NOT_SUPPORTED,
+    return Claim(
         f"median std over an episode: CPG-Actor {cpg_text} (rad/s, rad/s^2); ratio of medians "
-        + "; ".join(parts)
-        + f" (supported if every CI's lower bound >= {factor:g})",
+        + "; ".join(parts),
+        tests,
     )
 
 

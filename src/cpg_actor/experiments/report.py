@@ -235,72 +235,86 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
             "per_seed": seeds[variant],
             "stages": _stages(results, variant),
         }
+    rewards = {variant: row["reward"] for variant, row in variants.items()}
+    return {
+        "total_steps": total_steps,
+        "comparison_step": comparison_step,
+        "variants": variants,
+        "claims": judge_claims(seeds, rewards, total_steps),
+        "comparisons": _comparisons(seeds),
+    }
+
+
+def judge_claims(
+    seeds: dict[str, dict[str, list[float]]], rewards: dict[str, str], total_steps: int
+) -> list[dict[str, str]]:
+    """The paper's claims judged on the per-seed numbers (``seeds``: variant -> key -> values,
+    as ``summary.json``'s ``per_seed``; ``rewards``: variant -> :func:`reward_of`) of runs of
+    ``total_steps``: each claim's verdict and detail, all claims one family
+    (:func:`cpg_actor.experiments.metrics.decide`)."""
+    comparison_step = min(total_steps, PAPER_COMPARISON_STEPS)
+    variants = list(seeds)
 
     def per_seed(variant: str, key: str) -> list[float] | None:
         """A variant's per-seed values; None when it did not run."""
         return seeds[variant][key] if variant in seeds else None
 
     cho_variants = [variant for variant in variants if agent_kind(variant) == "cho"]
-    claims: list[dict[str, str]] = []
+    # the claims (claim, its evidence, a prefix of its explanation), judged as one family
+    claims: list[tuple[str, m.Claim, str]] = []
     # 1. about 6x the reward of Cho et al. (warm)
-    verdict, detail = m.verdict_reward_ratio(
-        per_seed("cpg-actor", "return_at_comparison"),
-        per_seed("cho2019-warm", "return_at_comparison"),
-    )
     claims.append(
-        {
-            "claim": "CPG-Actor reaches about 6x the reward of Cho et al. (warm) after 20M steps",
-            "verdict": verdict,
-            "detail": f"final returns at {comparison_step:,} steps: {detail}",
-        }
+        (
+            "CPG-Actor reaches about 6x the reward of Cho et al. (warm) after 20M steps",
+            m.verdict_reward_ratio(
+                per_seed("cpg-actor", "return_at_comparison"),
+                per_seed("cho2019-warm", "return_at_comparison"),
+            ),
+            f"final returns at {comparison_step:,} steps: ",
+        )
     )
     # 2. open-loop CPG-Actor beats Cho et al.
-    verdict, detail = m.verdict_better(
-        per_seed("cpg-actor-open-loop", "final_return"),
-        {cho: per_seed(cho, "final_return") for cho in cho_variants},
-    )
     claims.append(
-        {
-            "claim": "the open-loop CPG-Actor beats Cho et al.",
-            "verdict": verdict,
-            "detail": f"final returns: {detail}",
-        }
+        (
+            "the open-loop CPG-Actor beats Cho et al.",
+            m.verdict_better(
+                per_seed("cpg-actor-open-loop", "final_return"),
+                {cho: per_seed(cho, "final_return") for cho in cho_variants},
+            ),
+            "final returns: ",
+        )
     )
     # 3. smooth vs bang-bang
-    verdict, detail = m.verdict_smooth(per_seed("cpg-actor", "smoothness"),
-                                       per_seed("mlp", "smoothness"))  # fmt: skip
     claims.append(
-        {
-            "claim": "CPG-Actor desired positions are smooth where the MLP actor is bang-bang",
-            "verdict": verdict,
-            "detail": detail,
-        }
+        (
+            "CPG-Actor desired positions are smooth where the MLP actor is bang-bang",
+            m.verdict_smooth(per_seed("cpg-actor", "smoothness"), per_seed("mlp", "smoothness")),
+            "",
+        )
     )
     # 4. near the motor limits
-    verdict, detail = m.verdict_near_limits(
-        per_seed("cpg-actor", "velocity_p99"), per_seed("cpg-actor", "velocity_share")
-    )
     claims.append(
-        {
-            "claim": "CPG-Actor desired velocities stay near (within) the +-15 rad/s motor limits",
-            "verdict": verdict,
-            "detail": detail,
-        }
+        (
+            "CPG-Actor desired velocities stay near (within) the +-15 rad/s motor limits",
+            m.verdict_near_limits(
+                per_seed("cpg-actor", "velocity_p99"), per_seed("cpg-actor", "velocity_share")
+            ),
+            "",
+        )
     )
     # 5. the hop height about doubles: 1M steps -> the end, as in the paper (1M -> 60M)
-    verdict, detail = m.verdict_hop_doubles(
-        per_seed("cpg-actor", "final_hop_height_logged"),
-        per_seed("cpg-actor", "hop_height_at_1M"),
-        PAPER_STAGE_STEPS[0],
-        total_steps,
-    )
     claims.append(
-        {
-            "claim": "the CPG-Actor's hop height about doubles with training (1M -> 60M steps "
-            "in the paper; here 1M -> the end)",
-            "verdict": verdict,
-            "detail": detail,
-        }
+        (
+            "the CPG-Actor's hop height about doubles with training (1M -> 60M steps in the paper; "
+            "here 1M -> the end)",
+            m.verdict_hop_doubles(
+                per_seed("cpg-actor", "final_hop_height_logged"),
+                per_seed("cpg-actor", "hop_height_at_1M"),
+                PAPER_STAGE_STEPS[0],
+                total_steps,
+            ),
+            "",
+        )
     )
     # 6. the CPG-Actor performs best during training (paper Fig. 6)
     # against the variants trained on the same reward only (returns of other rewards differ),
@@ -310,17 +324,15 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         for other in variants
         if other != "cpg-actor"
         and "cpg-actor" in variants
-        and variants[other]["reward"] == variants["cpg-actor"]["reward"]
+        and rewards[other] == rewards["cpg-actor"]
         and m.seeds_with_data(seeds[other]["mean_eval_return"])
     }
-    verdict, detail = m.verdict_best_during_training(per_seed("cpg-actor", "mean_eval_return"),
-                                                     others)  # fmt: skip
     claims.append(
-        {
-            "claim": "the CPG-Actor performs best during training",
-            "verdict": verdict,
-            "detail": detail,
-        }
+        (
+            "the CPG-Actor performs best during training",
+            m.verdict_best_during_training(per_seed("cpg-actor", "mean_eval_return"), others),
+            "",
+        )
     )
 
     # 7. Cho et al.'s theta_dot and r_ddot stay flat; the CPG-Actor's respond (section V)
@@ -329,24 +341,19 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
             return None
         return {n: seeds[variant][f"{n}_variability"] for n in m.CPG_SIGNALS}
 
-    verdict, detail = m.verdict_cho_flat(
-        flatness("cpg-actor"), {cho: flatness(cho) for cho in cho_variants}
-    )
     claims.append(
-        {
-            "claim": "Cho et al.'s theta_dot and r_ddot stay almost flat, the CPG-Actor's are "
-            "reshaped by its feedback",
-            "verdict": verdict,
-            "detail": detail,
-        }
+        (
+            "Cho et al.'s theta_dot and r_ddot stay almost flat, the CPG-Actor's are reshaped by "
+            "its feedback",
+            m.verdict_cho_flat(flatness("cpg-actor"), {cho: flatness(cho) for cho in cho_variants}),
+            "",
+        )
     )
-    return {
-        "total_steps": total_steps,
-        "comparison_step": comparison_step,
-        "variants": variants,
-        "claims": claims,
-        "comparisons": _comparisons(seeds),
-    }
+    verdicts = m.decide([claim for _, claim, _ in claims])
+    return [
+        {"claim": claim, "verdict": verdict, "detail": prefix + detail}
+        for (claim, _, prefix), (verdict, detail) in zip(claims, verdicts, strict=True)
+    ]
 
 
 TOO_FEW = f"not tested (< {m.MIN_SEEDS} seeds)"
@@ -370,32 +377,41 @@ COMPARISONS = (
 )
 
 
+# the metrics of the comparisons: (per-seed key, name in a row, key of m.MINIMUM_EFFECT)
+COMPARED = (("final_return", "return", "return"), ("final_hop_height_logged", "hop", "hop_height"))
+
+
 def _comparisons(seeds: dict[str, dict[str, list[float]]]) -> list[dict[str, Any]]:
     """For each pair of :data:`COMPARISONS` that ran: the differences of the final
-    (logged, deterministic) return and hop height, with bootstrap CIs over seeds, and which
-    one is better where a CI excludes 0; neither with fewer than ``MIN_SEEDS`` seeds a side."""
-    rows = []
+    (logged, deterministic) return and hop height, with bootstrap CIs over seeds (shown), and
+    which one is better: Welch's t-test, Holm-corrected over every test of the table (one
+    family), the difference at least the metric's minimum effect (of the second's mean);
+    neither with fewer than ``MIN_SEEDS`` seeds a side. Each row keeps ``NAME_p``: [p, Holm
+    p] and the family's size."""
+    rows, tests = [], []
     for first, second, question in COMPARISONS:
         if first not in seeds or second not in seeds:
             continue
         row: dict[str, Any] = {"first": first, "second": second, "question": question}
-        for key, name in (("final_return", "return"), ("final_hop_height_logged", "hop")):
-            if not m.enough_seeds(seeds[first][key], seeds[second][key]):
-                row[name], row[f"{name}_better"] = None, TOO_FEW
+        for key, name, metric in COMPARED:
+            a, b = seeds[first][key], seeds[second][key]
+            if not m.enough_seeds(a, b):
+                row[name], row[f"{name}_better"], row[f"{name}_p"] = None, TOO_FEW, None
                 continue
-            interval = m.bootstrap_difference(seeds[first][key], seeds[second][key])
-            row[name] = (
-                None if interval is None else [interval.estimate, interval.low, interval.high]
-            )
-            if interval is None:
-                row[f"{name}_better"] = "-"
-            elif interval.low > 0:
-                row[f"{name}_better"] = first
-            elif interval.high < 0:
-                row[f"{name}_better"] = second
-            else:
-                row[f"{name}_better"] = "not resolved"
+            interval = m.bootstrap_difference(a, b)
+            row[name] = [interval.estimate, interval.low, interval.high]
+            difference, p = m.welch_test(a, b)
+            minimum = m.MINIMUM_EFFECT[metric].threshold(float(np.mean(m.finite(b))))
+            tests.append((row, name, difference, p, minimum))
         rows.append(row)
+    adjusted = m.holm([p for *_, p, _ in tests])
+    for (row, name, difference, p, minimum), holm_p in zip(tests, adjusted, strict=True):
+        row[f"{name}_p"] = [p, holm_p]
+        resolved = holm_p < m.ALPHA and abs(difference) >= minimum and difference != 0
+        better = row["first"] if difference > 0 else row["second"]
+        row[f"{name}_better"] = better if resolved else "not resolved"
+    for row in rows:
+        row["family"] = len(tests)
     return rows
 
 
@@ -430,15 +446,20 @@ def _floor_lines(
     value = best["episode_return"]
     described = ", ".join(f"{k} {v:.3g}" for k, v in best["parameters"].items())
     above, below, unresolved, few = [], [], [], []
+    tests = []  # (variant, difference, p): one-sample t-tests against the floor, one family
     for variant, per_seed in seeds.items():
         if not m.seeds_with_data(per_seed["final_return"]):
             continue
-        if not m.enough_seeds(per_seed["final_return"]):  # no interval: listed apart
+        if not m.enough_seeds(per_seed["final_return"]):  # no test: listed apart
             few.append(f"`{variant}`")
             continue
-        interval = m.bootstrap_difference(per_seed["final_return"], [value])
-        target = above if interval.low > 0 else below if interval.high < 0 else unresolved
-        target.append(f"`{variant}` ({interval.estimate:+.0f})")
+        tests.append((variant, *m.one_sample_t_test(per_seed["final_return"], value)))
+    minimum = m.MINIMUM_EFFECT["return"].threshold(value)
+    adjusted = m.holm([p for *_, p in tests])
+    for (variant, difference, _), holm_p in zip(tests, adjusted, strict=True):
+        resolved = holm_p < m.ALPHA and abs(difference) >= minimum
+        target = (above if difference > 0 else below) if resolved else unresolved
+        target.append(f"`{variant}` ({difference:+.0f})")
     few_text = f"; fewer than {m.MIN_SEEDS} seeds, not tested: {', '.join(few)}" if few else ""
     return [
         f"**Open-loop grid floor** (no learning; `{FLOOR_FILE}`): the best of "
@@ -446,8 +467,10 @@ def _floor_lines(
         f"one episode, no reset noise, eq. 4's reward with this reproduction's env settings) "
         f"returns **{value:.0f}** (hop height p90 {best['hop_height_p90']:.2f} m; the highest "
         f"hopping set: {floor['best_hop']['hop_height_p90']:.2f} m, return "
-        f"{floor['best_hop']['episode_return']:.0f}). Final return minus the floor, CI over "
-        f"seeds (variants trained on this reward): above it {', '.join(above) or 'none'}; "
+        f"{floor['best_hop']['episode_return']:.0f}). Final return minus the floor, mean over "
+        f"seeds (variants trained on this reward), by a one-sample t-test with the "
+        f"{m.family_text(len(tests))} (every variant here) and a minimum effect of "
+        f"{m.MINIMUM_EFFECT['return']} (the floor): above it {', '.join(above) or 'none'}; "
         f"below it {', '.join(below) or 'none'}; not resolved {', '.join(unresolved) or 'none'}"
         f"{few_text}.",
         "",
@@ -501,21 +524,30 @@ def _comparison_lines(comparisons: list[dict[str, Any]]) -> list[str]:
         value, low, high = values
         return f"{value:+.{digits}f} [{low:+.{digits}f}, {high:+.{digits}f}]"
 
+    def p_cell(values: list[float] | None) -> str:
+        return "-" if values is None else f"{values[0]:.2g} / {values[1]:.2g}"
+
+    minimum = {name: m.MINIMUM_EFFECT[metric] for _, name, metric in COMPARED}
     lines = [
         "## Comparisons beyond the paper",
         "",
         "First minus second variant: final return (the last logged deterministic evaluations) "
         "and hop height (the last 3 logged evaluations), mean difference over seeds with its "
-        "bootstrap 95% CI; *better* names the variant a CI excluding 0 favours.",
+        f"bootstrap 95% CI (shown). *p*: {m.WELCH} (two-sided) / its p after the "
+        f"{m.family_text(comparisons[0]['family'])} (every test of this table). *Better* "
+        f"names a variant where the {m.HOLM} p < {m.ALPHA:g} and the difference is at least "
+        f"the minimum effect ({minimum['return']} for returns, {minimum['hop']} for hop "
+        "heights; the baseline: the second variant's mean).",
         "",
-        "| question | first - second | return difference | better (return) | "
-        "hop height difference (m) | better (hop) |",
-        "| --- | --- | --- | --- | --- | --- |",
+        "| question | first - second | return difference | p (return) | better (return) | "
+        "hop height difference (m) | p (hop) | better (hop) |",
+        "| --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for row in comparisons:
         lines.append(
             f"| {row['question']} | `{row['first']}` - `{row['second']}` | "
-            f"{cell(row['return'], 1)} | {row['return_better']} | {cell(row['hop'], 3)} | "
+            f"{cell(row['return'], 1)} | {p_cell(row.get('return_p'))} | "
+            f"{row['return_better']} | {cell(row['hop'], 3)} | {p_cell(row.get('hop_p'))} | "
             f"{row['hop_better']} |"
         )
     return lines + [""]
@@ -896,16 +928,23 @@ def _definition_lines() -> list[str]:
         "(one draw of seeds for both: the same runs);",
         f"* fewer than {m.MIN_SEEDS} seeds with data on a side: no interval and no verdict "
         "(*not tested in this run*);",
-        "* claim thresholds: reward ratio of means within [3, 12] with CI above 1; open-loop "
-        "beats Cho et al. if the CI of the difference of mean final returns is above 0 for each "
-        "Cho variant run; smooth vs bang-bang if the CI of the ratio of medians MLP / CPG-Actor "
-        "has its lower bound >= 10; near the limits if the CI of the median over seeds of the "
-        "per-seed 99th percentile of |desired velocity| lies in [9, 18] rad/s; hop height "
-        "doubles if the ratio of mean hop heights at the end / at 1M steps (paired) is >= 1.5 "
-        "with its CI above 1; best during training if the CI of the difference of mean returns "
-        "over the run is above 0 against every variant of the same reward; Cho et al. flat if, "
-        "for theta_dot and r_ddot and every Cho variant, the CI of the ratio of medians "
-        "CPG-Actor / Cho of the standard deviation over an episode (after 50 steps) has its "
-        "lower bound >= 3.",
+        f"* verdicts: the CIs are shown, the verdicts rest on tests: {m.WELCH} (two-sided) "
+        f"between variants (independent runs), a {m.PAIRED} for the hop height at two times "
+        f"(the same runs), {m.BAND} for the velocity band; the p-values of every test behind "
+        f"the claims are one family, {m.HOLM}-corrected to a family-wise error rate of "
+        f"{m.ALPHA:g}; a claim is supported if each of its tests has a {m.HOLM} p < "
+        f"{m.ALPHA:g}, a difference in the claimed direction of at least the minimum effect "
+        f"({m.MINIMUM_EFFECT['return']} for returns, {m.MINIMUM_EFFECT['hop_height']} for hop "
+        "heights) and the claim's other conditions hold;",
+        "* claim thresholds: reward ratio of means within [3, 12] with the CPG-Actor's return "
+        "higher; open-loop beats Cho et al. if its mean final return is higher than each Cho "
+        "variant's run; smooth vs bang-bang if the MLP's mean smoothness is more than 10 times "
+        "the CPG-Actor's (the test: mean MLP - 10 x mean CPG-Actor > 0); near the limits if the "
+        "mean over seeds of the per-seed 99th percentile of |desired velocity| lies in [9, 18] "
+        "rad/s; hop height doubles if the ratio of mean hop heights at the end / at 1M steps "
+        "is >= 1.5 and the hop height rose (paired); best during training if the mean return "
+        "over the run is higher than every variant's of the same reward; Cho et al. flat if, "
+        "for theta_dot and r_ddot and every Cho variant, the CPG-Actor's mean standard "
+        "deviation over an episode (after 50 steps) is more than 3 times Cho's.",
         "",
     ]

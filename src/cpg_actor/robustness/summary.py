@@ -19,7 +19,12 @@ from typing import Any
 import numpy as np
 
 from cpg_actor.experiments import metrics as m
-from cpg_actor.experiments.robustness_report import JSON_FILE, MARKDOWN_FILE, verdict_lines
+from cpg_actor.experiments.robustness_report import (
+    JSON_FILE,
+    MARKDOWN_FILE,
+    verdict_lines,
+    verdict_rule,
+)
 from cpg_actor.robustness.suite import NO_GAIT, NOT_RECOVERED
 
 # a variant trained with env.randomize is named as the nominal one with this suffix: the
@@ -110,17 +115,24 @@ def verdict_pairs(variants: list[str]) -> list[tuple[str, str]]:
 
 def verdicts(runs: list[dict[str, Any]], names: list[str]) -> list[dict[str, Any]]:
     """Per claim (:func:`verdict_pairs`) and perturbation: its verdict and explanation
-    (:func:`cpg_actor.experiments.metrics.verdict_more_robust`)."""
+    (:func:`cpg_actor.experiments.metrics.verdict_more_robust`), all of them one family
+    (:func:`cpg_actor.experiments.metrics.decide`: Welch's t-tests, Holm-corrected), with the
+    test, its p, its Holm p and the family's size."""
     variants = list(dict.fromkeys(run["variant"] for run in runs))
-    out = []
+    rows, claims = [], []
     for first, second in verdict_pairs(variants):
         for name in names:
-            verdict, why = m.verdict_more_robust(retention_scores(runs, first, name),
-                                                 retention_scores(runs, second, name),
-                                                 (first, second))  # fmt: skip
-            out.append({"claim": f"{first} more robust than {second}", "perturbation": name,
-                        "verdict": verdict, "why": why})  # fmt: skip
-    return out
+            claims.append(m.verdict_more_robust(retention_scores(runs, first, name),
+                                                retention_scores(runs, second, name),
+                                                (first, second)))  # fmt: skip
+            rows.append({"claim": f"{first} more robust than {second}", "perturbation": name})
+    family = sum(len(claim.tests) for claim in claims if claim.fixed is None)
+    for row, claim, (verdict, why) in zip(rows, claims, m.decide(claims), strict=True):
+        row.update(verdict=verdict, why=why, family=family)
+        if claim.fixed is None:
+            (test,) = claim.tests
+            row.update(test=test.name, p=test.p, p_holm=test.adjusted)
+    return rows
 
 
 def plain(value: Any) -> Any:
@@ -182,10 +194,7 @@ def markdown(data: dict[str, Any]) -> str:
                      f"{_text(summary['nominal']['return'], '.1f')} |")  # fmt: skip
     if data.get("verdicts"):
         lines += ["", "## Verdicts", "",
-                  "Per perturbation, per seed the mean over its levels of the return retained; "
-                  "a claim is supported if the bootstrap 95% CI of the difference of the means "
-                  f"over seeds lies above 0 (not tested with fewer than {m.MIN_SEEDS} seeds a "
-                  "side).", "", *verdict_lines(data)]  # fmt: skip
+                  *verdict_rule(data), *verdict_lines(data)]  # fmt: skip
     names = list(next(iter(variants.values()))["perturbations"]) if variants else []
     for name in names:
         axis = next(iter(variants.values()))["perturbations"][name]
