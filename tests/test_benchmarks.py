@@ -63,7 +63,7 @@ MARKS = {
     "mjx_agreement.py": [SLOW, MJX],
     "mjx_eval.py": [SLOW, MJX],
     "mjx_solver_iterations.py": [SLOW, MJX],
-    "profile_collect.py": [SLOW],
+    "profile_collect.py": [SLOW, MJX],
     "robustness_suite.py": [SLOW],
     "rollout_threads.py": [SLOW],
     "shared_device.py": [SLOW],
