@@ -2,7 +2,12 @@
 experiments, above deployment, above training, above the configuration, above the agents
 and PPO, above the robots' registry, above the robots, above their tasks and shared
 machinery (and the parts they share), above the CPG; small shared utilities at the bottom),
-and the folders of one layer import each other one way only (no cycle)."""
+and the folders of one layer import each other one way only (no cycle).
+
+The longest dotted prefix in ``LAYERS`` decides a module's layer, so a robot's subfolder can sit
+above its robot: the hopper's paper code (``robots.hopper.paper``: Cho et al.'s agents, the
+paper's report parts, its commands) is at the layer of what it plugs into, and generic code
+reaches it only through the robot's registry entry (``Robot`` strings, "module:NAME")."""
 
 import ast
 from pathlib import Path
@@ -128,3 +133,42 @@ def test_the_agents_never_look_a_robot_up():
         if module.split(".")[0] in ("agents", "ppo"):
             names = imported(ast.parse(path.read_text(encoding="utf-8")))
             assert "robots.registry" not in names, module
+
+
+def robot_folders() -> set[str]:
+    """The robots' folders under ``robots`` (those with a ``plugin.py``)."""
+    return {path.parent.name for path in (PACKAGE / "robots").glob("*/plugin.py")}
+
+
+# modules outside a robot's folder that still import it (module -> the robot): to be emptied
+OUTSIDE_IMPORTS_LEFT: dict[str, str] = {
+    "agents.cho2019": "hopper",
+    "experiments.report": "hopper",
+    "experiments.results": "hopper",
+    "experiments.floor": "hopper",
+    "commands.cpg_demo": "hopper",
+    "commands.cho2019_reference": "hopper",
+}
+
+
+def outside_imports() -> dict[str, str]:
+    """Module outside ``robots/<name>/`` -> the robot ``<name>`` it imports (the registry,
+    the one place the robots are named, aside)."""
+    robots, found = robot_folders(), {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        module = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
+        module = module.removesuffix(".__init__").removesuffix("__init__")
+        own = module.split(".")[1] if module.startswith("robots.") else ""
+        if module == "robots.registry" or own in robots:
+            continue
+        for name in imported(ast.parse(path.read_text(encoding="utf-8"))):
+            parts = name.split(".")
+            if parts[0] == "robots" and len(parts) > 1 and parts[1] in robots:
+                found[module] = parts[1]
+    return found
+
+
+def test_nothing_outside_a_robots_folder_imports_it():
+    """A robot is its folder plus its registry line: generic code gets what it needs from the
+    robot's registry entry, never by importing the robot's modules."""
+    assert outside_imports() == OUTSIDE_IMPORTS_LEFT
