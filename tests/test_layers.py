@@ -5,9 +5,9 @@ machinery (and the parts they share), above the CPG; small shared utilities at t
 and the folders of one layer import each other one way only (no cycle).
 
 The longest dotted prefix in ``LAYERS`` decides a module's layer, so a robot's subfolder can sit
-above its robot: the hopper's paper code (``robots.hopper.paper``: Cho et al.'s agents, the
-paper's report parts, its commands) is at the layer of what it plugs into, and generic code
-reaches it only through the robot's registry entry (``Robot`` strings, "module:NAME")."""
+above its robot: the hopper's own commands (``robots.hopper.commands``) and Cho et al.'s
+agents (``robots.hopper.agents``) sit at the layer of what they plug into, and generic code
+reaches them only through the robot's registry entry (its ``Robot`` names them by string)."""
 
 import ast
 from pathlib import Path
@@ -33,6 +33,7 @@ LAYERS = {
     "deploy": 10,
     "experiments": 11, "plots": 11, "robustness": 11,
     "cli": 12, "commands": 12,
+    "robots.hopper.commands": 12,  # the hopper's own commands (Robot.commands)
 }  # fmt: skip
 
 
@@ -146,8 +147,6 @@ OUTSIDE_IMPORTS_LEFT: dict[str, str] = {
     "experiments.report": "hopper",
     "experiments.results": "hopper",
     "experiments.floor": "hopper",
-    "commands.cpg_demo": "hopper",
-    "commands.cho2019_reference": "hopper",
 }
 
 

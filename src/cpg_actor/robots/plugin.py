@@ -101,6 +101,9 @@ class Robot:
     # the recipe (cpg_actor.config.presets.PRESETS) a run on it follows when neither
     # ``--preset`` nor its config file names one: with ``agent_defaults``, its tuned settings
     recipe: str = "paper"
+    # the `cpg-actor` commands it brings (listed after the generic ones): command name ->
+    # (its module, with HELP, add_arguments and run; the module's HELP)
+    commands: Mapping[str, tuple[str, str]] = field(default_factory=dict)
 
     @property
     def episode_steps(self) -> int:
