@@ -144,9 +144,6 @@ def robot_folders() -> set[str]:
 # modules outside a robot's folder that still import it (module -> the robot): to be emptied
 OUTSIDE_IMPORTS_LEFT: dict[str, str] = {
     "agents.cho2019": "hopper",
-    "experiments.report": "hopper",
-    "experiments.results": "hopper",
-    "experiments.floor": "hopper",
 }
 
 

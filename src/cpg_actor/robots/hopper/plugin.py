@@ -70,6 +70,7 @@ ROBOT = Robot(
     start_gait=START_GAIT,
     simulators=SIMULATORS,
     agent_defaults=AGENT_DEFAULTS,
+    paper="cpg_actor.robots.hopper.paper:PAPER",
     commands={
         "cpg-demo": (
             "cpg_actor.robots.hopper.commands.cpg_demo",
