@@ -118,6 +118,9 @@ class Robot:
     # the `cpg-actor` commands it brings (listed after the generic ones): command name ->
     # (its module, with HELP, add_arguments and run; the module's HELP)
     commands: Mapping[str, tuple[str, str]] = field(default_factory=dict)
+    # the agents built for it alone: "module:NAME" of each one's AgentSpec
+    # (cpg_actor.agents.AGENTS lists them, imported on first use)
+    agents: tuple[str, ...] = ()
     # "module:NAME" of its Paper, where the paper's reproduction studies it (the hopper)
     paper: str | None = None
 

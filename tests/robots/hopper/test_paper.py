@@ -31,3 +31,32 @@ def test_the_hopper_brings_its_commands_to_the_command_line():
     assert {"cpg-demo", "cho2019-reference"} <= set(ROBOTS["hopper"].commands)
     assert not {"cpg-demo", "cho2019-reference"} & set(COMMANDS)  # not listed by hand
     assert commands()["cpg-demo"][0] == "cpg_actor.robots.hopper.commands.cpg_demo"
+
+
+def test_the_agents_list_the_cho2019_baselines_the_hopper_brings():
+    from cpg_actor.agents import AGENTS, get_agent_spec
+    from cpg_actor.robots.hopper import agents
+
+    for spec in (agents.CHO2019, agents.CHO2019_WARM, agents.CHO2019_PAPER):
+        assert get_agent_spec(spec.name) is spec and spec.name in sorted(AGENTS)
+
+
+EXTRA = None  # a robot registered later brings this agent (below)
+
+
+def test_a_robot_registered_later_brings_its_agents(monkeypatch):
+    import dataclasses
+    import sys
+
+    from cpg_actor.agents import AGENTS, get_agent_spec
+    from cpg_actor.robots.hopper.agents import CHO2019
+
+    monkeypatch.setattr(sys.modules[__name__], "EXTRA", dataclasses.replace(CHO2019, name="x"))
+    copy = dataclasses.replace(
+        get_robot("hopper"), name="hopper-copy", agents=(f"{__name__}:EXTRA",), commands={}
+    )
+    monkeypatch.setitem(ROBOTS, copy.name, copy)
+    try:
+        assert get_agent_spec("x").name == "x"
+    finally:
+        del AGENTS["x"]

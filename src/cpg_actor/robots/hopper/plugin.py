@@ -70,6 +70,10 @@ ROBOT = Robot(
     start_gait=START_GAIT,
     simulators=SIMULATORS,
     agent_defaults=AGENT_DEFAULTS,
+    agents=tuple(
+        f"cpg_actor.robots.hopper.agents:{name}"
+        for name in ("CHO2019", "CHO2019_WARM", "CHO2019_PAPER")
+    ),
     paper="cpg_actor.robots.hopper.paper:PAPER",
     commands={
         "cpg-demo": (
