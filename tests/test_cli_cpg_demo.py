@@ -69,7 +69,7 @@ def test_the_two_oscillators_lines_stay_distinguishable_where_they_coincide():
     outside the axes."""
     import numpy as np
 
-    from cpg_actor.commands.cpg_demo import demo_figure
+    from cpg_actor.robots.hopper.commands.cpg_demo import demo_figure
     from cpg_actor.robots.hopper.cpg import hopper_cpg
 
     values = {k: v.detach().numpy() for k, v in hopper_cpg(0.01).parametrisation.values().items()}

@@ -2,7 +2,12 @@
 experiments, above deployment, above training, above the configuration, above the agents
 and PPO, above the robots' registry, above the robots, above their tasks and shared
 machinery (and the parts they share), above the CPG; small shared utilities at the bottom),
-and the folders of one layer import each other one way only (no cycle)."""
+and the folders of one layer import each other one way only (no cycle).
+
+The longest dotted prefix in ``LAYERS`` decides a module's layer, so a robot's subfolder can sit
+above its robot: the hopper's own commands (``robots.hopper.commands``) and Cho et al.'s
+agents (``robots.hopper.agents``) sit at the layer of what they plug into, and generic code
+reaches them only through the robot's registry entry (its ``Robot`` names them by string)."""
 
 import ast
 from pathlib import Path
@@ -28,6 +33,8 @@ LAYERS = {
     "deploy": 10,
     "experiments": 11, "plots": 11, "robustness": 11,
     "cli": 12, "commands": 12,
+    "robots.hopper.commands": 12,  # the hopper's own commands (Robot.commands)
+    "robots.hopper.agents": 7,  # Cho et al.'s agents, which the hopper brings (Robot.agents)
 }  # fmt: skip
 
 
@@ -126,5 +133,42 @@ def test_the_agents_never_look_a_robot_up():
     for path in PACKAGE.rglob("*.py"):
         module = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
         if module.split(".")[0] in ("agents", "ppo"):
-            names = imported(ast.parse(path.read_text(encoding="utf-8")))
-            assert "robots.registry" not in names, module
+            tree = ast.parse(path.read_text(encoding="utf-8"))
+            if module == "agents.registry":  # the robots' table, for the agents they bring
+                assert registry_names(tree) <= {"ROBOTS"}, module
+            else:
+                assert "robots.registry" not in imported(tree), module
+
+
+def registry_names(tree: ast.AST) -> set[str]:
+    """The names a module imports from ``cpg_actor.robots.registry``."""
+    return {alias.name for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)
+            and node.module == "cpg_actor.robots.registry" for alias in node.names}  # fmt: skip
+
+
+def robot_folders() -> set[str]:
+    """The robots' folders under ``robots`` (those with a ``plugin.py``)."""
+    return {path.parent.name for path in (PACKAGE / "robots").glob("*/plugin.py")}
+
+
+def outside_imports() -> dict[str, str]:
+    """Module outside ``robots/<name>/`` -> the robot ``<name>`` it imports (the registry,
+    the one place the robots are named, aside)."""
+    robots, found = robot_folders(), {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        module = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
+        module = module.removesuffix(".__init__").removesuffix("__init__")
+        own = module.split(".")[1] if module.startswith("robots.") else ""
+        if module == "robots.registry" or own in robots:
+            continue
+        for name in imported(ast.parse(path.read_text(encoding="utf-8"))):
+            parts = name.split(".")
+            if parts[0] == "robots" and len(parts) > 1 and parts[1] in robots:
+                found[module] = parts[1]
+    return found
+
+
+def test_nothing_outside_a_robots_folder_imports_it():
+    """A robot is its folder plus its registry line: generic code gets what it needs from the
+    robot's registry entry, never by importing the robot's modules."""
+    assert outside_imports() == {}

@@ -523,10 +523,10 @@ def test_version_and_help_import_neither_torch_nor_a_simulator(argv):
 def test_every_command_has_its_module_help_and_arguments(capsys):
     import importlib
 
-    from cpg_actor.cli import COMMANDS
+    from cpg_actor.cli import commands
 
-    for name, (module_name, help_text) in COMMANDS.items():
-        module = importlib.import_module(f"cpg_actor.commands.{module_name}")
+    for name, (module_name, help_text) in commands().items():
+        module = importlib.import_module(module_name)
         assert help_text == module.HELP, name
         with pytest.raises(SystemExit) as exit_:
             main([name, "--help"])

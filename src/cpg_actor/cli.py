@@ -21,62 +21,65 @@ brief_openmp_spinning(os.environ)  # before anything imports torch
 from cpg_actor.errors import MjxUnavailable, RenderingUnavailable  # noqa: E402
 from cpg_actor.files import describe_os_error  # noqa: E402
 
-# command name -> (module in cpg_actor.commands, its HELP)
+# command name -> (its module, its HELP); the robots' own commands follow (commands())
 COMMANDS: dict[str, tuple[str, str]] = {
-    "cpg-demo": (
-        "cpg_demo",
-        "integrate the hopper CPG for a few seconds and plot x, theta_dot and r_ddot to a PNG",
-    ),
     "gaits": (
-        "gaits",
+        "cpg_actor.commands.gaits",
         "run a quadruped's CPG gait presets open loop; write a gait diagram and a summary",
     ),
     "train": (
-        "train",
+        "cpg_actor.commands.train",
         "train an agent (cpg-actor, cpg-actor-paper, mlp, mlp-warm, cho2019-warm, ...) with "
         "PPO, or search one (open-loop-es: CMA-ES)",
     ),
     "eval": (
-        "eval",
+        "cpg_actor.commands.eval",
         "evaluate a trained run deterministically; save per-step traces, figures (and a video)",
     ),
     "export": (
-        "export",
+        "cpg_actor.commands.export",
         "export a trained policy (normaliser, networks, CPG step) as TorchScript or ONNX",
     ),
-    "cho2019-reference": (
-        "cho2019_reference",
-        "grid-search the reference hopping CPG parameters that warm-start the cho2019 baseline",
-    ),
     "reproduce": (
-        "reproduce",
+        "cpg_actor.commands.reproduce",
         "reproduce the paper: train variants x seeds in parallel (or on Ray), figures and a report",
     ),
     "sweep": (
-        "sweep",
+        "cpg_actor.commands.sweep",
         "sensitivity study: train variants x seeds for the defaults and each --vary setting",
     ),
     "figures": (
-        "figures",
+        "cpg_actor.commands.figures",
         "redraw the paper's figures and report.md from a `cpg-actor reproduce` results directory",
     ),
     "curves": (
-        "curves",
+        "cpg_actor.commands.curves",
         "draw the learning curves of several runs (grouped by agent and settings) in one figure",
     ),
     "gradient": (
-        "gradient",
+        "cpg_actor.commands.gradient",
         "measure the k-step (truncated) CPG gradient against the full-trajectory one",
     ),
     "transfer": (
-        "transfer",
+        "cpg_actor.commands.transfer",
         "evaluate a reproduction's final policies in both simulators (cross-simulator transfer)",
     ),
     "robustness": (
-        "robustness",
+        "cpg_actor.commands.robustness",
         "evaluate trained runs under perturbations (pushes, payload, friction, latency, ...)",
     ),
 }
+
+
+def commands() -> dict[str, tuple[str, str]]:
+    """Every command: the generic ones (:data:`COMMANDS`), then those the robots bring
+    (``Robot.commands``, in the registry's order)."""
+    from cpg_actor.robots.registry import ROBOTS
+
+    merged = dict(COMMANDS)
+    for robot in ROBOTS.values():
+        merged.update(robot.commands)
+    return merged
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -90,10 +93,10 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
     parser.add_argument("--version", action="version", version=f"cpg-actor {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name, (module_name, help_text) in COMMANDS.items():
+    for name, (module_name, help_text) in commands().items():
         command_parser = sub.add_parser(name, help=help_text, description=help_text)
         if name == command:
-            module = importlib.import_module(f"cpg_actor.commands.{module_name}")
+            module = importlib.import_module(module_name)
             module.add_arguments(command_parser)
             command_parser.set_defaults(_run=module.run)
     return parser

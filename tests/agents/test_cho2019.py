@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 import torch
 
-from cpg_actor.agents.cho2019 import reference_action
 from cpg_actor.agents.warm_start import WarmStartConfig
 from cpg_actor.config import TrainConfig
 from cpg_actor.ppo import PPOConfig
+from cpg_actor.robots.hopper.agents import reference_action
 from cpg_actor.robots.hopper.cho2019 import action_to_parameters
 from cpg_actor.robots.hopper.cho2019_reference import REFERENCE_PARAMETERS
 from cpg_actor.robots.hopper.config import HopperConfig
@@ -146,7 +146,7 @@ def test_the_papers_cho2019_acts_on_frequency_and_amplitude_and_sees_the_hopper_
     """cho2019-paper: 4 actions (nu, rho per joint; the phase bias stays the preset's pi), 8
     observations (no CPG state), warm-started toward Ijspeert et al. 2007's limb oscillators
     at drive 3 (0.6 Hz, 0.524 rad), which lie inside the action ranges."""
-    from cpg_actor.agents.cho2019 import ijspeert_2007_parameters
+    from cpg_actor.robots.hopper.agents import ijspeert_2007_parameters
     from cpg_actor.robots.hopper.cho2019 import PAPER_PARAMETER_RANGES, parameters_to_action
 
     np.testing.assert_allclose(ijspeert_2007_parameters(), [0.6, 0.6, 0.524, 0.524])

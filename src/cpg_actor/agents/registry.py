@@ -2,30 +2,24 @@
 around the robot's environment (the robot builds the env: ``Robot.make``).
 
 A baseline such as ``cho2019`` (an MLP actor acting on a wrapped env whose actions are CPG
-parameters) registers an :class:`AgentSpec` with its ``wrapper``; the runner needs nothing
-else.
+parameters) is an :class:`AgentSpec` with its ``wrapper``; the runner needs nothing else. A
+robot brings the agents built for it alone (``Robot.agents``: the hopper's Cho et al.
+baselines, in its folder): :data:`AGENTS` lists them too, imported on first use.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, MutableMapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from cpg_actor.agents.base import Agent, AgentConfig
-from cpg_actor.agents.cho2019 import (
-    build_cho2019,
-    cpg_parameter_wrapper,
-    paper_cpg_parameter_wrapper,
-    warm_start_cho2019,
-    warm_start_cho2019_paper,
-)
 from cpg_actor.agents.cpg_actor import CPGActorAgent
 from cpg_actor.agents.mlp import MLPAgent
 from cpg_actor.agents.warm_start import warm_start_mlp
-from cpg_actor.robots.plugin import Robot
+from cpg_actor.robots.plugin import Robot, load
 
 
 def env_shapes(env: Any) -> tuple[int, np.ndarray]:
@@ -71,7 +65,47 @@ class AgentSpec:
         return env if self.wrapper is None else self.wrapper(env, agent_config, robot)
 
 
-AGENTS: dict[str, AgentSpec] = {}
+class AgentTable(MutableMapping[str, AgentSpec]):
+    """The agents by name: those registered here, then those the robots bring (each robot's
+    ``Robot.agents``, "module:NAME" strings, imported when the table is first read, and for a
+    robot registered later, when it is read next)."""
+
+    def __init__(self) -> None:
+        self._specs: dict[str, AgentSpec] = {}
+        self._loaded: set[str] = set()  # the robots' strings already imported
+
+    def _load_robot_agents(self) -> None:
+        # the robots' registry read for the agents they bring, never for a run's robot
+        from cpg_actor.robots.registry import ROBOTS
+
+        for path in (path for robot in ROBOTS.values() for path in robot.agents):
+            if path not in self._loaded:
+                spec = load(path)
+                self._loaded.add(path)
+                if spec.name in self._specs:
+                    raise ValueError(f"an agent named '{spec.name}' is already registered")
+                self._specs[spec.name] = spec
+
+    def __getitem__(self, name: str) -> AgentSpec:
+        self._load_robot_agents()
+        return self._specs[name]
+
+    def __setitem__(self, name: str, spec: AgentSpec) -> None:
+        self._specs[name] = spec
+
+    def __delitem__(self, name: str) -> None:
+        del self._specs[name]
+
+    def __iter__(self) -> Iterator[str]:
+        self._load_robot_agents()
+        return iter(self._specs)
+
+    def __len__(self) -> int:
+        self._load_robot_agents()
+        return len(self._specs)
+
+
+AGENTS = AgentTable()
 
 
 def register_agent(spec: AgentSpec) -> AgentSpec:
@@ -138,38 +172,6 @@ register_agent(
         "CPG-Actor without feedback (xi = kappa = 0): only the CPG parameters are trained",
         lambda config, env, robot: build_cpg_actor(config, env, robot, feedback=False),
         uses_start_gait=True,
-    )
-)
-register_agent(
-    AgentSpec(
-        "cho2019",
-        "Cho et al. 2019: MLP actor outputs CPG parameters; the CPG is inside the environment",
-        build_cho2019,
-        wrapper=cpg_parameter_wrapper,
-        robots=("hopper",),
-        uses_start_gait=True,
-    )
-)
-register_agent(
-    AgentSpec(
-        "cho2019-warm",
-        "Cho et al. 2019 with the actor warm-started toward the reference hopping parameters",
-        build_cho2019,
-        wrapper=cpg_parameter_wrapper,
-        warm_start=warm_start_cho2019,
-        robots=("hopper",),
-        uses_start_gait=True,
-    )
-)
-register_agent(
-    AgentSpec(
-        "cho2019-paper",
-        "Cho et al. 2019 as the paper has it: frequency and amplitude actions, no CPG state "
-        "observed, warm-started toward Ijspeert et al. 2007's limb parameters",
-        build_cho2019,
-        wrapper=paper_cpg_parameter_wrapper,
-        warm_start=warm_start_cho2019_paper,
-        robots=("hopper",),
     )
 )
 register_agent(

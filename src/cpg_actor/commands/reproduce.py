@@ -10,7 +10,7 @@ from pathlib import Path
 
 from cpg_actor.commands import add_set_option
 from cpg_actor.config.presets import PRESETS
-from cpg_actor.robots.hopper.config import SIMULATORS
+from cpg_actor.robots.registry import all_simulators
 
 HELP = "reproduce the paper: train variants x seeds in parallel (or on Ray), figures and a report"
 
@@ -38,7 +38,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"parallel runs on this machine (default: the core count, {os.cpu_count()})",
     )
     parser.add_argument("--num-envs", type=int, default=None, help="parallel envs per run")
-    parser.add_argument("--sim", default=None, choices=SIMULATORS)
+    parser.add_argument("--sim", default=None, choices=all_simulators())
     parser.add_argument(
         "--preset",
         default=None,

@@ -2,8 +2,8 @@
 learning at all, for a reproduction's environment.
 
 The open-loop CPG-Actor learns constant CPG parameters; a grid over the same parameters
-(:data:`cpg_actor.robots.hopper.cho2019_reference.DEFAULT_GRID`: 960 sets of frequency, hip and knee
-amplitude and hip-knee phase bias, a and w at the preset's values) run for one episode each
+(the studied robot's ``Paper.open_loop_floor``; the hopper's: 960 sets of frequency, hip and
+knee amplitude and hip-knee phase bias, a and w at the preset's values) run for one episode each
 with no reset noise gives a floor any CPG agent's trained return should clear. The report
 shows it next to the trained variants (``OUT/open_loop_floor.json``).
 """
@@ -19,22 +19,11 @@ FLOOR_FILE = "open_loop_floor.json"
 
 def open_loop_floor(env_config: Any, grid: dict | None = None) -> dict[str, Any]:
     """The best grid candidate by episode return (and, for reference, by hop height);
-    ``grid`` entries replace those of the default grid."""
-    from cpg_actor.robots.hopper.cho2019 import PARAMETER_NAMES
-    from cpg_actor.robots.hopper.cho2019_reference import evaluate_parameters, grid_candidates
+    ``grid`` entries replace those of the default grid. The grid is the robot's that
+    ``env_config`` configures (its ``Robot.paper``)."""
+    from cpg_actor.robots.registry import robot_of_config
 
-    candidates = evaluate_parameters(grid_candidates(grid), env_config)
-    by_return = max(candidates, key=lambda c: c.episode_return)
-    by_hop = max(candidates, key=lambda c: c.hop_height)
-
-    def row(candidate) -> dict[str, Any]:
-        return {
-            "parameters": dict(zip(PARAMETER_NAMES, candidate.parameters, strict=True)),
-            "episode_return": candidate.episode_return,
-            "hop_height_p90": candidate.hop_height,
-        }
-
-    return {"candidates": len(candidates), "best_return": row(by_return), "best_hop": row(by_hop)}
+    return robot_of_config(env_config).paper_parts().open_loop_floor(env_config, grid)
 
 
 def write_floor(out: Path, env_config: Any) -> dict[str, Any]:

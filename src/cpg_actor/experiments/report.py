@@ -28,8 +28,7 @@ from cpg_actor.experiments.robustness_report import report_lines as robustness_l
 from cpg_actor.experiments.transfer import load_transfer, transfer_lines
 from cpg_actor.files import atomic_write_text
 from cpg_actor.machine import cpu_model, git_commit
-from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
-from cpg_actor.robots.hopper.reward import REWARD_TERMS
+from cpg_actor.robots.registry import paper_robot
 
 PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
 PAPER_STAGE_STEPS = (1_000_000, 20_000_000, 60_000_000)
@@ -60,7 +59,7 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
             "r_ddot_variability",
             "xi_at_bound",
             "kappa_at_bound",
-            *(f"term_{name}" for name in REWARD_TERMS),
+            *(f"term_{name}" for name in _reward_terms()),
         )
     }
     for run in results.runs.get(variant, []):
@@ -80,7 +79,7 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
         out["final_std"].append(m.exploration_std(logged[-1]) if logged else float("nan"))
         # the return of the last training episodes, split into the reward terms r1..r5
         out["training_return"].append(m.final_return(*run.curve("charts/episode_return")))
-        for name in REWARD_TERMS:
+        for name in _reward_terms():
             out[f"term_{name}"].append(m.final_return(*run.curve(f"reward_terms/{name}")))
         traces = run.traces()
         first = run.traces(0) if run.stages else None
@@ -199,15 +198,22 @@ def _median_interval(values: list[float]) -> list[float] | None:
     return [interval.estimate, interval.low, interval.high]
 
 
+def _reward_terms() -> tuple[str, ...]:
+    """Eq. 4's reward terms, the studied robot's (:func:`cpg_actor.robots.registry.paper_robot`)."""
+    return paper_robot().paper_parts().reward_terms
+
+
 def check_hopper_runs(results: Results) -> None:
-    """ValueError unless every run is the hopper's: the report tests the paper's claims,
-    which are about the hopper (its hop height, its reward terms, its Cho et al. baseline)."""
-    robots = {run.config.get("robot") or HOPPER.name for runs in results.runs.values()
+    """ValueError unless every run is on the robot the paper studies (the hopper): the report
+    tests the paper's claims, which are about it (its hop height, its reward terms, its Cho et
+    al. baseline)."""
+    studied = paper_robot().name
+    robots = {run.config.get("robot") or studied for runs in results.runs.values()
               for run in runs}  # fmt: skip
-    others = sorted(str(robot) for robot in robots - {HOPPER.name})
+    others = sorted(str(robot) for robot in robots - {studied})
     if others:
         raise ValueError(
-            f"the reproduction report is the paper's, on the {HOPPER.name}; these runs are on "
+            f"the reproduction report is the paper's, on the {studied}; these runs are on "
             f"{', '.join(others)}: use `cpg-actor eval` and `cpg-actor curves` for them"
         )
 
@@ -810,6 +816,7 @@ def _feedback_lines(summary: dict[str, Any]) -> list[str]:
 
 def _reward_term_lines(summary: dict[str, Any]) -> list[str]:
     """The section "The return split into its reward terms" (paper eq. 4), per variant."""
+    names = _reward_terms()
     lines = [
         "## The return split into its reward terms",
         "",
@@ -818,16 +825,16 @@ def _reward_term_lines(summary: dict[str, Any]) -> list[str]:
         "episodes (exploration noise on, the last 10 logged values of the 100-episode means), "
         f"{SPREAD}; *r1 share* is r1 over the sum of the terms' magnitudes.",
         "",
-        "| variant | training return | " + " | ".join(REWARD_TERMS) + " | r1 share |",
-        "| --- | --- | " + " | ".join("---" for _ in REWARD_TERMS) + " | --- |",
+        "| variant | training return | " + " | ".join(names) + " | r1 share |",
+        "| --- | --- | " + " | ".join("---" for _ in names) + " | --- |",
     ]
     for variant, row in summary["variants"].items():
-        terms = [row[f"term_{name}"][0] for name in REWARD_TERMS]
+        terms = [row[f"term_{name}"][0] for name in names]
         magnitude = sum(abs(t) for t in terms if np.isfinite(t))
         share = terms[0] / magnitude if magnitude > 0 and np.isfinite(terms[0]) else float("nan")
         lines.append(
             f"| {label(variant)} | {_pm(row['training_return'])} | "
-            + " | ".join(_pm(row[f"term_{name}"]) for name in REWARD_TERMS)
+            + " | ".join(_pm(row[f"term_{name}"]) for name in names)
             + f" | {'-' if not np.isfinite(share) else f'{100 * share:.0f}%'} |"
         )
     return lines

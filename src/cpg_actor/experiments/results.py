@@ -105,17 +105,15 @@ def trace_control_dt(traces: dict[str, np.ndarray]) -> float | None:
 def trace_joint_limits(traces: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray] | None:
     """The action space's bounds (rad, per joint) the traces' desired positions were clipped
     to: ``action_low`` / ``action_high`` as :func:`cpg_actor.training.evaluation.evaluate` saves
-    them; for traces saved before it did, the hopper's joint limits when the traces are the
-    hopper's (joints HFE, KFE, or no joint names); None otherwise."""
+    them; for traces saved before it did, the joint limits of the robot the paper studies when
+    the traces are its (the hopper's: joints HFE, KFE, or no joint names); None otherwise."""
     if "action_low" in traces and "action_high" in traces:
         return np.asarray(traces["action_low"], float), np.asarray(traces["action_high"], float)
-    from cpg_actor.robots.hopper import description as hopper
+    from cpg_actor.robots.registry import paper_robot
 
-    joints = tuple(str(name) for name in traces.get("joint_names", hopper.JOINT_NAMES))
-    if joints != tuple(hopper.JOINT_NAMES):
-        return None
-    limits = np.array([hopper.JOINT_LIMITS[name] for name in joints], dtype=float)
-    return limits[:, 0], limits[:, 1]
+    names = traces.get("joint_names")
+    joints = None if names is None else tuple(str(name) for name in names)
+    return paper_robot().paper_parts().joint_limits(joints)
 
 
 def sent_positions(traces: dict[str, np.ndarray]) -> np.ndarray | None:

@@ -71,6 +71,20 @@ class CPGLayout:
 
 
 @dataclass(frozen=True)
+class Paper:
+    """What the paper's reproduction (``cpg-actor reproduce``: its report and its open-loop
+    floor) needs of the robot it studies (``Robot.paper`` names it, "module:NAME")."""
+
+    reward_terms: tuple[str, ...]  # eq. 4's terms, as its envs log them (reward_terms/NAME)
+    # (env config, grid or None: the default) -> the open-loop grid floor: the best constant
+    # CPG parameters by episode return and by hop height (cpg_actor.experiments.floor)
+    open_loop_floor: Callable[[Any, dict | None], dict[str, Any]]
+    # (joint names of traces saved without their action bounds, None where they name none) ->
+    # those joints' (low, high) limits (rad), None where the traces are not this robot's
+    joint_limits: Callable[[tuple[str, ...] | None], tuple[Any, Any] | None]
+
+
+@dataclass(frozen=True)
 class Robot:
     """One robot, as the trainer, the CLI, evaluation and export see it."""
 
@@ -101,6 +115,14 @@ class Robot:
     # the recipe (cpg_actor.config.presets.PRESETS) a run on it follows when neither
     # ``--preset`` nor its config file names one: with ``agent_defaults``, its tuned settings
     recipe: str = "paper"
+    # the `cpg-actor` commands it brings (listed after the generic ones): command name ->
+    # (its module, with HELP, add_arguments and run; the module's HELP)
+    commands: Mapping[str, tuple[str, str]] = field(default_factory=dict)
+    # the agents built for it alone: "module:NAME" of each one's AgentSpec
+    # (cpg_actor.agents.AGENTS lists them, imported on first use)
+    agents: tuple[str, ...] = ()
+    # "module:NAME" of its Paper, where the paper's reproduction studies it (the hopper)
+    paper: str | None = None
 
     @property
     def episode_steps(self) -> int:
@@ -132,6 +154,12 @@ class Robot:
                 f"{', '.join(layouts)}"
             )
         return name, layouts[name]
+
+    def paper_parts(self) -> Paper:
+        """Its :class:`Paper` (imported now); ValueError if the paper does not study it."""
+        if not self.paper:
+            raise ValueError(f"the paper's reproduction does not study the {self.name}")
+        return load(self.paper)
 
     def simulator(self, config: Any) -> str:
         """The simulator an env config of this robot runs on."""

@@ -41,6 +41,12 @@ def get_robot(name: str) -> Robot:
     return ROBOTS[name]
 
 
+def paper_robot() -> Robot:
+    """The robot the paper's reproduction studies (``cpg-actor reproduce``'s report): the first
+    whose entry names its ``paper``."""
+    return next(robot for robot in ROBOTS.values() if robot.paper)
+
+
 def robot_of_config(env_config: Any) -> Robot:
     """The robot whose env config ``env_config`` is."""
     for robot in ROBOTS.values():

@@ -67,7 +67,7 @@ CPG_OBS_NAMES = (
 # The paper's action set for Cho et al. (``action_set="paper"``): frequency and amplitude per
 # oscillator only (the phase bias stays at the hopper preset's pi). Its frequency range
 # reaches down to 0.2 Hz so that the Ijspeert et al. 2007 warm-start target (0.6 Hz, see
-# cpg_actor.agents.cho2019) lies well inside it.
+# cpg_actor.robots.hopper.agents) lies well inside it.
 PAPER_PARAMETER_RANGES = np.array(
     [[0.2, 4.0], [0.2, 4.0], [0.02, 0.6], [0.02, 0.8]], dtype=np.float64
 )

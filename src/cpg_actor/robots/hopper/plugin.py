@@ -70,4 +70,19 @@ ROBOT = Robot(
     start_gait=START_GAIT,
     simulators=SIMULATORS,
     agent_defaults=AGENT_DEFAULTS,
+    agents=tuple(
+        f"cpg_actor.robots.hopper.agents:{name}"
+        for name in ("CHO2019", "CHO2019_WARM", "CHO2019_PAPER")
+    ),
+    paper="cpg_actor.robots.hopper.paper:PAPER",
+    commands={
+        "cpg-demo": (
+            "cpg_actor.robots.hopper.commands.cpg_demo",
+            "integrate the hopper CPG for a few seconds and plot x, theta_dot and r_ddot to a PNG",
+        ),
+        "cho2019-reference": (
+            "cpg_actor.robots.hopper.commands.cho2019_reference",
+            "grid-search the reference hopping CPG parameters that warm-start the cho2019 baseline",
+        ),
+    },
 )

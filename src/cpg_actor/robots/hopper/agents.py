@@ -1,6 +1,7 @@
 """The Cho et al. 2019 baseline as agents: a classic MLP actor-critic whose actions are CPG
 parameters, acting on :class:`cpg_actor.robots.hopper.cho2019.CPGParameterVectorEnv` (paper Fig.
-2b).
+2b). The hopper brings them (``Robot.agents``): :data:`cpg_actor.agents.AGENTS` lists them by
+the registry entry's strings, imported on first use. At the agents' layer, above the hopper's.
 
 ``cho2019`` starts from a freshly initialised actor (mean action 0: the middle of every
 parameter range); ``cho2019-warm`` first fits the actor's mean to the reference hopping
@@ -21,6 +22,7 @@ import numpy as np
 
 from cpg_actor.agents.base import Agent, AgentConfig
 from cpg_actor.agents.mlp import MLPAgent
+from cpg_actor.agents.registry import AgentSpec
 from cpg_actor.agents.start_gait import hopper_gait_parameters, start_parameters
 from cpg_actor.agents.warm_start import warm_start
 from cpg_actor.robots.plugin import Robot
@@ -113,3 +115,31 @@ def warm_start_cho2019_paper(agent: Agent, normalizer, env, config, seed: int, r
 
     target = parameters_to_action(ijspeert_2007_parameters(), PAPER_PARAMETER_RANGES)
     return warm_start(agent, normalizer, env, target.astype(np.float32), config.warm_start, seed)
+
+
+CHO2019 = AgentSpec(
+    "cho2019",
+    "Cho et al. 2019: MLP actor outputs CPG parameters; the CPG is inside the environment",
+    build_cho2019,
+    wrapper=cpg_parameter_wrapper,
+    robots=("hopper",),
+    uses_start_gait=True,
+)
+CHO2019_WARM = AgentSpec(
+    "cho2019-warm",
+    "Cho et al. 2019 with the actor warm-started toward the reference hopping parameters",
+    build_cho2019,
+    wrapper=cpg_parameter_wrapper,
+    warm_start=warm_start_cho2019,
+    robots=("hopper",),
+    uses_start_gait=True,
+)
+CHO2019_PAPER = AgentSpec(
+    "cho2019-paper",
+    "Cho et al. 2019 as the paper has it: frequency and amplitude actions, no CPG state "
+    "observed, warm-started toward Ijspeert et al. 2007's limb parameters",
+    build_cho2019,
+    wrapper=paper_cpg_parameter_wrapper,
+    warm_start=warm_start_cho2019_paper,
+    robots=("hopper",),
+)
