@@ -69,7 +69,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cpg_actor.config import TrainConfig, apply_dict, check_seed, parse_override
+    from cpg_actor.config import (
+        MAX_EPISODES,
+        TrainConfig,
+        apply_dict,
+        check_count,
+        check_seed,
+        parse_override,
+    )
     from cpg_actor.deploy import load_policy
     from cpg_actor.training.evaluation import evaluate_policy, nominal_env
 
@@ -80,8 +87,7 @@ def run(args: argparse.Namespace) -> int:
         raise FileNotFoundError(
             f"{config_path} does not exist; is {run_dir} a training run directory?"
         )
-    if args.episodes < 1:
-        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
+    check_count(args.episodes, "--episodes", MAX_EPISODES)
     checkpoint = Path(args.checkpoint) if args.checkpoint else run_dir / "checkpoints" / "last.pt"
     output = Path(args.output) if args.output else run_dir / "eval" / "traces.npz"
     if output.suffix != ".npz":

@@ -34,15 +34,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cpg_actor.config import check_seed
+    from cpg_actor.config import MAX_EPISODES, check_count, check_seed
     from cpg_actor.robots.registry import get_robot
     from cpg_actor.robustness.runs import find_runs
     from cpg_actor.robustness.suite import evaluate_run
     from cpg_actor.robustness.summary import outputs, summarise, verdicts, write_outputs
 
     check_seed(args.seed)
-    if args.episodes < 1:
-        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
+    check_count(args.episodes, "--episodes", MAX_EPISODES)
     runs = find_runs(args.runs)
     robot = get_robot(runs[0].robot)
     table = robot.perturbations

@@ -39,6 +39,17 @@ def check_seed(seed: Any, name: str = "--seed") -> None:
         raise ValueError(f"{name} must be an integer from 0 to 2**63-1 ({MAX_SEED}), got {seed!r}")
 
 
+# episodes an evaluation runs at most (in parallel, an env each): far beyond the 4 to 5 its
+# commands run by default, small enough for the envs to fit in memory
+MAX_EPISODES = 1_000
+
+
+def check_count(value: Any, name: str, high: int) -> None:
+    """ValueError unless ``value`` is an integer from 1 to ``high``."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= high:
+        raise ValueError(f"{name} must be an integer from 1 to {high:,}, got {value!r}")
+
+
 def _default_env_config() -> Any:
     return get_robot(DEFAULT_ROBOT).config_class()
 

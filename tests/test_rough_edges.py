@@ -1,0 +1,66 @@
+"""Rough edges of the command line: a size that would exhaust memory or time, a value outside
+what the simulation means, a typo; each is one line saying what is wrong and what is accepted,
+given before anything is built or written."""
+
+import pytest
+
+from cpg_actor.cli import main
+
+TINY = ["--total-steps", "16", "--num-envs", "2", "--set", "ppo.num_steps=8", "--set",
+        "ppo.num_minibatches=2", "--set", "ppo.compile=false", "--no-progress"]  # fmt: skip
+
+
+def one_line(capsys) -> str:
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err, err
+    return err
+
+
+# -- upper bounds and absurd values ------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--set", "env.episode_steps=1000000000"], "at most 100,000 are accepted"),
+        (["--robot", "anymal", "--set", "env.episode_seconds=1e9"], "at most 100,000"),
+        (["--set", "env.perturbation.latency=1e9"], "latency <= 50"),
+        (["--set", "env.perturbation.motor_strength=1e9"], "motor_strength <= 10"),
+        (["--set", "env.perturbation.friction=1e308"], "friction <= 10"),
+        (["--set", "env.randomize.payload=[0,1e9]"], "low <= high <= 100"),
+        # the hopper's episode is 5 s: a push 6-7 s in never comes
+        (["--set", "env.perturbation.push=1", "--set", "env.perturbation.push_time=[6,7]"],
+         "push_time ends at 7 s, at or after the end of the episode (5 s)"),
+    ],
+)  # fmt: skip
+def test_a_size_or_value_out_of_range_is_one_line_and_creates_nothing(
+    tmp_path, capsys, argv, message
+):
+    run_dir = tmp_path / "run"
+    assert main(["train", "--run-dir", str(run_dir), *argv, *TINY]) == 2
+    assert message in one_line(capsys)
+    assert not run_dir.exists()
+
+
+def test_a_push_window_within_the_episode_is_accepted():
+    from cpg_actor.robots.common.perturbation import Perturbation
+    from cpg_actor.robots.hopper.config import HopperConfig
+
+    HopperConfig(perturbation=Perturbation(push=1.0, push_time=(1.0, 4.9)))
+    HopperConfig(episode_steps=100_000, perturbation=Perturbation(motor_strength=10.0))
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["export", "RUN", "--batch", "100000000"], "--batch must be an integer from 1 to 65,536"),
+        (["eval", "RUN", "--episodes", "100000000"], "--episodes must be an integer from 1 to"),
+        (["robustness", "RUN", "--out", "OUT", "--episodes", "0"], "--episodes must be an integer"),
+        (["gaits", "--robots", "100000000", "--out", "OUT"], "--robots must be an integer from 1"),
+    ],
+)
+def test_a_count_too_large_is_one_line(tmp_path, capsys, argv, message):
+    argv = [str(tmp_path / word) if word in ("RUN", "OUT") else word for word in argv]
+    (tmp_path / "RUN").mkdir()
+    (tmp_path / "RUN" / "config.yaml").write_text("agent: cpg-actor\n")
+    assert main(argv) == 2
+    assert message in one_line(capsys)
+    assert not (tmp_path / "OUT").exists()
