@@ -64,3 +64,8 @@ def test_a_count_too_large_is_one_line(tmp_path, capsys, argv, message):
     assert main(argv) == 2
     assert message in one_line(capsys)
     assert not (tmp_path / "OUT").exists()
+
+
+def test_gaits_errors_name_the_command_not_its_forward_command(tmp_path, capsys):
+    assert main(["gaits", "--seconds", "-1", "--command", "0.7", "--out", str(tmp_path)]) == 2
+    assert one_line(capsys).startswith("cpg-actor gaits: error: --seconds must be a positive")
