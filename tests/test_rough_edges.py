@@ -2,6 +2,9 @@
 what the simulation means, a typo; each is one line saying what is wrong and what is accepted,
 given before anything is built or written."""
 
+import shutil
+from pathlib import Path
+
 import pytest
 
 from cpg_actor.cli import main
@@ -14,6 +17,19 @@ def one_line(capsys) -> str:
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "Traceback" not in err, err
     return err
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory) -> Path:
+    """A finished tiny run (one iteration of 16 steps); copy it before changing it."""
+    run_dir = tmp_path_factory.mktemp("trained") / "run"
+    assert main(["train", "--run-dir", str(run_dir), *TINY]) == 0
+    return run_dir
+
+
+def copy_of(run_dir: Path, tmp_path: Path) -> Path:
+    shutil.copytree(run_dir, tmp_path / run_dir.name)
+    return tmp_path / run_dir.name
 
 
 # -- upper bounds and absurd values ------------------------------------------------------------
@@ -69,3 +85,13 @@ def test_a_count_too_large_is_one_line(tmp_path, capsys, argv, message):
 def test_gaits_errors_name_the_command_not_its_forward_command(tmp_path, capsys):
     assert main(["gaits", "--seconds", "-1", "--command", "0.7", "--out", str(tmp_path)]) == 2
     assert one_line(capsys).startswith("cpg-actor gaits: error: --seconds must be a positive")
+
+
+# -- a trained run -----------------------------------------------------------------------------
+def test_a_video_format_eval_cannot_write_is_refused_before_evaluating(tmp_path, capsys, trained):
+    run_dir = copy_of(trained, tmp_path)
+    capsys.readouterr()
+    assert main(["eval", str(run_dir), "--video", str(tmp_path / "x.avi")]) == 2
+    err = one_line(capsys)
+    assert not (run_dir / "eval").exists()  # nothing evaluated, nothing replaced
+    assert "--video must end in .mp4 or .gif, got" in err

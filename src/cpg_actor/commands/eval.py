@@ -78,6 +78,7 @@ def run(args: argparse.Namespace) -> int:
         parse_override,
     )
     from cpg_actor.deploy import load_policy
+    from cpg_actor.robots.common.video import VIDEO_SUFFIXES
     from cpg_actor.training.evaluation import evaluate_policy, nominal_env
 
     check_seed(args.seed)
@@ -94,6 +95,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--output must end in .npz, got {output}")
     if args.video_only and not args.video:
         raise ValueError("--video-only needs --video PATH")
+    if args.video and Path(args.video).suffix.lower() not in VIDEO_SUFFIXES:  # before evaluating
+        raise ValueError(f"--video must end in {' or '.join(VIDEO_SUFFIXES)}, got {args.video}")
     if not checkpoint.is_file():
         raise FileNotFoundError(f"checkpoint {checkpoint} does not exist")
     config = TrainConfig.load(config_path)
