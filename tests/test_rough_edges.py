@@ -95,3 +95,17 @@ def test_a_video_format_eval_cannot_write_is_refused_before_evaluating(tmp_path,
     err = one_line(capsys)
     assert not (run_dir / "eval").exists()  # nothing evaluated, nothing replaced
     assert "--video must end in .mp4 or .gif, got" in err
+
+
+def test_resuming_a_finished_run_says_so_and_changes_nothing(tmp_path, capsys, trained):
+    """The README's `--resume` line after the run it continues has finished."""
+    run_dir = copy_of(trained, tmp_path)
+
+    def files() -> dict[Path, bytes]:  # but the run's lock, taken again by each command
+        return {p: p.read_bytes() for p in run_dir.rglob("*") if p.is_file() and p.name != ".lock"}
+
+    before = files()
+    capsys.readouterr()
+    assert main(["train", "--run-dir", str(run_dir), "--resume"]) == 0
+    assert "is finished at iteration 1 (16 steps); nothing to continue" in capsys.readouterr().out
+    assert files() == before

@@ -258,9 +258,13 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
             raise ValueError(_search_finished_text(runner))
         if not _searches(config) and runner.iteration >= config.num_iterations:
             runner.close()
+            where = f"iteration {runner.iteration} ({runner.global_step:,} steps)"
+            if args.total_steps is None:  # a finished run resumed as it is: nothing to do
+                print(f"{run_dir} is finished at {where}; nothing to continue (pass a larger "
+                      "--total-steps to train it further)")  # fmt: skip
+                return 0
             raise ValueError(
-                f"the run is already at iteration {runner.iteration} "
-                f"({runner.global_step:,} steps); pass a larger --total-steps to continue"
+                f"the run is already at {where}; pass a larger --total-steps to continue"
             )
         config.save(config_path)
         _truncate_metrics(run_dir / "metrics.jsonl", runner.iteration)
