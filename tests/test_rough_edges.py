@@ -44,7 +44,7 @@ def copy_of(run_dir: Path, tmp_path: Path) -> Path:
         (["--set", "env.randomize.payload=[0,1e9]"], "low <= high <= 100"),
         # the hopper's episode is 5 s: a push 6-7 s in never comes
         (["--set", "env.perturbation.push=1", "--set", "env.perturbation.push_time=[6,7]"],
-         "push_time ends at 7 s, at or after the end of the episode (5 s)"),
+         "push_time starts at 6 s, at or after the end of the episode (5 s)"),
     ],
 )  # fmt: skip
 def test_a_size_or_value_out_of_range_is_one_line_and_creates_nothing(
@@ -56,11 +56,14 @@ def test_a_size_or_value_out_of_range_is_one_line_and_creates_nothing(
     assert not run_dir.exists()
 
 
-def test_a_push_window_within_the_episode_is_accepted():
-    from cpg_actor.robots.common.perturbation import Perturbation
+def test_a_push_window_that_starts_within_the_episode_pushes_every_episode():
+    from cpg_actor.robots.common.perturbation import EpisodeDraws, Perturbation
     from cpg_actor.robots.hopper.config import HopperConfig
 
     HopperConfig(perturbation=Perturbation(push=1.0, push_time=(1.0, 4.9)))
+    # a window past the end: every episode is still pushed, by its last step
+    config = HopperConfig(perturbation=Perturbation(push=1.0, push_time=(4.0, 9.0)))
+    assert EpisodeDraws(config, 1, [0.0]).window == (400, 499)
     HopperConfig(episode_steps=100_000, perturbation=Perturbation(motor_strength=10.0))
 
 
@@ -109,3 +112,25 @@ def test_resuming_a_finished_run_says_so_and_changes_nothing(tmp_path, capsys, t
     assert main(["train", "--run-dir", str(run_dir), "--resume"]) == 0
     assert "is finished at iteration 1 (16 steps); nothing to continue" in capsys.readouterr().out
     assert files() == before
+
+
+def test_robustness_refuses_a_run_given_twice(tmp_path, capsys, trained):
+    run_dir = copy_of(trained, tmp_path)
+    again = tmp_path / "." / run_dir.name  # the same run, written another way
+    capsys.readouterr()
+    argv = ["robustness", str(run_dir), str(run_dir), str(again), "--out", str(tmp_path / "out")]
+    assert main(argv) == 2
+    assert "the same run given twice; give each run once" in one_line(capsys)
+    assert not (tmp_path / "out").exists()
+
+
+def test_robustness_refuses_an_out_that_is_a_file_before_the_suite(tmp_path, capsys, trained):
+    out = tmp_path / "report.md"
+    out.write_text("mine\n")
+    capsys.readouterr()
+    assert main(["robustness", str(trained), "--out", str(out), "--episodes", "1"]) == 2
+    printed = capsys.readouterr()
+    assert printed.out == ""  # no run evaluated
+    assert printed.err.count("\n") == 1
+    assert f"--out {out} is a file, not a directory; give a directory path" in printed.err
+    assert out.read_text() == "mine\n"

@@ -19,6 +19,7 @@ from cpg_actor.files import (
     MARKER,
     RUN,
     atomic_write_text,
+    check_directory_path,
     check_overwritable,
     check_run_dir_length,
     clear_project_dir,
@@ -145,12 +146,7 @@ def _has_content(run_dir: Path) -> bool:
 def check_run_dir_path(run_dir: Path) -> None:
     """One clear error, before anything starts, for a ``--run-dir`` that cannot be one: a
     file, a path through a file, or a path too long for the files written in it."""
-    for path in (run_dir, *run_dir.parents):
-        if path.exists() and not path.is_dir():
-            where = "is a file" if path == run_dir else f"is inside {path}, a file"
-            raise NotADirectoryError(
-                f"run directory {run_dir} {where}, not a directory; give a directory path"
-            )
+    check_directory_path(run_dir, "run directory")
     check_run_dir_length(run_dir)
 
 

@@ -222,12 +222,12 @@ def check_perturbations(config: Any, directions: Sequence[str], simulators: Sequ
     a config file), for a robot with push ``directions`` whose ``simulators`` take them."""
     config.perturbation = Perturbation.from_value(config.perturbation).validate(directions)
     config.perturbation.substeps(config.decimation)  # a whole number of substeps late
-    push_end = config.perturbation.push_time[1]
-    if config.perturbation.push and round(push_end / config.control_dt) >= config.episode_steps:
+    push_start = config.perturbation.push_time[0]
+    if config.perturbation.push and round(push_start / config.control_dt) >= config.episode_steps:
         episode = config.episode_steps * config.control_dt
-        raise ValueError(f"perturbation.push_time ends at {push_end:g} s, at or after the end "
-                         f"of the episode ({episode:g} s); give a window that ends before "
-                         "it")  # fmt: skip
+        raise ValueError(f"perturbation.push_time starts at {push_start:g} s, at or after the "
+                         f"end of the episode ({episode:g} s): the push would never come; give "
+                         "a window that starts before it")  # fmt: skip
     config.randomize = Randomization.from_value(config.randomize).validate(config.decimation)
     if config.randomize.active:
         nominal = Perturbation()
