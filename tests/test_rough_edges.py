@@ -134,3 +134,22 @@ def test_robustness_refuses_an_out_that_is_a_file_before_the_suite(tmp_path, cap
     assert printed.err.count("\n") == 1
     assert f"--out {out} is a file, not a directory; give a directory path" in printed.err
     assert out.read_text() == "mine\n"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("seed: 1\nppo:\n  learning_rate: 0.001\n  learning_rate: 0.01\n",
+         "at line 4, column 3: duplicate key 'learning_rate' (give each key once)"),
+        ("seed: 1\nseed: 2\n", "at line 2, column 1: duplicate key 'seed'"),
+        # still the safe loader: a tag that would build an object is refused, in one line
+        ("x: !!python/object/apply:os.system ['true']\n", "could not determine a constructor"),
+    ],
+)  # fmt: skip
+def test_a_config_file_with_a_key_given_twice_is_refused_naming_it(tmp_path, capsys, text, message):
+    path = tmp_path / "config.yaml"
+    path.write_text(text)
+    run_dir = tmp_path / "run"
+    assert main(["train", "--config", str(path), "--run-dir", str(run_dir), *TINY]) == 2
+    assert f"{path} is not valid YAML" in (err := one_line(capsys)) and message in err
+    assert not run_dir.exists()
