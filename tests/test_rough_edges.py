@@ -3,6 +3,8 @@ what the simulation means, a typo; each is one line saying what is wrong and wha
 given before anything is built or written."""
 
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -153,3 +155,28 @@ def test_a_config_file_with_a_key_given_twice_is_refused_naming_it(tmp_path, cap
     assert main(["train", "--config", str(path), "--run-dir", str(run_dir), *TINY]) == 2
     assert f"{path} is not valid YAML" in (err := one_line(capsys)) and message in err
     assert not run_dir.exists()
+
+
+FULL_DISK = """
+import errno, sys
+from tensorboard.summary.writer import record_writer
+
+def full(self, data):  # every TensorBoard event write finds the disk full
+    raise OSError(errno.ENOSPC, "No space left on device")
+
+record_writer.RecordWriter.write = full
+from cpg_actor.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_a_full_disk_under_tensorboard_is_one_line_naming_its_folder(tmp_path):
+    """TensorBoard writes in a thread of its own; its error is reported once, in one line."""
+    run_dir = tmp_path / "run"
+    argv = ["train", "--run-dir", str(run_dir), *TINY]
+    done = subprocess.run([sys.executable, "-c", FULL_DISK, *argv], capture_output=True,
+                          text=True, timeout=300)  # fmt: skip
+    assert done.returncode == 1
+    assert done.stderr == (
+        f"cpg-actor train: error: no space left on device while writing {run_dir / 'tensorboard'}\n"
+    )
