@@ -2,6 +2,7 @@
 what the simulation means, a typo; each is one line saying what is wrong and what is accepted,
 given before anything is built or written."""
 
+import os
 import shutil
 import subprocess
 import sys
@@ -180,3 +181,64 @@ def test_a_full_disk_under_tensorboard_is_one_line_naming_its_folder(tmp_path):
     assert done.stderr == (
         f"cpg-actor train: error: no space left on device while writing {run_dir / 'tensorboard'}\n"
     )
+
+
+# -- reproduce's and sweep's runs die with them ------------------------------------------------
+PARENT = """
+import sys
+from pathlib import Path
+from cpg_actor.experiments import execute
+
+# a run as reproduce and sweep start one, long enough to outlive its parent
+execute._cli(["train", "--run-dir", sys.argv[1], "--total-steps", "100M", "--num-envs", "2",
+              "--set", "ppo.compile=false", "--no-progress"], Path(sys.argv[2]))
+"""
+
+
+def _children(pid: int) -> list[int]:
+    """The processes whose parent is ``pid`` (Linux's /proc)."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:  # it ended meanwhile
+            continue
+        if int(fields[1]) == pid:
+            found.append(int(stat.parent.name))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie, dead but not yet reaped, does not)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="PR_SET_PDEATHSIG is Linux's")
+def test_a_run_dies_with_the_reproduce_or_sweep_that_started_it(tmp_path):
+    import signal
+    import time
+
+    log = tmp_path / "run.log"
+    parent = subprocess.Popen([sys.executable, "-c", PARENT, str(tmp_path / "run"), str(log)])
+    child = None
+    try:
+        for _ in range(1200):  # polled until the run trains: it has asked to die with its parent
+            if log.exists() and "training cpg-actor" in log.read_text():
+                break
+            time.sleep(0.1)
+        (child,) = _children(parent.pid)
+        assert _alive(child)
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+        for _ in range(600):  # polled until the child is gone
+            if not _alive(child):
+                break
+            time.sleep(0.1)
+        assert not _alive(child)
+    finally:
+        parent.kill()
+        if child is not None and _alive(child):
+            os.kill(child, signal.SIGKILL)
