@@ -242,3 +242,22 @@ def test_a_run_dies_with_the_reproduce_or_sweep_that_started_it(tmp_path):
         parent.kill()
         if child is not None and _alive(child):
             os.kill(child, signal.SIGKILL)
+
+
+# -- a GIF of a few MB -------------------------------------------------------------------------
+def test_a_gif_keeps_at_most_20_frames_per_second_and_320_pixels_of_width(tmp_path):
+    import imageio.v2 as imageio
+    import numpy as np
+
+    from cpg_actor.robots.common.video import write_video
+
+    # a quadruped's video: 50 Hz, 640 x 480 (1 s of it), a fine checkerboard of 0 and 200
+    checkers = (np.indices((480, 640)).sum(axis=0) % 2 * 200).astype(np.uint8)
+    frames = [np.repeat(checkers[:, :, None], 3, axis=2) + i for i in range(50)]
+    path = write_video(frames, tmp_path / "trot.gif", fps=50)
+    read = imageio.mimread(path)
+    assert len(read) == 17 and read[0].shape[:2] == (240, 320)  # every 3rd frame, halved
+    for j, frame in enumerate(read):  # each pixel the mean of the block it replaces
+        assert (frame[:, :, :3] == 100 + 3 * j).all()
+    path = write_video(frames[:5], tmp_path / "full.gif", fps=50, gif_fps=50, gif_width=640)
+    assert len(imageio.mimread(path)) == 5 and imageio.mimread(path)[0].shape[:2] == (480, 640)

@@ -51,7 +51,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="override a field of the run's env config for this evaluation (value read as "
         "YAML, repeatable), e.g. --set env.command_range=[0.5,0.5]",
     )
-    parser.add_argument("--video", default=None, help="write an mp4 of the first episode here")
+    parser.add_argument("--video", default=None, help="write the first episode here: .mp4, or .gif "
+                        "(at most 20 frames per second and 320 pixels wide)")  # fmt: skip
     parser.add_argument(
         "--output", default=None, help="traces file (default RUN_DIR/eval/traces.npz)"
     )
