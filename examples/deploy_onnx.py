@@ -48,18 +48,42 @@ TEXT_KEYS = ("cpg_actor_version", "robot", "robot_model", "agent", "simulator", 
              "nonfinite_observations", "state_usage")  # fmt: skip
 
 
-def read_metadata(session: ort.InferenceSession) -> dict:
-    """The exported policy's metadata, JSON values decoded."""
+def read_metadata(session: ort.InferenceSession, path: Path) -> dict:
+    """The exported policy's metadata, JSON values decoded; ValueError without it."""
     raw = session.get_modelmeta().custom_metadata_map
-    return {key: value if key in TEXT_KEYS else json.loads(value) for key, value in raw.items()}
+    try:
+        meta = {key: value if key in TEXT_KEYS else json.loads(value) for key, value in raw.items()}
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{path}: its metadata is not cpg-actor's ({error})") from None
+    if not {"mjcf_file", "observation_names"} <= set(meta):
+        raise ValueError(f"{path} has no cpg-actor metadata; export it with cpg-actor export")
+    return meta
+
+
+def policy_file(path: Path) -> Path:
+    """The ONNX file ``path`` names: the file itself, or ``policy.onnx`` in an export directory
+    or in a run directory's ``export/``."""
+    if not path.is_dir():
+        if not path.is_file():
+            raise ValueError(f"{path} does not exist (an ONNX file from cpg-actor export)")
+        return path
+    for candidate in (path / "policy.onnx", path / "export" / "policy.onnx"):
+        if candidate.is_file():
+            return candidate
+    raise ValueError(f"{path} is a directory without policy.onnx or export/policy.onnx; give the "
+                     "ONNX file from cpg-actor export, or its run or export directory")  # fmt: skip
 
 
 class Policy:
     """The exported control step, its recurrent (CPG) state kept here."""
 
     def __init__(self, path: Path) -> None:
-        self.session = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
-        self.meta = read_metadata(self.session)
+        try:
+            self.session = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
+        except Exception as error:  # onnxruntime's own errors (a truncated or foreign file)
+            reason = (str(error).strip() or type(error).__name__).splitlines()[0]
+            raise ValueError(f"{path} is not an ONNX model onnxruntime loads: {reason}") from None
+        self.meta = read_metadata(self.session, path)
         self.names = self.meta["observation_names"]
         self.reset()
 
@@ -346,7 +370,8 @@ def run_episode(policy: Policy, sim: Simulation, seed: int, max_steps: int | Non
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("policy", type=Path, help="an ONNX file written by `cpg-actor export`")
+    parser.add_argument("policy", type=Path, help="an ONNX file written by `cpg-actor export`, "
+                        "or its export or run directory")  # fmt: skip
     parser.add_argument("--mjcf", type=Path, default=None,
                         help="the robot's MJCF (default: the one named in the metadata, next "
                         "to the policy)")  # fmt: skip
@@ -354,12 +379,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--steps", type=int, default=None, help="stop after this many steps")
     args = parser.parse_args(argv)
     try:
-        if not args.policy.is_file():
-            raise ValueError(f"{args.policy} does not exist (an ONNX file from cpg-actor export)")
-        policy = Policy(args.policy)
-        if "mjcf_file" not in policy.meta:
-            raise ValueError(f"{args.policy} has no cpg-actor metadata; export it again")
-        mjcf = args.mjcf or args.policy.with_name(policy.meta["mjcf_file"])
+        path = policy_file(args.policy)
+        policy = Policy(path)
+        mjcf = args.mjcf or path.with_name(policy.meta["mjcf_file"])
         if not mjcf.is_file():
             raise ValueError(f"the robot's MJCF {mjcf} does not exist; pass --mjcf PATH")
         sim = Simulation(policy.meta, mjcf)

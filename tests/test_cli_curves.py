@@ -58,6 +58,16 @@ def test_curves_says_what_is_wrong(tmp_path, capsys):
     assert "no run logged 'eval/nothing'" in capsys.readouterr().err
     assert main(["curves", str(tmp_path / "missing"), "--out", str(tmp_path / "x.png")]) == 2
     assert "does not exist; is" in capsys.readouterr().err
+
+
+def test_a_typo_in_the_metric_is_named_with_the_logged_ones_even_if_the_figure_exists(
+    tmp_path, capsys
+):
+    run = fake_run(tmp_path / "m0", "mlp", [0.6])
+    assert main(["curves", run, "--metric", "eval/speed_error"]) == 0
+    assert main(["curves", run, "--metric", "eval/sped_error"]) == 2
+    err = capsys.readouterr().err
+    assert "no run logged 'eval/sped_error'; the runs logged: charts/SPS, eval/speed_error" in err
     assert main(["curves", run, "--out", str(tmp_path / "x.pdf")]) == 2
     assert "--out must end in .png" in capsys.readouterr().err
 

@@ -15,3 +15,13 @@ def test_readme_python_example_runs(capsys):
     printed = capsys.readouterr().out.splitlines()
     assert printed[0] == "torch.Size([4, 2])"
     assert printed[1] == "(8,) (2,)"  # the hopper's observation and action
+
+
+def test_load_policy_is_imported_where_the_readme_shows_it():
+    import cpg_actor
+    from cpg_actor.deploy import load_policy
+
+    text = README.read_text(encoding="utf-8")
+    assert "load_policy(" in text and "`from cpg_actor import load_policy`" in text
+    assert text.index("`from cpg_actor import load_policy`") < text.index("load_policy(")
+    assert cpg_actor.load_policy is load_policy  # what the README's import gives

@@ -14,7 +14,7 @@ import importlib
 import os
 import sys
 
-from cpg_actor.machine import brief_openmp_spinning
+from cpg_actor.machine import brief_openmp_spinning, die_with_parent
 
 brief_openmp_spinning(os.environ)  # before anything imports torch
 
@@ -109,6 +109,7 @@ def _command(argv: list[str]) -> str | None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    die_with_parent(os.environ)  # a run of reproduce or sweep: not an orphan if it is killed
     argv = list(sys.argv[1:] if argv is None else argv)
     args = build_parser(_command(argv)).parse_args(argv)
     try:

@@ -207,6 +207,17 @@ def describe_os_error(error: OSError) -> str:
 _LONGEST_RUN_NAME = len("tensorboard/events.out.tfevents.1234567890..4194304.99")
 
 
+def check_directory_path(directory: Path, what: str) -> None:
+    """NotADirectoryError, before anything starts, for a ``directory`` (``what``: how the
+    user gave it) that is a file or a path through one."""
+    for path in (directory, *directory.parents):
+        if path.exists() and not path.is_dir():
+            where = "is a file" if path == directory else f"is inside {path}, a file"
+            raise NotADirectoryError(
+                f"{what} {directory} {where}, not a directory; give a directory path"
+            )
+
+
 def check_run_dir_length(run_dir: Path) -> None:
     """ValueError if the files ``train`` writes in ``run_dir`` would pass the file system's
     limits on a path (PATH_MAX) or a name (NAME_MAX), so nothing starts that cannot finish."""

@@ -4,8 +4,13 @@ from __future__ import annotations
 
 import os
 import platform
+import signal
 import subprocess
+import sys
 from pathlib import Path
+
+# set by a process for the `cpg-actor` subprocesses it starts (reproduce, sweep): its pid
+PARENT_ENV = "CPG_ACTOR_PARENT_PID"
 
 
 def cpu_model() -> str:
@@ -89,3 +94,19 @@ def git_commit(path: str | Path | None = None) -> str:
     if head.returncode != 0:
         return "unknown"
     return head.stdout.strip() + (" (uncommitted changes)" if dirty.stdout.strip() else "")
+
+
+def die_with_parent(environ) -> None:
+    """In a ``cpg-actor`` started by another with ``PARENT_ENV`` in ``environ``: ask Linux to
+    kill this process when that parent dies, even by kill -9 (``PR_SET_PDEATHSIG``), rather
+    than leave it training on as an orphan; exit at once if the parent is already gone.
+    Elsewhere nothing."""
+    parent = environ.pop(PARENT_ENV, None)  # not passed on to what this process starts
+    if not parent or not sys.platform.startswith("linux"):
+        return
+    import ctypes
+
+    pr_set_pdeathsig = 1  # <linux/prctl.h>
+    ctypes.CDLL(None, use_errno=True).prctl(pr_set_pdeathsig, signal.SIGKILL)
+    if os.getppid() != int(parent):  # it died before the signal was asked for
+        os._exit(1)

@@ -135,3 +135,30 @@ def test_the_example_refuses_a_nonfinite_observation_and_a_missing_file(tmp_path
     assert example["main"]([str(policy_path), "--mjcf", str(tmp_path / "robot.xml"),
                             "--steps", "3"]) == 0  # fmt: skip
     assert "over 3 steps (step limit)" in capsys.readouterr().out
+
+
+def test_the_example_takes_a_run_or_export_directory_and_refuses_a_damaged_file(
+    tmp_path, capsys
+):
+    import onnx
+
+    _, policy_path = exported_run(tmp_path / "run", "cpg-actor", "hopper")
+    example = runpy.run_path(str(EXAMPLE))
+    for directory in (tmp_path / "run", tmp_path / "run" / "export"):
+        assert example["main"]([str(directory), "--steps", "3"]) == 0
+        assert "over 3 steps (step limit)" in capsys.readouterr().out
+    assert example["main"]([str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert "is a directory without policy.onnx or export/policy.onnx" in err
+    assert len(err.splitlines()) == 1
+    truncated = tmp_path / "truncated.onnx"
+    truncated.write_bytes(policy_path.read_bytes()[:1000])
+    bare = tmp_path / "bare.onnx"
+    model = onnx.load(policy_path)
+    del model.metadata_props[:]
+    onnx.save(model, bare)
+    for path, message in ((truncated, "is not an ONNX model onnxruntime loads"),
+                          (bare, "has no cpg-actor metadata")):  # fmt: skip
+        assert example["main"]([str(path)]) == 2
+        err = capsys.readouterr().err
+        assert message in err and len(err.splitlines()) == 1, err

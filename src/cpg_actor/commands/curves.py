@@ -188,19 +188,21 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out is not None else Path(args.runs[0]) / "curves.png"
     if out.suffix != ".png":
         raise ValueError(f"--out must end in .png, got {out}")
-    summary_path = out.with_suffix(".json")
-    for path in (out, summary_path):
-        if path.exists() and not args.overwrite:
-            raise FileExistsError(f"{path} exists; pass --overwrite to replace it (or --out)")
     runs = {str(Path(r)): load_run(Path(r)) for r in args.runs}
     if args.max_steps is not None:
         limit = parse_steps(args.max_steps)
         runs = {name: (config, [r for r in rows if r["global_step"] <= limit])
                 for name, (config, rows) in runs.items()}  # fmt: skip
-    for metric in metrics:
-        if not any(series(rows, metric)[0] for _, rows in runs.values()):
-            raise ValueError(f"no run logged {metric!r} (a key of metrics.jsonl, e.g. "
-                             "eval/return, charts/episode_return)")  # fmt: skip
+    logged = sorted({key for _, rows in runs.values() for row in rows for key in row
+                     if key != "global_step" and series(rows, key)[0]})  # fmt: skip
+    for metric in metrics:  # before the files: a typo is not reported as an existing file
+        if metric not in logged:
+            raise ValueError(f"no run logged {metric!r}; the runs logged: "
+                             f"{', '.join(logged) or 'nothing'}")  # fmt: skip
+    summary_path = out.with_suffix(".json")
+    for path in (out, summary_path):
+        if path.exists() and not args.overwrite:
+            raise FileExistsError(f"{path} exists; pass --overwrite to replace it (or --out)")
 
     groups: dict[tuple, list[str]] = {}  # group key -> its runs
     configs: dict[tuple, dict[str, Any]] = {}  # group key -> a run's flat config

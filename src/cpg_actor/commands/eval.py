@@ -54,7 +54,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="override a field of the run's env config for this evaluation (value read as "
         "YAML, repeatable), e.g. --set env.command_range=[0.5,0.5]",
     )
-    parser.add_argument("--video", default=None, help="write an mp4 of the first episode here")
+    parser.add_argument("--video", default=None, help="write the first episode here: .mp4, or .gif "
+                        "(at most 20 frames per second and 320 pixels wide)")  # fmt: skip
     parser.add_argument(
         "--output", default=None, help="traces file (default RUN_DIR/eval/traces.npz)"
     )
@@ -72,8 +73,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cpg_actor.config import TrainConfig, apply_dict, check_seed, parse_override
+    from cpg_actor.config import (
+        MAX_EPISODES,
+        TrainConfig,
+        apply_dict,
+        check_count,
+        check_seed,
+        parse_override,
+    )
     from cpg_actor.deploy import load_policy
+    from cpg_actor.robots.common.video import VIDEO_SUFFIXES
     from cpg_actor.training.evaluation import evaluate_policy, nominal_env
 
     check_seed(args.seed)
@@ -83,14 +92,15 @@ def run(args: argparse.Namespace) -> int:
         raise FileNotFoundError(
             f"{config_path} does not exist; is {run_dir} a training run directory?"
         )
-    if args.episodes < 1:
-        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
+    check_count(args.episodes, "--episodes", MAX_EPISODES)
     checkpoint = Path(args.checkpoint) if args.checkpoint else run_dir / "checkpoints" / "last.pt"
     output = Path(args.output) if args.output else run_dir / "eval" / "traces.npz"
     if output.suffix != ".npz":
         raise ValueError(f"--output must end in .npz, got {output}")
     if args.video_only and not args.video:
         raise ValueError("--video-only needs --video PATH")
+    if args.video and Path(args.video).suffix.lower() not in VIDEO_SUFFIXES:  # before evaluating
+        raise ValueError(f"--video must end in {' or '.join(VIDEO_SUFFIXES)}, got {args.video}")
     if not checkpoint.is_file():
         raise FileNotFoundError(f"checkpoint {checkpoint} does not exist")
     config = TrainConfig.load(config_path)

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 HELP = "export a trained policy (normaliser, networks, CPG step) as TorchScript or ONNX"
+MAX_BATCH = 65_536  # robots per call: 16 times the GPU preset's envs; tracing allocates them
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -19,15 +20,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--out", default=None, help="output file (default RUN_DIR/export/policy.onnx or .pt)"
     )
-    parser.add_argument("--batch", type=int, default=1, help="robots per call (default 1)")
+    parser.add_argument(
+        "--batch", type=int, default=1, help=f"robots per call, 1 to {MAX_BATCH:,} (default 1)"
+    )
     parser.add_argument("--overwrite", action="store_true", help="replace an existing export")
 
 
 def run(args: argparse.Namespace) -> int:
-    from cpg_actor.config import TrainConfig
+    from cpg_actor.config import TrainConfig, check_count
     from cpg_actor.deploy import load_policy
     from cpg_actor.deploy.export import SUFFIXES, export_policy, sidecar_paths
 
+    check_count(args.batch, "--batch", MAX_BATCH)
     run_dir = Path(args.run_dir)
     if not run_dir.is_dir():
         raise FileNotFoundError(f"run directory {run_dir} does not exist")

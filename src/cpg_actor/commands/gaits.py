@@ -34,7 +34,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
                         "bound, pronk, walk on the quadrupeds)")  # fmt: skip
     parser.add_argument("--seconds", type=float, default=20.0, help="per run (default 20)")
     parser.add_argument("--robots", type=int, default=4, help="robots per gait (default 4)")
-    parser.add_argument("--command", type=float, default=0.5, help="forward command, m/s")
+    # its own dest: argparse's "command" names the sub-command (error lines read it)
+    parser.add_argument("--command", dest="forward_command", type=float, default=0.5,
+                        help="forward command, m/s (default 0.5)")  # fmt: skip
     parser.add_argument(
         "--layout",
         default="",
@@ -163,6 +165,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
 
+    from cpg_actor.config import MAX_EPISODES, check_count
     from cpg_actor.cpg.joint_map import JointMap
     from cpg_actor.files import atomic_write_text
     from cpg_actor.plots import save_figure
@@ -171,8 +174,7 @@ def run(args: argparse.Namespace) -> int:
 
     if not (math.isfinite(args.seconds) and args.seconds > 0):
         raise ValueError(f"--seconds must be a positive number, got {args.seconds}")
-    if args.robots < 1:
-        raise ValueError(f"--robots must be >= 1, got {args.robots}")
+    check_count(args.robots, "--robots", MAX_EPISODES)  # an env each, as an evaluation's
     robot = get_robot(args.robot)
     layout, cpg_layout = gait_layout(args.robot, args.layout, args.gaits)
     gaits = args.gaits or list(cpg_layout.gaits)
@@ -182,7 +184,10 @@ def run(args: argparse.Namespace) -> int:
         if path.exists() and not args.overwrite:
             raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
     config = robot.config_class.from_dict(
-        {"command_range": (args.command, args.command), "episode_seconds": args.seconds}
+        {
+            "command_range": (args.forward_command, args.forward_command),
+            "episode_seconds": args.seconds,
+        }
     )
     summary, traces, legs = {}, {}, ()
     for gait in gaits:
@@ -198,7 +203,7 @@ def run(args: argparse.Namespace) -> int:
             joints = lambda output, state, m=joint_map: m(output.position)  # noqa: E731
         state = cpg.initial_state(args.robots)
         n = cpg.num_oscillators
-        drive = torch.full((args.robots, n), max(args.command, 0.0), dtype=torch.float64)
+        drive = torch.full((args.robots, n), max(args.forward_command, 0.0), dtype=torch.float64)
         contact, speed, fell = [], [], np.zeros(args.robots, dtype=bool)
         alive = np.ones(args.robots, dtype=bool)
         with torch.no_grad():
@@ -224,11 +229,11 @@ def run(args: argparse.Namespace) -> int:
         }
         print(f"{gait}: {summary[gait]}")
 
-    fig = gaits_figure(traces, summary, args.command, legs, cpg_layout.gaits)
+    fig = gaits_figure(traces, summary, args.forward_command, legs, cpg_layout.gaits)
     fig.suptitle(f"Open-loop CPG gaits on {robot.model} ({layout} layout, {args.seconds:g} s, "
                  f"seed {args.seed})")  # fmt: skip
     save_figure(fig, paths[0])
-    atomic_write_text(json.dumps({"robot": robot.name, "command": args.command,
+    atomic_write_text(json.dumps({"robot": robot.name, "command": args.forward_command,
                                   "layout": layout, "seconds": args.seconds,
                                   "seed": args.seed, "gaits": summary}, indent=2) + "\n",
                       paths[1])  # fmt: skip

@@ -34,15 +34,17 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cpg_actor.config import check_seed
+    from cpg_actor.config import MAX_EPISODES, check_count, check_seed
+    from cpg_actor.files import check_directory_path
     from cpg_actor.robots.registry import get_robot
     from cpg_actor.robustness.runs import find_runs
     from cpg_actor.robustness.suite import evaluate_run
     from cpg_actor.robustness.summary import outputs, summarise, verdicts, write_outputs
 
     check_seed(args.seed)
-    if args.episodes < 1:
-        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
+    check_count(args.episodes, "--episodes", MAX_EPISODES)
+    out = Path(args.out)
+    check_directory_path(out, "--out")  # before the suite, not after it
     runs = find_runs(args.runs)
     robot = get_robot(runs[0].robot)
     table = robot.perturbations
@@ -55,7 +57,6 @@ def run(args: argparse.Namespace) -> int:
         if unknown or not names:
             raise ValueError(f"--perturbations: unknown {', '.join(unknown) or '(none given)'}; "
                              f"the {robot.name}'s are {', '.join(table.axes)}")  # fmt: skip
-    out = Path(args.out)
     existing = [path for path in outputs(out, names) if path.exists()]
     if existing and not args.overwrite:
         raise FileExistsError(f"{existing[0]} exists; pass --overwrite to replace the suite's "

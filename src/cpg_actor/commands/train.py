@@ -20,6 +20,7 @@ from cpg_actor.files import (
     MARKER,
     RUN,
     atomic_write_text,
+    check_directory_path,
     check_overwritable,
     check_run_dir_length,
     clear_project_dir,
@@ -153,12 +154,7 @@ def _has_content(run_dir: Path) -> bool:
 def check_run_dir_path(run_dir: Path) -> None:
     """One clear error, before anything starts, for a ``--run-dir`` that cannot be one: a
     file, a path through a file, or a path too long for the files written in it."""
-    for path in (run_dir, *run_dir.parents):
-        if path.exists() and not path.is_dir():
-            where = "is a file" if path == run_dir else f"is inside {path}, a file"
-            raise NotADirectoryError(
-                f"run directory {run_dir} {where}, not a directory; give a directory path"
-            )
+    check_directory_path(run_dir, "run directory")
     check_run_dir_length(run_dir)
 
 
@@ -213,7 +209,7 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
     """Build the run (a new one, or the one in ``--run-dir`` resumed), train it, report."""
     if args.resume:
         runner, run_dir = _resumed_runner(args, locks)
-        if runner is None:  # a search that has ended: nothing to continue, no error
+        if runner is None:  # a finished run or an ended search: nothing to continue, no error
             return 0
     else:
         runner, run_dir = _new_runner(args, locks)
@@ -272,13 +268,13 @@ def _resumed_runner(args: argparse.Namespace, locks: list[RunLock]):
     runner = _runner(config, run_dir, args)
     try:
         runner.load_checkpoint(checkpoint)
-        _check_unfinished(runner)
+        _check_unfinished(runner, resized=args.total_steps is not None)
     except (ValueError, FileNotFoundError):
         runner.close()
         raise
-    if _searches(config) and runner.finished:
+    if _finished(runner):  # nothing to continue, and no error (_check_unfinished)
         runner.close()
-        print(_search_finished_text(runner))
+        print(_search_finished_text(runner) if _searches(config) else _finished_text(runner))
         return None, run_dir
     config.save(run_dir / "config.yaml")
     try:
@@ -291,18 +287,35 @@ def _resumed_runner(args: argparse.Namespace, locks: list[RunLock]):
     return runner, run_dir
 
 
-def _check_unfinished(runner) -> None:
-    """ValueError unless the resumed run has steps left (a search that CMA-ES stopped has
-    none, and is no error)."""
-    config = runner.config
-    if _searches(config):
-        if runner.finished and not runner.stop_reason:
+def _finished(runner) -> bool:
+    """The resumed run has no steps left."""
+    if _searches(runner.config):
+        return runner.finished
+    return runner.iteration >= runner.config.num_iterations
+
+
+def _check_unfinished(runner, resized: bool) -> None:
+    """ValueError if the resumed run has no steps left, except where that is no error: a
+    search that CMA-ES stopped, and a finished run resumed as it is (``resized``: a
+    ``--total-steps`` it has already reached was given)."""
+    if not _finished(runner):
+        return
+    if _searches(runner.config):
+        if not runner.stop_reason:
             raise ValueError(_search_finished_text(runner))
-    elif runner.iteration >= config.num_iterations:
+    elif resized:
         raise ValueError(
             f"the run is already at iteration {runner.iteration} "
             f"({runner.global_step:,} steps); pass a larger --total-steps to continue"
         )
+
+
+def _finished_text(runner) -> str:
+    return (
+        f"{runner.run_dir} is finished at iteration {runner.iteration} "
+        f"({runner.global_step:,} steps); nothing to continue (pass a larger --total-steps "
+        "to train it further)"
+    )
 
 
 def _new_runner(args: argparse.Namespace, locks: list[RunLock]):

@@ -23,7 +23,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from cpg_actor.config import check_seed
+    from cpg_actor.config import MAX_EPISODES, check_count, check_seed
     from cpg_actor.experiments.report import write_report
     from cpg_actor.experiments.transfer import TRANSFER_FILE, write_transfer
 
@@ -31,8 +31,7 @@ def run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if not (out / "runs").is_dir():
         raise FileNotFoundError(f"{out} is not a reproduce results directory (no runs/)")
-    if args.episodes < 1:
-        raise ValueError(f"--episodes must be >= 1, got {args.episodes}")
+    check_count(args.episodes, "--episodes", MAX_EPISODES)
     if (out / TRANSFER_FILE).exists() and not (args.overwrite or args.add):
         raise FileExistsError(
             f"{out / TRANSFER_FILE} exists; pass --overwrite to replace it or --add to "

@@ -3,11 +3,13 @@ composed from defaults, presets, a config file and overrides, and the named pres
 (:mod:`cpg_actor.config.presets`)."""
 
 from cpg_actor.config.train_config import (
+    MAX_EPISODES,
     MAX_SEED,
     MAX_STEPS,
     STEP_KEYS,
     TrainConfig,
     apply_dict,
+    check_count,
     check_seed,
     compose_config,
     parse_override,
@@ -17,11 +19,13 @@ from cpg_actor.config.train_config import (
 )
 
 __all__ = [
+    "MAX_EPISODES",
     "MAX_SEED",
     "MAX_STEPS",
     "STEP_KEYS",
     "TrainConfig",
     "apply_dict",
+    "check_count",
     "check_seed",
     "compose_config",
     "parse_override",

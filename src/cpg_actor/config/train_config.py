@@ -41,6 +41,17 @@ def check_seed(seed: Any, name: str = "--seed") -> None:
         raise ValueError(f"{name} must be an integer from 0 to 2**63-1 ({MAX_SEED}), got {seed!r}")
 
 
+# episodes an evaluation runs at most (in parallel, an env each): far beyond the 4 to 5 its
+# commands run by default, small enough for the envs to fit in memory
+MAX_EPISODES = 1_000
+
+
+def check_count(value: Any, name: str, high: int) -> None:
+    """ValueError unless ``value`` is an integer from 1 to ``high``."""
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= high:
+        raise ValueError(f"{name} must be an integer from 1 to {high:,}, got {value!r}")
+
+
 def _default_env_config() -> EnvConfig:
     return get_robot(DEFAULT_ROBOT).config_class()
 
@@ -277,17 +288,36 @@ def without_compile_if_no_compiler(config: TrainConfig) -> TrainConfig:
     return config
 
 
+class _UniqueKeyLoader(yaml.SafeLoader):
+    """YAML's safe loader (no tags that build objects), refusing a key given twice in one
+    mapping (PyYAML would keep the last silently)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        seen = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"duplicate key {key!r} (give each key once)", key_node.start_mark
+                )
+            seen.add(key)
+        return super().construct_mapping(node, deep)
+
+
 def read_config_file(path: Path) -> dict[str, Any]:
     """The mapping of config keys in a YAML file; a clear ValueError if it is not one."""
     try:
-        data = yaml.safe_load(Path(path).read_text(encoding="utf-8")) or {}
+        data = yaml.load(Path(path).read_text(encoding="utf-8"), _UniqueKeyLoader) or {}
     except UnicodeDecodeError as error:  # a binary file: a checkpoint, an image, ...
         raise ValueError(
             f"{path} is not a YAML text file (byte {error.start} is not UTF-8 text); give a "
             "YAML file of config keys, e.g. a run's config.yaml"
         ) from None
-    except yaml.YAMLError as error:
-        raise ValueError(f"{path} is not valid YAML: {error}") from None
+    except yaml.YAMLError as error:  # in one line: the problem and where
+        mark = getattr(error, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(error, "problem", None) or str(error)
+        raise ValueError(f"{path} is not valid YAML{where}: {problem}") from None
     if not isinstance(data, dict):
         raise ValueError(f"{path} must hold a mapping of config keys")
     return data

@@ -134,7 +134,7 @@ def sidecar_paths(path: Path) -> dict[str, Path]:
 
 def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict[str, str]:
     """What a control loop needs to run the exported step of ``policy`` (one loaded by
-    :func:`cpg_actor.training.policy.load_policy`, which knows its run and robot), key -> string
+    :func:`cpg_actor.deploy.load_policy`, which knows its run and robot), key -> string
     (``docs/training.md``, "Export", has the table)."""
     from cpg_actor import __version__
     from cpg_actor.robots.common.actuator import Actuator
@@ -143,7 +143,7 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
     config, robot = policy.config, policy.robot
     if config is None or robot is None:
         raise ValueError(
-            "the policy knows no run or robot; load it with cpg_actor.training.policy.load_policy"
+            "the policy knows no run or robot; load it with cpg_actor.deploy.load_policy"
         )
     env = config.env
     actuator = Actuator.from_config(env)

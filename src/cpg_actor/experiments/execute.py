@@ -43,7 +43,7 @@ from cpg_actor.files import (
     open_own,
     refuse_link,
 )
-from cpg_actor.machine import git_commit
+from cpg_actor.machine import PARENT_ENV, git_commit
 from cpg_actor.training.run_lock import LOCK_NAME
 
 MARKER = "reproduce_run.json"
@@ -58,6 +58,7 @@ def _single_thread_env() -> dict[str, str]:
     env = dict(os.environ)
     for key in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
         env[key] = "1"
+    env[PARENT_ENV] = str(os.getpid())  # the run dies with this process (machine.py)
     return env
 
 

@@ -23,7 +23,8 @@ def find_runs(paths: list[str | Path]) -> list[RunRef]:
     """Every run the arguments name, in their order: a run directory is one run (its variant
     its parent folder's name when it is a reproduction's ``seedS``, else its agent's), a
     reproduction directory (one with ``runs/``) is each of its runs that has a final
-    checkpoint. FileNotFoundError for a path that is neither."""
+    checkpoint. FileNotFoundError for a path that is neither; ValueError for a run named
+    twice (it would count as two seeds)."""
     from cpg_actor.experiments.results import Results, read_config, run_robot
 
     found: list[RunRef] = []
@@ -53,6 +54,14 @@ def find_runs(paths: list[str | Path]) -> list[RunRef]:
         else:
             variant, seed = str(config.get("agent", path.name)), int(config.get("seed", 0))
         found.append(RunRef(variant, seed, path, run_robot(config).name))
+    seen: dict[Path, Path] = {}  # resolved -> as given
+    for run in found:
+        first = seen.get(run.path.resolve())
+        if first is not None:
+            twice = str(run.path) if run.path == first else f"{first} and {run.path}"
+            raise ValueError(f"{twice}: the same run given twice; give each run once (a "
+                             "reproduction directory gives every run in it)")  # fmt: skip
+        seen[run.path.resolve()] = run.path
     robots = sorted({run.robot for run in found})
     if len(robots) > 1:
         raise ValueError(f"the runs are of several robots ({', '.join(robots)}), whose "

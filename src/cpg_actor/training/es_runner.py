@@ -299,7 +299,7 @@ class ESRunner:
 
     def load_checkpoint(self, path: Path) -> None:
         """Continue the search from ``path`` (the agent, CMA-ES, the best candidate, counters,
-        RNG streams). To act with the agent, see :func:`cpg_actor.training.policy.load_policy`."""
+        RNG streams). To act with the agent, see :func:`cpg_actor.deploy.load_policy`."""
         data = run_checkpoint.read(path, self.config.agent)
         if "es" not in data:
             raise ValueError(f"checkpoint {path} holds no search state")

@@ -10,11 +10,22 @@ from __future__ import annotations
 
 import json
 import math
+import threading
+from contextlib import nullcontext
 from pathlib import Path
 
 from torch import Tensor
 
 from cpg_actor.files import naming, open_own
+
+
+def _quiet_writer_thread(args: threading.ExceptHookArgs) -> None:
+    """TensorBoard's writer thread dying of an OSError (a full disk) prints no traceback: the
+    writer raises the error again in the training thread at its next call, where the command
+    line reports it in one line. Any other thread's error goes to the hook before this one."""
+    if not (isinstance(args.exc_value, OSError)
+            and type(args.thread).__name__ == "_AsyncWriterThread"):  # fmt: skip
+        _quiet_writer_thread.previous(args)
 
 
 class RunLog:
@@ -32,9 +43,18 @@ class RunLog:
         if self._writer is None and self.use_tensorboard:
             from torch.utils.tensorboard import SummaryWriter
 
-            log_dir = str(self.run_dir / "tensorboard")
-            self._writer = SummaryWriter(log_dir=log_dir, purge_step=self.purge_step)
+            if threading.excepthook is not _quiet_writer_thread:
+                _quiet_writer_thread.previous = threading.excepthook
+                threading.excepthook = _quiet_writer_thread
+            with self._tensorboard():
+                self._writer = SummaryWriter(
+                    log_dir=str(self.run_dir / "tensorboard"), purge_step=self.purge_step
+                )
         return self._writer
+
+    def _tensorboard(self):
+        """Where an OSError of the TensorBoard writer (which names no file) names its folder."""
+        return naming(self.run_dir / "tensorboard") if self.run_dir else nullcontext()
 
     def write(self, iteration: int, global_step: int, row: dict[str, float]) -> None:
         """Append ``row`` to ``metrics.jsonl`` and to TensorBoard at ``global_step``."""
@@ -47,24 +67,29 @@ class RunLog:
         with naming(path), open_own(path, "a") as f:  # a link there is refused, not followed
             f.write(json.dumps(record) + "\n")
         if self.writer is not None:
-            for key, value in row.items():
-                if math.isfinite(value):
-                    self.writer.add_scalar(key, value, global_step)
+            with self._tensorboard():
+                for key, value in row.items():
+                    if math.isfinite(value):
+                        self.writer.add_scalar(key, value, global_step)
 
     def scalar(self, tag: str, value: float, step: int) -> None:
         if self.writer is not None:
-            self.writer.add_scalar(tag, value, step)
+            with self._tensorboard():
+                self.writer.add_scalar(tag, value, step)
 
     def histograms(self, global_step: int, histograms: dict[str, Tensor]) -> None:
         if self.writer is not None:
-            for tag, values in histograms.items():
-                self.writer.add_histogram(tag, values, global_step)
+            with self._tensorboard():
+                for tag, values in histograms.items():
+                    self.writer.add_histogram(tag, values, global_step)
 
     def flush(self) -> None:
         if self._writer is not None:
-            self._writer.flush()
+            with self._tensorboard():
+                self._writer.flush()
 
     def close(self) -> None:
         if self._writer is not None:
-            self._writer.close()
-            self._writer = None
+            writer, self._writer = self._writer, None
+            with self._tensorboard():
+                writer.close()

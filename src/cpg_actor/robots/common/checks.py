@@ -1,11 +1,15 @@
-"""Checks every robot's Gymnasium envs make alike: actions that are real numbers, and a
-render mode the env offers."""
+"""Checks every robot's Gymnasium envs make alike: actions that are real numbers, a render
+mode the env offers, an episode of a bounded length."""
 
 from __future__ import annotations
 
 from typing import Any
 
 import numpy as np
+
+# control steps per episode at most: 200 times the hopper's and the quadrupeds' episodes, so
+# that a typo (1e9) is refused rather than simulated for hours
+MAX_EPISODE_STEPS = 100_000
 
 
 def real_actions(actions: Any, expected: str, dtype: Any = np.float64) -> np.ndarray:
@@ -36,3 +40,11 @@ def check_render_mode(render_mode: str | None, metadata: dict[str, Any]) -> None
         raise ValueError(
             f"render_mode must be None or one of {metadata['render_modes']}, got {render_mode!r}"
         )
+
+
+def check_episode_steps(steps: int, given: str) -> None:
+    """ValueError unless an episode of ``steps`` control steps (from ``given``, the field and
+    its value) is at most :data:`MAX_EPISODE_STEPS`."""
+    if steps > MAX_EPISODE_STEPS:
+        raise ValueError(f"{given} makes episodes of {steps:,} control steps; at most "
+                         f"{MAX_EPISODE_STEPS:,} are accepted")  # fmt: skip

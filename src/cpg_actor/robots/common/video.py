@@ -14,13 +14,25 @@ import numpy as np
 from cpg_actor.errors import RenderingUnavailable  # noqa: F401 (the CLI catches it from there)
 
 VIDEO_SUFFIXES = (".mp4", ".gif")
+# a GIF's frames per second and width at most: GIF stores every pixel of every frame nearly
+# raw, so a quadruped's 20 s episode at 50 Hz and 640 x 480 made 61 MB (150 s to encode); at
+# these it makes a few MB. Browsers slow down frames shorter than 20 ms (above 50 fps)
+GIF_FPS = 20.0
+GIF_WIDTH = 320
 
 
 def write_video(
-    frames: Iterable[np.ndarray], path: str | os.PathLike, fps: float, overwrite: bool = False
+    frames: Iterable[np.ndarray],
+    path: str | os.PathLike,
+    fps: float,
+    overwrite: bool = False,
+    gif_fps: float = GIF_FPS,
+    gif_width: int = GIF_WIDTH,
 ) -> Path:
     """Write RGB frames (H, W, 3) uint8 to ``path`` (``.mp4`` or ``.gif``) and return the path.
-    A GIF keeps at most 50 frames per second (browsers slow down faster ones).
+    A GIF keeps every k-th frame (at most ``gif_fps`` per second, at most 50), each shown k
+    times as long so that it plays in real time, shrunk by a whole factor to at most
+    ``gif_width`` pixels wide (each pixel the mean of the block it replaces).
 
     The file appears atomically (written next to it under a temporary name, then renamed).
     An existing file is an error unless ``overwrite=True``. MP4 frames are padded to even
@@ -33,6 +45,10 @@ def write_video(
         raise ValueError(f"video path must end in {' or '.join(VIDEO_SUFFIXES)}, got {path}")
     if not (isinstance(fps, (int, float)) and not isinstance(fps, bool) and 0 < fps < 1000):
         raise ValueError(f"fps must be a number in (0, 1000), got {fps!r}")
+    if not (isinstance(gif_fps, (int, float)) and 0 < gif_fps <= 50):
+        raise ValueError(f"gif_fps must be a number in (0, 50], got {gif_fps!r}")
+    if isinstance(gif_width, bool) or not (isinstance(gif_width, int) and gif_width >= 1):
+        raise ValueError(f"gif_width must be an integer >= 1, got {gif_width!r}")
     if path.exists() and not overwrite:
         raise FileExistsError(f"{path} exists; pass overwrite=True to replace it")
     checked = (_check_frame(frame, i) for i, frame in enumerate(frames))
@@ -45,8 +61,14 @@ def write_video(
             raise ValueError("all frames must have the same shape")
         return frame
 
+    k = math.ceil(fps / gif_fps)  # a GIF's frames kept: every k-th
     if suffix == ".gif":  # not streamed: checked whole before anything is written
-        gif_frames = [first, *(same_shape(frame) for frame in checked)]
+        scale = math.ceil(first.shape[1] / gif_width)
+        gif_frames = [
+            _shrink(frame, scale)
+            for i, frame in enumerate(itertools.chain([first], map(same_shape, checked)))
+            if i % k == 0
+        ]
     path.parent.mkdir(parents=True, exist_ok=True)
     import imageio.v2 as imageio
 
@@ -65,10 +87,7 @@ def write_video(
                         np.pad(frame, pad, mode="edge") if any(pad[0] + pad[1]) else frame
                     )
         else:
-            # browsers draw a frame shorter than 20 ms for 100 ms: above 50 fps keep every
-            # k-th frame, each shown k times as long, so the GIF plays in real time
-            k = math.ceil(fps / 50)
-            imageio.mimsave(tmp, gif_frames[::k], format="GIF", duration=1000.0 * k / fps, loop=0)
+            imageio.mimsave(tmp, gif_frames, format="GIF", duration=1000.0 * k / fps, loop=0)
         tmp.replace(path)
     except BaseException:
         tmp.unlink(missing_ok=True)
@@ -83,3 +102,13 @@ def _check_frame(frame: np.ndarray, index: int) -> np.ndarray:
     if array.dtype != np.uint8:
         raise ValueError(f"frame {index} must be uint8, got {array.dtype}")
     return np.ascontiguousarray(array[:, :, :3])
+
+
+def _shrink(frame: np.ndarray, scale: int) -> np.ndarray:
+    """``frame`` ``scale`` times smaller each way, each pixel the mean of its block (the edge
+    rows and columns that fill no block dropped)."""
+    if scale == 1:
+        return frame
+    height, width = frame.shape[0] // scale, frame.shape[1] // scale
+    blocks = frame[: height * scale, : width * scale].reshape(height, scale, width, scale, 3)
+    return blocks.mean(axis=(1, 3)).round().astype(np.uint8)

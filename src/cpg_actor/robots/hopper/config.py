@@ -10,6 +10,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from cpg_actor.robots.common.checks import check_episode_steps
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 from cpg_actor.robots.hopper.backends import BACKENDS, BATCHED_ONLY
 
@@ -105,7 +106,6 @@ class HopperConfig:
                     raise ValueError(f"{name} must be a number, got {value!r}")
                 if not math.isfinite(value):
                     raise ValueError(f"{name} must be finite, got {value!r}")
-        check_perturbations(self, PUSH_DIRECTIONS, tuple(BACKENDS))  # not on MJX
         if self.sim not in SIMULATORS:
             raise ValueError(f"sim must be one of {', '.join(SIMULATORS)}, got {self.sim!r}")
         if self.actuator_law not in ACTUATOR_LAWS:
@@ -128,6 +128,7 @@ class HopperConfig:
             raise ValueError(
                 f"physics_dt must be <= 0.005 s for stable contacts, got {self.physics_dt}"
             )
+        check_episode_steps(self.episode_steps, f"episode_steps={self.episode_steps}")
         if self.saturation_torque < self.torque_limit:
             raise ValueError(
                 f"saturation_torque ({self.saturation_torque}) must be >= torque_limit "
@@ -145,6 +146,8 @@ class HopperConfig:
                     f"{name} must be <= 0 (paper eq. 4: r2..r5 are penalties), "
                     f"got {getattr(self, name)}"
                 )
+        # last: the push's window is checked against the episode's length
+        check_perturbations(self, PUSH_DIRECTIONS, tuple(BACKENDS))  # not on MJX
 
     # -- (de)serialisation -------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:

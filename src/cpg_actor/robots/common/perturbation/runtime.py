@@ -81,7 +81,7 @@ class EpisodeDraws:
         self.active = perturbation.random or randomize.active
         self.num_envs = num_envs
         first, last = (round(t / config.control_dt) for t in perturbation.push_time)
-        self.window = (first, last)
+        self.window = (first, min(last, config.episode_steps - 1))  # a push in every episode
         self.sensor_noise = np.asarray(sensor_noise, dtype=np.float64)
         self.noisy = np.flatnonzero(self.sensor_noise > 0)
         self.rngs: list[np.random.Generator] = []

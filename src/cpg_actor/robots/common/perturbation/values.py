@@ -22,6 +22,12 @@ PUSH_DIRECTIONS = {
 }
 
 
+# the largest value of each: far beyond the suite's levels (docs/robustness.md), small enough
+# that the simulation stays meaningful and the latency's command buffer small
+HIGHS = {"payload": 100.0, "friction": 10.0, "latency": 50.0, "obs_noise": 100.0,
+         "motor_strength": 10.0, "push": 100.0}  # fmt: skip
+
+
 @dataclass
 class Perturbation:
     """What is done to the robot and its world; the defaults are the nominal robot."""
@@ -60,9 +66,10 @@ class Perturbation:
         def number(name: str, value: Any, low: float, strict: bool) -> None:
             ok = not isinstance(value, bool) and isinstance(value, int | float)
             ok = ok and math.isfinite(value) and (value > low if strict else value >= low)
-            if not ok:
-                raise ValueError(f"perturbation.{name} must be a finite number "
-                                 f"{'>' if strict else '>='} {low:g}, got {value!r}")  # fmt: skip
+            if not (ok and value <= HIGHS[name]):
+                raise ValueError(f"perturbation.{name} must be a number with {low:g} "
+                                 f"{'<' if strict else '<='} {name} <= {HIGHS[name]:g}, got "
+                                 f"{value!r}")  # fmt: skip
 
         number("payload", self.payload, 0.0, False)
         if self.friction is not None:
@@ -168,12 +175,12 @@ class Randomization:
             ok = isinstance(bounds, list | tuple) and len(bounds) == 2 and all(
                 not isinstance(b, bool) and isinstance(b, int | float) and math.isfinite(b)
                 for b in bounds)  # fmt: skip
-            ok = ok and bounds[0] <= bounds[1]
+            ok = ok and bounds[0] <= bounds[1] <= HIGHS[name]
             ok = ok and (bounds[0] > lows[name] if strict else bounds[0] >= lows[name])
             if not ok:
                 raise ValueError(f"randomize.{name} must be [low, high] with "
-                                 f"{lows[name]:g} {'<' if strict else '<='} low <= high, got "
-                                 f"{bounds!r}")  # fmt: skip
+                                 f"{lows[name]:g} {'<' if strict else '<='} low <= high <= "
+                                 f"{HIGHS[name]:g}, got {bounds!r}")  # fmt: skip
             setattr(self, name, (float(bounds[0]), float(bounds[1])))
         for bound in self.latency:
             Perturbation(latency=bound).substeps(decimation)  # whole substeps
@@ -215,6 +222,12 @@ def check_perturbations(config: Any, directions: Sequence[str], simulators: Sequ
     a config file), for a robot with push ``directions`` whose ``simulators`` take them."""
     config.perturbation = Perturbation.from_value(config.perturbation).validate(directions)
     config.perturbation.substeps(config.decimation)  # a whole number of substeps late
+    push_start = config.perturbation.push_time[0]
+    if config.perturbation.push and round(push_start / config.control_dt) >= config.episode_steps:
+        episode = config.episode_steps * config.control_dt
+        raise ValueError(f"perturbation.push_time starts at {push_start:g} s, at or after the "
+                         f"end of the episode ({episode:g} s): the push would never come; give "
+                         "a window that starts before it")  # fmt: skip
     config.randomize = Randomization.from_value(config.randomize).validate(config.decimation)
     if config.randomize.active:
         nominal = Perturbation()

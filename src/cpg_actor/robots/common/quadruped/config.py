@@ -12,6 +12,7 @@ import dataclasses
 import math
 from dataclasses import dataclass, field
 
+from cpg_actor.robots.common.checks import check_episode_steps
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 
 
@@ -137,6 +138,7 @@ class QuadrupedConfig:
             raise ValueError(f"decimation must be an integer >= 1, got {self.decimation!r}")
         if self.physics_dt > 0.005:
             raise ValueError(f"physics_dt must be <= 0.005 s, got {self.physics_dt}")
+        check_episode_steps(self.episode_steps, f"episode_seconds={self.episode_seconds:g}")
         for name, unit in (("command_range", "m/s"), ("lateral_range", "m/s"),
                            ("yaw_range", "rad/s")):  # fmt: skip
             bounds = getattr(self, name)
