@@ -261,3 +261,49 @@ def test_a_gif_keeps_at_most_20_frames_per_second_and_320_pixels_of_width(tmp_pa
         assert (frame[:, :, :3] == 100 + 3 * j).all()
     path = write_video(frames[:5], tmp_path / "full.gif", fps=50, gif_fps=50, gif_width=640)
     assert len(imageio.mimread(path)) == 5 and imageio.mimread(path)[0].shape[:2] == (480, 640)
+
+
+def test_a_gif_of_an_evaluation_renders_only_the_frames_it_keeps(tmp_path, monkeypatch):
+    """Rendering costs more than encoding: `eval --video X.gif` renders every 3rd control step
+    of a 50 Hz episode (at most 20 fps), an MP4 every step; both play in real time."""
+    import imageio.v2 as imageio
+    import numpy as np
+
+    import cpg_actor.training.build as build
+    from cpg_actor.commands.eval import record_video
+    from cpg_actor.config import TrainConfig
+    from cpg_actor.robots.go1.config import Go1Config
+
+    class Env:
+        rendered = 0
+
+        def reset(self, seed):
+            return np.zeros((1, 1)), {}
+
+        def step(self, action):
+            no = np.zeros(1, dtype=bool)
+            return np.zeros((1, 1)), None, no, no, {}
+
+        def render_frame(self, index):
+            Env.rendered += 1
+            return np.full((8, 8, 3), Env.rendered, dtype=np.uint8)
+
+        def close(self):
+            pass
+
+    class Policy:
+        def reset(self, n):
+            pass
+
+        def act(self, obs):
+            return type("Step", (), {"action": np.zeros((1, 1))})()
+
+    monkeypatch.setattr(build, "make_env", lambda *args: Env())
+    config = TrainConfig(robot="go1", env=Go1Config(episode_seconds=1.2))  # 60 steps at 50 Hz
+    record_video(Policy(), config, tmp_path / "walk.gif", seed=0, overwrite=False)
+    assert Env.rendered == 21  # the first frame and every 3rd of 60 steps
+    durations = [frame.meta["duration"] for frame in imageio.get_reader(tmp_path / "walk.gif")]
+    assert len(durations) == 21 and np.allclose(durations, 60.0)  # 3 steps of 20 ms each
+    Env.rendered = 0
+    record_video(Policy(), config, tmp_path / "walk.mp4", seed=0, overwrite=False)
+    assert Env.rendered == 61

@@ -189,25 +189,29 @@ def episode_lines(traces: dict[str, np.ndarray]) -> list[str]:
 
 def record_video(policy, config, path: Path, seed: int, overwrite: bool) -> None:
     """One deterministic episode in the agent's own environment (one env), rendered offscreen
-    by its ``render_frame`` (the hopper's or the quadruped's scene) and encoded as it runs."""
-    from cpg_actor.robots.common.video import write_video
+    by its ``render_frame`` (the hopper's or the quadruped's scene) and encoded as it runs;
+    a GIF renders only the frames it keeps."""
+    from cpg_actor.robots.common.video import frame_stride, write_video
     from cpg_actor.robots.registry import get_robot
     from cpg_actor.training.build import make_env
 
     env = make_env(config, get_robot(config.robot), 1, 1)
+    fps = round(1.0 / config.env.control_dt)
+    stride = frame_stride(path, fps)
 
     def frames():
         obs, _ = env.reset(seed=seed)
         policy.reset(1)
         yield env.render_frame(0)
-        for _ in range(config.env.episode_steps):
+        for step in range(1, config.env.episode_steps + 1):
             obs, _, terminated, truncated, _ = env.step(policy.act(obs).action)
             if terminated[0] or truncated[0]:
                 break  # the env has already reset: the frame would show the next episode
-            yield env.render_frame(0)
+            if step % stride == 0:
+                yield env.render_frame(0)
 
     try:
-        write_video(frames(), path, fps=round(1.0 / config.env.control_dt), overwrite=overwrite)
+        write_video(frames(), path, fps=fps / stride, overwrite=overwrite)
     finally:
         env.close()
 

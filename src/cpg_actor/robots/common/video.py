@@ -15,10 +15,17 @@ from cpg_actor.errors import RenderingUnavailable  # noqa: F401 (the CLI catches
 
 VIDEO_SUFFIXES = (".mp4", ".gif")
 # a GIF's frames per second and width at most: GIF stores every pixel of every frame nearly
-# raw, so a quadruped's 20 s episode at 50 Hz and 640 x 480 made 61 MB (150 s to encode); at
-# these it makes a few MB. Browsers slow down frames shorter than 20 ms (above 50 fps)
+# raw, so a full-rate, full-size episode is tens of MB. Browsers slow down frames shorter
+# than 20 ms (above 50 fps)
 GIF_FPS = 20.0
 GIF_WIDTH = 320
+
+
+def frame_stride(path: str | os.PathLike, fps: float, gif_fps: float = GIF_FPS) -> int:
+    """Every how many frames a video at ``fps`` keeps one: a GIF at most ``gif_fps`` per
+    second, an MP4 every frame. A caller that renders frames can render only those (rendering
+    costs more than encoding) and pass ``fps / stride``."""
+    return math.ceil(fps / gif_fps) if Path(path).suffix.lower() == ".gif" else 1
 
 
 def write_video(
@@ -61,7 +68,7 @@ def write_video(
             raise ValueError("all frames must have the same shape")
         return frame
 
-    k = math.ceil(fps / gif_fps)  # a GIF's frames kept: every k-th
+    k = frame_stride(path, fps, gif_fps)  # a GIF's frames kept: every k-th
     if suffix == ".gif":  # not streamed: checked whole before anything is written
         scale = math.ceil(first.shape[1] / gif_width)
         gif_frames = [
@@ -87,7 +94,9 @@ def write_video(
                         np.pad(frame, pad, mode="edge") if any(pad[0] + pad[1]) else frame
                     )
         else:
-            imageio.mimsave(tmp, gif_frames, format="GIF", duration=1000.0 * k / fps, loop=0)
+            # ms per frame, rounded off float error: GIF keeps whole 10 ms and Pillow truncates
+            duration = round(1000.0 * k / fps, 6)
+            imageio.mimsave(tmp, gif_frames, format="GIF", duration=duration, loop=0)
         tmp.replace(path)
     except BaseException:
         tmp.unlink(missing_ok=True)
