@@ -2,8 +2,8 @@
 Go1's): config values, by agent, that a run on a quadruped starts from, over its recipe
 (``throughput``), unless the config file or command line say otherwise
 (:func:`cpg_actor.config.compose_config`). They are the settings the quadruped results were
-trained with (``docs/results/quadruped-5M``, ``docs/results/go1-2M``); an agent not named here
-trains with the config's defaults."""
+trained with (``docs/quadruped.md``, "Training"); an agent not named here trains with the
+config's defaults."""
 
 from __future__ import annotations
 
