@@ -3,16 +3,17 @@
 # throughput table, a `--preset gpu` training run, (the machine having 16 cores) the CPU
 # scaling table of benchmarks/train_scaling.py, and, when PARTS names it, the combined rate of
 # runs sharing the GPU (benchmarks/shared_device.py) and a training run with MuJoCo on the CPU
-# and PPO on CUDA; at most 8 files, all under $OUT: cuda_tests.txt (device, then the tests),
-# train.log (both trainings' output and configs), metrics.jsonl, metrics_mujoco_cuda.jsonl,
-# gpu_throughput.md, train_scaling.md, shared_device.md, and bench.log (the three
-# benchmarks' output).
+# and PPO on CUDA, and the quadruped's training run and throughput (with many seeds in one
+# process); at most 8 files, all under $OUT: cuda_tests.txt (device, then the tests),
+# train.log (the trainings' output and configs), metrics.jsonl, metrics_mujoco_cuda.jsonl or
+# qtrain.jsonl, gpu_throughput.md, train_scaling.md or go1_throughput.md, shared_device.md,
+# and bench.log (the benchmarks' output).
 # The machine's image holds CUDA PyTorch and JAX; mujoco, mujoco-mjx, gymnasium and the
 # project's other missing packages travel as wheels in .whl/ (installed to /tmp/site).
 # Each part has a time limit (seconds) and writes as it goes: a part cut short keeps its output.
-# PARTS picks the parts to run, in this order: tests bench train split scaling eval share
-# (default: tests bench train scaling; split, eval and share run only when named), e.g.
-# PARTS="train split".
+# PARTS picks the parts to run, in this order: tests bench train split scaling eval qtrain
+# qbench share (default: tests bench train scaling; the others run only when named), e.g.
+# PARTS="qtrain qbench" for the quadruped alone.
 set -o pipefail
 OUT="${OUT:-gpu-check}"
 mkdir -p "$OUT"
@@ -61,6 +62,17 @@ part scaling && timeout "${SCALING_S:-80}" python3 benchmarks/train_scaling.py -
 # "Train"): its table goes to bench.log
 part eval && timeout "${EVAL_S:-150}" python3 benchmarks/mjx_eval.py --rounds 3 \
     --output /tmp/mjx_eval.md 2>&1 | tee -a "$OUT/bench.log"
+# the quadruped (Go1; QROBOT=anymal for ANYmal B): a `--preset gpu` training run as far as the
+# time allows (qtrain.jsonl: its metrics, the evaluations' speed error every 10 iterations),
+# then its MJX throughput per batch size with QSEEDS seeds in one process (go1_throughput.md)
+part qtrain && timeout "${QTRAIN_S:-200}" python3 -m cpg_actor.cli train --preset gpu \
+    --robot "${QROBOT:-go1}" --total-steps 50M --run-dir /tmp/gpu-run-quadruped --no-progress \
+    --progress-interval 10 2>&1 | tee -a "$OUT/train.log"
+part qtrain && cat /tmp/gpu-run-quadruped/config.yaml >>"$OUT/train.log" \
+    && cp /tmp/gpu-run-quadruped/metrics.jsonl "$OUT/qtrain.jsonl"
+part qbench && timeout "${QBENCH_S:-220}" python3 benchmarks/gpu_throughput.py \
+    --robot "${QROBOT:-go1}" --envs ${QENVS:-4096 16384} --agents cpg-actor --iterations 2 \
+    --seeds "${QSEEDS:-4}" --output "$OUT/go1_throughput.md" 2>&1 | tee -a "$OUT/bench.log"
 # runs sharing the GPU: 1, 2 and 4 `--preset gpu` trainings at once (about SHARE_SECONDS each)
 part share && timeout "${SHARE_S:-420}" python3 benchmarks/shared_device.py --runs 1 2 4 \
     --seconds "${SHARE_SECONDS:-120}" --output "$OUT/shared_device.md" 2>&1 | tee -a "$OUT/bench.log"

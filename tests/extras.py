@@ -7,3 +7,16 @@ import pytest
 from cpg_actor.robots.common import mjx_runtime
 
 MJX = pytest.mark.skipif(not mjx_runtime.available(), reason='needs pip install -e ".[mjx]"')
+
+
+def _warp_installed() -> bool:
+    try:
+        mjx_runtime.check_impl("warp")
+    except mjx_runtime.MjxUnavailable:
+        return False
+    return True
+
+
+WARP = pytest.mark.skipif(
+    not (mjx_runtime.available() and _warp_installed()), reason='needs pip install -e ".[warp]"'
+)

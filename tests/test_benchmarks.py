@@ -26,7 +26,7 @@ RUNS = {
     "env_throughput.py": (["--quick", "--max-n", "1", "--sims", "mujoco", "--repeats", "1"],
                           "--out"),
     "gpu_throughput.py": (["--envs", "4", "--agents", "mlp", "--iterations", "1", "--repeats",
-                           "1", "--device", "cpu"], "--output"),
+                           "1", "--device", "cpu", "--seeds", "2"], "--output"),
     "guard_checks.py": (["--agent", "mlp", "--preset", "paper", "--pairs", "1", "--iterations",
                          "1"], "--output"),
     "learning_curves.py": (["--reference-src", str(ROOT / "src"), "--agents", "mlp", "--seeds",

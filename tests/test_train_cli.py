@@ -584,6 +584,17 @@ def test_compose_config_applies_each_layer_in_order(tmp_path):
         compose_config(config_file=tmp_path / "missing.yaml")
 
 
+@pytest.mark.parametrize("robot", ["go1", "anymal"])
+def test_a_recipe_sets_the_env_of_the_robot_the_flags_name(robot):
+    """`--preset gpu --robot go1` trains the Go1 on MJX: the recipe's env values land on the
+    named robot's config, not on the default robot's that the robot flag then replaces."""
+    config = compose_config("gpu", values={"robot": robot})
+    assert (config.robot, config.env.sim, config.num_envs) == (robot, "mjx", 4096)
+    assert compose_config("gpu", values={"robot": robot, "env": {"sim": "mujoco"}}).env.sim == (
+        "mujoco"  # the flags still come after the recipe
+    )
+
+
 def test_a_config_saved_before_a_field_existed_keeps_what_it_trained_with():
     """Runs saved before ``env.actuator_law`` and ``update_threads`` resume with the drive law
     and update threads they trained with; a new config gets today's defaults."""

@@ -255,8 +255,12 @@ def compose_config(
     chosen = preset or file_data.get("preset")
     given = [dict(values or {}), *(parse_override(text) for text in overrides)]
 
-    def compose(agent_defaults: Mapping[str, Any], recipe: str) -> TrainConfig:
+    def compose(
+        agent_defaults: Mapping[str, Any], recipe: str, robot: str | None = None
+    ) -> TrainConfig:
         config = TrainConfig()
+        if robot is not None:  # first: the recipe's env values are then the robot's
+            apply_dict(config, {"robot": robot}, prefix="")
         apply_dict(config, dict(agent_defaults), prefix="")
         apply_dict(config, preset_values(recipe), prefix="")
         apply_dict(config, file_data, prefix="")
@@ -271,7 +275,9 @@ def compose_config(
     get_agent_spec(config.agent)  # an unknown agent: its ValueError now
     robot = ROBOTS.get(config.robot)  # an unknown robot: validate() says so
     if robot is not None:
-        config = compose(robot.agent_defaults.get(config.agent, {}), chosen or robot.recipe)
+        config = compose(
+            robot.agent_defaults.get(config.agent, {}), chosen or robot.recipe, config.robot
+        )
     config.validate()
     return config
 

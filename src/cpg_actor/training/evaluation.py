@@ -305,6 +305,16 @@ def evaluation_row(policy, env, seed: int, control_dt: float, max_steps: int) ->
     return row
 
 
+def evaluation_env(config: Any, robot: Any) -> Any:
+    """The envs a run is evaluated on during training: ``config.eval_episodes`` of the run's
+    robot's, on its env config without training randomisation (:func:`nominal_env`)."""
+    from cpg_actor.training.build import make_env
+
+    return make_env(
+        config, robot, config.eval_episodes, config.env_threads, nominal_env(config.env)
+    )
+
+
 class TrainingEvaluation:
     """The evaluation during training, of both runners: one episode with the mean action on
     each of ``config.eval_episodes`` envs of its own (the run's ``robot``'s, built at the first
@@ -329,11 +339,7 @@ class TrainingEvaluation:
         cfg = self.config
         start = time.perf_counter()
         if self.env is None:
-            from cpg_actor.training.build import make_env
-
-            self.env = make_env(
-                cfg, self.robot, cfg.eval_episodes, cfg.env_threads, nominal_env(cfg.env)
-            )
+            self.env = evaluation_env(cfg, self.robot)
         policy = Policy(
             self.agent,
             self.normalizer,

@@ -15,8 +15,10 @@ from typing import Any
 import torch
 
 from cpg_actor.config import TrainConfig
+from cpg_actor.robots.common.torch_env import EnvStep
 from cpg_actor.training.build import PPORun
 from cpg_actor.training.episodes import EpisodeLog, EpisodeStats
+from cpg_actor.training.policy import PolicyStep
 
 
 class NonFiniteActionsError(RuntimeError):
@@ -60,13 +62,23 @@ class Rollout:
     @torch.no_grad()
     def collect(self) -> dict[str, float]:
         """One rollout into the storage, with its returns and advantages computed."""
-        cfg = self.config
+        self.begin()
+        for _ in range(self.config.ppo.num_steps):
+            self.step()
+        return self.finish()
+
+    def begin(self) -> None:
+        """Before a rollout's first step: the storage emptied, the counters at zero."""
         self.storage.clear()
         self.simulation_time = 0.0
         # sync-free: whether every action so far was finite, on the device, checked once below
         self._finite_actions = torch.ones((), dtype=torch.bool, device=self.device)
-        for _ in range(cfg.ppo.num_steps):
-            self.step()
+
+    @torch.no_grad()
+    def finish(self) -> dict[str, float]:
+        """After a rollout's last step: the episode log flushed, the actions checked, the
+        returns and advantages computed."""
+        cfg = self.config
         if self.sync_free:  # the rollout's one wait for the device, with the episode log's
             self.episodes.flush()
             if not bool(self._finite_actions):
@@ -80,19 +92,31 @@ class Rollout:
     def step(self) -> None:
         """One control step in every env: act, step, store, track episodes. With
         :attr:`sync_free` it never waits for the device (tested on JAX's CPU backend)."""
-        cfg = self.config
-        acted = self.policy.act(
-            self.obs, deterministic=False, update_normalizer=True, tensor_action=True
-        )
-        step = acted.agent
+        acted = self.act()
         start = time.perf_counter()
         if self.sync_free:  # the env's check of the actions would wait: checked per rollout
-            self._finite_actions &= torch.isfinite(acted.action).all()
             out = self.env.step(acted.action, check_finite=False)
         else:
             out = self.env.step(acted.action)
         self.simulation_time += time.perf_counter() - start
+        self.record(acted, out)
 
+    @torch.no_grad()
+    def act(self) -> PolicyStep:
+        """The sampled actions of every env for its last observation (the CPG state
+        advances)."""
+        acted = self.policy.act(
+            self.obs, deterministic=False, update_normalizer=True, tensor_action=True
+        )
+        if self.sync_free:
+            self._finite_actions &= torch.isfinite(acted.action).all()
+        return acted
+
+    @torch.no_grad()
+    def record(self, acted: PolicyStep, out: EnvStep) -> None:
+        """Store the step ``acted`` led to (``out``, the env's answer), track the episodes."""
+        cfg = self.config
+        step = acted.agent
         done = out.terminated | out.truncated
         final_values = torch.zeros(cfg.num_envs, device=self.device)
         bootstrap = out.truncated & ~out.terminated

@@ -137,11 +137,15 @@ class Runner:
 
     def train_iteration(self) -> Iteration:
         """One rollout and one PPO update; the counters advance."""
-        cfg = self.config
         start = time.perf_counter()
-        self.ppo.schedule(self.iteration, cfg.num_iterations)
+        self.ppo.schedule(self.iteration, self.config.num_iterations)
         collected = self.collect()
-        collect_time = time.perf_counter() - start
+        return self.learn_from(collected, time.perf_counter() - start)
+
+    def learn_from(self, collected: dict[str, float], collect_time: float) -> Iteration:
+        """The PPO update of the rollout just collected (in ``collect_time`` seconds, its
+        ``simulation_time`` in env steps); the counters advance."""
+        cfg = self.config
         start_learn = time.perf_counter()
         try:
             stats = self.update()

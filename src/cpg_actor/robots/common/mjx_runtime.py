@@ -51,3 +51,17 @@ def available() -> bool:
     except MjxUnavailable:
         return False
     return True
+
+
+def check_impl(impl: str) -> None:
+    """:class:`MjxUnavailable` with the install line if MJX's ``impl`` cannot run here (its
+    ``"warp"`` needs the warp-lang package; MuJoCo's MJX carries the rest)."""
+    if impl != "warp":
+        return
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):  # Warp's banner
+            import warp  # noqa: F401
+    except ImportError as error:
+        raise MjxUnavailable(
+            f'mjx_impl="warp" needs NVIDIA Warp: pip install -e ".[warp]" ({error})'
+        ) from None

@@ -49,6 +49,10 @@ def _number(value, bound: float, strict: bool) -> bool:
     return value > bound if strict else value >= bound
 
 
+# MJX's implementations: its own in JAX, or MuJoCo Warp's kernels called from JAX
+MJX_IMPLEMENTATIONS = ("jax", "warp")
+
+
 @dataclass
 class QuadrupedConfig:
     """The locomotion task of a quadruped; the defaults are ANYmal B's (``docs/quadruped.md``)."""
@@ -60,6 +64,9 @@ class QuadrupedConfig:
     # trot needs more than 4 iterations to stay on MuJoCo's trajectory (docs/gpu.md)
     mjx_iterations: int = 15
     mjx_ls_iterations: int = 15
+    # sim="mjx" only: MJX's implementation, "jax" (MJX's own, any JAX device) or "warp"
+    # (MuJoCo Warp's kernels inside JAX: needs the warp-lang package; docs/gpu.md)
+    mjx_impl: str = "jax"
     physics_dt: float = 0.002  # s: 500 Hz, stable for this robot's contacts (legged_gym: 5 ms)
     decimation: int = 10  # substeps per control step: control at 50 Hz (legged_gym's)
     episode_seconds: float = 20.0  # s, then truncated
@@ -129,6 +136,9 @@ class QuadrupedConfig:
         if self.sim not in SIMULATORS:
             raise ValueError(f"sim must be one of {', '.join(SIMULATORS)} for the quadruped, "
                              f"got {self.sim!r}")  # fmt: skip
+        if self.mjx_impl not in MJX_IMPLEMENTATIONS:
+            raise ValueError(f"mjx_impl must be one of {', '.join(MJX_IMPLEMENTATIONS)}, got "
+                             f"{self.mjx_impl!r}")  # fmt: skip
         for name in ("decimation", "mjx_iterations", "mjx_ls_iterations", "render_width",
                      "render_height"):  # fmt: skip
             value = getattr(self, name)

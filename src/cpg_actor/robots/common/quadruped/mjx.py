@@ -35,7 +35,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from cpg_actor.robots.common.actuator import Actuator
-from cpg_actor.robots.common.mjx_runtime import STATE_FIELDS, load
+from cpg_actor.robots.common.mjx_runtime import STATE_FIELDS, check_impl, load
 from cpg_actor.robots.common.mjx_vector import MjxVectorEnv
 from cpg_actor.robots.common.mujoco_runtime import mujoco
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
@@ -80,9 +80,10 @@ class QuadrupedDynamics:
         self.quadruped = quadruped
         self.config = config.validate()
         self.actuator = Actuator.from_config(config)
+        check_impl(config.mjx_impl)
         self.mj_model = mjx_model(quadruped, config)
-        self.model = mjx.put_model(self.mj_model)
-        self._empty = mjx.make_data(self.model)
+        self.model = mjx.put_model(self.mj_model, impl=config.mjx_impl)
+        self._empty = mjx.make_data(self.mj_model, impl=config.mjx_impl)
         self._feet = jnp.asarray([self.mj_model.site(f"{leg}_foot").id for leg in quadruped.legs])
         self._base = self.mj_model.body(quadruped.base_body).id
         self._corners = jnp.asarray(box_corners(quadruped.base_box), dtype=jnp.float32)
