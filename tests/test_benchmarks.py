@@ -39,6 +39,8 @@ RUNS = {
     "policy_latency.py": (["--steps", "20", "--agents", "mlp"], "--output"),
     "profile_collect.py": (["--num-envs", "4", "--agent", "mlp", "--device", "cpu"], "--output"),
     "quadruped_throughput.py": (["--envs", "2", "--seconds", "0.2"], "--output"),
+    "quadruped_train_throughput.py": (["--robot", "go1", "--iterations", "1", "--num-envs", "2",
+                                       "--no-compile"], "--output"),
     # REPRODUCTION: a tiny trained reproduction the test makes (its runs' episodes 250 steps)
     "robustness_suite.py": (["REPRODUCTION", "--variants", "mlp", "--seeds", "1", "--episodes",
                              "1"], "--output"),
