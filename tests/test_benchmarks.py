@@ -38,7 +38,12 @@ RUNS = {
                                  "--output"),
     "policy_latency.py": (["--steps", "20", "--agents", "mlp"], "--output"),
     "profile_collect.py": (["--num-envs", "4", "--agent", "mlp", "--device", "cpu"], "--output"),
+    "quadruped_physics_settings.py": (["--robot", "go1", "--envs", "2", "--rounds", "1",
+                                       "--seconds", "0.04", "--trot-robots", "1",
+                                       "--trot-seconds", "0.1"], "--output"),
     "quadruped_throughput.py": (["--envs", "2", "--seconds", "0.2"], "--output"),
+    "quadruped_train_throughput.py": (["--robot", "go1", "--iterations", "1", "--num-envs", "2",
+                                       "--no-compile"], "--output"),
     # REPRODUCTION: a tiny trained reproduction the test makes (its runs' episodes 250 steps)
     "robustness_suite.py": (["REPRODUCTION", "--variants", "mlp", "--seeds", "1", "--episodes",
                              "1"], "--output"),

@@ -208,6 +208,7 @@ class QuadrupedVectorEnv(VectorEnv):
         self._next = np.zeros((num_envs, config.decimation, nstate))
         self._control = np.zeros((num_envs, config.decimation, self.model.nu))
         self._sensors = np.zeros((num_envs, config.decimation, self.model.nsensordata))
+        self._power = np.zeros((num_envs, config.decimation, self.model.nu))  # |torque x speed|
         nq, nv = self.model.nq, self.model.nv
         self.qpos = self._state[:, 1 : 1 + nq]
         self.qvel = self._state[:, 1 + nq : 1 + nq + nv]
@@ -341,10 +342,10 @@ class QuadrupedVectorEnv(VectorEnv):
                            episode.last_action, self._nominal)  # fmt: skip
         return self.draws.observe(obs, index)
 
-    def _control_with_push(self, control: np.ndarray) -> tuple[np.ndarray, int]:
+    def _control_with_push(self, control: np.ndarray, pushed: np.ndarray) -> tuple[np.ndarray, int]:
         """``control`` and its ``mujoco.rollout`` spec, with the perturbation's push on the
-        bases of the envs whose push comes in this step (their heading turns its direction)."""
-        pushed = self.draws.pushed(self.episode.elapsed)
+        bases of the envs ``pushed`` (N,) bool, whose push comes in this step (their heading
+        turns its direction)."""
         if not pushed.any():
             return control, CONTROL_SPEC
         forces = np.zeros((self.num_envs, self.config.decimation, self.model.nbody, 6))
@@ -377,17 +378,19 @@ class QuadrupedVectorEnv(VectorEnv):
         self._control[:] = desired[:, None, :] if self.delay is None else self.delay.schedule(
             desired)  # fmt: skip
         pushed = self.draws.pushed(self.episode.elapsed)  # before the step's clock moves
-        control, spec = self._control_with_push(self._control)
+        control, spec = self._control_with_push(self._control, pushed)
         self.stepper.rollout(self._state, control, self._next, self._sensors, spec, cfg.decimation)
         np.copyto(self._state, self._next[:, -1])
         torque = self._sensors[:, :, : model.nu]  # every substep's
         joint_speed = self._next[:, :, 1 + model.nq + 6 : 1 + model.nq + model.nv]
+        power = np.multiply(torque, joint_speed, out=self._power)  # no new array per step
+        np.abs(power, out=power)
         # copies: the autoreset below rewrites the state and sensors of the robots it resets
         reading = task.Reading(
             qpos=self.qpos.copy(), qvel=self.qvel.copy(),
             lin_vel=self._sensor("velocimeter").copy(), ang_vel=self._sensor("gyro").copy(),
             feet=self._feet().copy(), torque=torque[:, -1].copy(),
-            work=np.abs(torque * joint_speed).sum(axis=(1, 2)) * cfg.physics_dt,
+            work=power.sum(axis=(1, 2)) * cfg.physics_dt,
             base_touch=self._sensor("base_touch")[:, 0] > 0,
             unstable=~np.isfinite(self._state).all(axis=1),
         )  # fmt: skip
