@@ -29,20 +29,21 @@ def write(path: str | Path, lines: list[str]) -> None:
     print("\n".join(lines))
 
 
-def json_from_tree(src: str | Path, arguments: list[str]) -> dict:
+def json_from_tree(src: str | Path, arguments: list[str], show_stderr: bool = False) -> dict:
     """``python *arguments`` with the ``cpg_actor`` package in ``src`` first on its path; the
-    last line it prints, parsed as JSON. RuntimeError with the end of its stderr if it fails."""
+    last line it prints, parsed as JSON. RuntimeError with the end of its stderr if it fails.
+    ``show_stderr``: its stderr goes to ours as it comes (a long run's progress)."""
     path = os.pathsep.join([str(src), os.environ.get("PYTHONPATH", "")])
     done = subprocess.run(
         [sys.executable, *arguments],
         env=dict(os.environ, PYTHONPATH=path),
-        capture_output=True,
+        stdout=subprocess.PIPE,
+        stderr=None if show_stderr else subprocess.PIPE,
         text=True,
     )
     if done.returncode != 0:
-        raise RuntimeError(
-            f"{' '.join(arguments)} with the package in {src} failed:\n{done.stderr[-3000:]}"
-        )
+        said = "its stderr above" if show_stderr else done.stderr[-3000:]
+        raise RuntimeError(f"{' '.join(arguments)} with the package in {src} failed:\n{said}")
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 

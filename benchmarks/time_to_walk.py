@@ -2,7 +2,7 @@
 forward-speed command, per agent, next to the physics ceiling measured in the same run.
 
     python benchmarks/time_to_walk.py [--robot go1] [--agents cpg-actor,mlp-warm,mlp]
-        [--seeds 100] [--max-steps 3000000] [--eval-interval 81920]
+        [--seeds 100] [--max-steps 3000000] [--eval-interval 40960]
         [--output benchmarks/results/time_to_walk.md]
 
 The quadruped's analogue of ``benchmarks/time_to_hop.py``. The task is the robot's as
@@ -56,12 +56,13 @@ from typing import NamedTuple
 import numpy as np
 
 from bench_report import evaluation_recorder, json_from_tree, measured, write
+from cpg_actor.training.hooks import Hook
 
 HERE = Path(__file__).resolve().parent
 OUTPUT = "benchmarks/results/time_to_walk.md"
 AGENTS = ("cpg-actor", "mlp-warm", "mlp")
 MAX_SPEED_ERROR = 0.1  # m/s
-EVAL_INTERVAL = 81_920  # env steps: 10 iterations of the throughput recipe's 8,192
+EVAL_INTERVAL = 40_960  # env steps: 5 iterations of the throughput recipe's 8,192
 EVAL_EPISODES = 10
 # the benchmark's settings over an agent's tuned ones: mlp-warm, which the quadrupeds have
 # no settings for, clones the CPG-Actor's own start (the foot-space trot of the "leg" layout)
@@ -141,8 +142,16 @@ def project_run(spec: RunSpec) -> dict:
         )
     robot = get_robot(config.robot)
     before, threads = ceiling(config, robot, spec.ceiling_seconds)
-    recorder = evaluation_recorder(lambda e: reached(e, spec.max_speed_error))
-    runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder])
+
+    def met(evaluation: dict[str, float]) -> bool:  # each evaluation, also to the log
+        print(f"{spec.agent} seed {spec.seed}: {runner.global_step:,} steps, "
+              f"{runner.train_wall:.0f} s, speed error {evaluation['eval/speed_error']:.3f} "
+              f"m/s, fell {evaluation['eval/fell']:.0%}", file=sys.stderr, flush=True)  # fmt: skip
+        return reached(evaluation, spec.max_speed_error)
+
+    recorder = evaluation_recorder(met)
+    stopped = StopOnSignal()
+    runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder, stopped])
     start = {"steps": 0, "wall": 0.0}  # the warm start's (mlp-warm's cloning)
     if runner.spec.warm_start is not None:
         fit = runner.run_warm_start
@@ -169,10 +178,27 @@ def project_run(spec: RunSpec) -> dict:
     result.update(
         sps=trained_steps / train_wall if train_wall > 0 else math.nan,
         ceiling=[before, after], num_envs=config.num_envs, threads=threads,
-        trained_steps=trained_steps, train_wall=train_wall,
+        trained_steps=trained_steps, train_wall=train_wall, stopped=stopped.asked,
         episode_seconds=config.env.episode_seconds, command_range=list(config.env.command_range),
     )  # fmt: skip
     return result
+
+
+class StopOnSignal(Hook):
+    """A training-loop hook that ends the run after the iteration in which the process got
+    SIGTERM (a run cut short to fit a session: its evaluations so far are still reported)."""
+
+    def __init__(self) -> None:
+        import signal
+
+        self.asked = False
+        signal.signal(signal.SIGTERM, self.ask)
+
+    def ask(self, *_) -> None:
+        self.asked = True
+
+    def iteration(self, runner, it) -> None:
+        it.stop = it.stop or self.asked
 
 
 def summarize(history: list[dict], max_speed_error: float, start_steps: int = 0,
@@ -209,7 +235,8 @@ def total_wall(run: dict) -> float:
 
 def tree_run(spec: RunSpec) -> dict:
     """:func:`project_run` in a fresh process with this tree's package."""
-    return json_from_tree(HERE.parent / "src", [__file__, "--one-run", json.dumps(spec._asdict())])
+    arguments = [__file__, "--one-run", json.dumps(spec._asdict())]
+    return json_from_tree(HERE.parent / "src", arguments, show_stderr=True)
 
 
 def one_run(text: str) -> int:
@@ -264,7 +291,9 @@ def run_row(agent: str, seed: int, run: dict, max_steps: int) -> str:
         physics = seconds(total_steps(run) / ceiling_rate)
     else:
         start = f" (+ start {kilo(run['start_steps'])}, {seconds(run['start_wall'])})"
-        steps = f"not reached by {kilo(max_steps)}" + (start if run["start_steps"] else "")
+        cap = run["steps"] if run.get("stopped") else max_steps  # cut short: its last evaluation
+        steps = (f"not reached by {kilo(cap)}" + (" (stopped there by hand)" if run.get("stopped")
+                 else "") + (start if run["start_steps"] else ""))  # fmt: skip
         wall = f"- (ran {seconds(total_wall(run))})"
         physics = "-"
     stolen = run.get("stolen", math.nan)
@@ -340,7 +369,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--max-steps", type=int, default=3_000_000,
                         help="PPO env steps per run at most (default 3000000)")  # fmt: skip
     parser.add_argument("--eval-interval", type=int, default=EVAL_INTERVAL,
-                        help="env steps between evaluations (default 81920)")  # fmt: skip
+                        help="env steps between evaluations (default 40960)")  # fmt: skip
     parser.add_argument("--eval-episodes", type=int, default=EVAL_EPISODES)
     parser.add_argument("--max-speed-error", type=float, default=MAX_SPEED_ERROR,
                         help="the target's speed error, m/s (default 0.1)")  # fmt: skip
