@@ -181,7 +181,9 @@ def test_time_to_walk_says_not_reached_and_ends_at_the_cap():
     run = walk.summarize(history, 0.1)
     assert not run["reached"] and run["steps"] == 200 and run["best"]["steps"] == 200
     run.update(sps=1000.0, ceiling=[2000.0, 2000.0], stolen=0.0)
-    assert "not reached by 3,000k" in walk.run_row("mlp", 100, run, 3_000_000)
+    assert "not reached by 3,000k |" in walk.run_row("mlp", 100, run, 3_000_000)
+    run["stopped"] = True  # cut short by SIGTERM: not reached by its last evaluation
+    assert "not reached by 200 (stopped there by hand)" in walk.run_row("mlp", 100, run, 3_000_000)
     assert walk.summarize([evaluation(0, 0.1)], 0.1)["steps"] == 0  # walks before training
 
 
