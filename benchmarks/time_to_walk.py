@@ -206,11 +206,17 @@ def summarize(history: list[dict], max_speed_error: float, start_steps: int = 0,
     """A run's result from its evaluations (``steps``, ``wall``: PPO env steps and training
     wall time at each, and its ``eval/*``): ``reached``; ``steps`` and ``wall``, the first
     evaluation's that met the target, else the last one's (the run's end); the start's
-    ``start_steps`` and ``start_wall``, charged on top; ``first`` (before any update) and
-    ``best`` (lowest speed error, the first of equals) evaluations; ``history``."""
+    ``start_steps`` and ``start_wall``, charged on top; ``first`` (before any update),
+    ``best`` (the lowest speed error of those with no fall) and ``lowest`` (the lowest speed
+    error, falls or not) evaluations, the first of equals, None for none; ``history``."""
     hit = next((h for h in history if reached(h, max_speed_error)), None)
     end = hit if hit is not None else (history[-1] if history else {"steps": 0, "wall": 0.0})
     finite = [h for h in history if math.isfinite(h["eval/speed_error"])]
+    standing = [h for h in finite if h["eval/fell"] == 0]  # no episode fell
+
+    def lowest(entries: list[dict]) -> dict | None:
+        return min(entries, key=lambda h: h["eval/speed_error"]) if entries else None
+
     return {
         "reached": hit is not None,
         "steps": end["steps"],
@@ -218,7 +224,8 @@ def summarize(history: list[dict], max_speed_error: float, start_steps: int = 0,
         "start_steps": start_steps,
         "start_wall": start_wall,
         "first": history[0] if history else None,
-        "best": min(finite, key=lambda h: h["eval/speed_error"]) if finite else None,
+        "best": lowest(standing),
+        "lowest": lowest(finite),
         "history": history,
     }
 
@@ -299,7 +306,7 @@ def run_row(agent: str, seed: int, run: dict, max_steps: int) -> str:
     stolen = run.get("stolen", math.nan)
     cells = [
         f"`{agent}`", str(seed), steps, wall, physics, evaluation_text(run["first"]),
-        evaluation_text(run["best"]), f"{run['sps']:,.0f}",
+        evaluation_text(run["best"]), evaluation_text(run["lowest"]), f"{run['sps']:,.0f}",
         " / ".join(f"{c:,.0f}" for c in run["ceiling"]), f"{run['sps'] / ceiling_rate:.0%}",
         f"{stolen:.0%}" if math.isfinite(stolen) else "-",
     ]  # fmt: skip
@@ -344,13 +351,15 @@ def report(args, runs: list[tuple[str, int, dict]], planned: int, provenance: st
         "Physics ceiling: `mujoco.rollout` of the run's own model (same substeps, the run's "
         "robots on the env's threads, standing), measured in the run's process before / "
         "after its training. Physics alone: the env steps to the target at the ceiling's "
-        "mean rate. CPU stolen: the share of the machine's CPU time its hypervisor gave to "
+        "mean rate. Training steps/s: the run's PPO steps over its training wall time, "
+        "compilation included (a run that stops after a few iterations is mostly "
+        "compilation). CPU stolen: the share of the machine's CPU time its hypervisor gave to "
         "something else during the run.",
         "",
         "| agent | seed | env steps to the target | wall time to the target | physics alone "
-        "| before the first update: speed error | best speed error | training steps/s | ceiling "
-        "steps/s | of ceiling | CPU stolen |",
-        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+        "| before the first update: speed error | best speed error with no fall | lowest speed "
+        "error | training steps/s | ceiling steps/s | of ceiling | CPU stolen |",
+        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
     ]
     lines += [run_row(agent, seed, run, args.max_steps) for agent, seed, run in runs]
     if len(runs) < planned:

@@ -180,6 +180,9 @@ def test_time_to_walk_says_not_reached_and_ends_at_the_cap():
     history = [evaluation(0, 0.5), evaluation(100, 0.2), evaluation(200, 0.11)]
     run = walk.summarize(history, 0.1)
     assert not run["reached"] and run["steps"] == 200 and run["best"]["steps"] == 200
+    falling = walk.summarize([*history, evaluation(300, 0.05, fell=0.5)], 0.1)
+    assert falling["best"]["steps"] == 200 and falling["lowest"]["steps"] == 300
+    assert walk.summarize([evaluation(0, 0.3, fell=1.0)], 0.1)["best"] is None
     run.update(sps=1000.0, ceiling=[2000.0, 2000.0], stolen=0.0)
     assert "not reached by 3,000k |" in walk.run_row("mlp", 100, run, 3_000_000)
     run["stopped"] = True  # cut short by SIGTERM: not reached by its last evaluation
