@@ -1,5 +1,6 @@
 """What the benchmark scripts share: the provenance line, the write of their Markdown
-results, and running a script with the package of another source tree."""
+results, running a script with the package of another source tree, and the record of a
+training run's evaluations (the time-to-a-target benchmarks)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ import json
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from cpg_actor.machine import git_commit
@@ -27,18 +29,50 @@ def write(path: str | Path, lines: list[str]) -> None:
     print("\n".join(lines))
 
 
-def json_from_tree(src: str | Path, arguments: list[str]) -> dict:
+def json_from_tree(src: str | Path, arguments: list[str], show_stderr: bool = False) -> dict:
     """``python *arguments`` with the ``cpg_actor`` package in ``src`` first on its path; the
-    last line it prints, parsed as JSON. RuntimeError with the end of its stderr if it fails."""
+    last line it prints, parsed as JSON. RuntimeError with the end of its stderr if it fails.
+    ``show_stderr``: its stderr goes to ours as it comes (a long run's progress)."""
     path = os.pathsep.join([str(src), os.environ.get("PYTHONPATH", "")])
     done = subprocess.run(
         [sys.executable, *arguments],
         env=dict(os.environ, PYTHONPATH=path),
-        capture_output=True,
+        stdout=subprocess.PIPE,
+        stderr=None if show_stderr else subprocess.PIPE,
         text=True,
     )
     if done.returncode != 0:
-        raise RuntimeError(
-            f"{' '.join(arguments)} with the package in {src} failed:\n{done.stderr[-3000:]}"
-        )
+        said = "its stderr above" if show_stderr else done.stderr[-3000:]
+        raise RuntimeError(f"{' '.join(arguments)} with the package in {src} failed:\n{said}")
     return json.loads(done.stdout.strip().splitlines()[-1])
+
+
+def evaluation_recorder(stop: Callable[[dict[str, float]], bool] | None = None):
+    """A training-loop hook (:class:`cpg_actor.training.hooks.Hook`, for ``Runner(hooks=...)``)
+    that records every evaluation of a run in its ``history``, as ``(env steps, training wall
+    time, evaluation)`` at it: the one before the first update (at 0 s; an agent that starts
+    from a gait or a warm start may already be there) and the periodic ones. With ``stop``, the
+    run stops after the first iteration by which an evaluation met it (a first evaluation
+    that met it stops the run after one iteration, still recorded at its 0 s). It reads the
+    runner and changes nothing it trains."""
+    from cpg_actor.training.hooks import Hook
+
+    class Recorder(Hook):
+        def __init__(self) -> None:
+            self.history: list[tuple[int, float, dict[str, float]]] = []
+            self.met = False
+
+        def add(self, runner, evaluation: dict[str, float]) -> None:
+            self.history.append((runner.global_step, runner.train_wall, dict(evaluation)))
+            self.met = self.met or (stop is not None and bool(stop(evaluation)))
+
+        def start(self, runner, fresh: bool) -> None:
+            if runner.last_evaluation is not None:  # the evaluation hook's, before the first
+                self.add(runner, runner.last_evaluation)
+
+        def iteration(self, runner, it) -> None:
+            if it.evaluation is not None:
+                self.add(runner, it.evaluation)
+            it.stop = it.stop or self.met
+
+    return Recorder()

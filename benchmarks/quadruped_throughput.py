@@ -32,6 +32,54 @@ from cpg_actor.robots.common.quadruped.gaits import joint_map_for
 from cpg_actor.robots.common.threaded_rollout import ThreadedRollout
 
 
+def physics_ceiling(env, seconds: float) -> float:
+    """The physics ceiling of ``env`` (a quadruped's vector env, reset): ``mujoco.rollout`` of
+    its own model from its state, ``decimation`` substeps per control step, its actuators
+    holding the nominal pose, the robots split over the env's threads, nothing else; control
+    steps per second summed over the robots, the faster of MuJoCo's own thread pool and the
+    env's ``ThreadedRollout``. The env itself is not stepped."""
+    model, threads, num_envs = env.model, env.num_threads, env.num_envs
+    (state,) = env.get_state().values()  # {state_key: its arrays}
+    start_state = state["physics"].numpy().copy()
+    steps = env.config.decimation
+    control = np.tile(np.asarray(env.robot.nominal_pose), (num_envs, steps, 1))
+    out = np.zeros((num_envs, steps, start_state.shape[1]))
+    rollout = mujoco.rollout.Rollout(  # loaded by the backend, after MUJOCO_GL is set
+        nthread=threads if threads > 1 else 0
+    )
+    datas = [mujoco.MjData(model) for _ in range(threads)]
+    chunk = max(1, -(-num_envs // (4 * threads)))
+    threaded = ThreadedRollout(model, num_envs, threads)
+
+    def physics() -> None:
+        rollout.rollout([model] * num_envs, datas, start_state, control,
+                        control_spec=CONTROL_SPEC, skip_checks=True, nstep=steps,
+                        initial_warmstart=None, state=out, chunk_size=chunk)  # fmt: skip
+        np.copyto(start_state, out[:, -1])
+
+    def physics_threaded() -> None:
+        threaded.rollout(start_state, control, out, None, CONTROL_SPEC, steps)
+        np.copyto(start_state, out[:, -1])
+
+    try:
+        return max(rate(physics, num_envs, seconds), rate(physics_threaded, num_envs, seconds))
+    finally:
+        rollout.close()
+        threaded.close()
+
+
+def rate(step, num_envs: int, seconds: float) -> float:
+    """Control steps per second of ``step`` (one control step of ``num_envs`` robots) over
+    ``seconds``, after 20 steps of warm-up."""
+    for _ in range(20):
+        step()
+    count, begin = 0, time.perf_counter()
+    while time.perf_counter() - begin < seconds:
+        step()
+        count += 1
+    return num_envs * count / (time.perf_counter() - begin)
+
+
 def rates(num_envs: int, seconds: float) -> dict[str, float]:
     env = AnymalVectorEnv(num_envs)
     env.reset(seed=0)
@@ -45,43 +93,14 @@ def rates(num_envs: int, seconds: float) -> dict[str, float]:
             output, state = cpg(state)
             env.step(joint_map(output.position).numpy())
 
-    model, threads = env.model, env.num_threads
-    start_state = env.get_state()["anymal"]["physics"].numpy().copy()
-    control = np.tile(np.asarray(robot.NOMINAL_POSE), (num_envs, env.config.decimation, 1))
-    out = np.zeros((num_envs, env.config.decimation, start_state.shape[1]))
-    rollout = mujoco.rollout.Rollout(  # loaded by the backend, after MUJOCO_GL is set
-        nthread=threads if threads > 1 else 0
-    )
-    datas = [mujoco.MjData(model) for _ in range(threads)]
-    chunk = max(1, -(-num_envs // (4 * threads)))
-
-    threaded = ThreadedRollout(model, num_envs, threads)
-
-    def physics() -> None:
-        rollout.rollout([model] * num_envs, datas, start_state, control,
-                        control_spec=CONTROL_SPEC, skip_checks=True, nstep=control.shape[1],
-                        initial_warmstart=None, state=out, chunk_size=chunk)  # fmt: skip
-        np.copyto(start_state, out[:, -1])
-
-    def physics_threaded() -> None:
-        threaded.rollout(start_state, control, out, None, CONTROL_SPEC, control.shape[1])
-        np.copyto(start_state, out[:, -1])
-
-    result = {"threads": threads}
-    steppers = (("ceiling", physics), ("ceiling", physics_threaded), ("env", env_step))
-    for name, step in steppers:
-        for _ in range(20):
-            step()
-        count, begin = 0, time.perf_counter()
-        while time.perf_counter() - begin < seconds:
-            step()
-            count += 1
-        rate = num_envs * count / (time.perf_counter() - begin)
-        result[name] = max(rate, result.get(name, 0.0))
-    rollout.close()
-    threaded.close()
-    env.close()
-    return result
+    try:
+        return {
+            "threads": env.num_threads,
+            "ceiling": physics_ceiling(env, seconds),
+            "env": rate(env_step, num_envs, seconds),
+        }
+    finally:
+        env.close()
 
 
 def main() -> None:

@@ -165,37 +165,25 @@ def project_run(spec: RunSpec) -> dict:
     config.agent, config.seed, config.total_steps = agent, seed, budget
     config.eval_interval = max(1, round(EVAL_EVERY / config.steps_per_iteration))
     config.eval_episodes = EVAL_EPISODES
-    history: list[tuple[int, float, float, float]] = []
-
-    def record(evaluation: dict[str, float]) -> None:
-        history.append(
-            (
-                runner.global_step,
-                runner.train_wall,
-                evaluation["eval/return"],
-                evaluation["eval/hop_height"],
-            )
-        )
-
-    def stop(evaluation: dict[str, float]) -> bool:
-        record(evaluation)
-        return any(reached(evaluation_of(h), threshold) for h in history)
-
     try:
-        from cpg_actor.training.hooks import Hook
+        from cpg_actor.training.hooks import Hook  # noqa: F401 (a tree with the loop's hooks)
     except ImportError:  # a tree before the loop's hooks
-        Hook = None
-    if Hook is not None:
+        history: list[tuple[int, float, float, float]] = []
 
-        class RecordFirst(Hook):
-            """The evaluation before the first update (the evaluation hook's, before it)."""
+        def record(evaluation: dict[str, float]) -> None:
+            history.append(
+                (
+                    runner.global_step,
+                    runner.train_wall,
+                    evaluation["eval/return"],
+                    evaluation["eval/hop_height"],
+                )
+            )
 
-            def start(self, runner, fresh):
-                if runner.last_evaluation is not None:
-                    record(runner.last_evaluation)
+        def stop(evaluation: dict[str, float]) -> bool:
+            record(evaluation)
+            return any(reached(evaluation_of(h), threshold) for h in history)
 
-        runner = Runner(config, run_dir=None, tensorboard=False, hooks=[RecordFirst()])
-    else:
         runner = Runner(config, run_dir=None, tensorboard=False)
         first_evaluation = getattr(runner, "log_evaluation", None)  # the agent before training
 
@@ -206,11 +194,22 @@ def project_run(spec: RunSpec) -> dict:
 
         if first_evaluation is not None:  # trees that evaluate before the first update
             runner.log_evaluation = log_evaluation
+        try:
+            runner.learn(stop_when=stop)
+        finally:
+            runner.close()
+        return summarize(history, threshold)
+    from bench_report import evaluation_recorder
+
+    recorder = evaluation_recorder(lambda evaluation: reached(evaluation, threshold))
+    runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder])
     try:
-        runner.learn(stop_when=stop)
+        runner.learn()
     finally:
         runner.close()
-    return summarize(history, threshold)
+    recorded = [(step, wall, e["eval/return"], e["eval/hop_height"])
+                for step, wall, e in recorder.history]  # fmt: skip
+    return summarize(recorded, threshold)
 
 
 def evaluation_of(entry: tuple[int, float, float, float]) -> dict[str, float]:

@@ -2,10 +2,13 @@
 to a temporary file (a script that breaks says so here, not on the next measurement). Those
 whose smallest run compiles (``torch.compile``, MJX's JIT) or trains for seconds are slow."""
 
+import importlib
+import math
 import os
 import subprocess
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -54,6 +57,11 @@ RUNS = {
     "time_to_hop.py": (["--seeds", "1", "--agents", "mlp", "--presets", "paper", "--no-sb3",
                         "--no-search", "--budget", "mlp=256", "--set", "ppo.compile=false",
                         "--set", "num_envs=2", "--ceiling-steps", "2000"], "--output"),
+    # a tiny budget: it may not reach the target; mlp-warm's cloning is charged
+    "time_to_walk.py": (["--agents", "cpg-actor,mlp-warm", "--max-steps", "128",
+                         "--eval-interval", "64", "--eval-episodes", "1", "--set",
+                         "ppo.compile=false", "--set", "num_envs=2", "--set",
+                         "env.episode_seconds=0.5", "--ceiling-seconds", "0.1"], "--output"),
     "train_scaling.py": (["--cores", "1", "--num-envs", "2", "--iterations", "1", "--agent",
                           "mlp"], "--output"),
     "train_throughput.py": (["--presets", "paper", "--agents", "mlp", "--iterations", "1",
@@ -130,3 +138,105 @@ def test_time_to_hop_trains_each_agent_with_the_config_cpg_actor_train_gives_it(
         composed = time_to_hop.compose(agent, preset, values)
         composed.preset = expected.preset  # the benchmark names the preset in its report
         assert composed == expected, agent
+
+
+def benchmark(name: str):
+    """The benchmark script ``name`` as a module (its folder on the path while it imports)."""
+    sys.path.insert(0, str(BENCHMARKS))
+    try:
+        return importlib.import_module(name)
+    finally:
+        sys.path.remove(str(BENCHMARKS))
+
+
+def evaluation(steps: int, error: float, fell: float = 0.0) -> dict:
+    """One recorded evaluation of time_to_walk: at ``steps`` env steps, ``steps / 1000`` s."""
+    return {"steps": steps, "wall": steps / 1000, "eval/speed_error": error, "eval/fell": fell,
+            "eval/forward_speed": 0.5, "eval/return": 10.0}  # fmt: skip
+
+
+def test_time_to_walk_target_is_a_low_speed_error_without_a_fall():
+    walk = benchmark("time_to_walk")
+    assert walk.reached(evaluation(0, 0.1), 0.1)
+    assert walk.reached(evaluation(0, 0.02), 0.1)
+    assert not walk.reached(evaluation(0, 0.1001), 0.1)
+    assert not walk.reached(evaluation(0, 0.05, fell=0.1), 0.1)  # one episode of ten fell
+    assert not walk.reached(evaluation(0, math.nan), 0.1)
+    assert not walk.reached(evaluation(0, 0.05, fell=math.nan), 0.1)
+    assert walk.reached(evaluation(0, 0.14), 0.15)
+
+
+def test_time_to_walk_times_the_first_evaluation_at_the_target_and_charges_the_start():
+    walk = benchmark("time_to_walk")
+    history = [evaluation(0, 0.5), evaluation(100, 0.2), evaluation(200, 0.08, fell=0.1),
+               evaluation(300, 0.09), evaluation(400, 0.05)]  # fmt: skip
+    run = walk.summarize(history, 0.1, start_steps=1000, start_wall=2.0)
+    assert run["reached"] and (run["steps"], run["wall"]) == (300, 0.3)
+    assert walk.total_steps(run) == 1300 and walk.total_wall(run) == pytest.approx(2.3)
+    assert run["first"]["eval/speed_error"] == 0.5 and run["best"]["steps"] == 400
+    run.update(sps=1000.0, ceiling=[2000.0, 2000.0], stolen=0.0)
+    row = walk.run_row("mlp-warm", 100, run, 400)
+    assert "1,000 + 300 = **1,300**" in row and "2 s + 0 s = **2 s**" in row
+    assert "| 1 s |" in row  # physics alone: 1,300 steps at 2,000 per second
+
+
+def test_time_to_walk_says_not_reached_and_ends_at_the_cap():
+    walk = benchmark("time_to_walk")
+    history = [evaluation(0, 0.5), evaluation(100, 0.2), evaluation(200, 0.11)]
+    run = walk.summarize(history, 0.1)
+    assert not run["reached"] and run["steps"] == 200 and run["best"]["steps"] == 200
+    falling = walk.summarize([*history, evaluation(300, 0.05, fell=0.5)], 0.1)
+    assert falling["best"]["steps"] == 200 and falling["lowest"]["steps"] == 300
+    assert walk.summarize([evaluation(0, 0.3, fell=1.0)], 0.1)["best"] is None
+    run.update(sps=1000.0, ceiling=[2000.0, 2000.0], stolen=0.0)
+    assert "not reached by 3,000k |" in walk.run_row("mlp", 100, run, 3_000_000)
+    run["stopped"] = True  # cut short by SIGTERM: not reached by its last evaluation
+    assert "not reached by 200 (stopped there by hand)" in walk.run_row("mlp", 100, run, 3_000_000)
+    assert walk.summarize([evaluation(0, 0.1)], 0.1)["steps"] == 0  # walks before training
+
+
+def test_the_evaluation_recorder_stops_after_the_first_evaluation_at_the_target():
+    recorder = benchmark("bench_report").evaluation_recorder(lambda e: e["x"] <= 1)
+    runner = SimpleNamespace(last_evaluation={"x": 3}, global_step=0, train_wall=0.0)
+    recorder.start(runner, True)
+    stops = []
+    for step, x in ((10, None), (20, 2), (30, None), (40, 1), (50, 0)):
+        runner.global_step, runner.train_wall = step, step / 10
+        it = SimpleNamespace(evaluation=None if x is None else {"x": x}, stop=False)
+        recorder.iteration(runner, it)
+        stops.append(it.stop)
+    assert stops == [False, False, False, True, True]
+    assert [(s, w, e["x"]) for s, w, e in recorder.history] == [
+        (0, 0.0, 3), (20, 2.0, 2), (40, 4.0, 1), (50, 5.0, 0)]  # fmt: skip
+    first = benchmark("bench_report").evaluation_recorder(lambda e: e["x"] <= 1)
+    runner.last_evaluation = {"x": 0}  # at the target before training: stop at once
+    first.start(runner, True)
+    it = SimpleNamespace(evaluation=None, stop=False)
+    first.iteration(runner, it)
+    assert it.stop
+
+
+def test_time_to_walk_trains_as_a_run_without_its_evaluations():
+    """The benchmark's run (its config, the trainer's evaluations, its recorder) trains the
+    same parameters as the same run with no evaluation: the evaluations draw nothing from
+    the training's random numbers."""
+    import torch
+
+    from cpg_actor.training.runner import Runner
+
+    walk = benchmark("time_to_walk")
+    tiny = ["ppo.compile=false", "num_envs=2", "env.episode_seconds=0.5"]
+    spec = walk.RunSpec("go1", "cpg-actor", 100, 192, 64, 1, 0.1, tiny, 0.1)
+    parameters = []
+    for evaluated in (True, False):
+        config = walk.run_config(spec)
+        recorder = benchmark("bench_report").evaluation_recorder()
+        if not evaluated:
+            config.eval_interval = 0
+        runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder])
+        runner.learn()
+        runner.close()
+        assert len(recorder.history) == (4 if evaluated else 0)  # before, then every iteration
+        parameters.append(runner.agent.state_dict())
+    for key, value in parameters[0].items():
+        assert torch.equal(value, parameters[1][key]), key
