@@ -227,7 +227,10 @@ def report(args, name: str, rows: list) -> None:
         f"{usable_cores()} CPU cores, in the same run (the CPU simulators' ceiling), with as "
         f"many robots up to {CPU_CEILING_ROBOTS:,} (the rate no longer grows past a few hundred "
         "robots per core, and the CPU env that sets the robots hopping first takes minutes at "
-        "more).",
+        "more)."
+        if args.robot == "hopper"
+        else "MuJoCo C on the CPU: not measured here for a quadruped "
+        "(`benchmarks/quadruped_train_throughput.py` measures its CPU ceiling).",
         "",
         "Training: the `gpu` preset at each size (percent: of the env's own rate); "
         + (
