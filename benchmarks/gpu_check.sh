@@ -12,8 +12,8 @@
 # project's other missing packages travel as wheels in .whl/ (installed to /tmp/site).
 # Each part has a time limit (seconds) and writes as it goes: a part cut short keeps its output.
 # PARTS picks the parts to run, in this order: tests bench train split scaling eval qtrain
-# qbench share (default: tests bench train scaling; the others run only when named), e.g.
-# PARTS="qtrain qbench" for the quadruped alone.
+# qbench qcontacts share (default: tests bench train scaling; the others run only when named),
+# e.g. PARTS="qtrain qbench qcontacts" for the quadruped alone.
 set -o pipefail
 OUT="${OUT:-gpu-check}"
 mkdir -p "$OUT"
@@ -73,6 +73,11 @@ part qtrain && cat /tmp/gpu-run-quadruped/config.yaml >>"$OUT/train.log" \
 part qbench && timeout "${QBENCH_S:-220}" python3 benchmarks/gpu_throughput.py \
     --robot "${QROBOT:-go1}" --envs ${QENVS:-4096 16384} --agents cpg-actor --iterations 2 \
     --seeds "${QSEEDS:-4}" --output "$OUT/go1_throughput.md" 2>&1 | tee -a "$OUT/bench.log"
+# the same rows with every geom touching the floor (env.floor_contacts=all; MJX's default is
+# the feet alone): what the feet-only contacts buy on this device (its table to bench.log)
+part qcontacts && timeout "${QCONTACTS_S:-150}" python3 benchmarks/gpu_throughput.py \
+    --robot "${QROBOT:-go1}" --envs ${QENVS:-4096 16384} --agents cpg-actor --iterations 2 \
+    --set env.floor_contacts=all --output /tmp/go1_all_contacts.md 2>&1 | tee -a "$OUT/bench.log"
 # runs sharing the GPU: 1, 2 and 4 `--preset gpu` trainings at once (about SHARE_SECONDS each)
 part share && timeout "${SHARE_S:-420}" python3 benchmarks/shared_device.py --runs 1 2 4 \
     --seconds "${SHARE_SECONDS:-120}" --output "$OUT/shared_device.md" 2>&1 | tee -a "$OUT/bench.log"

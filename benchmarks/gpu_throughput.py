@@ -3,8 +3,8 @@ CPU backend), per batch size: the physics alone, the env, and end-to-end PPO tra
 (the ``gpu`` preset, networks and PPO on the same device), with the device named.
 
     python benchmarks/gpu_throughput.py [--robot hopper] [--envs 1024 4096 32768 131072]
-        [--agents cpg-actor cpg-actor-open-loop mlp] [--iterations 3]
-        [--output benchmarks/results/gpu_throughput.md]
+        [--agents cpg-actor cpg-actor-open-loop mlp] [--iterations 3] [--seeds K]
+        [--set KEY=VALUE] [--output benchmarks/results/gpu_throughput.md]
 
 * physics: ``decimation`` x ``mjx.step`` per control step for every robot, the actuator law at
   every substep: the ceiling of this env on this device;
@@ -43,6 +43,7 @@ jax, _ = load()
 AGENTS = ("cpg-actor", "cpg-actor-open-loop", "mlp")
 PAPER_BUDGET = 5 * 5 * 20_000_000  # control steps: 5 variants x 5 seeds x 20M
 CPU_CEILING_ROBOTS = 4096  # the CPU ceiling is measured with at most this many robots
+OVERRIDES: list[str] = []  # --set values over the gpu preset, for every config of the run
 
 
 def device_name() -> str:
@@ -63,8 +64,8 @@ def timed(step, repeats: int) -> float:
 
 def gpu_config(robot: str, agent: str = "cpg-actor"):
     """The ``gpu`` preset's config of ``agent`` on ``robot``, as ``cpg-actor train --preset gpu
-    --robot ROBOT --agent AGENT`` composes it."""
-    return compose_config("gpu", values={"robot": robot, "agent": agent})
+    --robot ROBOT --agent AGENT`` composes it, with the run's ``--set`` values."""
+    return compose_config("gpu", values={"robot": robot, "agent": agent}, overrides=OVERRIDES)
 
 
 def gait(robot: str, env, num_envs: int) -> list[np.ndarray]:
@@ -186,6 +187,7 @@ def report(args, name: str, rows: list) -> None:
     command += " ".join(map(str, args.envs))
     command += f" --agents {' '.join(args.agents)} --iterations {args.iterations}"
     command += f" --seeds {args.seeds}" if args.seeds > 1 else ""
+    command += "".join(f" --set {value}" for value in args.set)
     config = gpu_config(args.robot)
     substeps = f"{config.env.decimation} physics substeps of {config.env.physics_dt * 1e3:g} ms"
     group = f"{args.seeds} seeds in one process" if args.seeds > 1 else None
@@ -264,8 +266,12 @@ def main() -> None:
     parser.add_argument(
         "--seeds", type=int, default=1, help="K > 1: also K seeds of the first agent in one process"
     )
+    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                        help="a config value over the gpu preset (repeatable), e.g. "
+                        "env.floor_contacts=all")  # fmt: skip
     parser.add_argument("--output", default="benchmarks/results/gpu_throughput.md")
     args = parser.parse_args()
+    OVERRIDES.extend(args.set)
 
     name = device_name()
     print(f"device: {name}", flush=True)

@@ -39,6 +39,7 @@ HELP = (
 )
 
 DEFAULT_RUN_DIR = "runs/{agent}_{sim}_seed{seed}"
+DEFAULT_GROUP_DIR = "runs/{agent}_{sim}_seeds{first}-{last}"  # --seeds K
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -70,6 +71,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "the quadrupeds' throughput, with each agent's tuned settings on it)",
     )
     parser.add_argument("--seed", type=int, default=None, help="random seed (default 0)")
+    parser.add_argument(
+        "--seeds",
+        type=int,
+        default=None,
+        metavar="K",
+        help="train K seeds (--seed, --seed + 1, ...) in one process over one batched env, "
+        'each a run of its own in RUN_DIR/seed-S (docs/gpu.md, "Many seeds in one '
+        'process"; PPO agents without a warm start)',
+    )
     parser.add_argument(
         "--total-steps",
         default=None,
@@ -207,6 +217,8 @@ def _runner(config: TrainConfig, run_dir: Path, args: argparse.Namespace):
 
 def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
     """Build the run (a new one, or the one in ``--run-dir`` resumed), train it, report."""
+    if getattr(args, "seeds", None) is not None:
+        return _run_group(args, locks)
     if args.resume:
         runner, run_dir = _resumed_runner(args, locks)
         if runner is None:  # a finished run or an ended search: nothing to continue, no error
@@ -217,6 +229,80 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
     if code is None:
         print(_search_done_text(runner) if _searches(runner.config) else _done_text(runner))
     return code or 0
+
+
+def _run_group(args: argparse.Namespace, locks: list[RunLock]) -> int:
+    """``--seeds K``: K runs of the config, seeds ``config.seed`` on, trained together by a
+    :class:`~cpg_actor.training.many_seeds.SeedGroup`; each seed's run directory is prepared
+    and locked as a single run's (an existing one refused unless ``--overwrite``)."""
+    from cpg_actor.training.many_seeds import SeedGroup, seed_dir
+    from cpg_actor.training.runner import TrainingDiverged
+
+    if args.seeds < 1:
+        raise ValueError(f"--seeds takes a number of seeds, at least 1; got {args.seeds}")
+    if args.resume:
+        raise ValueError(
+            "--resume continues one run; a seed of a group resumes as a run of its own: "
+            "--resume --run-dir RUN_DIR/seed-S"
+        )
+    config = build_config(args)
+    if _searches(config):
+        raise ValueError(
+            f"--seeds trains PPO agents; {config.agent} is searched by CMA-ES: one seed per "
+            "process (--seed)"
+        )
+    seeds = list(range(config.seed, config.seed + args.seeds))
+    run_dir = Path(
+        args.run_dir
+        or DEFAULT_GROUP_DIR.format(
+            agent=config.agent, sim=simulator(config), first=seeds[0], last=seeds[-1]
+        )
+    )
+    check_run_dir_path(run_dir)
+    directories = [seed_dir(run_dir, seed) for seed in seeds]
+    for directory in directories:  # refused before anything is built or written
+        check_run_dir_path(directory)
+        if _has_content(directory):
+            if not args.overwrite:
+                raise FileExistsError(
+                    f"run directory {directory} already exists; pass --overwrite to replace "
+                    f"the group's runs, or continue that seed alone: --resume --run-dir "
+                    f"{directory}"
+                )
+            check_overwritable(directory, RUN)
+    group = SeedGroup(
+        config, seeds, run_dir, tensorboard=True, progress=not args.no_progress,
+        progress_interval=args.progress_interval,
+    )  # fmt: skip
+    try:
+        for directory in directories:
+            if not _has_content(directory):
+                directory.mkdir(parents=True, exist_ok=True)
+                write_marker(directory, RUN)
+            _lock(directory, locks)
+            prepare_run_dir(directory, args.overwrite)
+        for runner in group.runners:
+            runner.config.save(runner.run_dir / "config.yaml")
+        print(f"{len(seeds)} seeds ({seeds[0]}-{seeds[-1]}) in one process, "
+              f"{len(seeds)} x {config.num_envs} envs; "
+              + _start_text(config, run_dir, args).replace(
+                  f"run directory {run_dir}", f"runs in {run_dir}/seed-S"))  # fmt: skip
+        group.learn()
+    except TrainingDiverged as error:
+        print(f"cpg-actor train: training stopped: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(
+            f"cpg-actor train: interrupted; each seed's last checkpoint is in "
+            f"{run_dir}/seed-S/checkpoints (each resumes as a run of its own)",
+            file=sys.stderr,
+        )
+        return 130
+    finally:
+        group.close()
+    for runner in group.runners:
+        print(f"seed {runner.config.seed}: {_done_text(runner)}")
+    return 0
 
 
 def _check_resume_flags(args: argparse.Namespace) -> None:

@@ -207,11 +207,14 @@ class TrainConfig:
     def from_dict(cls, data: dict[str, Any]) -> TrainConfig:
         """A saved config (a run's ``config.yaml``, a checkpoint's). One saved before a field
         existed keeps what it trained with: the drives coasting past v_max (``env.actuator_law``
-        "coast") and the update on ``torch_threads`` (``update_threads``)."""
+        "coast"), the update on ``torch_threads`` (``update_threads``) and a quadruped's every
+        geom touching the floor (``env.floor_contacts`` "all")."""
         data = dict(data)
         env = data.get("env")
         if isinstance(env, dict) and "actuator_law" not in env:
             data["env"] = {**env, "actuator_law": "coast"}
+        if isinstance(env, dict) and "floor_contacts" not in env and _has_floor_contacts(data):
+            data["env"] = {**data["env"], "floor_contacts": "all"}  # every geom, as before
         if "update_threads" not in data and "torch_threads" in data:
             data["update_threads"] = data["torch_threads"]
         config = cls()
@@ -224,6 +227,17 @@ class TrainConfig:
     @classmethod
     def load(cls, path: Path) -> TrainConfig:
         return cls.from_dict(read_config_file(path))
+
+
+def _has_floor_contacts(data: dict[str, Any]) -> bool:
+    """The saved config's robot has ``env.floor_contacts`` (the quadrupeds)."""
+    from cpg_actor.robots.registry import ROBOTS, get_robot
+
+    robot = data.get("robot", TrainConfig.robot)
+    if robot not in ROBOTS:
+        return False  # the config's validation names it
+    fields = dataclasses.fields(get_robot(robot).config_class)
+    return any(field.name == "floor_contacts" for field in fields)
 
 
 def compose_config(

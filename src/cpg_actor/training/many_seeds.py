@@ -39,6 +39,12 @@ from cpg_actor.training.runner import Runner
 from cpg_actor.training.seeding import derived_seed
 
 
+def seed_dir(run_dir: Path | str, seed: int) -> Path:
+    """Where seed ``seed`` of a group in ``run_dir`` keeps its run (a run directory of its own:
+    ``cpg-actor eval``, ``--resume`` alone)."""
+    return Path(run_dir) / f"seed-{seed}"
+
+
 def rows_of(out: EnvStep, rows: slice) -> EnvStep:
     """One seed's rows of a step of the group's env (its ``info`` is the env's, whole)."""
     return EnvStep(
@@ -77,11 +83,12 @@ class SeedSlice:
 
 class SeedGroup:
     """K runs of ``config`` with ``seeds``, each in ``run_dir/seed-S`` (when ``run_dir`` is
-    given), over one env of ``K * config.num_envs`` robots (module docstring)."""
+    given), over one env of ``K * config.num_envs`` robots (module docstring). ``progress``:
+    the first seed's progress display stands for the group's (all step together)."""
 
     def __init__(
         self, config: TrainConfig, seeds: Sequence[int], run_dir: Path | None = None,
-        tensorboard: bool = False,
+        tensorboard: bool = False, progress: bool = False, progress_interval: float = 30.0,
     ) -> None:  # fmt: skip
         config.validate()
         seeds = list(seeds)
@@ -103,11 +110,12 @@ class SeedGroup:
         for k, seed in enumerate(seeds):
             seed_config = copy.deepcopy(config)
             seed_config.seed = seed
-            directory = None if run_dir is None else Path(run_dir) / f"seed-{seed}"
+            directory = None if run_dir is None else seed_dir(run_dir, seed)
             eval_env = evaluation_env(seed_config, robot) if config.eval_interval > 0 else None
             self.runners.append(Runner(
                 seed_config, directory, env=SeedSlice(self.env, slice(k * n, (k + 1) * n)),
-                tensorboard=tensorboard, eval_env=eval_env,
+                tensorboard=tensorboard, eval_env=eval_env, progress=progress and k == 0,
+                progress_interval=progress_interval,
             ))  # fmt: skip
 
     def start(self) -> None:

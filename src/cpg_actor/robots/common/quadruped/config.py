@@ -51,6 +51,7 @@ def _number(value, bound: float, strict: bool) -> bool:
 
 # MJX's implementations: its own in JAX, or MuJoCo Warp's kernels called from JAX
 MJX_IMPLEMENTATIONS = ("jax", "warp")
+FLOOR_CONTACTS = ("auto", "all", "feet")  # QuadrupedConfig.floor_contacts
 
 
 @dataclass
@@ -67,6 +68,13 @@ class QuadrupedConfig:
     # sim="mjx" only: MJX's implementation, "jax" (MJX's own, any JAX device) or "warp"
     # (MuJoCo Warp's kernels inside JAX: needs the warp-lang package; docs/gpu.md)
     mjx_impl: str = "jax"
+    # which of the robot's geoms touch the floor: "all" (every collision geom: the trunk,
+    # thighs and calves too), "feet" (the feet alone, as MuJoCo Playground's feet-only MJX
+    # scenes), or "auto": the feet alone on MJX, where every potential contact costs solver
+    # rows whether it touches or not (the Go1's 31 geoms: 5x the rows), all on MuJoCo, whose
+    # collision stage skips geoms far from the floor. A fall ends an episode before anything
+    # but a foot rests on flat ground (docs/quadruped.md, "Backends")
+    floor_contacts: str = "auto"
     physics_dt: float = 0.002  # s: 500 Hz, stable for this robot's contacts (legged_gym: 5 ms)
     decimation: int = 10  # substeps per control step: control at 50 Hz (legged_gym's)
     episode_seconds: float = 20.0  # s, then truncated
@@ -106,6 +114,13 @@ class QuadrupedConfig:
         return self.physics_dt * self.decimation
 
     @property
+    def feet_only(self) -> bool:
+        """Whether the feet alone touch the floor (``floor_contacts``)."""
+        return self.floor_contacts == "feet" or (
+            self.floor_contacts == "auto" and self.sim == "mjx"
+        )
+
+    @property
     def episode_steps(self) -> int:
         return round(self.episode_seconds / self.control_dt)
 
@@ -139,6 +154,9 @@ class QuadrupedConfig:
         if self.mjx_impl not in MJX_IMPLEMENTATIONS:
             raise ValueError(f"mjx_impl must be one of {', '.join(MJX_IMPLEMENTATIONS)}, got "
                              f"{self.mjx_impl!r}")  # fmt: skip
+        if self.floor_contacts not in FLOOR_CONTACTS:
+            raise ValueError(f"floor_contacts must be one of {', '.join(FLOOR_CONTACTS)}, got "
+                             f"{self.floor_contacts!r}")  # fmt: skip
         for name in ("decimation", "mjx_iterations", "mjx_ls_iterations", "render_width",
                      "render_height"):  # fmt: skip
             value = getattr(self, name)

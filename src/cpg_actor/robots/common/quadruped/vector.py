@@ -89,9 +89,20 @@ def load_model(quadruped: QuadrupedModel, config: QuadrupedConfig,
     for leg in quadruped.legs:
         model.geom_friction[model.geom(f"{leg}_foot").id, 0] = friction
     model.geom_friction[model.geom("ground").id, 0] = friction
+    if config.feet_only:
+        floor_feet_only(model, quadruped.legs)
     if perturbation.payload:
         add_mass(model, quadruped.base_body, perturbation.payload)
     return model
+
+
+def floor_feet_only(model: mujoco.MjModel, legs) -> None:
+    """Take every geom of the robot but its feet (``<leg>_foot``) out of collisions
+    (``QuadrupedConfig.floor_contacts``): the robot's geoms collide with the floor alone."""
+    feet = {model.geom(f"{leg}_foot").id for leg in legs}
+    for geom in range(model.ngeom):
+        if model.geom_bodyid[geom] != 0 and geom not in feet:  # body 0: the world's floor
+            model.geom_contype[geom] = model.geom_conaffinity[geom] = 0
 
 
 def resolve_config(
