@@ -180,6 +180,7 @@ def robot_spec(quadruped: QuadrupedModel, config: QuadrupedConfig) -> RobotSpec:
         control_dt=config.control_dt,
         observation_names=quadruped.observation_names,
         drive_observation="command_vx",  # the commanded forward speed (m/s) drives the CPG
+        command_observations=("command_vx", "command_vy", "command_yaw"),  # planar steps'
     )
 
 
