@@ -58,7 +58,8 @@ def walk(robot_name: str, command, gait: str, seconds: float, robots: int) -> di
     cpg = layout.preset(spec.control_dt, gait=gait).double()
     pattern = layout.pattern(spec.nominal_pose).double()
     drive, direction = layout.planar_drive().double()(
-        torch.tensor([command] * robots, dtype=torch.float64))
+        torch.tensor([command] * robots, dtype=torch.float64)
+    )
     state = cpg.initial_state(robots)
     env.reset(seed=0)
     steps = round(seconds / spec.control_dt)

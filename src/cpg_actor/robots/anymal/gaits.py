@@ -28,7 +28,9 @@ ANYMAL_GAITS = GaitCPGs(
     # the planar steps: the feet in the nominal pose (x from the leg's kinematics there, y the
     # abduction axis' plus the leg's offsets along y: HFE, KFE, adapter) and their lateral
     # distance from the abduction axis
-    feet=tuple((sx * FOOT_X, sy * (HAA_ORIGIN[1] + FOOT_LATERAL))
-               for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1))),  # fmt: skip
+    feet=tuple(
+        (sx * FOOT_X, sy * (HAA_ORIGIN[1] + FOOT_LATERAL))
+        for sx, sy in ((1, 1), (1, -1), (-1, 1), (-1, -1))
+    ),
     abduction_offset=FOOT_LATERAL,
 )

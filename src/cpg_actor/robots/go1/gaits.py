@@ -24,7 +24,9 @@ GO1_GAITS = GaitCPGs(
     # the planar steps: the feet under the hip flexion axes in the nominal pose (thigh and calf
     # of equal length, knee at twice the hip's angle), the hip flexion axis outside the
     # abduction axis by THIGH_ORIGIN_Y
-    feet=tuple((robot.HIP_ORIGIN[0] * sx, (robot.HIP_ORIGIN[1] + robot.THIGH_ORIGIN_Y) * sy)
-               for sx, sy in (robot.LEG_SIGNS[leg] for leg in robot.LEGS)),  # fmt: skip
+    feet=tuple(
+        (robot.HIP_ORIGIN[0] * sx, (robot.HIP_ORIGIN[1] + robot.THIGH_ORIGIN_Y) * sy)
+        for sx, sy in (robot.LEG_SIGNS[leg] for leg in robot.LEGS)
+    ),
     abduction_offset=robot.THIGH_ORIGIN_Y,
 )

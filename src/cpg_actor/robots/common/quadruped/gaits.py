@@ -150,8 +150,9 @@ class GaitCPGs:
         planar = self.planar_drive if self.feet else None
         return {
             "joint": CPGLayout(self.joint_cpg, joints=OSCILLATOR_JOINTS, gaits=gaits),
-            "leg": CPGLayout(self.leg_cpg, pattern=self.foot_space, gaits=gaits,
-                             planar_drive=planar),  # fmt: skip
+            "leg": CPGLayout(
+                self.leg_cpg, pattern=self.foot_space, gaits=gaits, planar_drive=planar
+            ),
         }
 
     def foot_space(self, nominal_pose: Sequence[float]) -> FootSpacePattern:

@@ -195,7 +195,8 @@ class QuadrupedDynamics:
             due = (after.elapsed % cfg.resample_steps == 0) & ~done
             # its key folded out of the env's by the step count: the env's key stream as it was
             command = jax.vmap(lambda key, n: self.command(jax.random.fold_in(key, n)))(
-                state.key, after.elapsed)
+                state.key, after.elapsed
+            )
             after, out["obs"] = task.resample(after, out["obs"], command, due)
 
         # autoreset (SAME_STEP): the envs that ended start their next episode now
