@@ -44,6 +44,7 @@ RUNS = {
                     "--output"),
     "mjx_solver_iterations.py": (["--caps", "4/15", "--rounds", "1", "--batch", "1"],
                                  "--output"),
+    "planar_prior.py": (["--robot", "go1", "--seconds", "0.1", "--robots", "1"], "--output"),
     "policy_latency.py": (["--steps", "20", "--agents", "mlp"], "--output"),
     "profile_collect.py": (["--num-envs", "4", "--agent", "mlp", "--device", "cpu"], "--output"),
     "quadruped_physics_settings.py": (["--robot", "go1", "--envs", "2", "--rounds", "1",

@@ -58,6 +58,11 @@ class AgentConfig:
     # the CPG's drive d (eq. 3) follows the robot's drive observation (the quadruped's
     # forward-speed command; RobotSpec.drive_observation). False, or a robot without one: d = 0
     cpg_drive: bool = True
+    # the CPG's drive follows the whole velocity command (forward, lateral, yaw rate): each
+    # leg's drive is its foot's commanded planar speed and its step points along that velocity
+    # (the layout's planar drive: the quadruped's "leg" layout). False: d is the drive
+    # observation alone (the forward command) on every oscillator. Needs cpg_drive
+    cpg_planar_steps: bool = False
     # -- beyond the paper: the CPG-Actor's start, exploration and output bound --------------
     # where the CPG starts: "" the robot's CPG preset (the paper's start), "search" the gait
     # the open-loop search (agent open-loop-es) found for the robot, shipped with the package,

@@ -106,7 +106,11 @@ class CPGActorAgent(Agent):
     forward-speed command) and ``agent_config.cpg_drive`` is on, d is that observation as the
     env gives it (before normalisation), clipped at 0. It is part of the recurrent state, a
     sixth row ``(B, 6, N)`` written by :meth:`observe` before each step, so the rollout storage
-    keeps it and the PPO update replays the step with the drive it was taken with.
+    keeps it and the PPO update replays the step with the drive it was taken with. With
+    ``agent_config.cpg_planar_steps`` (a layout with a planar drive: the quadruped's ``leg``),
+    each leg's d is its foot's commanded planar speed and a seventh row holds its step's
+    direction, which the pattern takes
+    (:mod:`cpg_actor.robots.common.quadruped.planar_drive`).
     """
 
     def __init__(
@@ -119,7 +123,7 @@ class CPGActorAgent(Agent):
         feedback: bool = True,
     ) -> None:
         layout, cpg = plugin.cpg_layout(config.cpg_layout)  # the run's robot's CPG layouts
-        preset, joints, pattern = cpg.preset, cpg.joints, cpg.pattern
+        preset, joints, pattern, planar = cpg.preset, cpg.joints, cpg.pattern, cpg.planar_drive
         options = {"gait": config.cpg_gait} if config.cpg_gait else {}
         if options and not cpg.gaits:
             raise ValueError(
@@ -160,8 +164,23 @@ class CPGActorAgent(Agent):
         self.pattern = None if pattern is None else pattern(robot.nominal_pose)
         # the observation that sets the drive d (None: d = 0)
         self.drive_index = robot.drive_index if config.cpg_drive else None
-        self.state_shape = (5, n) if self.drive_index is None else (6, n)
-        self.state_rows = STATE_FIELDS + (() if self.drive_index is None else ("drive",))
+        # planar steps: each leg's drive and step direction from the whole command
+        self.planar_drive = None
+        if config.cpg_planar_steps:
+            if self.drive_index is None:
+                raise ValueError("agent_config.cpg_planar_steps needs agent_config.cpg_drive "
+                                 f"and a robot with a drive (robot '{robot.name}')")  # fmt: skip
+            if planar is None or not robot.command_observations:
+                raise ValueError(f"agent_config.cpg_planar_steps needs a CPG layout with planar "
+                                 f"steps (the quadrupeds' 'leg'); the '{layout}' layout of robot "
+                                 f"'{robot.name}' has none: set it to false")  # fmt: skip
+            self.planar_drive = planar()
+            names = robot.observation_names
+            self.command_index = [names.index(name) for name in robot.command_observations]
+        drive_rows = () if self.drive_index is None else ("drive",)
+        drive_rows += () if self.planar_drive is None else ("direction",)
+        self.state_rows = STATE_FIELDS + drive_rows
+        self.state_shape = (len(self.state_rows), n)
         self.xi_scale = config.xi_scale
         self.kappa_scale = config.kappa_scale
         self.kappa_bound = config.kappa_bound if config.output_bound else None
@@ -205,7 +224,8 @@ class CPGActorAgent(Agent):
         state = self.cpg.initial_state(batch_size).as_tensor()
         if self.drive_index is None:
             return state
-        return torch.cat([state, torch.zeros_like(state[:, :1])], dim=1)  # drive 0 until observed
+        extra = state.new_zeros(batch_size, self.state_shape[0] - 5, state.shape[2])
+        return torch.cat([state, extra], dim=1)  # drive (and direction) 0 until observed
 
     def cpg_parameters(self) -> list[torch.nn.Parameter]:
         """The CPG vector V (eq. 1-3's parameters) and the feedback MLP: what acts on the
@@ -225,6 +245,9 @@ class CPGActorAgent(Agent):
         """The state with the drive row set from the raw observation (class docstring)."""
         if self.drive_index is None:
             return state
+        if self.planar_drive is not None:
+            drive, direction = self.planar_drive(obs[:, self.command_index].to(state.dtype))
+            return torch.cat([state[:, :5], drive[:, None], direction[:, None]], dim=1)
         drive = obs[:, self.drive_index].clamp(min=0.0).to(state.dtype)
         return torch.cat([state[:, :5], drive[:, None, None].expand_as(state[:, 5:])], dim=1)
 
@@ -343,7 +366,9 @@ class CPGActorAgent(Agent):
         next_state = next_cpg_state.as_tensor()
         if self.drive_index is not None:  # the drive is held until the next observation
             next_state = torch.cat([next_state, state[:, 5:]], dim=1)
-        if self.pattern is not None:
+        if self.planar_drive is not None:  # the step along each leg's direction
+            mean = self.pattern(next_cpg_state.phase, next_cpg_state.amplitude, state[:, 6])
+        elif self.pattern is not None:
             mean = self.pattern(next_cpg_state.phase, next_cpg_state.amplitude)
         else:
             mean = self.joint_map(output.position)

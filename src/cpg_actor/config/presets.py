@@ -26,6 +26,14 @@ follow when none is given (``Robot.recipe``: the hopper ``paper``, the quadruped
   as ``throughput`` (no effect on agents whose policy holds no CPG: ``mlp``, ``cho2019*``);
   ``device`` auto (CUDA if torch sees it). It runs on a CPU too (JAX's CPU backend), slowly.
 
+* ``omni``: the quadrupeds' omnidirectional velocity task on the ``throughput`` recipe: the
+  env's commands are the robot's ``OMNI_COMMANDS`` (its config class's: the field's ranges,
+  vx in [-1, 1] m/s, vy in [-0.5, 0.5] m/s, yaw rate in [-1, 1] rad/s, drawn again every 5 s,
+  one draw in ten standing still; ``docs/quadruped.md``, "The omnidirectional task"), and the
+  CPG's drive follows the whole command (``agent_config.cpg_planar_steps``: each leg's step
+  along its foot's commanded planar velocity). A robot without ``OMNI_COMMANDS`` (the hopper)
+  has no such task: ValueError.
+
 ``anymal`` is the name ANYmal B's recipe had when presets named robots, kept so that saved runs
 (``preset: anymal``) and their commands keep their values: ``robot: anymal``, ``throughput``
 and the CPG-Actor's settings for every agent (one oscillator per leg, action noise 0.1, feedback
@@ -54,7 +62,10 @@ THROUGHPUT: dict[str, Any] = {
 }
 
 # the recipes a user picks (--preset); PRESETS adds the old name kept for saved runs
-RECIPES = ("paper", "throughput", "gpu")
+RECIPES = ("paper", "throughput", "gpu", "omni")
+# a recipe's key naming a class attribute of the robot's env config whose values are the
+# recipe's env values on that robot (its own command ranges)
+ROBOT_ENV = "robot_env"
 
 PRESETS: dict[str, dict[str, Any]] = {
     "paper": {"ppo": {"compile": True}},
@@ -65,6 +76,11 @@ PRESETS: dict[str, dict[str, Any]] = {
         "eval_interval": 10,
         "env": {"sim": "mjx"},
         "ppo": {**THROUGHPUT["ppo"], "num_steps": 24},
+    },
+    "omni": {
+        **THROUGHPUT,
+        ROBOT_ENV: "OMNI_COMMANDS",
+        "agent_config": {"cpg_planar_steps": True},
     },
     "anymal": {  # ANYmal B's recipe under its old name, for saved runs (above)
         **THROUGHPUT,
@@ -83,7 +99,18 @@ def check_preset(name: str) -> None:
         )
 
 
-def preset_values(name: str) -> dict[str, Any]:
-    """The config values of recipe ``name`` (a nested mapping); ValueError if unknown."""
+def preset_values(name: str, env_class: type | None = None) -> dict[str, Any]:
+    """The config values of recipe ``name`` (a nested mapping); ValueError if unknown.
+    ``env_class``: the robot's env config class, whose values a recipe may take
+    (:data:`ROBOT_ENV`; None: the robot is not known yet, those values are left out)."""
     check_preset(name)
-    return {"preset": name, **PRESETS[name]}
+    values = {"preset": name, **PRESETS[name]}
+    attribute = values.pop(ROBOT_ENV, None)
+    if attribute is not None and env_class is not None:
+        robot_env = getattr(env_class, attribute, None)
+        if robot_env is None:
+            raise ValueError(f"preset {name!r} is a quadruped task; the robot's config "
+                             f"{env_class.__name__} has no {attribute} (the quadrupeds "
+                             f"anymal and go1 have)")  # fmt: skip
+        values["env"] = {**values.get("env", {}), **robot_env}
+    return values

@@ -276,7 +276,8 @@ def compose_config(
         if robot is not None:  # first: the recipe's env values are then the robot's
             apply_dict(config, {"robot": robot}, prefix="")
         apply_dict(config, dict(agent_defaults), prefix="")
-        apply_dict(config, preset_values(recipe), prefix="")
+        env_class = None if robot is None else type(config.env)  # the robot's env values
+        apply_dict(config, preset_values(recipe, env_class), prefix="")
         apply_dict(config, file_data, prefix="")
         config.preset = recipe
         for layer in given:

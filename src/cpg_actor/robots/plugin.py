@@ -61,13 +61,17 @@ class CPGLayout:
     from the nominal pose that maps the oscillators' phase and amplitude to every joint.
     ``gaits``: the gaits it can start in (``agent_config.cpg_gait``'s choices; the first is the
     default), each with its footfall pattern: every leg's phase, a fraction of a cycle, in the
-    robot's leg order.
+    robot's leg order. ``planar_drive``: where the layout steps in the ground plane, a builder
+    of the module mapping the velocity command (B, 3) to each oscillator's drive and step
+    direction (B, N) each, which the pattern takes as a third argument
+    (``agent_config.cpg_planar_steps``).
     """
 
     preset: Callable[..., Any]
     joints: tuple[int, ...] | None = None
     pattern: Callable[[Sequence[float]], Any] | None = None
     gaits: Mapping[str, tuple[float, ...]] = field(default_factory=dict)
+    planar_drive: Callable[[], Any] | None = None
 
 
 @dataclass(frozen=True)

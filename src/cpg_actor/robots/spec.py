@@ -49,6 +49,9 @@ class RobotSpec:
     # nu(d), rho(d)), as it comes from the env, before normalisation: the quadruped's
     # forward-speed command. None: no drive (the hopper: d = 0)
     drive_observation: str | None = None
+    # the velocity command's observations (forward, lateral m/s, yaw rate rad/s), which a
+    # planar drive reads (agent_config.cpg_planar_steps); empty: the robot takes no such command
+    command_observations: tuple[str, ...] = ()
     # observations evaluation records as traces of their own, by name (the hopper's
     # hip_height), with their value after reset as standing_<name>
     traced_observations: tuple[str, ...] = ()
@@ -73,6 +76,9 @@ class RobotSpec:
                 f"RobotSpec.drive_observation {self.drive_observation!r} is not one of the "
                 f"observation names {self.observation_names}"
             )
+        missing = set(self.command_observations) - set(self.observation_names)
+        if missing:
+            raise ValueError(f"RobotSpec.command_observations {sorted(missing)} are not observed")
         unknown = set(self.traced_observations) - set(self.observation_names)
         if unknown:
             raise ValueError(f"RobotSpec.traced_observations {sorted(unknown)} are not observed")

@@ -207,6 +207,20 @@ def rows(mask, new, old):
     return xp.where(mask.reshape((-1,) + (1,) * (old.ndim - 1)), new, old)
 
 
+COMMAND = slice(6, 9)  # the command's entries in the observation
+
+
+def resample(episode: Episode, obs, command, due) -> tuple[Episode, Any]:
+    """``episode`` and its observation ``obs`` (N, 9 + 3 J) with the rows of ``due`` (N,) under
+    ``command`` (N, 3): the command drawn again within an episode, which the next step runs
+    under and the observation now shows."""
+    xp = namespace(obs)
+    command = rows(due, command, episode.command)
+    shown = xp.concatenate([obs[:, : COMMAND.start], command.astype(obs.dtype),
+                            obs[:, COMMAND.stop :]], axis=1)  # fmt: skip
+    return episode._replace(command=command), rows(due, shown, obs)
+
+
 def observe(qpos, qvel, ang_vel, command, last_action, nominal):
     """:func:`observation` of the state after a step (non-finite entries 0)."""
     xp = namespace(qpos)

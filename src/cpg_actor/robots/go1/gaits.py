@@ -21,4 +21,12 @@ GO1_GAITS = GaitCPGs(
     # m: the foot's lift at mid swing, scaled from ANYmal's 0.08 by the legs' lengths (0.43 m to
     # ANYmal's ~0.6 m, rounded down); the stance press as ANYmal's
     clearance=0.05,
+    # the planar steps: the feet under the hip flexion axes in the nominal pose (thigh and calf
+    # of equal length, knee at twice the hip's angle), the hip flexion axis outside the
+    # abduction axis by THIGH_ORIGIN_Y
+    feet=tuple(
+        (robot.HIP_ORIGIN[0] * sx, (robot.HIP_ORIGIN[1] + robot.THIGH_ORIGIN_Y) * sy)
+        for sx, sy in (robot.LEG_SIGNS[leg] for leg in robot.LEGS)
+    ),
+    abduction_offset=robot.THIGH_ORIGIN_Y,
 )

@@ -11,6 +11,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
+from typing import Any, ClassVar
 
 from cpg_actor.robots.common.checks import check_episode_steps
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
@@ -87,12 +88,18 @@ class QuadrupedConfig:
     velocity_limit: float | tuple[float, ...] = 15.0  # rad/s
     saturation_torque: float | tuple[float, ...] = 80.0  # N m
     actuator_law: str = "dc-motor"
-    # commands, each uniform in its range per episode: forward and lateral speed (base frame)
-    # and yaw rate. Lateral and yaw are 0 by default (the forward task); the CPG's drive follows
-    # the forward command only, turning and side-stepping are left to the feedback
+    # commands, each uniform in its range: forward and lateral speed (base frame) and yaw
+    # rate. Lateral and yaw are 0 by default (the forward task); the omnidirectional task
+    # (the "omni" recipe, OMNI_COMMANDS) takes the field's ranges
     command_range: tuple[float, float] = (0.0, 1.0)  # m/s
     lateral_range: tuple[float, float] = (0.0, 0.0)  # m/s, positive to the left
     yaw_range: tuple[float, float] = (0.0, 0.0)  # rad/s, positive counter-clockwise
+    # s between draws of a new command within an episode (legged_gym's 10 s, Playground's
+    # 5 s); 0 or None: one command per episode (the forward task's)
+    command_resample_seconds: float | None = 0.0
+    # the share of draws (at an episode's start and at each resampling) whose command is
+    # zero: standing still
+    standing_share: float = 0.0
     # (m/s)^2 and (rad/s)^2 of the tracking kernels. legged_gym's 0.25 pays 96% of the term at
     # 0.1 m/s of error, too little pull to track a command within 0.1 m/s; 0.1 pays 90% there
     # (docs/quadruped.md)
@@ -123,6 +130,24 @@ class QuadrupedConfig:
     @property
     def episode_steps(self) -> int:
         return round(self.episode_seconds / self.control_dt)
+
+    @property
+    def resample_steps(self) -> int:
+        """Control steps between command draws within an episode; 0: one per episode."""
+        if not self.command_resample_seconds:
+            return 0
+        return max(1, round(self.command_resample_seconds / self.control_dt))
+
+    # The omnidirectional task's values (the "omni" recipe, cpg_actor.config.presets): the
+    # field's command ranges (legged_gym, mjlab, MuJoCo Playground), a command held 5 s, one
+    # draw in ten standing still. A robot whose body needs other ranges gives its own.
+    OMNI_COMMANDS: ClassVar[dict[str, Any]] = {
+        "command_range": (-1.0, 1.0),
+        "lateral_range": (-0.5, 0.5),
+        "yaw_range": (-1.0, 1.0),
+        "command_resample_seconds": 5.0,
+        "standing_share": 0.1,
+    }
 
     def validate(self) -> QuadrupedConfig:
         """Raise ``ValueError`` naming the first bad field; returns ``self``."""
@@ -178,6 +203,14 @@ class QuadrupedConfig:
             ):
                 raise ValueError(f"{name} must be [low, high] in {unit} with low <= high, got "
                                  f"{bounds!r}")  # fmt: skip
+        period = self.command_resample_seconds
+        if period is not None and not _number(period, 0.0, strict=False):
+            raise ValueError(f"command_resample_seconds must be a finite number of seconds >= 0 "
+                             f"(0 or None: one command per episode), got {period!r}")  # fmt: skip
+        share = self.standing_share
+        if not (_number(share, 0.0, strict=False) and share <= 1.0):
+            raise ValueError(f"standing_share must be a number in [0, 1] (the share of zero "
+                             f"commands), got {share!r}")  # fmt: skip
         if not isinstance(self.reward_scales, dict):
             raise ValueError(f"reward_scales must be a mapping of term to scale, got "
                              f"{self.reward_scales!r}")  # fmt: skip

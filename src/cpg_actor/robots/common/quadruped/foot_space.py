@@ -14,6 +14,18 @@ planar inverse kinematics (a robot gives its thigh and shank; legs that are the 
 mirrored front to back, as ANYmal's hind legs, solve the mirrored target and negate the angles).
 The abduction joint stays at the nominal pose. Differentiable in theta and r (torch).
 
+Planar steps (:mod:`cpg_actor.robots.common.quadruped.planar_drive`): with a step direction
+psi per leg (rad from forward, in the base frame), the step lies in the ground plane,
+
+    (dx, dy) = -r cos(theta) (cos psi, sin psi)            (dz as above)
+
+and the abduction joint puts the foot's lateral place: the leg turned about its abduction axis
+(+x) by q carries the foot, at the lateral distance l from that axis (``lateral``) and the
+height z below it, to (l cos q - z sin q, l sin q + z cos q); for the target (Y, Z) the leg's
+own height is ``z = -sqrt(Y^2 + Z^2 - l^2)`` and ``q = atan2(Z, Y) - atan2(z, l)`` (the
+nominal abduction 0, the hip flexion axis at the abduction axis' height, as on ANYmal B and
+the Go1), and the sagittal inverse kinematics solves (x, z).
+
 A robot's pattern is this one on its leg (its
 :class:`~cpg_actor.robots.common.quadruped.gaits.GaitCPGs`: ``foot_space(nominal_pose)``, the
 ``pattern`` of its ``leg`` CPG layout).
@@ -55,6 +67,8 @@ class FootSpacePattern(nn.Module):
         thigh: the knee in the thigh frame (x, z), m, relative to the hip flexion axis.
         shank: the foot centre in the shank frame (x, z), m, relative to the knee axis.
         clearance, penetration: the swing lift and the stance press, m.
+        lateral: each leg's foot's lateral distance from its abduction axis, m (+ left), for
+            planar steps; None: forward steps only.
     """
 
     def __init__(
@@ -64,6 +78,7 @@ class FootSpacePattern(nn.Module):
         shank: Vec2,
         clearance: float,
         penetration: float,
+        lateral: Sequence[float] | None = None,
     ) -> None:
         super().__init__()
         self.thigh, self.shank = tuple(thigh), tuple(shank)
@@ -77,6 +92,12 @@ class FootSpacePattern(nn.Module):
             )
         self.register_buffer("offset", pose.reshape(-1).clone())
         self.register_buffer("signs", signs)
+        self.planar = lateral is not None
+        if self.planar:
+            if len(lateral) != 4 or torch.any(pose[:, 0] != 0):
+                raise ValueError(f"{type(self).__name__}'s planar steps need 4 lateral offsets "
+                                 f"and a nominal abduction of 0, got {list(lateral)}")  # fmt: skip
+            self.register_buffer("lateral", torch.as_tensor(lateral, dtype=torch.float64))
         x0, z0 = leg_foot(front[0], front[1], self.thigh, self.shank)
         self.register_buffer("foot", torch.stack([x0, z0]))  # the nominal foot (front leg)
         self.clearance = float(clearance)
@@ -101,15 +122,29 @@ class FootSpacePattern(nn.Module):
         hfe = torch.atan2(torch.sin(hfe), torch.cos(hfe))  # within (-pi, pi]
         return hfe, kfe
 
-    def forward(self, phase: Tensor, amplitude: Tensor) -> Tensor:
+    def forward(self, phase: Tensor, amplitude: Tensor, direction: Tensor | None = None) -> Tensor:
+        """Joints ``(B, 12)`` of the legs' ``phase`` and ``amplitude`` ``(B, 4)``, stepping
+        forward, or along ``direction`` ``(B, 4)`` (rad from forward: planar steps)."""
         s = torch.sin(phase)
         dx = -amplitude * torch.cos(phase)
         dz = torch.where(s > 0, self.clearance * s, self.penetration * s)
         signs = self.signs.to(phase.dtype)
+        z = self.foot[1].to(phase.dtype) + dz
+        if direction is None:
+            haa = self.offset.to(phase.dtype)[0::3].expand_as(phase)
+        else:  # the step in the ground plane; the abduction puts the lateral part
+            if not self.planar:
+                raise ValueError(f"{type(self).__name__} built without lateral offsets steps "
+                                 "forward only: give it lateral= for planar steps")  # fmt: skip
+            lateral = self.lateral.to(phase.dtype)
+            dx, dy = dx * torch.cos(direction), dx * torch.sin(direction)
+            y = lateral + dy
+            z_leg = -torch.sqrt((y * y + z * z - lateral * lateral).clamp(min=1e-6))
+            haa = torch.atan2(z, y) - torch.atan2(z_leg, lateral)
+            haa = torch.atan2(torch.sin(haa), torch.cos(haa))  # within (-pi, pi]
+            z = z_leg
         # the target in the front leg's frame (the hind legs' mirrored front to back)
         x = self.foot[0].to(phase.dtype) + signs * dx
-        z = self.foot[1].to(phase.dtype) + dz
         hfe, kfe = self.inverse_kinematics(x, z)
-        haa = self.offset.to(phase.dtype)[0::3].expand_as(hfe)
         joints = torch.stack([haa, signs * hfe, signs * kfe], dim=-1)  # (B, 4, 3)
         return joints.reshape(*phase.shape[:-1], 12)

@@ -36,7 +36,11 @@ positive angles (ANYmal's hind knees): ``psi_knee = psi_hip - pi/2``. A robot sa
 
 The drive d of eq. 3 is the commanded forward speed (m/s): ``nu(d) = c_nu1 d + c_nu0`` and
 ``rho(d) = c_R1 d + c_R0``, so the step's frequency and length follow the command (the
-CPG-Actor reads d from the observation, ``RobotSpec.drive_observation``).
+CPG-Actor reads d from the observation, ``RobotSpec.drive_observation``). With planar steps
+(the ``leg`` layout, ``agent_config.cpg_planar_steps``) each leg's drive is its foot's
+commanded planar speed and its step points along it
+(:mod:`cpg_actor.robots.common.quadruped.planar_drive`): the whole command, turning and side
+steps included.
 
 A robot's presets are one :class:`GaitCPGs`: its legs, where each is on the body, which way
 each knee flexes, its leg's lengths for the foot-space pattern (its ``gaits.py``).
@@ -55,6 +59,7 @@ from cpg_actor.cpg.joint_map import JointMap
 from cpg_actor.cpg.network import CPGNetwork
 from cpg_actor.cpg.topology import Topology
 from cpg_actor.robots.common.quadruped.foot_space import FootSpacePattern, Vec2
+from cpg_actor.robots.common.quadruped.planar_drive import PlanarDrive
 from cpg_actor.robots.plugin import CPGLayout
 
 PLACES = ("LF", "RF", "LH", "RH")  # the columns of GAITS
@@ -122,6 +127,12 @@ class GaitCPGs:
     shank: Vec2
     clearance: float  # m: the foot's lift at mid swing in the foot-space pattern
     penetration: float = 0.01  # m: how far the stance foot is pressed below its nominal height
+    # the planar steps' geometry (the leg layout's planar drive, agent_config.cpg_planar_steps):
+    # each foot's nominal place (x, y) in the base frame (m, leg order; the yaw rate moves the
+    # base above it at w x (x, y)), and the foot's lateral distance from its abduction axis (m,
+    # outwards). Empty: forward steps only
+    feet: tuple[Vec2, ...] = ()
+    abduction_offset: float = 0.0
     joint_initial: Mapping[str, float | Sequence] = field(default_factory=lambda: JOINT_INITIAL)
     leg_initial: Mapping[str, float | Sequence] = field(default_factory=lambda: LEG_INITIAL)
 
@@ -136,15 +147,27 @@ class GaitCPGs:
     def layouts(self) -> dict[str, CPGLayout]:
         """The robot's CPG layouts: ``joint`` (the default) and ``leg``."""
         gaits = self.footfalls()
+        planar = self.planar_drive if self.feet else None
         return {
             "joint": CPGLayout(self.joint_cpg, joints=OSCILLATOR_JOINTS, gaits=gaits),
-            "leg": CPGLayout(self.leg_cpg, pattern=self.foot_space, gaits=gaits),
+            "leg": CPGLayout(
+                self.leg_cpg, pattern=self.foot_space, gaits=gaits, planar_drive=planar
+            ),
         }
 
     def foot_space(self, nominal_pose: Sequence[float]) -> FootSpacePattern:
-        """The ``leg`` layout's pattern on the robot's leg, around ``nominal_pose``."""
+        """The ``leg`` layout's pattern on the robot's leg, around ``nominal_pose`` (with
+        planar steps where the robot gives its feet)."""
+        lateral = None
+        if self.feet:
+            lateral = [math.copysign(self.abduction_offset, y) for _, y in self.feet]
         return FootSpacePattern(nominal_pose, self.thigh, self.shank, self.clearance,
-                                self.penetration)  # fmt: skip
+                                self.penetration, lateral)  # fmt: skip
+
+    def planar_drive(self) -> PlanarDrive:
+        """The ``leg`` layout's drive from the whole command (:mod:`planar_drive
+        <cpg_actor.robots.common.quadruped.planar_drive>`)."""
+        return PlanarDrive(self.feet)
 
     def gait_phases(self, gait: str) -> tuple[float, ...]:
         """The target phase psi (rad) of each of the joint layout's 8 oscillators in ``gait``."""

@@ -21,8 +21,9 @@ computed as pure jitted JAX functions, as the MJX hopper's
   model's ``base_box`` at or below the ground;
 * the task's step of the MuJoCo env, the same function (:func:`cpg_actor.tasks.velocity.step`:
   observation, reward terms, falls, feet air time, episode metrics, ``info``) on JAX arrays;
-  SAME_STEP autoreset; episode commands and reset noise from one JAX key per env (the same
-  distributions, other numbers than the MuJoCo env for the same seed).
+  SAME_STEP autoreset; episode commands (drawn again every ``command_resample_seconds``
+  where that is not 0) and reset noise from one JAX key per env (the same distributions,
+  other numbers than the MuJoCo env for the same seed).
 
 Float32, and MJX's solver is not MuJoCo's C one: trajectories agree within the tolerances of
 ``tests/robots/anymal/test_anymal_mjx.py`` (and the Go1's), not exactly.
@@ -102,22 +103,32 @@ class QuadrupedDynamics:
         noise = jax.random.uniform(noise_key, (12,), minval=-cfg.reset_noise,
                                    maxval=cfg.reset_noise)  # fmt: skip
         joints = jnp.clip(self._nominal + noise, self._low, self._high)
-        low, high = cfg.command_range
-        speed = jax.random.uniform(command_key, (), minval=low, maxval=high)
-        # the lateral and yaw commands from keys folded out of the forward one's (the forward
-        # task's draws unchanged)
-        lateral, yaw = (
-            jax.random.uniform(jax.random.fold_in(command_key, column), (),
-                               minval=getattr(cfg, name)[0], maxval=getattr(cfg, name)[1])
-            for column, name in ((1, "lateral_range"), (2, "yaw_range"))
-        )  # fmt: skip
         qpos = self._empty.qpos.at[7:].set(joints)
         placed = mjx.kinematics(self.model, self._empty.replace(qpos=qpos))
         lowest = placed.site_xpos[self._feet, 2].min()
         qpos = qpos.at[2].add(self.quadruped.foot_radius - lowest)  # feet on the ground
-        command = jnp.stack([speed, lateral, yaw]).astype(jnp.float32)
+        command = self.command(command_key)
         feet_xy = placed.site_xpos[self._feet, :2]  # the lift above moves no foot sideways
         return self._empty.replace(qpos=qpos), command, joints, feet_xy, key
+
+    def command(self, key):
+        """One robot's command (3,) from ``key``: each entry uniform in its range, all zero
+        with probability ``standing_share`` (the MuJoCo env's distribution)."""
+        cfg = self.config
+        low, high = cfg.command_range
+        speed = jax.random.uniform(key, (), minval=low, maxval=high)
+        # the lateral and yaw commands from keys folded out of the forward one's (the forward
+        # task's draws unchanged)
+        lateral, yaw = (
+            jax.random.uniform(jax.random.fold_in(key, column), (),
+                               minval=getattr(cfg, name)[0], maxval=getattr(cfg, name)[1])
+            for column, name in ((1, "lateral_range"), (2, "yaw_range"))
+        )  # fmt: skip
+        command = jnp.stack([speed, lateral, yaw]).astype(jnp.float32)
+        if cfg.standing_share > 0:
+            standing = jax.random.uniform(jax.random.fold_in(key, 3), ()) < cfg.standing_share
+            command = jnp.where(standing, jnp.zeros_like(command), command)
+        return command
 
     def control(self, data, desired):
         """``decimation`` substeps of one robot: the actuator law, then ``mjx.step``. Returns
@@ -180,6 +191,13 @@ class QuadrupedDynamics:
         after, out = task.step(cfg, state.episode, reading, desired, self._nominal,
                                robot.foot_radius, robot.total_mass * robot.gravity)  # fmt: skip
         done = out["terminated"] | out["truncated"]
+        if cfg.resample_steps:  # a new command where one is due (the next step runs under it)
+            due = (after.elapsed % cfg.resample_steps == 0) & ~done
+            # its key folded out of the env's by the step count: the env's key stream as it was
+            command = jax.vmap(lambda key, n: self.command(jax.random.fold_in(key, n)))(
+                state.key, after.elapsed
+            )
+            after, out["obs"] = task.resample(after, out["obs"], command, due)
 
         # autoreset (SAME_STEP): the envs that ended start their next episode now
         fresh, started, keys = self._starts(state.key)

@@ -11,7 +11,9 @@ actuator law inside MuJoCo. Actions are desired joint positions (12,
 rad; in [-1, 1] with ``normalized_actions``), clipped to the joint ranges.
 
 Per episode: a forward-speed command uniform in ``command_range`` (lateral and yaw speed
-commands uniform in ``lateral_range`` and ``yaw_range``, 0 by default), a start
+commands uniform in ``lateral_range`` and ``yaw_range``, 0 by default; zero with probability
+``standing_share``), drawn again every ``command_resample_seconds`` where that is not 0 (the
+observation after the step that draws it carries the new one), a start
 in the nominal pose with uniform joint noise, the feet on the ground, at rest. An episode ends
 when the base falls (``task.fallen``) or touches the ground (terminated), or after
 ``episode_seconds`` (truncated). ``info["episode_metrics"]`` (NaN for envs still running):
@@ -105,6 +107,21 @@ def floor_feet_only(model: mujoco.MjModel, legs) -> None:
             model.geom_contype[geom] = model.geom_conaffinity[geom] = 0
 
 
+def draw_command(rng: np.random.Generator, config: QuadrupedConfig) -> np.ndarray:
+    """One command (3,): forward and lateral speed (m/s), yaw rate (rad/s), each uniform in its
+    range, or zero with probability ``standing_share``. Only the draws a config needs are
+    taken (the lateral and yaw ones where the range is not a point, the standing one where
+    the share is not 0), so that the forward task's random streams stay as they were."""
+    command = np.zeros(3)
+    command[0] = rng.uniform(*config.command_range)
+    for column, name in ((1, "lateral_range"), (2, "yaw_range")):
+        low, high = getattr(config, name)
+        command[column] = rng.uniform(low, high) if high > low else low
+    if config.standing_share > 0 and rng.uniform() < config.standing_share:
+        command[:] = 0.0
+    return command
+
+
 def resolve_config(
     config: QuadrupedConfig | dict | None, config_class: type = QuadrupedConfig
 ) -> QuadrupedConfig:
@@ -174,6 +191,7 @@ def robot_spec(quadruped: QuadrupedModel, config: QuadrupedConfig) -> RobotSpec:
         control_dt=config.control_dt,
         observation_names=quadruped.observation_names,
         drive_observation="command_vx",  # the commanded forward speed (m/s) drives the CPG
+        command_observations=("command_vx", "command_vy", "command_yaw"),  # planar steps'
     )
 
 
@@ -281,11 +299,7 @@ class QuadrupedVectorEnv(VectorEnv):
             rng = self._rngs[i]
             noise = rng.uniform(-self.config.reset_noise, self.config.reset_noise, 12)
             joints[i] = np.clip(self._nominal + noise, self._low, self._high)
-            command[i, 0] = rng.uniform(*self.config.command_range)
-            # drawn only where the range is not a point: the forward task's streams unchanged
-            for column, name in ((1, "lateral_range"), (2, "yaw_range")):
-                low, high = getattr(self.config, name)
-                command[i, column] = rng.uniform(low, high) if high > low else low
+            command[i] = draw_command(rng, self.config)
             data = self._data
             mujoco.mj_resetData(self.model, data)
             data.qpos[7:] = joints[i]
@@ -409,7 +423,14 @@ class QuadrupedVectorEnv(VectorEnv):
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # blown up: masked
             self.episode, out = task.step(cfg, self.episode, reading, desired, self._nominal,
                                           self.quadruped.foot_radius, weight)  # fmt: skip
-        final_obs, done = self.draws.observe(out["obs"]), out["terminated"] | out["truncated"]
+        done = out["terminated"] | out["truncated"]
+        if cfg.resample_steps:  # a new command where one is due (the next step runs under it)
+            due = (self.episode.elapsed % cfg.resample_steps == 0) & ~done
+            command = self.episode.command.copy()
+            for i in np.flatnonzero(due):
+                command[i] = draw_command(self._rngs[i], cfg)
+            self.episode, out["obs"] = task.resample(self.episode, out["obs"], command, due)
+        final_obs = self.draws.observe(out["obs"])
         obs = final_obs.copy()
         if done.any():  # SAME_STEP autoreset
             self._start(done)
