@@ -167,7 +167,7 @@ def physical_traces(traces: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
 
 def physical_line(traces: dict[str, np.ndarray]) -> str | None:
     """The physical metrics' means over the episodes that define them, with their units, as
-    one printed line (docs/hopper.md: their definitions); None where the traces have none."""
+    one printed line (docs/reproduction.md: their definitions); None where the traces have none."""
     from cpg_actor.experiments.physical import METRICS
     from cpg_actor.training.evaluation import finite_mean
 

@@ -165,6 +165,12 @@ def joint_stop_share(joint_position: np.ndarray, low: Sequence[float], high: Seq
     return _stop_share(joint_position, low, high, tolerance=margin)
 
 
+# the traces the metrics read, (T, E, ...) each
+TRACED = ("hip_height", "foot_height", "foot_contact", "foot_position", "joint_position",
+          "measured_position", "joint_velocity", "measured_velocity", "joint_torque",
+          "desired_position", "push")  # fmt: skip
+
+
 def _first(traces, *keys):
     return next((np.asarray(traces[key], dtype=float) for key in keys if key in traces), None)
 
@@ -176,9 +182,20 @@ def episode_metrics(traces: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     before them: the observed ``measured_position``, ``measured_velocity``), the torques,
     the feet's positions and contacts (``foot_contact``; the hopper's from ``foot_height``),
     the hip's height."""
-    lengths = np.asarray(traces["length"], dtype=int)
+    if "length" in traces:
+        lengths = np.asarray(traces["length"], dtype=int)
+    else:  # traces without episode lengths: every row (the metrics leave NaN rows out)
+        shaped = [np.shape(traces[key]) for key in TRACED if key in traces]
+        shaped = [shape for shape in shaped if len(shape) >= 2]
+        if not shaped:
+            return {}
+        lengths = np.full(shaped[0][1], shaped[0][0], dtype=int)
     episodes = len(lengths)
-    dt = float(traces["control_dt"]) if "control_dt" in traces else None
+    dt = None  # the control period: saved, else the traces' time step
+    if "control_dt" in traces:
+        dt = float(traces["control_dt"])
+    elif "time" in traces and np.size(traces["time"]) > 1:
+        dt = float(traces["time"][1] - traces["time"][0])
     position = _first(traces, "joint_position", "measured_position")
     velocity = _first(traces, "joint_velocity", "measured_velocity")
     torque = _first(traces, "joint_torque")
@@ -197,7 +214,7 @@ def episode_metrics(traces: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         if low.size == position.shape[-1]:
             limits = (low, high)
     hip = _first(traces, "hip_height")
-    standing = float(traces.get("standing_hip_height", 0.0))
+    standing = float(traces.get("standing_hip_height", np.nan))  # none: no apex above it
     push = _first(traces, "push")
 
     def per_episode(function) -> np.ndarray:
@@ -205,7 +222,8 @@ def episode_metrics(traces: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
                         dtype=float)  # fmt: skip
 
     out: dict[str, np.ndarray] = {}
-    if hip is not None and contact is not None and dt is not None and np.isfinite(hip).any():
+    if (hip is not None and contact is not None and dt is not None and np.isfinite(standing)
+            and np.isfinite(hip).any()):  # fmt: skip
         settle = round(SETTLE_SECONDS / dt)
         out["hop_apex"] = per_episode(lambda e, rows: hop_apex(
             hip[rows, e], contact[rows, e].any(axis=-1), standing,

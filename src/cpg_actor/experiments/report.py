@@ -808,7 +808,7 @@ def physical_lines(summary: dict[str, Any]) -> list[str]:
         "## Physical metrics",
         "",
         "What the robot did in the deterministic evaluation of the final checkpoint, by the "
-        "same code for every agent (docs/hopper.md, *Physical metrics*); per seed the mean "
+        "same code for every agent (docs/reproduction.md, *Physical metrics*); per seed the mean "
         "over its episodes, per variant the median over seeds [bootstrap 95% CI]. *Hop "
         "apex*: per episode the median over its flight phases of the highest hip height in "
         "the flight above the standing one (a flight a push came in left out); *highest hip*: "
