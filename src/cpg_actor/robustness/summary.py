@@ -205,6 +205,12 @@ def markdown(data: dict[str, Any]) -> str:
                   *verdict_rule(data), *verdict_lines(data)]  # fmt: skip
     names = list(next(iter(variants.values()))["perturbations"]) if variants else []
     physical = physical_columns(variants)
+    if "hop_apex" in physical:
+        lines += ["", "*Hop apex*: per episode the median over its flights of the highest hip "
+                  "height in each (a flight a push came in left out; docs/reproduction.md, "
+                  "*Physical metrics*), where the hop height is the episode's highest hip, "
+                  "which a push up or a slip raises; *apex kept*: its fraction of the nominal "
+                  "one."]  # fmt: skip
     for name in names:
         axis = next(iter(variants.values()))["perturbations"][name]
         unit = f" ({axis['unit']})" if axis["unit"] else ""
@@ -222,7 +228,7 @@ def markdown(data: dict[str, Any]) -> str:
                      _text(nominal["return"], ".1f"), "100%"]  # fmt: skip
             cells += [_text(nominal.get(key)) for key in metrics]
             cells += [_text(nominal["p99_desired_velocity"], ".1f")]
-            cells += ["100%" if key == "apex_retention" else _text(nominal.get(key))
+            cells += ["100%" if key == "apex_retention" else _physical_text(nominal, key)
                       for key in physical]  # fmt: skip
             cells += ["", ""] if push else []
             lines.append("| " + " | ".join(cells) + " |")
@@ -231,8 +237,7 @@ def markdown(data: dict[str, Any]) -> str:
                          _text(level["retention"], ".0f", 100.0, "%")]  # fmt: skip
                 cells += [_text(level.get(key)) for key in metrics]
                 cells += [_text(level["p99_desired_velocity"], ".1f")]
-                cells += [_text(level.get(key), ".0f", 100.0, "%") if key == "apex_retention"
-                          else _text(level.get(key)) for key in physical]  # fmt: skip
+                cells += [_physical_text(level, key) for key in physical]
                 if push:
                     cells += [_text(level["recovered"], ".0f", 100.0, "%"),
                               _text(level["recovery_steps"], ".0f")]  # fmt: skip
@@ -241,6 +246,13 @@ def markdown(data: dict[str, Any]) -> str:
 
 
 PHYSICAL_HEADS = {"apex_retention": "apex kept"}
+PERCENT = ("apex_retention", "time_at_joint_stop")  # shown in %
+
+
+def _physical_text(row: dict[str, Any], key: str) -> str:
+    if key in PERCENT:
+        return _text(row.get(key), ".0f" if key == "apex_retention" else ".1f", 100.0, "%")
+    return _text(row.get(key))
 
 
 def info_column(key: str) -> str:
