@@ -34,6 +34,7 @@ def _fake_run(out, variant, seed, bang_bang=False, steps=500, responsive=False, 
         "desired_velocity": np.gradient(position, 0.01, axis=0),
         "hip_height": 0.5 + 0.05 * np.abs(np.sin(4 * np.pi * t))[:, None],
         "foot_height": 0.02 * np.abs(np.sin(4 * np.pi * t))[:, None],
+        "standing_hip_height": np.array(0.5),
         "episode_return": np.array([10.0]),
         "hop_height": np.array([0.05]),
         # CPG signals (T, E, N): flat, or moving with the environment (feedback)
@@ -94,6 +95,11 @@ def test_report_verdicts_from_constructed_traces(tmp_path):
     by_hand = np.percentile(np.abs(np.diff(traces["desired_position"], axis=0) / 0.01), 99)
     assert cpg["per_seed"]["velocity_p99"][0] == pytest.approx(by_hand)
     assert cpg["per_seed"]["time_at_stop"] == [0.0] * 3
+    # the physical metrics these traces have data for; the torques' absent, not 0
+    assert cpg["per_seed"]["hop_apex"] == pytest.approx([0.05] * 3, rel=0.01)  # sampled peaks
+    assert all(np.isnan(cpg["per_seed"]["torque_rate"]))
+    report = (out / "report.md").read_text()
+    assert "## Physical metrics" in report and "| hop apex (m) | highest hip (m) |" in report
 
 
 def _interval_free(text):

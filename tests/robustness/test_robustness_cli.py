@@ -35,6 +35,7 @@ def test_the_suite_on_a_reproduction_and_a_run(tmp_path, capsys):
     for level in payload["levels"]:
         assert level["retention"] == pytest.approx(level["return"] / run["nominal"]["return"])
         assert "hop_height" in level and "p99_desired_velocity" in level
+        assert "torque_rate" in level and "joint_smoothness" in level
     pushes = run["perturbations"]["push_down"]["levels"]
     assert all(len(level["recovery"]) == 1 for level in pushes)
     text = (out / "robustness.md").read_text()
@@ -127,6 +128,23 @@ def test_the_summary_over_seeds_has_a_ci_from_three_seeds_on():
     data = {"robot": "hopper", "episodes": 1, "env_seed": 0, "metrics": ["hop_height"],
             "cycle": "hop apex (m)", "variants": three}  # fmt: skip
     assert "| CPG-Actor | 0 (nominal) | 100.0 [100.0, 100.0] | 100% |" in markdown(plain(data))
+
+
+def test_the_tables_show_the_physical_metrics_a_file_has_and_old_files_none():
+    runs = [synthetic_run(s, r) for s, r in enumerate((0.8, 0.9, 1.0))]
+    old = summarise(runs, ("hop_height",))
+    data = {"robot": "hopper", "episodes": 1, "env_seed": 0, "metrics": ["hop_height"],
+            "cycle": "hop apex (m)", "variants": old}  # fmt: skip
+    assert "| hop apex (m) |" not in markdown(plain(data))  # written before the metrics
+    for run in runs:
+        run["nominal"].update(hop_apex=0.5, torque_rate=100.0)
+        run["perturbations"]["push_up"]["levels"][0].update(hop_apex=0.25, apex_retention=0.5)
+    data["variants"] = summarise(runs, ("hop_height",))
+    level = data["variants"]["cpg-actor"]["perturbations"]["push_up"]["levels"][0]
+    assert level["apex_retention"]["estimate"] == pytest.approx(0.5)
+    text = markdown(plain(data))
+    assert "| apex kept | hop apex (m) | torque rate (N m/s) |" in text
+    assert "| 50% [50, 50] | 0.25 [0.25, 0.25] | — |" in text  # no torque rate at the level
 
 
 def test_nominal_env_drops_the_ranges_and_keeps_a_fixed_perturbation():

@@ -132,6 +132,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"video in {args.video}")
         return 0
     traces = evaluate_policy(policy, config, args.episodes, seed=args.seed)
+    traces.update(physical_traces(traces))
 
     atomic_write(output, lambda f: np.savez(f, **traces))  # replaced whole or not at all
     for line in episode_lines(traces):
@@ -150,6 +151,40 @@ def run(args: argparse.Namespace) -> int:
         record_video(policy, config, Path(args.video), args.seed, args.overwrite)
         print(f"video in {args.video}")
     return 0
+
+
+def physical_traces(traces: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The physical metrics (:mod:`cpg_actor.experiments.physical`) of every episode the
+    traces define them for, saved with the traces: ``physical_NAME`` ``(E,)`` each, their
+    names in ``physical_names``."""
+    from cpg_actor.experiments.physical import episode_metrics
+
+    values = episode_metrics(traces)
+    out = {f"physical_{name}": value for name, value in values.items()}
+    out["physical_names"] = np.array(list(values), dtype=str)
+    return out
+
+
+def physical_line(traces: dict[str, np.ndarray]) -> str | None:
+    """The physical metrics' means over the episodes that define them, with their units, as
+    one printed line (docs/reproduction.md: their definitions); None where the traces have none."""
+    from cpg_actor.experiments.physical import METRICS
+    from cpg_actor.training.evaluation import finite_mean
+
+    names = [str(name) for name in traces.get("physical_names", ())]
+    if not names:
+        return None
+
+    def text(name: str) -> str:
+        value = finite_mean(traces[f"physical_{name}"])
+        info = METRICS[name]
+        if not np.isfinite(value):
+            return f"{info.label} —"
+        if not info.unit:
+            return f"{info.label} {100 * value:.1f}%"
+        return f"{info.label} {value:.4g} {info.unit}"
+
+    return "physical (mean over episodes): " + ", ".join(text(name) for name in names)
 
 
 def episode_lines(traces: dict[str, np.ndarray]) -> list[str]:
@@ -179,6 +214,9 @@ def episode_lines(traces: dict[str, np.ndarray]) -> list[str]:
         means.append(text)
     lines.append(", ".join([f"mean return {traces['episode_return'].mean():.3f}", *means])
                  + f" over {episodes} episodes")  # fmt: skip
+    physical = physical_line(traces)
+    if physical is not None:
+        lines.append(physical)
     for name in undefined:
         info = all_metrics().get(name)
         reason = info.undefined if info is not None else ""

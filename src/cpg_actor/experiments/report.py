@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from cpg_actor.experiments import metrics as m
+from cpg_actor.experiments import physical
 from cpg_actor.experiments.figures import make_figures, steps_at_iteration
 from cpg_actor.experiments.floor import FLOOR_FILE, load_floor
 from cpg_actor.experiments.plan import STAGE_LABELS, load_settings_file
@@ -33,6 +34,8 @@ from cpg_actor.robots.registry import paper_robot
 PAPER_COMPARISON_STEPS = 20_000_000  # "roughly six times more reward after 20 million steps"
 PAPER_STAGE_STEPS = (1_000_000, 20_000_000, 60_000_000)
 EARLY_ROWS = 3  # logged evaluations averaged for a hop height "at" a step
+# the physical metrics of the final evaluation (the command's smoothness is ``smoothness``)
+PHYSICAL_KEYS = tuple(name for name in physical.METRICS if name != "command_smoothness")
 
 
 def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str, list[float]]:
@@ -59,6 +62,7 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
             "r_ddot_variability",
             "xi_at_bound",
             "kappa_at_bound",
+            *PHYSICAL_KEYS,
             *(f"term_{name}" for name in _reward_terms()),
         )
     }
@@ -96,9 +100,14 @@ def _per_seed(results: Results, variant: str, at_step: float | None) -> dict[str
                 "r_ddot_variability",
                 "xi_at_bound",
                 "kappa_at_bound",
+                *PHYSICAL_KEYS,
             ):
                 out[key].append(nan)
         else:
+            # what the robot did (hip, joints, feet): absent (NaN) where traces predate it
+            values = physical.run_metrics(traces)
+            for key in PHYSICAL_KEYS:
+                out[key].append(values[key])
             out["eval_return"].append(float(np.mean(traces["episode_return"])))
             out["hop_height"].append(float(np.mean(traces["hop_height"])))
             # the desired positions the env tracked (T, E, joints), and for every agent alike
@@ -186,7 +195,7 @@ def reward_of(results: Results, variant: str) -> str:
 
 # the per-seed numbers of the per-variant table: each a median over seeds with its bootstrap CI
 TABLE_KEYS = ("final_return", "eval_return", "hop_height", "smoothness", "velocity_p99",
-              "velocity_share", "time_at_stop")  # fmt: skip
+              "velocity_share", "time_at_stop", *PHYSICAL_KEYS)  # fmt: skip
 
 
 def _median_interval(values: list[float]) -> list[float] | None:
@@ -617,9 +626,9 @@ def _seed_cell(row: dict[str, Any], key: str, digits: int = 3, percent: bool = F
     def text(x: float) -> str:
         return f"{100 * x:.1f}%" if percent else f"{x:.{digits}g}"
 
-    interval = row["median"][key]
+    interval = row["median"].get(key)  # a key added after a summary was written: none
     if interval is None:
-        return ", ".join(text(x) for x in m.finite(row["per_seed"][key])) or "-"
+        return ", ".join(text(x) for x in m.finite(row["per_seed"].get(key))) or "-"
     return f"{text(interval[0])} [{text(interval[1])}, {text(interval[2])}]"
 
 
@@ -642,6 +651,7 @@ def write_report(out: Path, run_results: list[dict[str, Any]] | None = None) -> 
         *_setup_lines(saved, results, total_steps, summary["environment"]),
         *_invocation_lines(run_results or []),
         *_variant_lines(summary, load_floor(out)),
+        *physical_lines(summary),
         *_feedback_lines(summary),
         *_reward_term_lines(summary),
         "",
@@ -750,8 +760,8 @@ def _variant_lines(summary: dict[str, Any], floor: Any) -> list[str]:
         "joint's limit.",
         "",
         "| variant | seeds (finished) | final return | eval return | hop height (m) | "
-        "smoothness (rad^2) | p99 desired \\|v\\| (rad/s) | desired vel. within +-15 rad/s | "
-        "time at a joint stop |",
+        "command smoothness (rad^2) | p99 desired \\|v\\| (rad/s) | "
+        "desired vel. within +-15 rad/s | time at a joint stop |",
         "| --- | --- | --- | --- | --- | --- | --- | --- | --- |",
     ]
     for variant, row in summary["variants"].items():
@@ -782,6 +792,41 @@ def _variant_lines(summary: dict[str, Any], floor: Any) -> list[str]:
             "",
         ]
     return lines
+
+
+def physical_lines(summary: dict[str, Any]) -> list[str]:
+    """The section "Physical metrics": what each variant's robot did in the final
+    evaluation (:mod:`cpg_actor.experiments.physical`), a column per metric; "-" where a
+    variant's traces lack the data (saved before the metric existed)."""
+    columns = [("hop_apex", False), ("hop_height", False), ("joint_smoothness", False),
+               ("smoothness", False), ("torque_rate", False), ("mechanical_power", False),
+               ("foot_slip", False), ("time_at_joint_stop", True)]  # fmt: skip
+    heads = {"hop_height": "highest hip (m)", "smoothness": "command smoothness (rad^2)"}
+    heads.update({name: info.column for name, info in physical.METRICS.items()})
+    heads["time_at_joint_stop"] = "time at a joint stop (measured)"
+    lines = [
+        "## Physical metrics",
+        "",
+        "What the robot did in the deterministic evaluation of the final checkpoint, by the "
+        "same code for every agent (docs/reproduction.md, *Physical metrics*); per seed the mean "
+        "over its episodes, per variant the median over seeds [bootstrap 95% CI]. *Hop "
+        "apex*: per episode the median over its flight phases of the highest hip height in "
+        "the flight above the standing one (a flight a push came in left out); *highest hip*: "
+        "the episode's maximum (the env's `hop_height`, raised by a push or a slip). "
+        "*Joint smoothness*: the mean squared second difference of the measured joint "
+        "positions; *command smoothness* the same of the desired positions sent. *Torque "
+        "rate*: mean |tau[t] - tau[t-1]| / dt; *mechanical power*: mean sum over joints of "
+        "|tau qdot|; *foot slip*: the planted foot's mean horizontal speed; *time at a joint "
+        f"stop*: share of steps with a measured joint within {physical.JOINT_STOP_MARGIN:g} rad "
+        "of its limit.",
+        "",
+        "| variant | " + " | ".join(heads[key] for key, _ in columns) + " |",
+        "| --- |" + " --- |" * len(columns),
+    ]
+    for variant, row in summary["variants"].items():
+        cells = [_seed_cell(row, key, percent=percent) for key, percent in columns]
+        lines.append(f"| {label(variant)} (`{variant}`) | " + " | ".join(cells) + " |")
+    return lines + [""]
 
 
 def _feedback_lines(summary: dict[str, Any]) -> list[str]:
@@ -921,9 +966,10 @@ def _definition_lines() -> list[str]:
         "* desired velocity (every agent alike): its finite difference over the control "
         "period, `(p[t] - p[t-1]) / dt`; the first step of an episode is left out (its "
         "previous command is the env's reset pose, not the agent's);",
-        "* smoothness: mean over steps, joints and eval episodes of the squared second "
-        "difference of the desired position, `(p[t+1] - 2 p[t] + p[t-1])^2`, in rad^2 (per "
-        "control step of 0.01 s); lower is smoother, a bang-bang signal scores high;",
+        "* (command) smoothness: mean over steps, joints and eval episodes of the squared "
+        "second difference of the desired position, `(p[t+1] - 2 p[t] + p[t-1])^2`, in rad^2 "
+        "(per control step of 0.01 s); lower is smoother, a bang-bang signal scores high; "
+        "*joint smoothness* (section Physical metrics) the same of the measured joints;",
         "* velocity share: share of desired joint velocities with `|v| <= 15 rad/s`; p99: "
         "the 99th percentile of `|v|`; both over the steps, joints and eval episodes of a seed;",
         "* time at a joint stop: share of control steps at which a desired position sent lies "

@@ -4,7 +4,10 @@ every level) nominally and at each level of each perturbation.
 
 Per level: the mean return and its fraction of the nominal one (*retention*), the robot's
 metrics (``PerturbationTable.metrics``: the hopper's hop height, a quadruped's speed error and
-falls), the 99th percentile of |desired velocity| and, for a push, each episode's recovery
+falls), the physical metrics (:mod:`cpg_actor.experiments.physical`: the hopper's hop apex,
+which a push does not raise as it does the episode's highest hip, and its fraction of the
+nominal one, *apex kept*; joint smoothness, torque rate, power, foot slip, time at a joint
+stop), the 99th percentile of |desired velocity| and, for a push, each episode's recovery
 time (:mod:`cpg_actor.robustness.recovery`): control steps until the gait cycle is back within
 10 % of the same episode's without the push, "not recovered" where it never is (or the robot
 fell), "no gait" where the nominal episode has none to come back to.
@@ -29,8 +32,10 @@ NO_GAIT = "no gait"
 def level_row(traces: dict[str, np.ndarray], metrics: tuple[str, ...],
               nominal_return: float | None = None) -> dict[str, Any]:  # fmt: skip
     """What the suite keeps of one evaluation: mean return (and retention against
-    ``nominal_return``), the metrics' means, the p99 |desired velocity|, the mean length."""
+    ``nominal_return``), the metrics' means, the physical metrics the traces define (means
+    over episodes), the p99 |desired velocity|, the mean length."""
     from cpg_actor.experiments.metrics import velocity_p99
+    from cpg_actor.experiments.physical import run_metrics
     from cpg_actor.training.evaluation import finite_mean
 
     mean_return = float(np.mean(traces["episode_return"]))
@@ -41,6 +46,8 @@ def level_row(traces: dict[str, np.ndarray], metrics: tuple[str, ...],
     for name in metrics:
         if name in traces:
             row[name] = finite_mean(traces[name])
+    row.update({name: value for name, value in run_metrics(traces).items()
+                if math.isfinite(value)})  # fmt: skip
     row["p99_desired_velocity"] = velocity_p99(traces["desired_velocity"])
     row["length"] = float(np.mean(traces["length"]))
     return row
@@ -109,6 +116,8 @@ def evaluate_run(run: RunRef, names: list[str], episodes: int, seed: int,
             start = time.perf_counter()
             traces = measure(axis.perturbation(level))
             entry = {"level": level, **level_row(traces, table.metrics, row["return"])}
+            if row.get("hop_apex", 0.0) > 0 and "hop_apex" in entry:  # the apex kept
+                entry["apex_retention"] = entry["hop_apex"] / row["hop_apex"]
             if axis.field == "push":
                 entry["recovery"] = recoveries(traces, nominal, table)
             levels.append(entry)

@@ -3,6 +3,9 @@ run's numbers and the summary), ``robustness.md`` (a table per perturbation) and
 perturbation (``robustness_<name>.png``: the return retained against the level, a line per
 variant with its bootstrap 95% CI band over seeds).
 
+The physical metrics (:data:`PHYSICAL_COLUMNS`) appear where the runs' traces define them (a
+``robustness.json`` written before them has none: its tables show none).
+
 Over seeds (as the reproduction report): the mean of the per-seed values, with a percentile
 bootstrap CI from :data:`~cpg_actor.experiments.metrics.MIN_SEEDS` seeds on
 (:func:`cpg_actor.experiments.metrics.bootstrap`); a push's recovery as the share of episodes
@@ -30,6 +33,10 @@ from cpg_actor.robustness.suite import NO_GAIT, NOT_RECOVERED
 # a variant trained with env.randomize is named as the nominal one with this suffix: the
 # verdicts compare the two
 RANDOMIZED = "-randomized"
+# the physical metrics a level's table shows (:mod:`cpg_actor.experiments.physical`), where
+# a run has them; the hop apex's fraction of the nominal one first
+PHYSICAL_COLUMNS = ("apex_retention", "hop_apex", "joint_smoothness", "torque_rate",
+                    "mechanical_power", "foot_slip", "time_at_joint_stop")  # fmt: skip
 
 
 def figure_name(perturbation: str) -> str:
@@ -63,7 +70,8 @@ def summarise(runs: list[dict[str, Any]], metrics: tuple[str, ...]) -> dict[str,
     variants: dict[str, list[dict[str, Any]]] = {}
     for run in runs:
         variants.setdefault(run["variant"], []).append(run)
-    keys = ("return", *metrics, "p99_desired_velocity")
+    keys = ("return", *metrics, "p99_desired_velocity",
+            *(key for key in PHYSICAL_COLUMNS if key != "apex_retention"))  # fmt: skip
     out: dict[str, Any] = {}
     for variant, group in variants.items():
         nominal = {key: interval([r["nominal"].get(key, math.nan) for r in group])
@@ -75,7 +83,7 @@ def summarise(runs: list[dict[str, Any]], metrics: tuple[str, ...]) -> dict[str,
                 rows = [r["perturbations"][name]["levels"][i] for r in group
                         if name in r["perturbations"]]  # fmt: skip
                 entry = {"level": level["level"]}
-                for key in ("retention", *keys):
+                for key in ("retention", "apex_retention", *keys):
                     entry[key] = interval([row.get(key, math.nan) for row in rows])
                 if "recovery" in level:
                     shares, steps = zip(*(_recovery(row["recovery"]) for row in rows),
@@ -196,6 +204,13 @@ def markdown(data: dict[str, Any]) -> str:
         lines += ["", "## Verdicts", "",
                   *verdict_rule(data), *verdict_lines(data)]  # fmt: skip
     names = list(next(iter(variants.values()))["perturbations"]) if variants else []
+    physical = physical_columns(variants)
+    if "hop_apex" in physical:
+        lines += ["", "*Hop apex*: per episode the median over its flights of the highest hip "
+                  "height in each (a flight a push came in left out; docs/reproduction.md, "
+                  "*Physical metrics*), where the hop height is the episode's highest hip, "
+                  "which a push up or a slip raises; *apex kept*: its fraction of the nominal "
+                  "one."]  # fmt: skip
     for name in names:
         axis = next(iter(variants.values()))["perturbations"][name]
         unit = f" ({axis['unit']})" if axis["unit"] else ""
@@ -203,6 +218,7 @@ def markdown(data: dict[str, Any]) -> str:
         heads = ["variant", f"level{unit}", "return", "retention"]
         heads += [info[key].column if key in info else key for key in metrics]
         heads += ["p99 \\|v_d\\| (rad/s)"]
+        heads += [PHYSICAL_HEADS.get(key) or info_column(key) for key in physical]
         heads += ["recovered", "recovery (steps)"] if push else []
         lines += ["", f"## {name}: {axis['description']}", "",
                   "| " + " | ".join(heads) + " |", "|" + " --- |" * len(heads)]  # fmt: skip
@@ -212,6 +228,8 @@ def markdown(data: dict[str, Any]) -> str:
                      _text(nominal["return"], ".1f"), "100%"]  # fmt: skip
             cells += [_text(nominal.get(key)) for key in metrics]
             cells += [_text(nominal["p99_desired_velocity"], ".1f")]
+            cells += ["100%" if key == "apex_retention" else _physical_text(nominal, key)
+                      for key in physical]  # fmt: skip
             cells += ["", ""] if push else []
             lines.append("| " + " | ".join(cells) + " |")
             for level in summary["perturbations"][name]["levels"]:
@@ -219,11 +237,43 @@ def markdown(data: dict[str, Any]) -> str:
                          _text(level["retention"], ".0f", 100.0, "%")]  # fmt: skip
                 cells += [_text(level.get(key)) for key in metrics]
                 cells += [_text(level["p99_desired_velocity"], ".1f")]
+                cells += [_physical_text(level, key) for key in physical]
                 if push:
                     cells += [_text(level["recovered"], ".0f", 100.0, "%"),
                               _text(level["recovery_steps"], ".0f")]  # fmt: skip
                 lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+PHYSICAL_HEADS = {"apex_retention": "apex kept"}
+PERCENT = ("apex_retention", "time_at_joint_stop")  # shown in %
+
+
+def _physical_text(row: dict[str, Any], key: str) -> str:
+    if key in PERCENT:
+        return _text(row.get(key), ".0f" if key == "apex_retention" else ".1f", 100.0, "%")
+    return _text(row.get(key))
+
+
+def info_column(key: str) -> str:
+    from cpg_actor.experiments.physical import METRICS
+
+    return METRICS[key].column if key in METRICS else key
+
+
+def physical_columns(variants: dict[str, Any]) -> list[str]:
+    """The :data:`PHYSICAL_COLUMNS` some variant has a value of, nominally or at a level
+    (none for a file written before the physical metrics)."""
+
+    def has(entry: Any) -> bool:
+        return isinstance(entry, dict) and entry.get("estimate") is not None
+
+    found = set()
+    for summary in variants.values():
+        rows = [summary["nominal"], *(level for axis in summary["perturbations"].values()
+                                      for level in axis["levels"])]  # fmt: skip
+        found |= {key for key in PHYSICAL_COLUMNS for row in rows if has(row.get(key))}
+    return [key for key in PHYSICAL_COLUMNS if key in found]
 
 
 def draw(data: dict[str, Any], out: Path) -> list[Path]:

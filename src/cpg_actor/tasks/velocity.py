@@ -235,7 +235,9 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
     yet restarted where it ended) and ``obs`` (the step's last observation), ``reward``,
     ``reward_terms`` (scaled), ``terminated``, ``truncated``, ``episode_metrics`` (NaN for
     the robots whose episode goes on) and ``info`` (``command``, ``contact``,
-    ``base_height``, ``forward_speed``, ``desired_position``, ``measured_position``).
+    ``base_height``, ``forward_speed``, ``desired_position``, ``measured_position``,
+    ``measured_velocity``, ``joint_torque`` (N, J, N m) and ``foot_position`` (N, 4, 3, the
+    feet in the world, m): the physical metrics' inputs).
 
     ``config``: the env's (scales, sigma, fall limits, steps); ``desired`` (N, J) the positions
     the step tracked; ``nominal`` (J,) the nominal pose; ``weight`` m g (N), the cost of
@@ -285,7 +287,8 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
         "info": {
             "command": episode.command, "contact": contact, "base_height": height,
             "forward_speed": lin_vel[:, 0], "desired_position": desired,
-            "measured_position": qpos[:, 7:],
+            "measured_position": qpos[:, 7:], "measured_velocity": joint_vel,
+            "joint_torque": reading.torque, "foot_position": feet,
         },
     }  # fmt: skip
     return after, outputs

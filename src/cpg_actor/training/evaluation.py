@@ -67,10 +67,15 @@ def observation_columns(robot) -> dict[str, list[int]]:
 CHECK_EVERY = 50
 
 # the step info an env may report -> its trace: feet on the ground (E, feet) as 1 or 0, the
-# base's forward speed (m/s), the velocity command (E, 3: forward, lateral, yaw) and, under a
-# perturbation's push, 1 at the step it came
+# base's forward speed (m/s), the velocity command (E, 3: forward, lateral, yaw), under a
+# perturbation's push 1 at the step it came, and the physical metrics' inputs
+# (:mod:`cpg_actor.experiments.physical`): the joint torques (E, J; N m), the feet's positions
+# in the world (E, feet, 3; m) and the joints' true positions and velocities (E, J; rad,
+# rad/s: what the robot did, without the sensor noise a perturbation adds to the observation)
 TRACED_INFO = {"contact": "foot_contact", "forward_speed": "base_forward_speed",
-               "command": "command", "pushed": "push"}  # fmt: skip
+               "command": "command", "pushed": "push", "joint_torque": "joint_torque",
+               "foot_position": "foot_position", "measured_position": "joint_position",
+               "measured_velocity": "joint_velocity"}  # fmt: skip
 
 
 @torch.no_grad()
@@ -262,8 +267,9 @@ def _trace_row(
     for key, where in columns.items():
         joints = key in ("measured_position", "measured_velocity")
         row[key] = measured[:, where] if joints else measured[:, where[0]]
-    if "measured_position" not in row and "measured_position" in info:  # not observed as such
-        row["measured_position"] = np.asarray(info["measured_position"], dtype=np.float64)
+    for key in ("measured_position", "measured_velocity"):  # not observed as such
+        if key not in row and key in info:
+            row[key] = np.asarray(info[key], dtype=np.float64)
     row["foot_height"] = np.asarray(info.get("foot_height", np.full(num_envs, np.nan)))
     row["reward"] = np.asarray(reward, dtype=np.float64)
     # one definition for every agent: the finite difference of the desired positions sent

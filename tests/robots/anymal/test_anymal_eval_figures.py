@@ -132,6 +132,14 @@ def test_eval_writes_the_gait_diagram_and_speed_figures_and_keeps_them(anymal_ru
     assert list(traces["foot_names"]) == ["LF", "RF", "LH", "RH"]
     assert set(np.unique(traces["foot_contact"][:steps, 0])) <= {0.0, 1.0}
     assert np.all(traces["command"][:, 0] == traces["command"][0, 0])  # episode 0: one command
+    # the physical metrics that apply to a quadruped (no hip on a rail: no hop apex)
+    assert traces["joint_torque"].shape == (steps, 2, 12)
+    assert traces["foot_position"].shape == (steps, 2, 4, 3)
+    assert [str(n) for n in traces["physical_names"]] == [
+        "joint_smoothness", "command_smoothness", "torque_rate", "mechanical_power", "foot_slip",
+        "time_at_joint_stop"]  # fmt: skip
+    assert np.isfinite(traces["physical_torque_rate"]).all()
+    assert "physical (mean over episodes): joint smoothness" in out
     assert [p.name for p in eval_dir.iterdir() if p.name.startswith(".")] == []  # no temporary
 
     # another traces file in the same folder would redraw the figures: refused

@@ -20,7 +20,7 @@ from .helpers import NOMINAL, SIMS
 
 INFO_KEYS = {
     "reward_terms", "hip_height", "foot_height", "joint_torque", "desired_position",
-    "measured_position",
+    "measured_position", "measured_velocity", "foot_position",
 }  # fmt: skip
 
 

@@ -128,6 +128,8 @@ def step_info(result: StepResult, row: int) -> dict[str, Any]:
         "joint_torque": result.joint_torque[row].copy(),
         "desired_position": result.desired_position[row].copy(),
         "measured_position": result.measured_position[row].copy(),
+        "measured_velocity": result.measured_velocity[row].copy(),
+        "foot_position": result.foot_position[row].copy(),
     }
 
 

@@ -32,6 +32,8 @@ class StepResult:
     joint_torque: np.ndarray  # (K, 2) applied torque, mean over the control step
     desired_position: np.ndarray  # (K, 2)
     measured_position: np.ndarray  # (K, 2)
+    measured_velocity: np.ndarray  # (K, 2) rad/s, the joints' true velocity
+    foot_position: np.ndarray  # (K, 1, 3) the foot sphere's centre in the world (m)
 
 
 class HopperSimulation:

@@ -109,7 +109,9 @@ def step_outcome(config, qpos, qvel, desired, torque, elapsed, episode_steps,
 
     Keys: ``obs``, ``reward``, ``terminated``, ``truncated``, ``reward_terms`` and the step's
     info ``hip_height``, ``foot_height``, ``joint_torque``, ``desired_position``,
-    ``measured_position``."""
+    ``measured_position``, ``measured_velocity`` and ``foot_position`` (N, 1, 3: the foot
+    sphere's centre in the world, x along the ground, y 0, z up; the physical metrics' foot
+    slip)."""
     xp = namespace(qpos)
     foot_vx = leg_kinematics.foot_velocity(qpos[:, 1:3], qvel[:, 1:3])[:, 0]
     foot_velocity_xy = xp.stack([foot_vx, xp.zeros_like(foot_vx)], -1)  # the hip is on a rail
@@ -139,7 +141,17 @@ def step_outcome(config, qpos, qvel, desired, torque, elapsed, episode_steps,
         "joint_torque": finite(torque),
         "desired_position": desired,
         "measured_position": finite(qpos[:, 1:3]),
+        "measured_velocity": finite(qvel[:, 1:3]),
+        "foot_position": finite(foot_world(qpos))[:, None, :],
     }
+
+
+def foot_world(qpos):
+    """(N, 3) the foot sphere's centre in the world (m): x along the ground (the hip's rail at
+    x = 0), y = 0 (the leg is planar), z up."""
+    xp = namespace(qpos)
+    foot = leg_kinematics.foot_position(qpos[:, 1:3])
+    return xp.stack([foot[:, 0], xp.zeros_like(foot[:, 0]), qpos[:, 0] + foot[:, 1]], axis=-1)
 
 
 def hop_height(done, max_hip, standing):

@@ -142,6 +142,8 @@ class HopperVectorEnv(VectorEnv):
             "joint_torque": result.joint_torque,
             "desired_position": result.desired_position,
             "measured_position": result.measured_position,
+            "measured_velocity": result.measured_velocity,
+            "foot_position": result.foot_position,
             "final_obs": final_obs,
             "_final_obs": done,
             # per-episode metrics of the envs whose episode ended at this step (NaN elsewhere)
