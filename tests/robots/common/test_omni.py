@@ -253,3 +253,22 @@ def test_the_mjx_env_draws_commands_again_as_the_mujoco_env():
     commands = np.concatenate(draws)
     assert np.all(np.abs(commands) <= [1.0, 0.5, 1.0]) and np.all(commands == 0, axis=1).any()
     env.close()
+
+
+def test_a_leg_layout_checkpoint_from_before_planar_steps_loads_into_either_agent():
+    """The planar geometry (each foot's place, its lateral offset) is the robot's, not learned:
+    out of the state dict, so a checkpoint saved before planar steps existed loads, and one of
+    a planar agent carries the same learned tensors as a forward one."""
+    robot = get_robot("go1")
+    env = robot.make(1, robot.config_class(), num_threads=1)
+    agents = [
+        CPGActorAgent(45, [1.0] * 12, AgentConfig(cpg_layout="leg", cpg_planar_steps=planar),
+                      env.robot, robot)
+        for planar in (False, True)
+    ]  # fmt: skip
+    env.close()
+    saved = agents[0].state_dict()
+    assert not any(key.endswith(("lateral", "feet")) for key in saved)
+    assert set(agents[1].state_dict()) == set(saved)
+    for agent in agents:
+        agent.load_state_dict(saved)  # strict

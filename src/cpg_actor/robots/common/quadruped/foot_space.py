@@ -97,7 +97,10 @@ class FootSpacePattern(nn.Module):
             if len(lateral) != 4 or torch.any(pose[:, 0] != 0):
                 raise ValueError(f"{type(self).__name__}'s planar steps need 4 lateral offsets "
                                  f"and a nominal abduction of 0, got {list(lateral)}")  # fmt: skip
-            self.register_buffer("lateral", torch.as_tensor(lateral, dtype=torch.float64))
+            # the robot's geometry, not learned: out of the state dict, so that checkpoints
+            # from before planar steps load
+            lateral = torch.as_tensor(lateral, dtype=torch.float64)
+            self.register_buffer("lateral", lateral, persistent=False)
         x0, z0 = leg_foot(front[0], front[1], self.thigh, self.shank)
         self.register_buffer("foot", torch.stack([x0, z0]))  # the nominal foot (front leg)
         self.clearance = float(clearance)

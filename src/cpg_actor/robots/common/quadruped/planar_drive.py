@@ -45,7 +45,7 @@ class PlanarDrive(nn.Module):
         feet = torch.as_tensor(feet, dtype=torch.float64)
         if feet.shape != (4, 2):
             raise ValueError(f"{type(self).__name__} needs 4 feet (x, y), got {tuple(feet.shape)}")
-        self.register_buffer("feet", feet)
+        self.register_buffer("feet", feet, persistent=False)  # the robot's geometry
 
     def forward(self, command: Tensor) -> tuple[Tensor, Tensor]:
         feet = self.feet.to(command.dtype)
