@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import platform
+from collections.abc import Sequence
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
@@ -256,7 +257,7 @@ def summarise(results: Results, total_steps: int) -> dict[str, Any]:
         "comparison_step": comparison_step,
         "variants": variants,
         "claims": judge_claims(seeds, rewards, total_steps),
-        "comparisons": _comparisons(seeds),
+        "comparisons": judge_comparisons(seeds),
     }
 
 
@@ -396,15 +397,19 @@ COMPARISONS = (
 COMPARED = (("final_return", "return", "return"), ("final_hop_height_logged", "hop", "hop_height"))
 
 
-def _comparisons(seeds: dict[str, dict[str, list[float]]]) -> list[dict[str, Any]]:
-    """For each pair of :data:`COMPARISONS` that ran: the differences of the final
+def judge_comparisons(
+    seeds: dict[str, dict[str, list[float]]],
+    pairs: Sequence[tuple[str, str, str]] = COMPARISONS,
+) -> list[dict[str, Any]]:
+    """For each pair of ``pairs`` (default :data:`COMPARISONS`; a stored report's own pairs
+    when it is judged again) that ran: the differences of the final
     (logged, deterministic) return and hop height, with bootstrap CIs over seeds (shown), and
     which one is better: Welch's t-test, Holm-corrected over every test of the table (one
     family), the difference at least the metric's minimum effect (of the second's mean);
     neither with fewer than ``MIN_SEEDS`` seeds a side. Each row keeps ``NAME_p``: [p, Holm
     p] and the family's size."""
     rows, tests = [], []
-    for first, second, question in COMPARISONS:
+    for first, second, question in pairs:
         if first not in seeds or second not in seeds:
             continue
         row: dict[str, Any] = {"first": first, "second": second, "question": question}
