@@ -90,7 +90,8 @@ def main(argv: list[str] | None = None) -> int:
         f"{ort.__version__}, mujoco {mujoco.__version__}.",
         "",
         f"Policy: `{args.policy}` ({policy.meta['agent']}, {policy.meta['robot_model']}). "
-        f"Other model: `{args.mjcf.name}`. One episode per start seed ({', '.join(map(str, seeds))}), "
+        f"Other model: `{args.mjcf.name}`. One episode per start seed "
+        f"({', '.join(map(str, seeds))}), "
         "the forward command held for the episode; speed error: the mean over the episode of "
         "|forward speed - command|, then over the seeds (m/s); falls: episodes ended by a fall.",
         "",

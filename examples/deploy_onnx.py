@@ -23,6 +23,15 @@ PyTorch policy rounds float32 differently from ONNX Runtime, which moves a legge
 return a little (``docs/training.md``, "Export"). On a real robot, ``Simulation`` is the
 robot's driver and the reward goes; the loop stays as it is.
 
+Another model of the robot (``--mjcf OTHER.xml``, a quadruped's policy): its joints are found
+by name (one line naming those it lacks), its actuators switched off and the metadata's
+actuator law applied as joint torques at every substep of its own timestep; the sites, sensors
+and ground the observation and the reward read are added where it lacks them (the metadata's
+``model_interface``). ``--command VX [VY YAW]`` holds a command for the episode and prints the
+tracking::
+
+    python examples/deploy_onnx.py runs/my-run --mjcf OTHER.xml --command 0.5
+
 A non-finite observation (a failed sensor) is refused before the model sees it: the model
 would replace it by the normaliser's mean (its metadata's ``nonfinite_observations``), a
 fallback a robot should not run on.
