@@ -16,7 +16,10 @@ start seed), the command held for the whole episode (20 s). Three models:
 * ``own, law as torques``: the same file through ``--mjcf``, the law applied as joint torques
   by the example, as on any other model (separates the way the law is applied from the model);
 * ``other``: ``--mjcf`` (default the Go1 variant of :mod:`cpg_actor.robots.go1.variant`:
-  mjlab's passive dynamics and contact).
+  mjlab's passive dynamics and contact);
+* with ``--ablation``, ``only TERM``: the Go1's own model with one of the variant's
+  differences alone (:data:`cpg_actor.robots.go1.variant.TERMS`), written to a temporary file:
+  which difference moves the tracking.
 
 Speed error: the mean over the episode of |forward speed - command| (the forward speed is the
 base-frame x velocity at the IMU site, as the env's ``speed_error``), then the mean over the
@@ -29,6 +32,7 @@ import argparse
 import json
 import runpy
 import sys
+import tempfile
 from pathlib import Path
 
 import mujoco
@@ -50,13 +54,13 @@ def episode(example: dict, policy, mjcf: Path, other: bool, command: float, seed
     sim.fixed_command = [command, 0.0, 0.0]
     _, length, ended = example["run_episode"](policy, sim, seed, steps)
     speeds = np.asarray(sim.forward_speeds)
-    return {"speed_error": float(np.abs(speeds - command).mean()),
-            "forward_speed": float(speeds.mean()), "fell": ended == "terminated",
+    return {"speed_error": round(float(np.abs(speeds - command).mean()), 5),
+            "forward_speed": round(float(speeds.mean()), 5), "fell": ended == "terminated",
             "steps": int(length)}  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
-    from cpg_actor.robots.go1.variant import VARIANT_PATH
+    from cpg_actor.robots.go1.variant import TERMS, VARIANT_PATH, variant_mjcf
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("policy", type=Path, help="an ONNX file from cpg-actor export")
@@ -64,6 +68,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--commands", default="0.3,0.5,0.8", help="forward commands, m/s")
     parser.add_argument("--seeds", default="1000,1001,1002", help="the episodes' start seeds")
     parser.add_argument("--steps", type=int, default=None, help="cap each episode (tests)")
+    parser.add_argument("--ablation", action="store_true",
+                        help="also each of the Go1 variant's differences alone")  # fmt: skip
     parser.add_argument("--output", default=OUTPUT)
     args = parser.parse_args(argv)
     example = runpy.run_path(str(EXAMPLE))
@@ -73,6 +79,12 @@ def main(argv: list[str] | None = None) -> int:
     seeds = [int(s) for s in args.seeds.split(",")]
     models = {"own": (own, False), "own, law as torques": (own, True),
               "other": (args.mjcf, True)}  # fmt: skip
+    scratch = tempfile.TemporaryDirectory()
+    if args.ablation:
+        for term in TERMS:
+            path = Path(scratch.name) / f"go1_only_{term}.xml"
+            path.write_text(variant_mjcf(only=term))
+            models[f"only {term}"] = (path, True)
     results: dict[str, dict[str, list[dict]]] = {}
     for name, (mjcf, other) in models.items():
         for command in commands:
@@ -82,6 +94,7 @@ def main(argv: list[str] | None = None) -> int:
             error = np.mean([r["speed_error"] for r in runs])
             print(f"{name} at {command:g} m/s: speed error {error:.3f} m/s", file=sys.stderr)
     argv_text = " ".join(argv if argv is not None else sys.argv[1:])
+    scratch.cleanup()
     lines = [
         f"# {policy.meta['agent']} on {policy.meta['robot_model']}: its own model and another",
         "",
@@ -95,18 +108,19 @@ def main(argv: list[str] | None = None) -> int:
         "the forward command held for the episode; speed error: the mean over the episode of "
         "|forward speed - command|, then over the seeds (m/s); falls: episodes ended by a fall.",
         "",
-        "| command | " + " | ".join(f"{m}: speed error | {m}: speed | {m}: falls" for m in models)
+        "| model | " + " | ".join(f"{c:g} m/s: speed error (speed), falls" for c in commands)
         + " |",
-        "| ---: | " + " | ".join("---: | ---: | ---:" for _ in models) + " |",
+        "| --- | " + " | ".join("---:" for _ in commands) + " |",
     ]  # fmt: skip
-    for command in commands:
+    for name in models:
         cells = []
-        for name in models:
+        for command in commands:
             runs = results[name][f"{command:g}"]
-            cells += [f"{np.mean([r['speed_error'] for r in runs]):.3f}",
-                      f"{np.mean([r['forward_speed'] for r in runs]):.3f}",
-                      f"{sum(r['fell'] for r in runs)} / {len(runs)}"]  # fmt: skip
-        lines.append(f"| {command:g} m/s | " + " | ".join(cells) + " |")
+            error = np.mean([r["speed_error"] for r in runs])
+            speed = np.mean([r["forward_speed"] for r in runs])
+            cells.append(f"{error:.3f} ({speed:.3f}), {sum(r['fell'] for r in runs)} / "
+                         f"{len(runs)}")  # fmt: skip
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
     lines += ["", "Per episode (JSON):", "", "```json", json.dumps(results), "```", ""]
     write(args.output, lines)
     return 0

@@ -40,8 +40,8 @@ RUNS = {
     "mjx_solver_iterations.py": (["--caps", "4/15", "--rounds", "1", "--batch", "1"],
                                  "--output"),
     # GO1POLICY: a tiny trained Go1 run the test makes, exported; episodes of 5 steps
-    "other_model.py": (["GO1POLICY", "--seeds", "1000", "--commands", "0.5", "--steps", "5"],
-                       "--output"),
+    "other_model.py": (["GO1POLICY", "--seeds", "1000", "--commands", "0.5", "--steps", "5",
+                        "--ablation"], "--output"),
     "policy_latency.py": (["--steps", "20", "--agents", "mlp"], "--output"),
     "profile_collect.py": (["--num-envs", "4", "--agent", "mlp", "--device", "cpu"], "--output"),
     "quadruped_physics_settings.py": (["--robot", "go1", "--envs", "2", "--rounds", "1",

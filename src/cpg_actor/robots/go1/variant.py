@@ -49,11 +49,24 @@ LEG_ORDER = ("FL", "FR", "RL", "RR")  # legged_gym's (its URDF's alphabetical or
 IMU_SITE = (-0.01592, -0.06659, -0.00617)  # m, in the trunk frame
 
 
-def variant_mjcf() -> str:
-    """The variant's MJCF text, generated from this project's Go1 MJCF."""
+# the variant's differences from this project's model, each of which ``only`` can name alone
+TERMS = ("damping", "armature", "friction_loss", "contact", "friction")
+
+
+def variant_mjcf(only: str | None = None) -> str:
+    """The variant's MJCF text, generated from this project's Go1 MJCF; ``only`` (one of
+    :data:`TERMS`): the project's model written the variant's way (legs reordered, no
+    actuators or sensors) with that one difference alone (what each difference does)."""
     from cpg_actor.robots.go1.mjcf import mjcf_text
 
-    root = ET.fromstring(mjcf_text(foot_friction=FRICTION))
+    if only is not None and only not in TERMS:
+        raise ValueError(f"unknown variant term {only!r}; accepted: {', '.join(TERMS)}")
+
+    def changed(term: str) -> bool:
+        return only is None or only == term
+
+    root = ET.fromstring(mjcf_text(foot_friction=FRICTION if changed("friction")
+                                   else robot.FOOT_FRICTION))  # fmt: skip
     for name in ("actuator", "sensor", "keyframe"):
         for element in root.findall(name):
             root.remove(element)
@@ -70,13 +83,19 @@ def variant_mjcf() -> str:
         trunk.append(legs[leg])
     for joint in trunk.iter("joint"):
         kind = joint.get("name").split("_")[1]
-        joint.set("damping", f"{DAMPING:g}")
-        joint.set("armature", f"{ARMATURE[kind]:.6g}")
-        joint.set("frictionloss", f"{FRICTION_LOSS:g}")
+        if changed("damping"):
+            joint.set("damping", f"{DAMPING:g}")
+        if changed("armature"):
+            joint.set("armature", f"{ARMATURE[kind]:.6g}")
+        if changed("friction_loss"):
+            joint.set("frictionloss", f"{FRICTION_LOSS:g}")
     for geom in root.iter("geom"):
         if geom.get("name", "").endswith("_foot"):
-            geom.attrib.update(FOOT_CONTACT)
-            geom.set("friction", f"{FRICTION:g}")
+            if changed("contact"):
+                geom.attrib.update(FOOT_CONTACT)
+            if changed("friction"):
+                spin_roll = geom.get("friction").split()[1:]
+                geom.set("friction", " ".join([f"{FRICTION:g}", *spin_roll]))
     ET.indent(root, space="  ")
     comment = generated_comment(SOURCES, robot.LICENSE_NOTICE)
     return "\n".join([*comment, ET.tostring(root, encoding="unicode"), ""])
