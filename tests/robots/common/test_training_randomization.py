@@ -189,3 +189,21 @@ def test_the_forward_preset_trains_without_randomisation():
     assert not config.env.randomize.active
     field = compose_config(overrides=["robot=go1", "env.randomize.preset=field"])
     assert field.env.randomize.kd_scale == (0.5, 1.5) and field.env.randomize.pushes
+
+
+def test_a_resumed_env_pushes_and_draws_as_the_uninterrupted_one():
+    ranges = {"push_velocity": (0.5, 1.0), "push_interval": (0.1, 0.2), "kp_scale": (0.8, 1.2),
+              "joint_damping": (0.0, 1.5)}  # fmt: skip
+    rng = np.random.default_rng(4)
+    commands = NOMINAL + rng.uniform(-0.1, 0.1, (80, 2, 12))
+    env = go1(2, **ranges)
+    env.reset(seed=8)
+    for command in commands[:30]:
+        env.step(command)
+    state = env.get_state()
+    straight = [env.step(command)[0].copy() for command in commands[30:]]
+    resumed = go1(2, **ranges)
+    resumed.reset(seed=123)
+    resumed.set_state(state)
+    again = [resumed.step(command)[0].copy() for command in commands[30:]]
+    np.testing.assert_array_equal(np.array(again), np.array(straight))
