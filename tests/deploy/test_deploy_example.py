@@ -137,7 +137,9 @@ def test_the_example_refuses_a_nonfinite_observation_and_a_missing_file(tmp_path
     assert "over 3 steps (step limit)" in capsys.readouterr().out
 
 
-def test_the_example_takes_a_run_or_export_directory_and_refuses_a_damaged_file(tmp_path, capsys):
+def test_the_example_takes_a_run_or_export_directory_and_refuses_a_damaged_file(
+    tmp_path, capsys
+):
     import onnx
 
     _, policy_path = exported_run(tmp_path / "run", "cpg-actor", "hopper")
