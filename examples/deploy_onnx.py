@@ -23,6 +23,15 @@ PyTorch policy rounds float32 differently from ONNX Runtime, which moves a legge
 return a little (``docs/training.md``, "Export"). On a real robot, ``Simulation`` is the
 robot's driver and the reward goes; the loop stays as it is.
 
+Another model of the robot (``--mjcf OTHER.xml``, a quadruped's policy): its joints are found
+by name (one line naming those it lacks), its actuators switched off and the metadata's
+actuator law applied as joint torques at every substep of its own timestep; the sites, sensors
+and ground the observation and the reward read are added where it lacks them (the metadata's
+``model_interface``). ``--command VX [VY YAW]`` holds a command for the episode and prints the
+tracking::
+
+    python examples/deploy_onnx.py runs/my-run --mjcf OTHER.xml --command 0.5
+
 A non-finite observation (a failed sensor) is refused before the model sees it: the model
 would replace it by the normaliser's mean (its metadata's ``nonfinite_observations``), a
 fallback a robot should not run on.
@@ -107,10 +116,15 @@ def actuator_torque(law: dict, desired, position, velocity) -> np.ndarray:
     what the motor gives at this speed (its torque-speed line), and to the torque limit. The
     MJCF's ``dcmotor`` actuators compute the ``dc-motor`` law inside MuJoCo; this is run where
     the MJCF has them switched off, for ``coast`` (no torque along the motion beyond the
-    speed limit, never braking)."""
-    torque = law["kp"] * (desired - position) - law["kd"] * velocity
-    limit, stall = law["torque_limit"], law["saturation_torque"]
-    drop = velocity * (stall / law["velocity_limit"])
+    speed limit, never braking). A constant is one number, or one per joint of a leg
+    (repeated leg after leg), or one per joint."""
+    n = len(desired)
+    kp, kd, limit, stall, speed = (
+        np.resize(np.asarray(law[name], dtype=np.float64), n)
+        for name in ("kp", "kd", "torque_limit", "saturation_torque", "velocity_limit")
+    )
+    torque = kp * (desired - position) - kd * velocity
+    drop = velocity * (stall / speed)
     floor, ceiling = (0.0, 0.0) if law["law"] == "coast" else (-limit, limit)
     upper = np.minimum(np.maximum(stall - drop, floor), limit)
     lower = np.maximum(np.minimum(-stall - drop, ceiling), -limit)
@@ -140,31 +154,146 @@ def standing_hip_height(model: mujoco.MjModel, joints: np.ndarray) -> float:
     return float((model.geom("foot").size[0] - foot_z)[0])
 
 
+# -- another model of the robot (--mjcf) -----------------------------------------------------
+def other_model(meta: dict, mjcf: Path) -> mujoco.MjModel:
+    """Another MJCF of the policy's robot, made ready for it: its joints found by name (a
+    ValueError naming those missing), the sites and sensors the observation and the reward
+    read added where it lacks them (``model_interface``: where they sit on which body), a
+    ground plane when it has none, and its actuators switched off: the metadata's actuator
+    law is applied as joint torques at every substep (:func:`actuator_torque`)."""
+    interface = meta.get("model_interface")
+    if interface is None or not interface.get("free_joint"):
+        raise ValueError("--mjcf with another model takes a quadruped policy exported with its "
+                         "model_interface (cpg-actor export of this version)")  # fmt: skip
+    try:
+        spec = mujoco.MjSpec.from_file(str(mjcf))
+        spec.compile()
+    except Exception as error:  # MuJoCo's own parse and compile errors
+        reason = (str(error).strip() or type(error).__name__).splitlines()[0]
+        raise ValueError(f"{mjcf} is not an MJCF MuJoCo loads: {reason}") from None
+    have = {joint.name for joint in spec.joints}
+    missing = [name for name in meta["joint_names"] if name not in have]
+    if missing:
+        raise ValueError(f"{mjcf} lacks the policy's joints {', '.join(missing)} (it has: "
+                         f"{', '.join(sorted(n for n in have if n)) or 'none'})")  # fmt: skip
+    frees = [j for j in spec.joints if j.type == mujoco.mjtJoint.mjJNT_FREE]
+    if len(frees) != 1:
+        raise ValueError(f"{mjcf} has {len(frees)} free joints; the robot's base is the one "
+                         "free body of the file")  # fmt: skip
+    frees[0].name = frees[0].name or interface["free_joint"]
+    bodies = {body.name: body for body in spec.bodies}
+    bodies[interface["base_body"]] = bodies.get(interface["base_body"], frees[0].parent)
+    sites = {site.name for site in spec.sites}
+    sensors = {sensor.name for sensor in spec.sensors}
+    for sensor in interface["sensors"]:
+        if sensor["name"] in sensors:
+            continue
+        site = next(s for s in interface["sites"] if s["name"] == sensor["objname"])
+        if site["name"] not in sites:
+            body = bodies.get(site["body"])
+            if body is None:
+                raise ValueError(
+                    f"{mjcf} lacks the body {site['body']!r} that carries the "
+                    f"site {site['name']!r} of the sensor {sensor['name']!r}"
+                )
+            body.add_site(
+                name=site["name"],
+                pos=site["pos"],
+                quat=site["quat"],
+                size=site["size"],
+                type=getattr(mujoco.mjtGeom, site["type"]),
+            )
+            sites.add(site["name"])
+        spec.add_sensor(name=sensor["name"], type=getattr(mujoco.mjtSensor, sensor["type"]),
+                        objtype=getattr(mujoco.mjtObj, sensor["objtype"]),
+                        objname=sensor["objname"])  # fmt: skip
+    planes = [
+        g
+        for g in spec.worldbody.geoms
+        if g.type in (mujoco.mjtGeom.mjGEOM_PLANE, mujoco.mjtGeom.mjGEOM_HFIELD)
+    ]
+    if not planes:  # the ground the policy trained on
+        friction = interface.get("ground_friction") or [1.0, 0.005, 0.0001]
+        spec.worldbody.add_geom(name="ground", type=mujoco.mjtGeom.mjGEOM_PLANE,
+                                size=[50, 50, 0.05], friction=friction,
+                                contype=1, conaffinity=1)  # fmt: skip
+    model = spec.compile()
+    model.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_ACTUATION.value
+    return model
+
+
+def substeps(timestep: float, control_dt: float, mjcf: Path) -> int:
+    """Physics steps per control step at ``timestep``; ValueError unless a whole number."""
+    n = round(control_dt / timestep)
+    if n < 1 or abs(n * timestep - control_dt) > 1e-9:
+        raise ValueError(f"{mjcf}: timestep {timestep} s does not divide the policy's control "
+                         f"period {control_dt} s")  # fmt: skip
+    return n
+
+
+def free_joint(model: mujoco.MjModel, name: str):
+    """The free joint ``name``, or the model's only free joint."""
+    try:
+        return model.joint(name)
+    except KeyError:
+        free = [j for j in range(model.njnt) if model.jnt_type[j] == mujoco.mjtJoint.mjJNT_FREE]
+        return model.joint(free[0])
+
+
+def located(model: mujoco.MjModel, entry: dict) -> dict:
+    """An observation source with its index in ``model``: a joint's coordinate found by the
+    joint's name (the metadata's ``joint`` and ``element``), as is without them."""
+    if "joint" not in entry:
+        return entry
+    entry = dict(entry)
+    joint = model.joint(entry["joint"]) if entry["joint"] else None
+    if entry["source"] == "projected_gravity":
+        joint = free_joint(model, entry["joint"])
+        entry["quaternion"] = int(joint.qposadr[0]) + entry["element"]
+    elif entry["source"] == "qpos":
+        entry["index"] = int(joint.qposadr[0]) + entry["element"]
+    else:
+        entry["index"] = int(joint.dofadr[0]) + entry["element"]
+    return entry
+
+
 class Simulation:
     """The robot of the MJCF, stepped as the project's MuJoCo env steps it."""
 
-    def __init__(self, meta: dict, mjcf: Path) -> None:
+    def __init__(self, meta: dict, mjcf: Path, other: bool = False) -> None:
         self.meta, self.env = meta, meta["env_config"]
-        self.model = mujoco.MjModel.from_xml_path(str(mjcf))
+        if other:  # another model of the robot: adapted to the policy by name
+            self.model = other_model(meta, mjcf)
+        else:
+            self.model = mujoco.MjModel.from_xml_path(str(mjcf))
         self.data = mujoco.MjData(self.model)
         self.query = mujoco.MjData(self.model)  # for what the reward reads between steps
         self.decimation = int(meta["decimation"])
-        if abs(self.model.opt.timestep * self.decimation - meta["control_dt"]) > 1e-12:
+        if other:  # its own timestep: the control period in as many substeps as it takes
+            self.decimation = substeps(self.model.opt.timestep, meta["control_dt"], mjcf)
+        elif abs(self.model.opt.timestep * self.decimation - meta["control_dt"]) > 1e-12:
             raise ValueError(f"{mjcf}: timestep {self.model.opt.timestep} s x "
                              f"{self.decimation} is not the control period "
                              f"{meta['control_dt']} s")  # fmt: skip
         joints = [self.model.joint(name) for name in meta["joint_names"]]
         self.qpos_index = np.array([j.qposadr[0] for j in joints])
         self.dof_index = np.array([j.dofadr[0] for j in joints])
-        self.ctrl_index = np.array([self.model.actuator(name).id for name in meta["joint_names"]])
-        self.torque_sensors = [self.sensor_slice(f"{name}_torque") for name in meta["joint_names"]]
+        # the free base's coordinates (0 in the policy's own model, the hopper has none)
+        base = meta.get("model_interface", {}).get("free_joint") if other else None
+        self.base_qpos = int(free_joint(self.model, base).qposadr[0]) if base else 0
+        self.base_dof = int(free_joint(self.model, base).dofadr[0]) if base else 0
+        self.sources = [located(self.model, entry) for entry in meta["observation_sources"]]
         self.low = np.asarray(meta["action_low"])
         self.high = np.asarray(meta["action_high"])
         self.nominal = np.asarray(meta["default_joint_positions"])
         self.law = meta["actuator"]
-        # the MJCF's actuators switched off (the coast law): the law is applied here, as torques
+        # the MJCF's actuators switched off (the coast law, another model): the law is
+        # applied here, as torques
         actuation_off = mujoco.mjtDisableBit.mjDSBL_ACTUATION.value
         self.torque_law = bool(self.model.opt.disableflags & actuation_off)
+        if not self.torque_law:
+            self.ctrl_index = np.array([self.model.actuator(n).id for n in meta["joint_names"]])
+            self.torque_sensors = [self.sensor_slice(f"{n}_torque") for n in meta["joint_names"]]
         self.hopper = meta["robot_model"] == "anymal-hopper"
         if self.hopper and self.env["hop_reward"] != "hip-velocity":
             raise ValueError(f"hop_reward {self.env['hop_reward']!r}: this example computes "
@@ -177,6 +306,8 @@ class Simulation:
         sensors = [self.model.sensor(i).name for i in range(self.model.nsensor)]
         self.legs = [name.removesuffix("_foot_pos") for name in sensors
                      if name.endswith("_foot_pos")]  # fmt: skip
+        self.fixed_command = None  # --command: held instead of the drawn one
+        self.forward_speeds: list[float] = []  # the base's forward speed at each step
 
     def sensor_slice(self, name: str) -> slice:
         sensor = self.model.sensor(name)
@@ -203,10 +334,13 @@ class Simulation:
             for column, name in ((1, "lateral_range"), (2, "yaw_range")):
                 low, high = env[name]
                 self.command[column] = rng.uniform(low, high) if high > low else low
+            if self.fixed_command is not None:
+                self.command = np.array(self.fixed_command, dtype=np.float64)
             data.qpos[self.qpos_index] = joints
             mujoco.mj_kinematics(model, data)
             lowest = min(data.site(f"{leg}_foot").xpos[2] for leg in self.legs)
-            data.qpos[2] += self.foot_radius() - lowest
+            data.qpos[self.base_qpos + 2] += self.foot_radius() - lowest
+            self.forward_speeds = []
             self.desired = joints.copy()  # the env's last action at a start
             self.joint_vel_before = np.zeros(len(joints))
             self.air_time = np.zeros(len(self.legs))
@@ -217,7 +351,7 @@ class Simulation:
     def observation(self) -> np.ndarray:
         """The observation, built entry by entry from the metadata's ``observation_sources``."""
         data, values = self.data, []
-        for entry in self.meta["observation_sources"]:
+        for entry in self.sources:
             source, index = entry["source"], entry["index"]
             if source == "qpos":
                 value = data.qpos[index]
@@ -244,8 +378,9 @@ class Simulation:
         last_desired, feet_before = self.desired, None if self.hopper else self.feet()[:, :2]
         self.desired = desired
         torque_sum = np.zeros(len(desired))
-        data.ctrl[:] = 0.0
-        data.ctrl[self.ctrl_index] = desired
+        if not self.torque_law:
+            data.ctrl[:] = 0.0
+            data.ctrl[self.ctrl_index] = desired
         data.qacc_warmstart[:] = 0.0  # each control step starts the solver afresh, as the env
         for _ in range(self.decimation):
             if self.torque_law:  # the law in numpy at every substep, as joint torques
@@ -276,8 +411,19 @@ class Simulation:
                          for leg in self.legs])  # fmt: skip
 
     def foot_radius(self) -> float:
-        """The quadruped's foot sphere's radius (m): the first foot's geom."""
-        return float(self.model.geom(f"{self.legs[0]}_foot").size[0])
+        """The quadruped's foot sphere's radius (m): the first foot's geom, or in another
+        model the sphere nearest the foot's site on the site's body."""
+        model, leg = self.model, self.legs[0]
+        try:
+            return float(model.geom(f"{leg}_foot").size[0])
+        except KeyError:
+            site = model.site(f"{leg}_foot")
+        spheres = [g for g in range(model.ngeom) if model.geom_bodyid[g] == site.bodyid[0]
+                   and model.geom_type[g] == mujoco.mjtGeom.mjGEOM_SPHERE]  # fmt: skip
+        if not spheres:
+            raise ValueError(f"the body of the site {leg}_foot has no sphere geom: no foot")
+        nearest = min(spheres, key=lambda g: np.linalg.norm(model.geom_pos[g] - site.pos))
+        return float(model.geom_size[nearest][0])
 
     # -- the reward (the env's) --------------------------------------------------------------
     def hopper_reward(self, desired, torque) -> tuple[float, bool]:
@@ -312,8 +458,10 @@ class Simulation:
         env, data, dt = self.env, self.data, self.meta["control_dt"]
         lin_vel = data.sensordata[self.sensor_slice("base_lin_vel")]
         ang_vel = data.sensordata[self.sensor_slice("base_ang_vel")]
-        gravity = projected_gravity(data.qpos[3:7])
-        height = data.qpos[2]
+        base = self.base_qpos
+        gravity = projected_gravity(data.qpos[base + 3 : base + 7])
+        height = data.qpos[base + 2]
+        self.forward_speeds.append(float(lin_vel[0]))
         joint_vel = data.qvel[self.dof_index].copy()
         feet = self.feet()
         contact = feet[:, 2] < self.foot_radius() + 0.005
@@ -373,8 +521,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("policy", type=Path, help="an ONNX file written by `cpg-actor export`, "
                         "or its export or run directory")  # fmt: skip
     parser.add_argument("--mjcf", type=Path, default=None,
-                        help="the robot's MJCF (default: the one named in the metadata, next "
-                        "to the policy)")  # fmt: skip
+                        help="the robot's MJCF (default: the one the export wrote next to the "
+                        "policy); for a quadruped, any MJCF of the robot: joints found by "
+                        "name, the actuator law applied as torques, the ground and sensors "
+                        "added where it lacks them")  # fmt: skip
+    parser.add_argument("--command", type=float, nargs="+", default=None,
+                        metavar="VX [VY YAW]",
+                        help="a quadruped's velocity command (m/s, m/s, rad/s), held for the "
+                        "episode instead of the drawn one")  # fmt: skip
     parser.add_argument("--seed", type=int, default=1000, help="the start's seed (default 1000)")
     parser.add_argument("--steps", type=int, default=None, help="stop after this many steps")
     args = parser.parse_args(argv)
@@ -384,13 +538,24 @@ def main(argv: list[str] | None = None) -> int:
         mjcf = args.mjcf or path.with_name(policy.meta["mjcf_file"])
         if not mjcf.is_file():
             raise ValueError(f"the robot's MJCF {mjcf} does not exist; pass --mjcf PATH")
-        sim = Simulation(policy.meta, mjcf)
+        other = args.mjcf is not None and bool(
+            policy.meta.get("model_interface", {}).get("free_joint")
+        )  # a quadruped's
+        sim = Simulation(policy.meta, mjcf, other=other)
+        if args.command is not None:
+            if sim.hopper or len(args.command) not in (1, 3):
+                raise ValueError("--command takes VX or VX VY YAW, for a quadruped policy")
+            sim.fixed_command = [*args.command, 0.0, 0.0][:3]
         total, steps, ended = run_episode(policy, sim, args.seed, args.steps)
     except ValueError as error:
         print(f"deploy_onnx.py: error: {error}", file=sys.stderr)
         return 2
     print(f"{policy.meta['agent']} on {policy.meta['robot_model']}, seed {args.seed}: "
           f"return {total:.10g} over {steps} steps ({ended})")  # fmt: skip
+    if sim.forward_speeds:  # the velocity task's tracking, as the env's metrics measure it
+        speeds = np.array(sim.forward_speeds)
+        print(f"command {sim.command[0]:.3g} m/s: mean forward speed {speeds.mean():.4f} m/s, "
+              f"speed error {np.abs(speeds - sim.command[0]).mean():.4f} m/s")  # fmt: skip
     return 0
 
 

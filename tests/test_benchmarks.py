@@ -45,6 +45,9 @@ RUNS = {
     "mjx_solver_iterations.py": (["--caps", "4/15", "--rounds", "1", "--batch", "1"],
                                  "--output"),
     "planar_prior.py": (["--robot", "go1", "--seconds", "0.1", "--robots", "1"], "--output"),
+    # GO1POLICY: a tiny trained Go1 run the test makes, exported; episodes of 5 steps
+    "other_model.py": (["GO1POLICY", "--seeds", "1000", "--commands", "0.5", "--steps", "5",
+                        "--ablation"], "--output"),
     "policy_latency.py": (["--steps", "20", "--agents", "mlp"], "--output"),
     "profile_collect.py": (["--num-envs", "4", "--agent", "mlp", "--device", "cpu"], "--output"),
     "quadruped_physics_settings.py": (["--robot", "go1", "--envs", "2", "--rounds", "1",
@@ -114,6 +117,16 @@ def test_the_script_runs_its_smallest_configuration(script, tmp_path):
         reproduction = tmp_path / "repro"
         trained_run(reproduction / "runs" / "mlp" / "seed0", "mlp", env={"episode_steps": 250})
         arguments = [str(reproduction) if a == "REPRODUCTION" else a for a in arguments]
+    if "GO1POLICY" in arguments:
+        from cpg_actor.config import TrainConfig
+        from cpg_actor.deploy import load_policy
+        from cpg_actor.deploy.export import export_policy
+        from tiny import trained_run  # tests/tiny.py
+
+        run = trained_run(tmp_path / "go1", "cpg-actor", "go1")
+        policy = load_policy(run, run_config=TrainConfig.load(run / "config.yaml"))
+        onnx = export_policy(policy, run / "export" / "policy.onnx", "onnx")
+        arguments = [str(onnx) if a == "GO1POLICY" else a for a in arguments]
     output = tmp_path / "result.md"
     result = subprocess.run(
         [sys.executable, str(BENCHMARKS / script.split()[0]), *arguments, output_flag, str(output)],

@@ -137,6 +137,7 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
     :func:`cpg_actor.deploy.load_policy`, which knows its run and robot), key -> string
     (``docs/training.md``, "Export", has the table)."""
     from cpg_actor import __version__
+    from cpg_actor.deploy.interface import model_interface, named_sources
     from cpg_actor.robots.common.actuator import Actuator
     from cpg_actor.robots.registry import get_robot
 
@@ -150,7 +151,9 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
     normalizer = policy.normalizer
     std = torch.sqrt(normalizer.var + normalizer.epsilon)
     state = initial_state(policy, batch)
-    sources = get_robot(config.robot).observation_sources()
+    plugin = get_robot(config.robot)
+    mjcf = plugin.mjcf(env)  # the model the policy trained on: its joints, sites, sensors
+    sources = named_sources(mjcf, [dict(source) for source in plugin.observation_sources()])
     values: dict[str, Any] = {
         "cpg_actor_version": __version__,
         "robot": config.robot,
@@ -194,6 +197,7 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
             "saturation_torque": actuator.saturation_torque,
         },
         "mjcf_file": mjcf_file,
+        "model_interface": model_interface(mjcf),
         "env_config": dataclasses.asdict(env),
     }
     return {

@@ -48,4 +48,27 @@ class Go1Config(QuadrupedConfig):
     reward_scales: dict[str, float] = field(default_factory=_go1_scales)
 
     moving_mass = robot.TOTAL_MASS  # kg: sizes its payloads and pushes (QuadrupedConfig's)
+    # randomised training's ranges for the Go1 (``env.randomize.preset=field``), each with its
+    # source: MuJoCo Playground's Go1 joystick domain randomisation (floor friction U(0.4, 1.0),
+    # armature x U(1.0, 1.05), torso mass + U(-1, 1) kg: its non-negative half, a payload
+    # here); walk-these-ways' Go1 (Margolis & Agrawal 2022, go1_gym: motor strength
+    # 0.9-1.1, Kp factor 0.8-1.3, Kd factor 0.5-1.5, actions late by up to 6 steps of 5 ms:
+    # 0-1.5 control steps here); legged_gym's sensor noise at level 1 and pushes up to 1 m/s
+    # (every 5-10 s: QuadrupedConfig's). Passive damping 0-1.5 x and the contact's time
+    # constant 0.5-2 x are this project's choice (no recipe for the Go1 randomises them): the
+    # damping range reaches mjlab's Go1, which has none (robots/go1/variant.py).
+    FIELD_RANDOMIZATION = {
+        "friction": (0.4, 1.0),
+        "payload": (0.0, 1.0),
+        "armature": (1.0, 1.05),
+        "motor_strength": (0.9, 1.1),
+        "kp_scale": (0.8, 1.3),
+        "kd_scale": (0.5, 1.5),
+        "latency": (0.0, 1.5),
+        "obs_noise": (1.0, 1.0),
+        "joint_damping": (0.0, 1.5),
+        "contact_softness": (0.5, 2.0),
+        "push_velocity": (0.0, 1.0),
+        "push_interval": (5.0, 10.0),
+    }
     body = "unitree-go1"

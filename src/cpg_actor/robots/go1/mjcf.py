@@ -114,3 +114,10 @@ def mjcf_text(
         gravity=robot.GRAVITY,
         foot_friction=foot_friction,
     )
+
+
+def extra_assets() -> dict[Path, str]:
+    """The other shipped models of the Go1: :mod:`cpg_actor.robots.go1.variant`'s."""
+    from cpg_actor.robots.go1.variant import variant_assets
+
+    return variant_assets()

@@ -147,7 +147,24 @@ class HopperConfig:
                     f"got {getattr(self, name)}"
                 )
         # last: the push's window is checked against the episode's length
-        check_perturbations(self, PUSH_DIRECTIONS, tuple(BACKENDS))  # not on MJX
+        check_perturbations(
+            self,
+            PUSH_DIRECTIONS,
+            tuple(BACKENDS),  # not on MJX
+            robot="the hopper",
+        )
+
+    # randomised training's ranges for the hopper (``env.randomize.preset=field``): those of the
+    # reproduction's randomised variants (docs/robustness.md), within the suite's levels;
+    # legged_gym randomises friction 0.5-1.25 and the base's mass by +-1 kg and adds its sensor
+    # noise at level 1
+    FIELD_RANDOMIZATION = {
+        "payload": (0.0, 1.02),
+        "friction": (0.4, 1.2),
+        "latency": (0.0, 1.0),
+        "obs_noise": (0.0, 1.0),
+        "motor_strength": (0.8, 1.2),
+    }
 
     # -- (de)serialisation -------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:

@@ -86,6 +86,9 @@ class EpisodeDraws:
         self.noisy = np.flatnonzero(self.sensor_noise > 0)
         self.rngs: list[np.random.Generator] = []
         self.push_step = np.full(num_envs, -1, dtype=np.int64)
+        # randomised training's pushes: the control step of each env's next kick
+        self.control_dt = config.control_dt
+        self.kick_step = np.full(num_envs, -1, dtype=np.int64)
         # each env's episode perturbation (randomised training: drawn by start())
         self.episodes = [perturbation] * num_envs
 
@@ -107,7 +110,35 @@ class EpisodeDraws:
                 self.episodes[i] = self.randomize.draw(rng, self.decimation, self.perturbation)
             if self.perturbation.push:
                 self.push_step[i] = rng.integers(self.window[0], self.window[1] + 1)
+            if self.randomize.pushes:
+                self.kick_step[i] = self._interval(rng)
         return index
+
+    def _interval(self, rng: np.random.Generator) -> int:
+        """Control steps to a training push: ``randomize.push_interval`` s drawn (>= 1)."""
+        low, high = self.randomize.push_interval
+        seconds = rng.uniform(low, high) if high > low else low
+        return max(1, round(seconds / self.control_dt))
+
+    def kicks(self, elapsed: np.ndarray) -> np.ndarray | None:
+        """(N, 2) the horizontal velocity kicks (m/s, world frame) of randomised training's
+        pushes due after ``elapsed`` (N,) control steps (zero for the others), each of a size
+        drawn in ``randomize.push_velocity`` in a direction drawn uniformly, the next push
+        drawn ``randomize.push_interval`` s later; None when none is due."""
+        if not (self.active and self.randomize.pushes):
+            return None
+        due = np.flatnonzero(self.kick_step == elapsed)
+        if due.size == 0:
+            return None
+        kicks = np.zeros((self.num_envs, 2))
+        low, high = self.randomize.push_velocity
+        for i in due:
+            rng = self.rngs[i]
+            size = rng.uniform(low, high) if high > low else low
+            angle = rng.uniform(0.0, 2.0 * np.pi)
+            kicks[i] = size * np.cos(angle), size * np.sin(angle)
+            self.kick_step[i] = elapsed[i] + self._interval(rng)
+        return kicks
 
     def pushed(self, elapsed: np.ndarray) -> np.ndarray:
         """(N,) bool: the envs pushed during the control step after ``elapsed`` steps."""
@@ -129,8 +160,11 @@ class EpisodeDraws:
     def get_state(self) -> dict[str, Any]:
         """The generators and the episode perturbations, as plain Python values (the push
         steps, an array, are the env's to save: :attr:`push_step`)."""
-        return {"rngs": [rng.bit_generator.state for rng in self.rngs],
-                "episodes": [dataclasses.asdict(p) for p in self.episodes]}  # fmt: skip
+        state = {"rngs": [rng.bit_generator.state for rng in self.rngs],
+                 "episodes": [dataclasses.asdict(p) for p in self.episodes]}  # fmt: skip
+        if self.randomize.pushes:
+            state["kick_step"] = self.kick_step.tolist()
+        return state
 
     def set_state(self, state: dict[str, Any], push_step=None) -> None:
         self.rngs = []
@@ -141,6 +175,8 @@ class EpisodeDraws:
         if push_step is not None:
             np.copyto(self.push_step, np.asarray(push_step, dtype=np.int64))
         self.episodes = [Perturbation.from_value(dict(p)) for p in state["episodes"]]
+        if "kick_step" in state:
+            np.copyto(self.kick_step, np.asarray(state["kick_step"], dtype=np.int64))
 
 
 def push_force(perturbation: Perturbation, control_dt: float) -> np.ndarray:

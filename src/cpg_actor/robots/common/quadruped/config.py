@@ -15,6 +15,7 @@ from typing import Any, ClassVar
 
 from cpg_actor.robots.common.checks import check_episode_steps
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
+from cpg_actor.robots.common.perturbation.values import RANDOMIZED, TRAINING_PUSHES
 
 
 def default_scales() -> dict[str, float]:
@@ -226,12 +227,32 @@ class QuadrupedConfig:
         if self.actuator_law not in ("dc-motor", "coast"):
             raise ValueError(f"actuator_law must be 'dc-motor' or 'coast', got "
                              f"{self.actuator_law!r}")  # fmt: skip
-        check_perturbations(self, PUSH_DIRECTIONS, ("mujoco",))  # not on MJX
+        check_perturbations(
+            self,
+            PUSH_DIRECTIONS,
+            ("mujoco",),  # not on MJX
+            supported=(*RANDOMIZED, *TRAINING_PUSHES),
+            robot=self.body,
+        )
         return self
 
     # the mass the robot moves, kg (ANYmal B's: robots/anymal/description.py TOTAL_MASS), which
     # sizes its payloads and pushes
     moving_mass = 30.4214
+    # randomised training's ranges for this robot (``env.randomize.preset=field``), each from
+    # legged_gym's ANYmal recipe (Rudin et al. 2021, anymal_c_rough_config.py, which ANYmal B's
+    # inherits): ground friction 0.5-1.25; added base mass +-5 kg, its non-negative half (a
+    # payload here); sensor noise at its level 1 in every episode; pushes up to 1 m/s (legged_gym:
+    # each horizontal component up to 1 m/s every 15 s; here a kick of up to 1 m/s in a random
+    # direction every 5-10 s, a few per 20 s episode). legged_gym randomises nothing else on
+    # ANYmal: the drives, joints and contact stay nominal.
+    FIELD_RANDOMIZATION = {
+        "friction": (0.5, 1.25),
+        "payload": (0.0, 5.0),
+        "obs_noise": (1.0, 1.0),
+        "push_velocity": (0.0, 1.0),
+        "push_interval": (5.0, 10.0),
+    }
     # the body these numbers are for (its QuadrupedModel's name): a subclass for another body
     # names its own, one that changes only numbers (a variant of the robot) keeps it
     body = "anymal-b"

@@ -91,4 +91,5 @@ def _observation_sources(vector_env: str) -> tuple[dict[str, Any], ...]:
 
 def _assets(mjcf: str) -> dict[Path, str]:
     module = importlib.import_module(mjcf)
-    return {module.MJCF_PATH: module.mjcf_text()}
+    extra = getattr(module, "extra_assets", dict)  # e.g. another model of the robot
+    return {module.MJCF_PATH: module.mjcf_text(), **extra()}

@@ -95,6 +95,8 @@ def load_model(quadruped: QuadrupedModel, config: QuadrupedConfig,
         floor_feet_only(model, quadruped.legs)
     if perturbation.payload:
         add_mass(model, quadruped.base_body, perturbation.payload)
+    if not perturbation.model_nominal:  # the joints' and the contact's (randomised training)
+        model_terms(model, quadruped, perturbation)
     return model
 
 
@@ -120,6 +122,16 @@ def draw_command(rng: np.random.Generator, config: QuadrupedConfig) -> np.ndarra
     if config.standing_share > 0 and rng.uniform() < config.standing_share:
         command[:] = 0.0
     return command
+
+
+def model_terms(model: mujoco.MjModel, quadruped: QuadrupedModel, perturbation) -> None:
+    """The perturbation's factors on the joints' passive damping and armature (every dof but
+    the free base's six) and on the contact time constant (solref's first number) of the
+    feet and the ground, written into ``model``."""
+    model.dof_damping[6:] *= perturbation.joint_damping
+    model.dof_armature[6:] *= perturbation.armature
+    for geom in [*(f"{leg}_foot" for leg in quadruped.legs), "ground"]:
+        model.geom_solref[model.geom(geom).id, 0] *= perturbation.contact_softness
 
 
 def resolve_config(
@@ -403,6 +415,9 @@ class QuadrupedVectorEnv(VectorEnv):
         self._control[:] = desired[:, None, :] if self.delay is None else self.delay.schedule(
             desired)  # fmt: skip
         pushed = self.draws.pushed(self.episode.elapsed)  # before the step's clock moves
+        kicks = self.draws.kicks(self.episode.elapsed)  # randomised training's pushes
+        if kicks is not None:  # the bases' horizontal velocity (world frame) kicked
+            self.qvel[:, :2] += kicks
         control, spec = self._control_with_push(self._control, pushed)
         self.stepper.rollout(self._state, control, self._next, self._sensors, spec, cfg.decimation)
         np.copyto(self._state, self._next[:, -1])
