@@ -15,6 +15,7 @@ from typing import Any, ClassVar
 
 from cpg_actor.robots.common.checks import check_episode_steps
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
+from cpg_actor.terrain.config import Terrain, check_terrain
 
 
 def default_scales() -> dict[str, float]:
@@ -115,6 +116,8 @@ class QuadrupedConfig:
     # perturbations (the robustness suite's; docs/robustness.md): none by default
     perturbation: Perturbation = field(default_factory=Perturbation)
     randomize: Randomization = field(default_factory=Randomization)  # randomised training
+    # rough ground (cpg_actor.terrain; docs/quadruped.md, "Terrain"): flat by default
+    terrain: Terrain = field(default_factory=Terrain)
 
     @property
     def control_dt(self) -> float:
@@ -227,6 +230,7 @@ class QuadrupedConfig:
             raise ValueError(f"actuator_law must be 'dc-motor' or 'coast', got "
                              f"{self.actuator_law!r}")  # fmt: skip
         check_perturbations(self, PUSH_DIRECTIONS, ("mujoco",))  # not on MJX
+        check_terrain(self)
         return self
 
     # the mass the robot moves, kg (ANYmal B's: robots/anymal/description.py TOTAL_MASS), which
