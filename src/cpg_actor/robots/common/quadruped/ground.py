@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 
 from cpg_actor.robots.common.mujoco_runtime import mujoco
-from cpg_actor.terrain import Terrain, clamped_levels, height_map, moved_levels
 from cpg_actor.tasks import velocity as task
+from cpg_actor.terrain import Terrain, clamped_levels, height_map, moved_levels
 
 SPAWN_SPREAD = 1.0  # m: a start within this of the tile's centre in x and y (legged_gym's)
 
@@ -85,7 +85,8 @@ class Ground:
         moved = moved_levels(self.levels[index], walked, commanded, self.terrain.tile_size)
         top = self.terrain.levels
         # a draw only for the robots past the top level (the env's generator)
-        random = [rngs[i].integers(top) if m >= top else 0 for i, m in zip(index, moved)]
+        random = [rngs[i].integers(top) if m >= top else 0
+                  for i, m in zip(index, moved, strict=True)]  # fmt: skip
         self.levels[index] = clamped_levels(moved, top, np.asarray(random, dtype=np.int64))
         return walked_level
 
