@@ -1,0 +1,104 @@
+"""How far the open-loop trot gets on rough ground: falls per terrain level and kind.
+
+    python benchmarks/terrain_trot.py [--robot go1] [--robots 4] [--seconds 20]
+        [--levels 10] [--command 0.5] [--output benchmarks/results/terrain_trot.md]
+
+The robot's training CPG layout (``leg``, the foot-space pattern) in its trot preset, open
+loop at the drive of a ``--command`` m/s forward command (no learning, no feedback), on flat
+ground and then on each level of the default terrain (``env.terrain``: every kind, ``--levels``
+levels, the curriculum off so that every robot stays on its level): ``--robots`` robots per
+kind, one episode of ``--seconds`` each, started on their tile within 1 m of its centre. A
+row per level: the robots of each kind that fell (the env's ``fell``: base too low over the
+ground, tilted past ``fall_tilt`` or touching the ground), and the mean forward speed of
+those that did not. What a policy has to add to the prior on each kind.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+import torch
+
+from bench_report import measured, write
+from cpg_actor.machine import cpu_model
+from cpg_actor.robots.registry import get_robot
+from cpg_actor.terrain import KINDS
+
+
+def trot(robot, num_envs: int, seconds: float, command: float, terrain: dict | None):
+    """One episode of the open-loop trot for ``num_envs`` robots: (fell (N,) bool, mean forward
+    speed (N,) m/s) on ``terrain`` (a mapping of its fields; None: flat)."""
+    values = {"command_range": (command, command), "episode_seconds": seconds}
+    if terrain is not None:
+        values["terrain"] = terrain
+    env = robot.make(num_envs, robot.config_class.from_dict(values))
+    env.reset(seed=0)
+    layout = robot.cpg_layouts()["leg"]
+    cpg = layout.preset(env.config.control_dt, gait="trot").double()
+    pattern = layout.pattern(env.robot.nominal_pose).double()
+    state = cpg.initial_state(num_envs)
+    drive = torch.full((num_envs, cpg.num_oscillators), command, dtype=torch.float64)
+    fell, speed = np.zeros(num_envs, dtype=bool), np.full(num_envs, np.nan)
+    with torch.no_grad():
+        for _ in range(env.config.episode_steps):
+            _, state = cpg(state, drive)
+            action = pattern(state.phase, state.amplitude).numpy()
+            _, _, terminated, truncated, info = env.step(action)
+            ended = (terminated | truncated) & np.isnan(speed)  # the first episode only
+            fell |= terminated & ended
+            speed[ended] = info["episode_metrics"]["forward_speed"][ended]
+    env.close()
+    return fell, speed
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robot", default="go1")
+    parser.add_argument("--robots", type=int, default=4, help="per kind and level")
+    parser.add_argument("--seconds", type=float, default=20.0)
+    parser.add_argument("--levels", type=int, default=10)
+    parser.add_argument("--command", type=float, default=0.5, help="m/s")
+    parser.add_argument("--output", default="benchmarks/results/terrain_trot.md")
+    args = parser.parse_args()
+    if args.robots < 1 or args.levels < 1 or not args.seconds > 0:
+        parser.error("--robots and --levels must be >= 1 and --seconds positive")
+    robot = get_robot(args.robot)
+    n = args.robots * len(KINDS)  # env i walks kind i % len(KINDS)
+    rows = []
+    fell, speed = trot(robot, args.robots, args.seconds, args.command, None)
+    rows.append(("flat ground", [f"{fell.sum()}/{len(fell)}"] + ["-"] * (len(KINDS) - 1),
+                 np.nanmean(np.where(fell, np.nan, speed))))  # fmt: skip
+    for level in range(args.levels):
+        terrain = {"kinds": list(KINDS), "levels": args.levels, "curriculum": False,
+                   "start_level": level}  # fmt: skip
+        fell, speed = trot(robot, n, args.seconds, args.command, terrain)
+        kind = np.arange(n) % len(KINDS)
+        falls = [f"{fell[kind == k].sum()}/{args.robots}" for k in range(len(KINDS))]
+        standing = np.where(fell, np.nan, speed)
+        rows.append((str(level), falls, np.nanmean(standing) if (~fell).any() else np.nan))
+        print(level, falls, flush=True)
+    command = (f"python benchmarks/terrain_trot.py --robot {args.robot} --robots {args.robots} "
+               f"--seconds {args.seconds:g} --levels {args.levels} --command {args.command:g}")
+    lines = [
+        f"# The open-loop trot on rough ground ({robot.name})",
+        "",
+        measured(command) + f" on {cpu_model()}.",
+        "",
+        f"The foot-space trot open loop at the drive of {args.command:g} m/s, one "
+        f"{args.seconds:g} s episode per robot, {args.robots} robots per kind and level (flat: "
+        f"{args.robots} robots); falls, and the mean forward speed of the robots that did not "
+        "fall. The default terrain (`env.terrain`), level l of L at (l + 1) / L of the top "
+        "level's 0.1 m roughness, 0.4 slope and 0.2 m steps.",
+        "",
+        "| level | " + " | ".join(KINDS) + " | forward speed, m/s |",
+        "| --- | " + " | ".join("---" for _ in KINDS) + " | --- |",
+        *(f"| {level} | " + " | ".join(falls) + f" | {speed:.2f} |"
+          for level, falls, speed in rows),
+        "",
+    ]  # fmt: skip
+    write(args.output, lines)
+
+
+if __name__ == "__main__":
+    main()
