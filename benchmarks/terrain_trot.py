@@ -78,8 +78,10 @@ def main() -> None:
         standing = np.where(fell, np.nan, speed)
         rows.append((str(level), falls, np.nanmean(standing) if (~fell).any() else np.nan))
         print(level, falls, flush=True)
-    command = (f"python benchmarks/terrain_trot.py --robot {args.robot} --robots {args.robots} "
-               f"--seconds {args.seconds:g} --levels {args.levels} --command {args.command:g}")
+    command = (
+        f"python benchmarks/terrain_trot.py --robot {args.robot} --robots {args.robots} "
+        f"--seconds {args.seconds:g} --levels {args.levels} --command {args.command:g}"
+    )
     lines = [
         f"# The open-loop trot on rough ground ({robot.name})",
         "",

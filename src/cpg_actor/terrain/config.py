@@ -83,8 +83,10 @@ class Terrain:
         for name in ("tile_size", "border", "platform", "step_width"):
             cells = getattr(self, name) / self.resolution
             if abs(cells - round(cells)) > 1e-6:
-                raise ValueError(f"terrain.{name} must be a whole number of terrain.resolution "
-                                 f"({self.resolution:g} m), got {getattr(self, name):g}")
+                raise ValueError(
+                    f"terrain.{name} must be a whole number of terrain.resolution "
+                    f"({self.resolution:g} m), got {getattr(self, name):g}"
+                )
         if not 2.0 <= self.platform < self.tile_size:
             raise ValueError(f"terrain.platform must be at least 2 m (the robots start within "
                              f"1 m of its centre) and less than terrain.tile_size "
@@ -115,6 +117,8 @@ def check_terrain(config: Any) -> None:
     simulator that runs it: ValueError, one line, for a simulator without terrain."""
     config.terrain = Terrain.from_value(config.terrain).validate()
     if config.terrain.active and config.sim not in SIMULATORS:
-        raise ValueError(f"terrain runs on {', '.join(SIMULATORS)} only, got sim={config.sim!r} "
-                         "(why: docs/quadruped.md, 'Terrain'); give sim=mujoco, or no "
-                         "terrain.kinds for flat ground")
+        raise ValueError(
+            f"terrain runs on {', '.join(SIMULATORS)} only, got sim={config.sim!r} "
+            "(why: docs/quadruped.md, 'Terrain'); give sim=mujoco, or no "
+            "terrain.kinds for flat ground"
+        )
