@@ -16,6 +16,7 @@ those that did not. What a policy has to add to the prior on each kind.
 from __future__ import annotations
 
 import argparse
+import time
 
 import numpy as np
 import torch
@@ -28,7 +29,8 @@ from cpg_actor.terrain import KINDS
 
 def trot(robot, num_envs: int, seconds: float, command: float, terrain: dict | None):
     """One episode of the open-loop trot for ``num_envs`` robots: (fell (N,) bool, mean forward
-    speed (N,) m/s) on ``terrain`` (a mapping of its fields; None: flat)."""
+    speed (N,) m/s, the env's control steps per second of ``env.step``) on ``terrain`` (a
+    mapping of its fields; None: flat)."""
     values = {"command_range": (command, command), "episode_seconds": seconds}
     if terrain is not None:
         values["terrain"] = terrain
@@ -40,16 +42,19 @@ def trot(robot, num_envs: int, seconds: float, command: float, terrain: dict | N
     state = cpg.initial_state(num_envs)
     drive = torch.full((num_envs, cpg.num_oscillators), command, dtype=torch.float64)
     fell, speed = np.zeros(num_envs, dtype=bool), np.full(num_envs, np.nan)
+    stepping = 0.0
     with torch.no_grad():
         for _ in range(env.config.episode_steps):
             _, state = cpg(state, drive)
             action = pattern(state.phase, state.amplitude).numpy()
+            begin = time.perf_counter()
             _, _, terminated, truncated, info = env.step(action)
+            stepping += time.perf_counter() - begin
             ended = (terminated | truncated) & np.isnan(speed)  # the first episode only
             fell |= terminated & ended
             speed[ended] = info["episode_metrics"]["forward_speed"][ended]
     env.close()
-    return fell, speed
+    return fell, speed, env.config.episode_steps * num_envs / stepping
 
 
 def main() -> None:
@@ -66,18 +71,19 @@ def main() -> None:
     robot = get_robot(args.robot)
     n = args.robots * len(KINDS)  # env i walks kind i % len(KINDS)
     rows = []
-    fell, speed = trot(robot, args.robots, args.seconds, args.command, None)
-    rows.append(("flat ground", [f"{fell.sum()}/{len(fell)}"] + ["-"] * (len(KINDS) - 1),
-                 np.nanmean(np.where(fell, np.nan, speed))))  # fmt: skip
+    fell, speed, flat_sps = trot(robot, n, args.seconds, args.command, None)
+    falls = [f"{fell.sum()}/{n}"] + ["-"] * (len(KINDS) - 1)
+    rows.append(("flat ground", falls, np.nanmean(np.where(fell, np.nan, speed)), 1.0))
     for level in range(args.levels):
         terrain = {"kinds": list(KINDS), "levels": args.levels, "curriculum": False,
                    "start_level": level}  # fmt: skip
-        fell, speed = trot(robot, n, args.seconds, args.command, terrain)
+        fell, speed, sps = trot(robot, n, args.seconds, args.command, terrain)
         kind = np.arange(n) % len(KINDS)
         falls = [f"{fell[kind == k].sum()}/{args.robots}" for k in range(len(KINDS))]
         standing = np.where(fell, np.nan, speed)
-        rows.append((str(level), falls, np.nanmean(standing) if (~fell).any() else np.nan))
-        print(level, falls, flush=True)
+        mean = np.nanmean(standing) if (~fell).any() else np.nan
+        rows.append((str(level), falls, mean, sps / flat_sps))
+        print(level, falls, f"{sps / flat_sps:.2f}", flush=True)
     command = (
         f"python benchmarks/terrain_trot.py --robot {args.robot} --robots {args.robots} "
         f"--seconds {args.seconds:g} --levels {args.levels} --command {args.command:g}"
@@ -89,14 +95,16 @@ def main() -> None:
         "",
         f"The foot-space trot open loop at the drive of {args.command:g} m/s, one "
         f"{args.seconds:g} s episode per robot, {args.robots} robots per kind and level (flat: "
-        f"{args.robots} robots); falls, and the mean forward speed of the robots that did not "
-        "fall. The default terrain (`env.terrain`), level l of L at (l + 1) / L of the top "
-        "level's 0.1 m roughness, 0.4 slope and 0.2 m steps.",
+        f"{n} robots); falls, and the mean forward speed of the robots that did not fall. The "
+        "default terrain (`env.terrain`), level l of L at (l + 1) / L of the top level's 0.1 m "
+        "roughness, 0.4 slope and 0.2 m steps. Steps/s: the env's `step` on the level over "
+        "flat ground's, the same number of robots (one run each, on a shared machine: "
+        "indicative).",
         "",
-        "| level | " + " | ".join(KINDS) + " | forward speed, m/s |",
-        "| --- | " + " | ".join("---" for _ in KINDS) + " | --- |",
-        *(f"| {level} | " + " | ".join(falls) + f" | {speed:.2f} |"
-          for level, falls, speed in rows),
+        "| level | " + " | ".join(KINDS) + " | forward speed, m/s | steps/s vs flat |",
+        "| --- | " + " | ".join("---" for _ in KINDS) + " | --- | --- |",
+        *(f"| {level} | " + " | ".join(falls) + f" | {speed:.2f} | {ratio:.2f} |"
+          for level, falls, speed, ratio in rows),
         "",
     ]  # fmt: skip
     write(args.output, lines)
