@@ -131,3 +131,23 @@ def test_the_terrain_is_a_config_section_and_refused_on_mjx():
         Go1Config(sim="mjx", terrain=Terrain(kinds=("rough",))).validate()
     assert "\n" not in str(error.value)
     assert Go1Config(sim="mjx").validate().terrain == Terrain()  # flat: MJX as before
+
+
+def test_a_model_with_other_actuators_is_the_compiled_one():
+    # a randomised episode's model (motor strength) copies the last one compiled on the terrain
+    # with its own actuators: every number as MuJoCo compiles it
+    from cpg_actor.robots.common.perturbation import Perturbation
+    from cpg_actor.robots.common.quadruped import ground
+    from cpg_actor.robots.common.quadruped.vector import load_model
+
+    config = Go1Config(terrain=Terrain(**terrain())).validate()
+    nominal = load_model(Go1VectorEnv.quadruped, config)
+    stronger = config.replace(perturbation=Perturbation(motor_strength=1.3, payload=2.0))
+    copied = load_model(Go1VectorEnv.quadruped, stronger)
+    ground._COMPILED.clear()
+    compiled = load_model(Go1VectorEnv.quadruped, stronger)
+    arrays = [n for n in dir(compiled) if isinstance(getattr(compiled, n), np.ndarray)]
+    assert "hfield_data" in arrays and "actuator_gainprm" in arrays
+    for name in arrays:
+        assert np.array_equal(getattr(copied, name), getattr(compiled, name)), name
+    assert not np.array_equal(copied.actuator_gainprm, nominal.actuator_gainprm)

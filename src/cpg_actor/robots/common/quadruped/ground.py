@@ -14,6 +14,7 @@ observation is unchanged: what a blind robot measures.
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import numpy as np
@@ -25,11 +26,40 @@ from cpg_actor.terrain import Terrain, clamped_levels, height_map, moved_levels
 SPAWN_SPREAD = 1.0  # m: a start within this of the tile's centre in x and y (legged_gym's)
 
 
+def _outside_actuators(text: str) -> str:
+    """``text`` without its ``<actuator>`` element."""
+    head, _, rest = text.partition("<actuator>")
+    return head + rest.partition("</actuator>")[2]
+
+
+# the last model compiled on each terrain, with its MJCF: another model that differs from it only
+# in its actuators (a randomised episode's motor strength) is a copy of it with theirs
+_COMPILED: dict[tuple, tuple[str, mujoco.MjModel]] = {}
+
+
 def terrain_model(text: str, terrain: Terrain) -> mujoco.MjModel:
-    """The MjModel of a quadruped's MJCF ``text`` on ``terrain``'s ground."""
+    """The MjModel of a quadruped's MJCF ``text`` on ``terrain``'s ground. Compiling a height
+    field of the default grid's size takes MuJoCo about 0.1 s, too long for each randomised
+    episode: a model whose MJCF differs from the last one on this terrain only in its actuators
+    is a copy of that one with its own actuator arrays (``actuator_*``, from the MJCF compiled
+    on the plane, fast): the same numbers as compiled (``tests/robots/common/``)."""
     from cpg_actor.terrain.hfield import compile_with_height_field
 
-    return compile_with_height_field(text, height_map(terrain))
+    key = tuple(sorted(vars(terrain).items()))
+    last = _COMPILED.get(key)
+    if last is not None and _outside_actuators(last[0]) == _outside_actuators(text):
+        model = copy.copy(last[1])
+        if last[0] != text:
+            own = mujoco.MjModel.from_xml_string(text)
+            for name in dir(own):
+                if name.startswith("actuator_") and isinstance(getattr(own, name), np.ndarray):
+                    getattr(model, name)[...] = getattr(own, name)
+        return model
+    model = compile_with_height_field(text, height_map(terrain))
+    if len(_COMPILED) >= 4:
+        _COMPILED.pop(next(iter(_COMPILED)))
+    _COMPILED[key] = (text, model)
+    return copy.copy(model)
 
 
 class Ground:
