@@ -1,7 +1,8 @@
 """How far the open-loop trot gets on rough ground: falls per terrain level and kind.
 
     python benchmarks/terrain_trot.py [--robot go1] [--robots 4] [--seconds 20]
-        [--levels 10] [--command 0.5] [--output benchmarks/results/terrain_trot.md]
+        [--levels 10] [--command 0.5] [--floor-contacts auto]
+        [--output benchmarks/results/terrain_trot.md]
 
 The robot's training CPG layout (``leg``, the foot-space pattern) in its trot preset, open
 loop at the drive of a ``--command`` m/s forward command (no learning, no feedback), on flat
@@ -10,7 +11,9 @@ levels, the curriculum off so that every robot stays on its level): ``--robots``
 kind, one episode of ``--seconds`` each, started on their tile within 1 m of its centre. A
 row per level: the robots of each kind that fell (the env's ``fell``: base too low over the
 ground, tilted past ``fall_tilt`` or touching the ground), and the mean forward speed of
-those that did not. What a policy has to add to the prior on each kind.
+those that did not. What a policy has to add to the prior on each kind. ``--floor-contacts``:
+the env's ``floor_contacts`` (``feet``: the feet alone touch the ground, the faster
+collisions), on flat ground and terrain alike.
 """
 
 from __future__ import annotations
@@ -27,11 +30,19 @@ from cpg_actor.robots.registry import get_robot
 from cpg_actor.terrain import KINDS
 
 
-def trot(robot, num_envs: int, seconds: float, command: float, terrain: dict | None):
+def trot(
+    robot,
+    num_envs: int,
+    seconds: float,
+    command: float,
+    terrain: dict | None,
+    floor_contacts: str = "auto",
+):
     """One episode of the open-loop trot for ``num_envs`` robots: (fell (N,) bool, mean forward
     speed (N,) m/s, the env's control steps per second of ``env.step``) on ``terrain`` (a
     mapping of its fields; None: flat)."""
-    values = {"command_range": (command, command), "episode_seconds": seconds}
+    values = {"command_range": (command, command), "episode_seconds": seconds,
+              "floor_contacts": floor_contacts}  # fmt: skip
     if terrain is not None:
         values["terrain"] = terrain
     env = robot.make(num_envs, robot.config_class.from_dict(values))
@@ -64,6 +75,7 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=20.0)
     parser.add_argument("--levels", type=int, default=10)
     parser.add_argument("--command", type=float, default=0.5, help="m/s")
+    parser.add_argument("--floor-contacts", default="auto", help="the env's floor_contacts")
     parser.add_argument("--output", default="benchmarks/results/terrain_trot.md")
     args = parser.parse_args()
     if args.robots < 1 or args.levels < 1 or not args.seconds > 0:
@@ -71,13 +83,13 @@ def main() -> None:
     robot = get_robot(args.robot)
     n = args.robots * len(KINDS)  # env i walks kind i % len(KINDS)
     rows = []
-    fell, speed, flat_sps = trot(robot, n, args.seconds, args.command, None)
+    fell, speed, flat_sps = trot(robot, n, args.seconds, args.command, None, args.floor_contacts)
     falls = [f"{fell.sum()}/{n}"] + ["-"] * (len(KINDS) - 1)
     rows.append(("flat ground", falls, np.nanmean(np.where(fell, np.nan, speed)), 1.0))
     for level in range(args.levels):
         terrain = {"kinds": list(KINDS), "levels": args.levels, "curriculum": False,
                    "start_level": level}  # fmt: skip
-        fell, speed, sps = trot(robot, n, args.seconds, args.command, terrain)
+        fell, speed, sps = trot(robot, n, args.seconds, args.command, terrain, args.floor_contacts)
         kind = np.arange(n) % len(KINDS)
         falls = [f"{fell[kind == k].sum()}/{args.robots}" for k in range(len(KINDS))]
         standing = np.where(fell, np.nan, speed)
@@ -87,6 +99,7 @@ def main() -> None:
     command = (
         f"python benchmarks/terrain_trot.py --robot {args.robot} --robots {args.robots} "
         f"--seconds {args.seconds:g} --levels {args.levels} --command {args.command:g}"
+        + (f" --floor-contacts {args.floor_contacts}" if args.floor_contacts != "auto" else "")
     )
     lines = [
         f"# The open-loop trot on rough ground ({robot.name})",
