@@ -14,7 +14,9 @@ Per episode: a forward-speed command uniform in ``command_range`` (lateral and y
 commands uniform in ``lateral_range`` and ``yaw_range``, 0 by default; zero with probability
 ``standing_share``), drawn again every ``command_resample_seconds`` where that is not 0 (the
 observation after the step that draws it carries the new one), a start
-in the nominal pose with uniform joint noise, the feet on the ground, at rest. An episode ends
+in the nominal pose with uniform joint noise, the feet on the ground, at rest (on rough
+ground, ``config.terrain``: on the env's tile, heights read over the ground and a curriculum
+over its levels, :mod:`cpg_actor.robots.common.quadruped.ground`). An episode ends
 when the base falls (``task.fallen``) or touches the ground (terminated), or after
 ``episode_seconds`` (truncated). ``info["episode_metrics"]`` (NaN for envs still running):
 ``speed_error`` (mean |forward speed - command| over the episode, m/s), ``forward_speed`` (mean,
