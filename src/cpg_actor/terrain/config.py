@@ -12,7 +12,7 @@ from typing import Any
 # named as a robot walking out of the tile's centre meets them: "rough" random heights, a
 # pyramid slope or stairs going up (the centre a pit) or down (the centre a platform)
 KINDS = ("rough", "slope_up", "slope_down", "stairs_up", "stairs_down")
-SIMULATORS = ("mujoco",)  # the simulators that take a terrain (docs/quadruped.md, "Terrain")
+SIMULATORS = ("mujoco", "mjx")  # the simulators that take a terrain (docs/quadruped.md)
 
 
 @dataclass
@@ -118,7 +118,12 @@ def check_terrain(config: Any) -> None:
     config.terrain = Terrain.from_value(config.terrain).validate()
     if config.terrain.active and config.sim not in SIMULATORS:
         raise ValueError(
-            f"terrain runs on {', '.join(SIMULATORS)} only, got sim={config.sim!r} "
-            "(why: docs/quadruped.md, 'Terrain'); give sim=mujoco, or no "
-            "terrain.kinds for flat ground"
+            f"terrain runs on {', '.join(SIMULATORS)}, got sim={config.sim!r}; give one of "
+            "them, or no terrain.kinds for flat ground"
+        )
+    if config.terrain.active and config.sim == "mjx" and not getattr(config, "feet_only", True):
+        raise ValueError(
+            f"terrain on MJX needs floor_contacts 'feet' or 'auto' (the feet alone touch the "
+            f"ground; MJX collides no height field with cylinders), got "
+            f"floor_contacts={config.floor_contacts!r}"
         )

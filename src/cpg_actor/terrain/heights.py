@@ -25,6 +25,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from cpg_actor.robots.common.array_namespace import namespace
 from cpg_actor.terrain.config import KINDS, Terrain
 
 
@@ -103,18 +104,22 @@ class HeightMap(NamedTuple):
     kinds: tuple[str, ...]
 
     def tile_centre(self, level, column) -> np.ndarray:
-        """(..., 2) the centre (x, y) of the tile at ``level`` and kind ``column`` (arrays)."""
-        return np.stack([(np.asarray(level) + 0.5) * self.tile_size,
-                         (np.asarray(column) + 0.5) * self.tile_size], axis=-1)  # fmt: skip
+        """(..., 2) the centre (x, y) of the tile at ``level`` and kind ``column`` (arrays;
+        numpy or JAX, as :meth:`height_at`)."""
+        xp = namespace(level, column)
+        return xp.stack([(xp.asarray(level) + 0.5) * self.tile_size,
+                         (xp.asarray(column) + 0.5) * self.tile_size], axis=-1)  # fmt: skip
 
     def height_at(self, xy: np.ndarray) -> np.ndarray:
         """(...) the ground's height (m) under the points ``xy`` (..., 2): bilinear between the
-        samples, the edge's height beyond the map."""
+        samples, the edge's height beyond the map. numpy, or JAX for a map whose ``heights``
+        is a JAX array (the MJX env's)."""
+        xp = namespace(xy, self.heights)
         rows, columns = self.heights.shape
-        x = np.clip((xy[..., 0] - self.origin[0]) / self.resolution, 0, columns - 1)
-        y = np.clip((xy[..., 1] - self.origin[1]) / self.resolution, 0, rows - 1)
-        x0 = np.minimum(np.floor(x).astype(int), columns - 2)
-        y0 = np.minimum(np.floor(y).astype(int), rows - 2)
+        x = xp.clip((xy[..., 0] - self.origin[0]) / self.resolution, 0, columns - 1)
+        y = xp.clip((xy[..., 1] - self.origin[1]) / self.resolution, 0, rows - 1)
+        x0 = xp.minimum(xp.floor(x).astype(int), columns - 2)
+        y0 = xp.minimum(xp.floor(y).astype(int), rows - 2)
         fx, fy = x - x0, y - y0
         h = self.heights
         bottom = h[y0, x0] * (1 - fx) + h[y0, x0 + 1] * fx

@@ -1,7 +1,7 @@
 """Rough ground in the quadrupeds' MuJoCo env: the height field in the compiled model, a robot
 standing on a stair tile's platform at its flat-ground height over it, the curriculum moving
 levels at the ends of episodes, the level as an episode metric and in the saved state, the
-flat default untouched, the terrain as a config section, and MJX's refusal."""
+flat default untouched, the terrain as a config section (MJX: test_terrain_mjx.py)."""
 
 from __future__ import annotations
 
@@ -116,7 +116,7 @@ def test_the_levels_are_in_the_saved_state_and_a_reset_starts_them_again():
     assert env.ground.levels.tolist() == [1, 1]
 
 
-def test_the_terrain_is_a_config_section_and_refused_on_mjx():
+def test_the_terrain_is_a_config_section():
     config = TrainConfig()
     apply_dict(config, {"robot": "go1"}, prefix="")
     apply_dict(config, parse_override("env.terrain.kinds=[rough, stairs_up]"), prefix="")
@@ -126,9 +126,6 @@ def test_the_terrain_is_a_config_section_and_refused_on_mjx():
     assert again.env.terrain == config.env.terrain
     with pytest.raises(ValueError, match="unknown terrain kind 'ice'") as error:
         apply_dict(config, parse_override("env.terrain.kinds=[ice]"), prefix="")
-    assert "\n" not in str(error.value)
-    with pytest.raises(ValueError, match="terrain runs on mujoco only, got sim='mjx'") as error:
-        Go1Config(sim="mjx", terrain=Terrain(kinds=("rough",))).validate()
     assert "\n" not in str(error.value)
     assert Go1Config(sim="mjx").validate().terrain == Terrain()  # flat: MJX as before
 
