@@ -25,6 +25,10 @@ computed as pure jitted JAX functions, as the MJX hopper's
   where that is not 0) and reset noise from one JAX key per env (the same distributions,
   other numbers than the MuJoCo env for the same seed).
 
+* on rough ground (``config.terrain``, with the feet alone on the ground: MJX collides no
+  height field with cylinders), the MuJoCo env's tiles, heights over the ground and
+  curriculum as JAX functions (:mod:`cpg_actor.robots.common.quadruped.mjx_ground`).
+
 Float32, and MJX's solver is not MuJoCo's C one: trajectories agree within the tolerances of
 ``tests/robots/anymal/test_anymal_mjx.py`` (and the Go1's), not exactly.
 """
