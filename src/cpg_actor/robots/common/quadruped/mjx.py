@@ -23,8 +23,7 @@ computed as pure jitted JAX functions, as the MJX hopper's
   observation, reward terms, falls, feet air time, episode metrics, ``info``) on JAX arrays;
   SAME_STEP autoreset; episode commands (drawn again every ``command_resample_seconds``
   where that is not 0) and reset noise from one JAX key per env (the same distributions,
-  other numbers than the MuJoCo env for the same seed).
-
+  other numbers than the MuJoCo env for the same seed);
 * on rough ground (``config.terrain``, with the feet alone on the ground: MJX collides no
   height field with cylinders), the MuJoCo env's tiles, heights over the ground and
   curriculum as JAX functions (:mod:`cpg_actor.robots.common.quadruped.mjx_ground`).
