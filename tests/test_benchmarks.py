@@ -68,6 +68,7 @@ RUNS = {
                             "--repeats", "1"], "--output"),
     "shared_device.py": (["--runs", "1", "--preset", "paper", "--agent", "mlp", "--seconds", "10",
                           "--train-args=--num-envs 2 --set ppo.compile=false"], "--output"),
+    "terrain_trot.py": (["--robots", "1", "--seconds", "0.1", "--levels", "1"], "--output"),
     "time_to_hop.py": (["--seeds", "1", "--agents", "mlp", "--presets", "paper", "--no-sb3",
                         "--no-search", "--budget", "mlp=256", "--set", "ppo.compile=false",
                         "--set", "num_envs=2", "--ceiling-steps", "2000"], "--output"),

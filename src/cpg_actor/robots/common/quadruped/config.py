@@ -16,6 +16,7 @@ from typing import Any, ClassVar
 from cpg_actor.robots.common.checks import check_episode_steps
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 from cpg_actor.robots.common.perturbation.values import RANDOMIZED, TRAINING_PUSHES
+from cpg_actor.terrain.config import Terrain, check_terrain
 
 
 def default_scales() -> dict[str, float]:
@@ -116,6 +117,8 @@ class QuadrupedConfig:
     # perturbations (the robustness suite's; docs/robustness.md): none by default
     perturbation: Perturbation = field(default_factory=Perturbation)
     randomize: Randomization = field(default_factory=Randomization)  # randomised training
+    # rough ground (cpg_actor.terrain; docs/quadruped.md, "Terrain"): flat by default
+    terrain: Terrain = field(default_factory=Terrain)
 
     @property
     def control_dt(self) -> float:
@@ -234,6 +237,7 @@ class QuadrupedConfig:
             supported=(*RANDOMIZED, *TRAINING_PUSHES),
             robot=self.body,
         )
+        check_terrain(self)
         return self
 
     # the mass the robot moves, kg (ANYmal B's: robots/anymal/description.py TOTAL_MASS), which

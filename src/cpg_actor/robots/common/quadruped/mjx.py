@@ -23,7 +23,10 @@ computed as pure jitted JAX functions, as the MJX hopper's
   observation, reward terms, falls, feet air time, episode metrics, ``info``) on JAX arrays;
   SAME_STEP autoreset; episode commands (drawn again every ``command_resample_seconds``
   where that is not 0) and reset noise from one JAX key per env (the same distributions,
-  other numbers than the MuJoCo env for the same seed).
+  other numbers than the MuJoCo env for the same seed);
+* on rough ground (``config.terrain``, with the feet alone on the ground: MJX collides no
+  height field with cylinders), the MuJoCo env's tiles, heights over the ground and
+  curriculum as JAX functions (:mod:`cpg_actor.robots.common.quadruped.mjx_ground`).
 
 Float32, and MJX's solver is not MuJoCo's C one: trajectories agree within the tolerances of
 ``tests/robots/anymal/test_anymal_mjx.py`` (and the Go1's), not exactly.
@@ -40,6 +43,7 @@ from cpg_actor.robots.common.mjx_runtime import STATE_FIELDS, check_impl, load
 from cpg_actor.robots.common.mjx_vector import MjxVectorEnv
 from cpg_actor.robots.common.mujoco_runtime import mujoco
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
+from cpg_actor.robots.common.quadruped.mjx_ground import GroundState, MjxGround
 from cpg_actor.robots.common.quadruped.model import QuadrupedModel
 from cpg_actor.robots.common.quadruped.vector import QuadrupedVectorEnv, init_spaces, load_model
 from cpg_actor.tasks import velocity as task
@@ -62,6 +66,7 @@ class EnvState(NamedTuple):
     data: Any  # mjx.Data, batched
     episode: task.Episode  # the task's bookkeeping
     key: Any  # (N, 2) uint32 random key of each env
+    ground: Any = None  # each env's GroundState on rough ground (None: flat)
 
 
 def mjx_model(quadruped: QuadrupedModel, config: QuadrupedConfig) -> mujoco.MjModel:
@@ -91,11 +96,14 @@ class QuadrupedDynamics:
         self._nominal = jnp.asarray(quadruped.nominal_pose, dtype=jnp.float32)
         self._low = jnp.asarray(quadruped.low, dtype=jnp.float32)
         self._high = jnp.asarray(quadruped.high, dtype=jnp.float32)
+        self.ground = None  # rough ground (mjx_ground; None: flat)
+        if config.terrain.active:
+            self.ground = MjxGround(config.terrain, config.episode_seconds)
         self.reset = jax.jit(self._reset)
         self.step = jax.jit(self._step)
 
     # -- one robot ------------------------------------------------------------------------------
-    def _fresh(self, key):
+    def _fresh(self, key, level=None, column=None):
         """A new episode's pose (nominal plus noise, feet on the ground, at rest), command and
         feet positions (4, 2) for one robot, and its key advanced."""
         key, noise_key, command_key = jax.random.split(key, 3)
@@ -104,9 +112,14 @@ class QuadrupedDynamics:
                                    maxval=cfg.reset_noise)  # fmt: skip
         joints = jnp.clip(self._nominal + noise, self._low, self._high)
         qpos = self._empty.qpos.at[7:].set(joints)
-        placed = mjx.kinematics(self.model, self._empty.replace(qpos=qpos))
-        lowest = placed.site_xpos[self._feet, 2].min()
-        qpos = qpos.at[2].add(self.quadruped.foot_radius - lowest)  # feet on the ground
+        if self.ground is not None:  # on the tile of its ``level`` and kind ``column``
+            qpos, placed = self.ground.place(self.model, self._empty.replace(qpos=qpos),
+                                             noise_key, level, column, self._feet,
+                                             self.quadruped.foot_radius)  # fmt: skip
+        else:
+            placed = mjx.kinematics(self.model, self._empty.replace(qpos=qpos))
+            lowest = placed.site_xpos[self._feet, 2].min()
+            qpos = qpos.at[2].add(self.quadruped.foot_radius - lowest)  # feet on the ground
         command = self.command(command_key)
         feet_xy = placed.site_xpos[self._feet, :2]  # the lift above moves no foot sideways
         return self._empty.replace(qpos=qpos), command, joints, feet_xy, key
@@ -159,26 +172,36 @@ class QuadrupedDynamics:
         corners = before.xpos[:, self._base, None, :] + jnp.einsum(
             "nij,kj->nki", rotation, self._corners
         )
-        return task.Reading(
+        reading = task.Reading(
             qpos=data.qpos, qvel=data.qvel,
             lin_vel=jnp.einsum("nji,nj->ni", rotation, before.qvel[:, 0:3]),
             ang_vel=before.qvel[:, 3:6], feet=before.site_xpos[:, self._feet], torque=torque,
             work=work, base_touch=corners[:, :, 2].min(axis=1) <= 0.0,
             unstable=~(jnp.isfinite(data.qpos).all(axis=1) & jnp.isfinite(data.qvel).all(axis=1)),
         )  # fmt: skip
+        if self.ground is not None:  # heights over the ground under the robot
+            reading = self.ground.relative(reading, corners)
+        return reading
 
     # -- the batch ------------------------------------------------------------------------------
-    def _starts(self, keys):
-        """New episodes for N robots: their data, the task's episodes and the keys advanced."""
-        data, command, joints, feet_xy, keys = jax.vmap(self._fresh)(keys)
+    def _starts(self, keys, levels=None):
+        """New episodes for N robots: their data, the task's episodes and the keys advanced
+        (on rough ground on the tiles of their ``levels``)."""
+        if self.ground is None:
+            data, command, joints, feet_xy, keys = jax.vmap(self._fresh)(keys)
+        else:
+            columns = self.ground.columns(keys.shape[0])
+            data, command, joints, feet_xy, keys = jax.vmap(self._fresh)(keys, levels, columns)
         return data, task.new_episode(command, joints, data.qpos[:, 0], feet_xy), keys
 
     def _reset(self, keys, episode=None):
         """New episodes for all N robots (``keys``: (N, 2) uint32): ``(state, obs, info)``."""
-        data, started, keys = self._starts(keys)
+        levels = None if self.ground is None else self.ground.first_levels(keys.shape[0])
+        data, started, keys = self._starts(keys, levels)
         obs = task.observe(data.qpos, data.qvel, data.qvel[:, 3:6], started.command,
                            started.last_action, self._nominal)  # fmt: skip
-        return EnvState(data, started, keys), obs, {"command": started.command}
+        ground = None if levels is None else GroundState(levels, data.qpos[:, :2])
+        return EnvState(data, started, keys, ground), obs, {"command": started.command}
 
     def _step(self, state: EnvState, actions, episode=None):
         """One control step of all N robots: ``(state, outputs)`` (module docstring)."""
@@ -199,8 +222,13 @@ class QuadrupedDynamics:
             )
             after, out["obs"] = task.resample(after, out["obs"], command, due)
 
+        levels = None
+        if self.ground is not None:  # the curriculum, before the next episodes start
+            levels, out["episode_metrics"]["terrain_level"] = self.ground.end_episodes(
+                state.ground, done, data.qpos, out["info"]["command"], state.key)  # fmt: skip
+
         # autoreset (SAME_STEP): the envs that ended start their next episode now
-        fresh, started, keys = self._starts(state.key)
+        fresh, started, keys = self._starts(state.key, levels)
         data = data.replace(**{name: task.rows(done, getattr(fresh, name), getattr(data, name))
                                for name in STATE_FIELDS})  # fmt: skip
         after = task.restart(after, done, started)
@@ -213,7 +241,10 @@ class QuadrupedDynamics:
             "final_obs": out["obs"], "episode_metrics": out["episode_metrics"],
             "info": {"reward_terms": out["reward_terms"], **out["info"]},
         }  # fmt: skip
-        return EnvState(data, after, task.rows(done, keys, state.key)), outputs
+        ground = None
+        if self.ground is not None:
+            ground = GroundState(levels, task.rows(done, data.qpos[:, :2], state.ground.start_xy))
+        return EnvState(data, after, task.rows(done, keys, state.key), ground), outputs
 
 
 _DYNAMICS: dict[tuple, QuadrupedDynamics] = {}
@@ -267,14 +298,22 @@ class MjxQuadrupedVectorEnv(MjxVectorEnv):
         max_episode_steps: int | None = None,
     ) -> None:
         init_spaces(self, num_envs, config, max_episode_steps, sim="mjx")
+        if self.config.terrain.active:  # each env's level and where its episode started
+            self.saved_fields = (*type(self).saved_fields, "terrain_level", "terrain_start")
         self._start_mjx(dynamics_for(self.quadruped, self.config))
 
     def saved(self, state: EnvState) -> dict[str, Any]:
-        return {**state.episode._asdict(), "key": state.key}
+        fields = {**state.episode._asdict(), "key": state.key}
+        if state.ground is not None:
+            fields.update(terrain_level=state.ground.level, terrain_start=state.ground.start_xy)
+        return fields
 
     def restored(self, data: Any, fields: dict[str, Any]) -> EnvState:
+        ground = None
+        if "terrain_level" in self.saved_fields:
+            ground = GroundState(fields["terrain_level"], fields["terrain_start"])
         return EnvState(
-            data, task.Episode(*(fields[n] for n in task.Episode._fields)), fields["key"]
+            data, task.Episode(*(fields[n] for n in task.Episode._fields)), fields["key"], ground
         )
 
     def draw(self, qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:

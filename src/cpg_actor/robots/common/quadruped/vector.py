@@ -14,7 +14,9 @@ Per episode: a forward-speed command uniform in ``command_range`` (lateral and y
 commands uniform in ``lateral_range`` and ``yaw_range``, 0 by default; zero with probability
 ``standing_share``), drawn again every ``command_resample_seconds`` where that is not 0 (the
 observation after the step that draws it carries the new one), a start
-in the nominal pose with uniform joint noise, the feet on the ground, at rest. An episode ends
+in the nominal pose with uniform joint noise, the feet on the ground, at rest (on rough
+ground, ``config.terrain``: on the env's tile, heights read over the ground and a curriculum
+over its levels, :mod:`cpg_actor.robots.common.quadruped.ground`). An episode ends
 when the base falls (``task.fallen``) or touches the ground (terminated), or after
 ``episode_seconds`` (truncated). ``info["episode_metrics"]`` (NaN for envs still running):
 ``speed_error`` (mean |forward speed - command| over the episode, m/s), ``forward_speed`` (mean,
@@ -66,6 +68,7 @@ from cpg_actor.robots.common.perturbation import (
     push_force,
 )
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
+from cpg_actor.robots.common.quadruped.ground import Ground, terrain_model
 from cpg_actor.robots.common.quadruped.model import SENSORS, QuadrupedModel
 from cpg_actor.robots.common.seeding import env_seeds
 from cpg_actor.robots.common.threaded_rollout import ThreadedRollout
@@ -85,7 +88,10 @@ def load_model(quadruped: QuadrupedModel, config: QuadrupedConfig,
     perturbation = config.perturbation
     actuator = None if torque_control else perturbation.actuator(Actuator.from_config(config))
     text = quadruped.mjcf_text(actuator, torque_control=torque_control)
-    model = mujoco.MjModel.from_xml_string(text)
+    if config.terrain.active:  # the ground a height field (docs/quadruped.md, "Terrain")
+        model = terrain_model(text, config.terrain)
+    else:
+        model = mujoco.MjModel.from_xml_string(text)
     model.opt.timestep = config.physics_dt
     friction = perturbation.ground_friction(config.foot_friction)
     for leg in quadruped.legs:
@@ -269,6 +275,9 @@ class QuadrupedVectorEnv(VectorEnv):
         self._push = push_force(perturbation, config.control_dt)  # N, in the heading frame
         self._payload = np.full(num_envs, perturbation.payload)  # per env (randomised)
         self._base = self.model.body(quadruped.base_body).id
+        self.ground = None  # rough ground: each env's tile and level (None: flat)
+        if config.terrain.active:
+            self.ground = Ground(config.terrain, num_envs, config.episode_seconds)
         self._rngs: list[np.random.Generator] | None = None
         self.episode: task.Episode | None = None  # the task's bookkeeping
         self._needs_reset = True
@@ -315,9 +324,12 @@ class QuadrupedVectorEnv(VectorEnv):
             data = self._data
             mujoco.mj_resetData(self.model, data)
             data.qpos[7:] = joints[i]
-            mujoco.mj_kinematics(self.model, data)
-            lowest = min(data.site(f"{leg}_foot").xpos[2] for leg in self.quadruped.legs)
-            data.qpos[2] += self.quadruped.foot_radius - lowest  # feet on the ground
+            if self.ground is not None:  # on its tile, drawn after the flat task's draws
+                self.ground.place(self.model, data, i, rng, self.quadruped)
+            else:
+                mujoco.mj_kinematics(self.model, data)
+                lowest = min(data.site(f"{leg}_foot").xpos[2] for leg in self.quadruped.legs)
+                data.qpos[2] += self.quadruped.foot_radius - lowest  # feet on the ground
             mujoco.mj_getState(self.model, data, self._state[i], STATE_SPEC)
         self._refresh_sensors(index)
         fresh = task.new_episode(command, joints, self.qpos[:, 0].copy(),
@@ -352,6 +364,8 @@ class QuadrupedVectorEnv(VectorEnv):
             self.draws.seed(seeds)
         self._sensors[:] = 0.0
         self.episode = None
+        if self.ground is not None:  # every env back on its first level
+            self.ground.restart()
         self._start(np.ones(self.num_envs, dtype=bool))
         self._needs_reset = False
         return self._observe(), {"command": self.command.copy()}
@@ -434,6 +448,8 @@ class QuadrupedVectorEnv(VectorEnv):
             base_touch=self._sensor("base_touch")[:, 0] > 0,
             unstable=~np.isfinite(self._state).all(axis=1),
         )  # fmt: skip
+        if self.ground is not None:  # heights over the ground under the robot
+            reading = self.ground.relative(reading)
         weight = (self.quadruped.total_mass + self._payload) * self.quadruped.gravity
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # blown up: masked
             self.episode, out = task.step(cfg, self.episode, reading, desired, self._nominal,
@@ -447,6 +463,9 @@ class QuadrupedVectorEnv(VectorEnv):
             self.episode, out["obs"] = task.resample(self.episode, out["obs"], command, due)
         final_obs = self.draws.observe(out["obs"])
         obs = final_obs.copy()
+        if self.ground is not None:  # the curriculum, before the next episodes start
+            out["episode_metrics"]["terrain_level"] = self.ground.end_episodes(
+                done, self.qpos, out["info"]["command"], self._rngs)  # fmt: skip
         if done.any():  # SAME_STEP autoreset
             self._start(done)
             obs = task.rows(done, self._observe(np.flatnonzero(done)), obs)
@@ -474,6 +493,8 @@ class QuadrupedVectorEnv(VectorEnv):
         extra = {}  # a perturbation's commands on their way, push steps and generators
         if self.delay is not None:
             arrays["delayed"] = self.delay.get_state()
+        if self.ground is not None:  # each env's level and where its episode started
+            arrays.update(self.ground.get_state())
         if self.draws.active:
             arrays["push_step"] = self.draws.push_step
             extra["perturbation"] = self.draws.get_state()
@@ -509,6 +530,8 @@ class QuadrupedVectorEnv(VectorEnv):
             rng = np.random.default_rng()
             rng.bit_generator.state = saved
             self._rngs.append(rng)
+        if self.ground is not None:
+            self.ground.set_state(state)
         if self.delay is not None and "delayed" in state:
             self.delay.set_state(state["delayed"])
         if "perturbation" in state:
