@@ -3,7 +3,7 @@ transfer after training under each physics setting, next to what the training co
 
     python benchmarks/quadruped_physics_training.py [--robot go1 anymal] [--seeds 100 101 102]
         [--total-steps 300k] [--settings default 4x5] [--commands 0.3 0.5 0.8]
-        [--episodes 8] [--output benchmarks/results/quadruped_physics_training.md]
+        [--episodes 8] [--work-dir DIR] [--output benchmarks/results/quadruped_physics_training.md]
 
 The second half of the physics-settings decision (``quadruped_physics_settings.py`` measures
 what a setting saves and whether the open-loop trot holds). Per robot, setting and seed:
@@ -17,7 +17,11 @@ what a setting saves and whether the open-loop trot holds). Per robot, setting a
   reference model; for the default setting the two are the same run and measured once);
 * report per setting the median over the seeds of: training wall time and steps/s, the mean
   speed error (m/s, mean |forward speed - command|), falls, forward speed, foot slip (m/s, the
-  speed of planted feet) and the cost of transport, over the commands.
+  speed of planted feet), over the commands.
+
+``--work-dir`` keeps the runs and evaluations (a temporary folder by default): a run there
+with its last checkpoint is not trained again, an evaluation there not run again, so a cut
+measurement continues.
 
 Settings (:data:`SETTINGS`): ``default`` (2 ms x 10 substeps, the robots' own) and ``4x5``
 (4 ms x 5 substeps: the same 20 ms control step), the one change the trot kept
@@ -29,6 +33,7 @@ default.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import statistics
 import subprocess
@@ -44,12 +49,13 @@ from cpg_actor.machine import cpu_model, load_average, usable_cores
 
 ROOT = Path(__file__).resolve().parent.parent
 ROBOTS = ("go1", "anymal")
-# name -> the train and eval --set values of the setting
+# name -> the train and eval --set values of the setting (each named in full: an evaluation
+# on "default" must not take a run's own physics)
 SETTINGS = {
-    "default": [],
+    "default": ["env.physics_dt=0.002", "env.decimation=10"],
     "4x5": ["env.physics_dt=0.004", "env.decimation=5"],
 }
-METRICS = ("speed_error", "fell", "forward_speed", "foot_slip", "cost_of_transport")
+METRICS = ("speed_error", "fell", "forward_speed", "foot_slip")
 
 
 def steps_value(text: str) -> int:
@@ -79,7 +85,10 @@ def sets(values: list[str]) -> list[str]:
 
 def train(robot: str, setting: str, seed: int, total_steps: int, run_dir: Path,
           extra: list[str]) -> float:  # fmt: skip
-    """Train one run; its training wall time (s, from its metrics: collection and update)."""
+    """Train one run (unless ``run_dir`` holds its last checkpoint); its training wall time (s,
+    from its metrics: collection and update)."""
+    if (run_dir / "checkpoints" / "last.pt").is_file():
+        return training_wall(run_dir)
     values = sets(SETTINGS[setting] + extra)
     run(cli("train", "--robot", robot, "--seed", str(seed), "--total-steps", str(total_steps),
             "--run-dir", str(run_dir), "--no-progress", *values))  # fmt: skip
@@ -102,8 +111,9 @@ def evaluate(run_dir: Path, physics: str, command: float, episodes: int, output:
     """``cpg-actor eval`` of the run at ``command`` m/s on ``physics``: the mean of each metric
     over the episodes (NaN-aware; a metric no episode defines is NaN)."""
     values = [*SETTINGS[physics], f"env.command_range=[{command},{command}]", *extra]
-    run(cli("eval", str(run_dir), "--episodes", str(episodes), "--output", str(output),
-            "--overwrite", *sets(values)))  # fmt: skip
+    if not output.is_file():  # else done before (--work-dir)
+        run(cli("eval", str(run_dir), "--episodes", str(episodes), "--output", str(output),
+                "--overwrite", *sets(values)))  # fmt: skip
     with np.load(output, allow_pickle=False) as traces:
         return {name: nanmean(traces[name]) for name in METRICS if name in traces}
 
@@ -144,7 +154,7 @@ def table(robot: str, runs: dict[str, list[dict]], commands: list[float]) -> lis
     commands, and the speed error per command."""
     head = ["setting", "evaluated on", "seeds", "training s", "steps/s", "speed error, m/s",
             *(f"error at {c}" for c in commands), "falls", "forward speed, m/s",
-            "foot slip, m/s", "cost of transport"]  # fmt: skip
+            "foot slip, m/s"]  # fmt: skip
     lines = [f"### {robot}", "", "| " + " | ".join(head) + " |",
              "| " + " | ".join(["---"] * 2 + ["---:"] * (len(head) - 2)) + " |"]  # fmt: skip
     for setting, results in runs.items():
@@ -162,7 +172,7 @@ def table(robot: str, runs: dict[str, list[dict]], commands: list[float]) -> lis
                 number(over("speed_error")),
                 *(number(over("speed_error", [c])) for c in commands),
                 number(over("fell"), 2), number(over("forward_speed")),
-                number(over("foot_slip")), number(over("cost_of_transport"), 2),
+                number(over("foot_slip")),
             ]) + " |")  # fmt: skip
     return lines + [""]
 
@@ -196,6 +206,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="extra training --set value (tests: tiny runs)")  # fmt: skip
     parser.add_argument("--eval-set", action="append", default=[],
                         help="extra evaluation --set value (tests: short episodes)")  # fmt: skip
+    parser.add_argument("--work-dir", default=None,
+                        help="runs and evaluations kept here, reused (default: a temporary "
+                        "folder)")  # fmt: skip
     parser.add_argument("--output", default="benchmarks/results/quadruped_physics_training.md")
     args = parser.parse_args(argv)
     if args.total_steps <= 0 or args.episodes <= 0:
@@ -204,9 +217,12 @@ def main(argv: list[str] | None = None) -> int:
         sys.argv[1:] if argv is None else argv)  # fmt: skip
     provenance = measured(command)
     sections: list[str] = []
-    with tempfile.TemporaryDirectory(prefix="physics-training-") as tmp:
+    with contextlib.ExitStack() as stack:
+        work = args.work_dir or stack.enter_context(
+            tempfile.TemporaryDirectory(prefix="physics-training-"))  # fmt: skip
+        Path(work).mkdir(parents=True, exist_ok=True)
         for robot in args.robot:  # the file rewritten after each robot: a cut run keeps them
-            runs = {setting: [one(robot, setting, seed, args, Path(tmp)) for seed in args.seeds]
+            runs = {setting: [one(robot, setting, seed, args, Path(work)) for seed in args.seeds]
                     for setting in args.settings}  # fmt: skip
             sections += table(robot, runs, args.commands)
             write(args.output, report(args, provenance, sections))
