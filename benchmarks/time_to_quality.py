@@ -145,9 +145,8 @@ class RunSpec(NamedTuple):
 
 def run_config(agent: str, preset: str, seed: int, values: list[dict], budget: int):
     """The run's config as ``cpg-actor train`` composes it, with the benchmark's evaluation."""
-    from time_to_hop import compose
-
     from cpg_actor.agents.open_loop_es import generation_steps
+    from time_to_hop import compose
 
     config = compose(agent, preset, values)
     config.agent, config.seed, config.total_steps = agent, seed, budget
@@ -171,7 +170,6 @@ def train(config, stop) -> tuple[list[dict], dict, object]:
     and its warm start timed; ``(history, warm start's {"steps", "wall"}, runner)`` (the
     runner closed)."""
     from bench_report import evaluation_recorder
-
     from cpg_actor.agents import get_agent_spec
 
     recorder = evaluation_recorder(stop)
@@ -236,9 +234,8 @@ def search_run(spec: SearchSpec) -> dict:
     """The search rerun as the gait file records it: its env steps and wall time, its
     evaluations, the gait it found (written to ``spec.path``) and how far that is from the
     file's (0.0: the same gait)."""
-    from time_to_hop import gait_difference, start_gait_file
-
     from cpg_actor.agents.gait_file import load_gait, write_gait
+    from time_to_hop import gait_difference, start_gait_file
 
     source = start_gait_file(spec.agent, spec.preset, spec.values)
     gait = load_gait(source)
@@ -278,7 +275,6 @@ def sb3_run(seed: int, num_envs: int, values: list[dict], budget: int, target: T
     from stable_baselines3 import PPO
     from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.env_util import make_vec_env
-    from time_to_hop import SB3Policy
 
     from cpg_actor.experiments.physical import episode_metrics
     from cpg_actor.robots.hopper.config import HopperConfig
@@ -286,6 +282,7 @@ def sb3_run(seed: int, num_envs: int, values: list[dict], budget: int, target: T
     from cpg_actor.robots.hopper.vector import HopperVectorEnv
     from cpg_actor.training.evaluation import evaluate, finite_mean
     from cpg_actor.training.seeding import EVAL_SEED_KEY, derived_seed
+    from time_to_hop import SB3Policy
 
     env_values: dict = {}  # --set env.KEY=VALUE reaches SB3's env too
     for mapping in values:
@@ -412,8 +409,15 @@ def figure(path: Path, methods: list[Method], results: dict[str, list[dict]],
                 for col, x in enumerate(("steps", "wall")):
                     xs = [c[x] / (1e3 if x == "steps" else 1.0) for c in curve]
                     ax = axes[row, col]
-                    ax.step(xs, [c[key] for c in curve], where="post", color=colours(i % 10),
-                            lw=1.2, alpha=0.8, label=method.label if j == 0 else None)
+                    ax.step(
+                        xs,
+                        [c[key] for c in curve],
+                        where="post",
+                        color=colours(i % 10),
+                        lw=1.2,
+                        alpha=0.8,
+                        label=method.label.replace("`", "") if j == 0 else None,
+                    )
                     if run["start_steps"]:
                         ax.plot(xs[0], curve[0][key], "o", ms=3, color=colours(i % 10))
     for col, x in enumerate(("env steps (thousands, start included)",
@@ -451,14 +455,22 @@ def report(methods: list[Method], results: dict[str, list[dict]], searches: dict
     if sb3_note:
         lines += ["", sb3_note]
     if searches:
-        lines += ["", "## The start gait's searches (charged)", "",
-                  "| search | env steps | wall time | its last evaluation: return, apex | the "
-                  "gait found against the file's |", "| --- | ---: | ---: | ---: | --- |"]
+        lines += [
+            "",
+            "## The start gait's searches (charged)",
+            "",
+            "| search | env steps | wall time | its last evaluation: return, apex | the "
+            "gait found against the file's |",
+            "| --- | ---: | ---: | ---: | --- |",
+        ]
         for search in searches.values():
             last = search["history"][-1] if search["history"] else None
             shown = "-" if last is None else f"{last['return']:.0f}, {last['apex']:.3f} m"
-            same = ("**the same gait**" if search["difference"] == 0 else
-                    f"differs (largest relative difference {search['difference']:.2g})")
+            same = (
+                "**the same gait**"
+                if search["difference"] == 0
+                else f"differs (largest relative difference {search['difference']:.2g})"
+            )
             lines.append(f"| `{search['agent']}`, seed {search['seed']}, budget "
                          f"{search['budget']:,} | {search['steps']:,} | {search['wall']:.0f} s "
                          f"| {shown} | {same} |")  # fmt: skip
@@ -502,23 +514,43 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=positive_int, default=3)
     parser.add_argument("--agents", default=",".join(AGENTS))
     parser.add_argument("--preset", default="paper")
-    parser.add_argument("--budget", type=positive_int, default=BUDGET,
-                        help="env steps of each method's own training (default 500000)")
+    parser.add_argument(
+        "--budget",
+        type=positive_int,
+        default=BUDGET,
+        help="env steps of each method's own training (default 500000)",
+    )
     parser.add_argument("--target-return", type=float, default=TARGET_RETURN)
     parser.add_argument("--target-apex", type=float, default=TARGET_APEX, help="m")
-    parser.add_argument("--stop-at-target", action="store_true",
-                        help="stop a run at the target (its curve then ends there)")
-    parser.add_argument("--search-budgets", type=budgets_list, default=None,
-                        metavar="STEPS[,STEPS...]",
-                        help="the start gait's search with each budget (the methods that "
-                        "start from it once per budget); default: the gait file's")
-    parser.add_argument("--start", choices=("found", "packaged"), default="found",
-                        help="start from the gait the rerun search found (default) or from "
-                        "the packaged file's, charged the rerun's cost either way")
+    parser.add_argument(
+        "--stop-at-target",
+        action="store_true",
+        help="stop a run at the target (its curve then ends there)",
+    )
+    parser.add_argument(
+        "--search-budgets",
+        type=budgets_list,
+        default=None,
+        metavar="STEPS[,STEPS...]",
+        help="the start gait's search with each budget (the methods that "
+        "start from it once per budget); default: the gait file's",
+    )
+    parser.add_argument(
+        "--start",
+        choices=("found", "packaged"),
+        default="found",
+        help="start from the gait the rerun search found (default) or from "
+        "the packaged file's, charged the rerun's cost either way",
+    )
     parser.add_argument("--no-sb3", action="store_true", help="skip Stable-Baselines3")
-    parser.add_argument("--set", dest="overrides", action="append", default=[],
-                        metavar="KEY=VALUE", help="a config value for every run (env.* reach "
-                        "the searches and SB3's env too)")
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="a config value for every run (env.* reach the searches and SB3's env too)",
+    )
     parser.add_argument("--ceiling-steps", type=positive_int, default=50_000)
     parser.add_argument("--output", default=OUTPUT)
     args = parser.parse_args(argv)  # fmt: skip
@@ -526,11 +558,10 @@ def main(argv: list[str] | None = None) -> int:
         parser.error("--target-return and --target-apex must be finite numbers")
 
     from bench_report import measured, write
-    from time_to_hop import ceiling, start_gait_file
-
     from cpg_actor.agents import get_agent_spec
     from cpg_actor.config import parse_override
     from cpg_actor.machine import cpu_model, load_average, usable_cores
+    from time_to_hop import ceiling, start_gait_file
 
     agents = args.agents.split(",")
     for agent in agents:
@@ -590,15 +621,22 @@ def main(argv: list[str] | None = None) -> int:
                     run = in_fresh_process("--one-run", spec)
                 results[method.label].append(summarize(run, search, target))
                 hit = results[method.label][-1]["hit"]
-                print(f"seed {seed} {method.label}: "
-                      f"{'at target ' + str(hit) if hit else 'target not reached'}", flush=True)
+                print(
+                    f"seed {seed} {method.label}: "
+                    f"{'at target ' + str(hit) if hit else 'target not reached'}",
+                    flush=True,
+                )
     ceilings = {n: ceiling(n, args.ceiling_steps) for n in sorted({m.num_envs for m in methods})}
     if args.start == "found":
-        start_note = ("The methods that start from the searched gait start from the gait the "
-                      "search rerun here found.")
+        start_note = (
+            "The methods that start from the searched gait start from the gait the "
+            "search rerun here found."
+        )
     else:
-        start_note = ("The methods that start from the searched gait start from the packaged "
-                      "gait file's, charged the cost of its search rerun here.")
+        start_note = (
+            "The methods that start from the searched gait start from the packaged "
+            "gait file's, charged the cost of its search rerun here."
+        )
     figure_path = output.with_suffix(".png")
     command = "python benchmarks/time_to_quality.py " + " ".join(argv)
     provenance = (f"{measured(command)} on {cpu_model()}, {usable_cores()} usable cores "
