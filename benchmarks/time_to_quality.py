@@ -584,6 +584,13 @@ def main(argv: list[str] | None = None) -> int:
     num_envs = run_config("mlp", args.preset, 0, values, args.budget).num_envs
     methods: list[Method] = []
     searched = [a for a in agents if start_gait_file(a, args.preset, values) is not None]
+    gait_files = {start_gait_file(a, args.preset, values) for a in searched}
+    if len(gait_files) > 1:  # one search is rerun and charged to them all
+        parser.error(
+            f"{', '.join(searched)} start from different gait files "
+            f"({', '.join(sorted(map(str, gait_files)))}); this benchmark reruns one search: "
+            "give agents that start from the same gait"
+        )
     for agent in agents:
         per_budget = args.search_budgets if agent in searched and args.search_budgets else [None]
         for budget in per_budget:
