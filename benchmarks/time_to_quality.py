@@ -454,6 +454,15 @@ def report(methods: list[Method], results: dict[str, list[dict]], searches: dict
     ]
     if sb3_note:
         lines += ["", sb3_note]
+    if any(m.kind == "sb3" for m in methods):
+        lines += [
+            "",
+            "SB3: PPO `MlpPolicy` with its defaults on `cpg_actor/AnymalHopper-v0` (actions "
+            "rescaled to [-1, 1], no VecNormalize), in this process with 1 torch thread (as "
+            "the project's runs), with 1 env and with `make_vec_env` and the project run's "
+            "envs; with N envs it collects 2,048 x N env steps per update, so its budget "
+            "rounds up to whole rollouts.",
+        ]
     if searches:
         lines += [
             "",
