@@ -399,7 +399,8 @@ def figure(path: Path, methods: list[Method], results: dict[str, list[dict]],
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(2, 2, figsize=(10, 6.5), sharey="row")
-    colours = plt.get_cmap("tab10")
+    palette = plt.get_cmap("tab10" if len(methods) <= 10 else "tab20")
+    colours = [palette(i % palette.N) for i in range(len(methods))]  # the sweep has more
     for i, method in enumerate(methods):
         for j, run in enumerate(results[method.label]):
             curve = best_so_far(run["curve"])
@@ -413,13 +414,13 @@ def figure(path: Path, methods: list[Method], results: dict[str, list[dict]],
                         xs,
                         [c[key] for c in curve],
                         where="post",
-                        color=colours(i % 10),
+                        color=colours[i],
                         lw=1.2,
                         alpha=0.8,
                         label=method.label.replace("`", "") if j == 0 else None,
                     )
                     if run["start_steps"]:
-                        ax.plot(xs[0], curve[0][key], "o", ms=3, color=colours(i % 10))
+                        ax.plot(xs[0], curve[0][key], "o", ms=3, color=colours[i])
     for col, x in enumerate(("env steps (thousands, start included)",
                              "wall time (s, start included)")):  # fmt: skip
         axes[1, col].set_xlabel(x)
