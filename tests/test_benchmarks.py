@@ -72,6 +72,12 @@ RUNS = {
     "time_to_hop.py": (["--seeds", "1", "--agents", "mlp", "--presets", "paper", "--no-sb3",
                         "--no-search", "--budget", "mlp=256", "--set", "ppo.compile=false",
                         "--set", "num_envs=2", "--ceiling-steps", "2000"], "--output"),
+    # one search of one generation (16 episodes of 50 steps) charged to mlp-warm, which is
+    # also charged its cloning; open-loop-es is its own search
+    "time_to_quality.py": (["--seeds", "1", "--agents", "mlp-warm,open-loop-es", "--budget",
+                            "800", "--search-budgets", "800", "--no-sb3", "--set",
+                            "ppo.compile=false", "--set", "num_envs=2", "--set",
+                            "env.episode_steps=50", "--ceiling-steps", "1000"], "--output"),
     # a tiny budget: it may not reach the target; mlp-warm's cloning is charged
     "time_to_walk.py": (["--agents", "cpg-actor,mlp-warm", "--max-steps", "128",
                          "--eval-interval", "64", "--eval-episodes", "1", "--set",
@@ -97,6 +103,7 @@ MARKS = {
     "robustness_suite.py": [SLOW],
     "rollout_threads.py": [SLOW],
     "shared_device.py": [SLOW],
+    "time_to_quality.py": [SLOW],
     "train_scaling.py": [COMPILER],
 }
 
@@ -267,3 +274,54 @@ def test_time_to_walk_trains_as_a_run_without_its_evaluations():
         parameters.append(runner.agent.state_dict())
     for key, value in parameters[0].items():
         assert torch.equal(value, parameters[1][key]), key
+
+
+def quality(steps: int, ret: float, apex: float) -> dict:
+    """One evaluation of time_to_quality: at ``steps`` env steps, ``steps / 1000`` s."""
+    return {"steps": steps, "wall": steps / 1000, "return": ret, "apex": apex, "hop": apex}
+
+
+def test_time_to_quality_target_needs_the_return_and_the_apex_in_one_evaluation():
+    ttq = benchmark("time_to_quality")
+    target = ttq.Target(850.0, 0.5)
+    assert target.met(quality(0, 850.0, 0.5)) and target.met(quality(0, 900.0, 0.6))
+    assert not target.met(quality(0, 849.9, 0.6))  # the apex alone
+    assert not target.met(quality(0, 1000.0, 0.499))  # the return alone
+    assert not target.met(quality(0, math.nan, 0.6)) and not target.met(quality(0, 900, math.nan))
+    # the best return and the best apex in different evaluations are no hit
+    history = [quality(0, 900.0, 0.3), quality(100, 700.0, 0.6), quality(200, 860.0, 0.55)]
+    assert ttq.first_at_target(history[:2], target) is None
+    assert ttq.first_at_target(history, target)["steps"] == 200
+    assert "return >= 850" in target.describe() and "apex >= 0.5 m" in target.describe()
+
+
+def test_time_to_quality_best_so_far_keeps_each_maximum_and_skips_nan():
+    ttq = benchmark("time_to_quality")
+    history = [quality(0, 500.0, math.nan), quality(10, 400.0, 0.3), quality(20, 600.0, 0.2),
+               quality(30, math.nan, 0.4)]  # fmt: skip
+    curve = ttq.best_so_far(history)
+    assert [c["return"] for c in curve] == [500.0, 500.0, 600.0, 600.0]
+    assert math.isnan(curve[0]["apex"]) and [c["apex"] for c in curve[1:]] == [0.3, 0.3, 0.4]
+    assert [c["steps"] for c in curve] == [0, 10, 20, 30]
+    assert ttq.best_so_far([]) == []
+
+
+def test_time_to_quality_charges_the_search_and_the_warm_start():
+    ttq = benchmark("time_to_quality")
+    target = ttq.Target(850.0, 0.5)
+    run = {"history": [quality(0, 700.0, 0.49), quality(1000, 900.0, 0.52)],
+           "warm_steps": 8000, "warm_wall": 1.5, "num_envs": 16}  # fmt: skip
+    search = {"steps": 496_000, "wall": 60.0}
+    charged = ttq.summarize(run, search, target)
+    assert (charged["start_steps"], charged["start_wall"]) == (504_000, pytest.approx(61.5))
+    assert charged["hit"]["steps"] == 505_000 and charged["hit"]["wall"] == pytest.approx(62.5)
+    assert charged["curve"][0]["steps"] == 504_000  # the curve begins where the start ends
+    assert (charged["best_return"], charged["best_apex"]) == (900.0, 0.52)
+    alone = ttq.summarize(run | {"warm_steps": 0, "warm_wall": 0.0}, None, target)
+    assert alone["hit"]["steps"] == 1000 and alone["start_steps"] == 0
+    missed = ttq.summarize(run, search, ttq.Target(950.0, 0.5))
+    assert missed["hit"] is None
+    row = ttq.method_row(
+        ttq.Method("`cpg-actor`", "project", "cpg-actor", 16, None), [charged, missed]
+    )
+    assert "| 1/2 |" in row and "**505k**" in row and "504k, 62 s" in row

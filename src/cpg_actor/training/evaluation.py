@@ -296,11 +296,18 @@ def _trace_row(
     return row
 
 
-def evaluation_row(policy, env, seed: int, control_dt: float, max_steps: int) -> dict[str, float]:
+def evaluation_row(
+    policy, env, seed: int, control_dt: float, max_steps: int, physical: bool = False
+) -> dict[str, float]:
     """The metrics row of one evaluation during training (both runners' ``eval/*``): the mean
-    and worst return, the mean length and the mean of each of the env's own metrics."""
+    and worst return, the mean length and the mean of each of the env's own metrics.
+
+    ``physical``: the episodes are traced and the physical metrics their traces define
+    (:mod:`cpg_actor.experiments.physical`: the hopper's ``eval/hop_apex``, ...) are added,
+    the mean over the episodes that define them; off by default, as the traces cost each
+    evaluation a copy of every step to the host (the time-to-quality benchmark asks for it)."""
     result = evaluate(policy, env, seed=seed, control_dt=control_dt, max_steps=max_steps,
-                      traces=False)  # fmt: skip
+                      traces=physical)  # fmt: skip
     row = {
         "eval/return": float(result["episode_return"].mean()),
         "eval/return_min": float(result["episode_return"].min()),
@@ -308,6 +315,11 @@ def evaluation_row(policy, env, seed: int, control_dt: float, max_steps: int) ->
     }
     for name in result["metric_names"]:  # the env's own (the hopper's hop height)
         row[f"eval/{name}"] = finite_mean(result[str(name)])
+    if physical:
+        from cpg_actor.experiments.physical import episode_metrics
+
+        for name, values in episode_metrics(result).items():
+            row[f"eval/{name}"] = finite_mean(values)
     return row
 
 
@@ -326,11 +338,13 @@ class TrainingEvaluation:
     each of ``config.eval_episodes`` envs of its own (the run's ``robot``'s, built at the first
     evaluation; ``env`` replaces them), always reset with the run's evaluation seed, by a
     policy of its own around the run's agent and normaliser (the training envs' CPG states
-    stay untouched)."""
+    stay untouched). ``physical``: each evaluation also gives the physical metrics
+    (:func:`evaluation_row`); off unless a caller sets it."""
 
     def __init__(
         self, config: Any, robot: Any, agent, normalizer, action_low, action_high, env: Any = None
     ) -> None:
+        self.physical = False
         self.config = config
         self.robot = robot
         self.agent, self.normalizer = agent, normalizer
@@ -359,6 +373,7 @@ class TrainingEvaluation:
             seed=derived_seed(cfg.seed, EVAL_SEED_KEY),
             control_dt=float(cfg.env.control_dt),
             max_steps=cfg.env.episode_steps,
+            physical=self.physical,
         )
         row["time/eval"] = time.perf_counter() - start
         return row
