@@ -7,6 +7,11 @@ for every run, and the figures of what the env reports (its step ``info``): with
 contacts, a gait diagram (``gait_diagram.png``); with a forward-speed command, commanded vs
 measured forward speed (``forward_speed.png``). The video shows one episode of the agent's
 own env, drawn by the env's ``render_frame``.
+
+With ``--grid`` (a quadruped's run): the evaluation protocol instead
+(:mod:`cpg_actor.experiments.protocol`): a fixed grid of velocity commands, each held for an
+episode, and the payload and push checks; printed as a table and saved as ``grid.json`` and
+``grid.csv`` where the traces go.
 """
 
 from __future__ import annotations
@@ -16,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cpg_actor.files import atomic_write
+from cpg_actor.files import atomic_write, atomic_write_text
 from cpg_actor.plots import GAIT_WINDOW, draw_gait_diagram, save_figure
 from cpg_actor.robots.registry import all_metrics, all_simulators, get_robot
 
@@ -29,6 +34,7 @@ GAIT_FIGURE = "gait_diagram.png"
 SPEED_FIGURE = "forward_speed.png"
 FIGURES = (CURVES_FIGURE, TRACES_FIGURE, GAIT_FIGURE, SPEED_FIGURE)
 SPEED_SMOOTHING = 0.5  # s: the running mean drawn over the measured forward speed
+GRID_FILES = ("grid.json", "grid.csv")  # --grid's table, where the traces go
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -66,6 +72,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "figures are always replaced",
     )
     parser.add_argument(
+        "--grid",
+        action="store_true",
+        help="quadrupeds: the evaluation protocol instead: a fixed grid of velocity commands "
+        "(forward, backward, lateral, turning, combined, standing), each held for an episode, "
+        "plus payload and push checks; a table printed and saved as grid.json and grid.csv "
+        "where the traces go (docs/quadruped.md, 'Evaluation protocol')",
+    )
+    parser.add_argument(
         "--video-only",
         action="store_true",
         help="with --video: record the video only (a run already evaluated keeps its traces)",
@@ -99,6 +113,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--output must end in .npz, got {output}")
     if args.video_only and not args.video:
         raise ValueError("--video-only needs --video PATH")
+    if args.grid and args.video:
+        raise ValueError("--grid writes a table, no video: run eval without --grid for --video")
     if args.video and Path(args.video).suffix.lower() not in VIDEO_SUFFIXES:  # before evaluating
         raise ValueError(f"--video must end in {' or '.join(VIDEO_SUFFIXES)}, got {args.video}")
     if not checkpoint.is_file():
@@ -118,6 +134,8 @@ def run(args: argparse.Namespace) -> int:
         apply_dict(config, override, "")
     if args.set:
         config.validate()
+    if args.grid:
+        return run_grid(args, config, checkpoint, output)
     # the traces and figures in RUN_DIR/eval/ are eval's own derived data: a new evaluation
     # replaces them; a file the user named (--output, --video) needs --overwrite
     kept = [] if args.video_only or args.output is None else [
@@ -150,6 +168,39 @@ def run(args: argparse.Namespace) -> int:
     if args.video:
         record_video(policy, config, Path(args.video), args.seed, args.overwrite)
         print(f"video in {args.video}")
+    return 0
+
+
+def run_grid(args: argparse.Namespace, config, checkpoint: Path, output: Path) -> int:
+    """``--grid``: the evaluation protocol on the run's policy, its table printed and saved as
+    :data:`GRID_FILES` in ``output``'s folder (RUN_DIR/eval/'s replaced; a folder the user
+    named keeps its files unless --overwrite)."""
+    from cpg_actor.deploy import load_policy
+    from cpg_actor.experiments import protocol
+
+    robot = get_robot(config.robot)
+    protocol.check_grid_robot(robot.name, config.env)
+    paths = [output.parent / name for name in GRID_FILES]
+    if args.output is not None:
+        for path in paths:
+            if path.exists() and not args.overwrite:
+                raise FileExistsError(f"{path} exists; pass --overwrite to replace it")
+    untrained = protocol.untrained_commands(config.env)
+    if untrained:
+        print(f"note: the run was trained without {', '.join(untrained)} (its command ranges); "
+              "those rows are marked *")  # fmt: skip
+    policy = load_policy(checkpoint, run_config=config)
+    print(f"evaluation protocol: {len(protocol.GRID)} commands and 3 checks, "
+          f"{args.episodes} episode(s) each")  # fmt: skip
+    result = protocol.run_grid(policy, config, robot, args.episodes, args.seed)
+    result.update(run=str(Path(args.run_dir)), checkpoint=str(checkpoint), agent=config.agent,
+                  robot=robot.name)  # fmt: skip
+    for line in protocol.table_lines(result):
+        print(line)
+    texts = (protocol.json_text(result), protocol.csv_text(result))
+    for path, text in zip(paths, texts, strict=True):
+        atomic_write_text(text, path)
+        print(f"table in {path}")
     return 0
 
 

@@ -124,6 +124,21 @@ def reward_terms(
     }
 
 
+def lin_vel_error(lin_vel, command):
+    """(N,) m/s: how far the base's horizontal velocity is from the commanded one,
+    ``|v_xy - command_xy|``, both in the base frame (the frame the command is given in, as
+    the tracking reward's); 0 for a robot walking exactly at its command."""
+    xp = namespace(lin_vel)
+    return xp.sqrt(xp.sum((lin_vel[:, :2] - command[:, :2]) ** 2, axis=1))
+
+
+def yaw_rate_error(ang_vel, command):
+    """(N,) rad/s: ``|w_z - command_yaw|``, the base's yaw rate (the gyro's z, base frame)
+    against the commanded one; the same for a turn too fast or too slow, left or right."""
+    xp = namespace(ang_vel)
+    return xp.abs(ang_vel[:, 2] - command[:, 2])
+
+
 def fallen(base_height, gravity, fall_height: float, fall_tilt: float) -> np.ndarray:
     """(N,) bool: the base is below ``fall_height`` or tilted more than ``fall_tilt`` rad."""
     xp = namespace(gravity)
@@ -135,7 +150,8 @@ def fallen(base_height, gravity, fall_height: float, fall_tilt: float) -> np.nda
 # one control step, for any simulator
 
 EPISODE_METRICS = ("speed_error", "forward_speed", "fell", "episode_seconds", "cost_of_transport",
-                   "foot_slip")  # fmt: skip
+                   "foot_slip", "lin_vel_error", "yaw_rate_error", "duty_factor",
+                   "planar_cost_of_transport")  # fmt: skip
 MIN_DISTANCE = 0.1  # m: below this the cost of transport is not defined (NaN)
 CONTACT_MARGIN = 0.005  # m: a foot whose centre is within its radius plus this touches the ground
 MOVING = 0.1  # m/s: a command faster than this pays the feet's air time
@@ -157,6 +173,11 @@ class Episode(NamedTuple):
     slip_sum: Any  # (N,) sum of the planted feet's sliding speeds, m/s
     planted_steps: Any  # (N,) int, count of planted feet over the episode's steps
     feet_xy: Any  # (N, 4, 2) the feet's horizontal positions at the last reading, m
+    # the omnidirectional task's tracking (the evaluation protocol's, docs/quadruped.md)
+    lin_vel_error_sum: Any  # (N,) sum of |v_xy - command_xy| in the base frame, m/s
+    yaw_rate_error_sum: Any  # (N,) sum of |yaw rate - command yaw|, rad/s
+    contact_steps: Any  # (N,) int, count of feet on the ground over the episode's steps
+    start_y: Any  # (N,) the base's y at the episode's start, m
 
 
 class Reading(NamedTuple):
@@ -182,8 +203,9 @@ def desired_positions(actions, low, high, normalized: bool):
     return xp.clip(actions, low, high)
 
 
-def new_episode(command, joints, start_x, feet_xy) -> Episode:
-    """A fresh :class:`Episode` for robots at rest in ``joints`` (N, J) under ``command``."""
+def new_episode(command, joints, start_x, feet_xy, start_y=None) -> Episode:
+    """A fresh :class:`Episode` for robots at rest in ``joints`` (N, J) under ``command``,
+    their bases at ``start_x``, ``start_y`` (N,; None: 0)."""
     xp = namespace(joints)
     n = joints.shape[0]
     zero = xp.zeros_like(start_x)
@@ -193,6 +215,8 @@ def new_episode(command, joints, start_x, feet_xy) -> Episode:
         elapsed=count, air_time=xp.zeros((n, 4), dtype=joints.dtype),
         in_contact=xp.ones((n, 4), dtype=bool), speed_error_sum=zero, speed_sum=zero, work=zero,
         start_x=start_x, slip_sum=zero, planted_steps=count, feet_xy=feet_xy,
+        lin_vel_error_sum=zero, yaw_rate_error_sum=zero, contact_steps=count,
+        start_y=zero if start_y is None else start_y,
     )  # fmt: skip
 
 
@@ -273,6 +297,9 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
         speed_sum=episode.speed_sum + lin_vel[:, 0], work=episode.work + reading.work,
         start_x=episode.start_x, slip_sum=episode.slip_sum + slip.sum(axis=1),
         planted_steps=episode.planted_steps + planted.sum(axis=1), feet_xy=feet[:, :, :2],
+        lin_vel_error_sum=episode.lin_vel_error_sum + lin_vel_error(lin_vel, episode.command),
+        yaw_rate_error_sum=episode.yaw_rate_error_sum + yaw_rate_error(ang_vel, episode.command),
+        contact_steps=episode.contact_steps + contact.sum(axis=1), start_y=episode.start_y,
     )  # fmt: skip
     truncated = (after.elapsed >= config.episode_steps) & ~terminated
     done = terminated | truncated
@@ -283,7 +310,8 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
         "reward_terms": scaled,
         "terminated": terminated,
         "truncated": truncated,
-        "episode_metrics": episode_metrics(after, qpos[:, 0], terminated, done, dt, weight),
+        "episode_metrics": episode_metrics(after, qpos[:, 0], terminated, done, dt, weight,
+                                           qpos[:, 1]),
         "info": {
             "command": episode.command, "contact": contact, "base_height": height,
             "forward_speed": lin_vel[:, 0], "desired_position": desired,
@@ -294,13 +322,20 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
     return after, outputs
 
 
-def episode_metrics(episode: Episode, x, fell, done, dt: float, weight: float) -> dict:
+def episode_metrics(episode: Episode, x, fell, done, dt: float, weight: float, y=None) -> dict:
     """The :data:`EPISODE_METRICS` of the episodes that ended (``done``), NaN elsewhere; ``x``
-    (N,) the base's position now, ``fell`` (N,) bool."""
+    and ``y`` (N,) the base's position now (``y`` None: at its start), ``fell`` (N,) bool.
+
+    ``cost_of_transport`` divides by the distance walked forward (world x: the forward
+    task's); ``planar_cost_of_transport`` by the distance between the base's start and end in
+    the plane, whichever way it walked (the omnidirectional task's)."""
     xp = namespace(x)
     steps = episode.elapsed.astype(episode.speed_sum.dtype)
     distance = x - episode.start_x
+    moved = episode.start_y if y is None else y
+    planar = xp.sqrt(distance**2 + (moved - episode.start_y) ** 2)
     planted = episode.planted_steps
+    contact_count = episode.in_contact.shape[1]  # the feet
     metrics = {
         "speed_error": episode.speed_error_sum / steps,
         "forward_speed": episode.speed_sum / steps,
@@ -309,5 +344,10 @@ def episode_metrics(episode: Episode, x, fell, done, dt: float, weight: float) -
         "cost_of_transport": xp.where(distance >= MIN_DISTANCE,
                                       episode.work / (weight * distance), xp.nan),
         "foot_slip": xp.where(planted > 0, episode.slip_sum / xp.maximum(planted, 1), xp.nan),
+        "lin_vel_error": episode.lin_vel_error_sum / steps,
+        "yaw_rate_error": episode.yaw_rate_error_sum / steps,
+        "duty_factor": episode.contact_steps.astype(steps.dtype) / (contact_count * steps),
+        "planar_cost_of_transport": xp.where(planar >= MIN_DISTANCE,
+                                             episode.work / (weight * planar), xp.nan),
     }  # fmt: skip
     return {name: xp.where(done, value, xp.nan) for name, value in metrics.items()}

@@ -43,6 +43,7 @@ class MjxVectorEnv(VectorEnv):
     state_key: str  # the key of get_state()'s dict
     action_hint: str  # what an action row is, for error messages
     saved_fields: tuple[str, ...]  # what a saved state holds beside STATE_FIELDS
+    added_fields: tuple[str, ...] = ()  # saved fields a state saved before them lacks (zeros)
 
     def _start_mjx(self, dynamics: Any, episode: Any = None) -> None:
         """Run on ``dynamics`` (jitted reset and step) on JAX's default device."""
@@ -166,7 +167,7 @@ class MjxVectorEnv(VectorEnv):
         except AttributeError as error:
             raise ValueError(f"not a state of {type(self).__name__} ({error!r})") from None
         names = (*STATE_FIELDS, *self.saved_fields)
-        missing = [name for name in names if name not in fields]
+        missing = [name for name in names if name not in fields and name not in self.added_fields]
         if missing:
             raise ValueError(f"the MJX state lacks {', '.join(missing)}")
         if fields["qpos"].shape[0] != self.num_envs:
@@ -174,6 +175,10 @@ class MjxVectorEnv(VectorEnv):
                              f"{self.num_envs}")  # fmt: skip
         if self._state is None:
             self.reset_tensors(seed=0)
+        current = self.saved(self._state)
+        for name in self.added_fields:  # a state saved before the field existed: zeros
+            if name not in fields:
+                fields[name] = np.zeros_like(np.asarray(current[name]))
         put = {name: jax.device_put(fields[name], self.jax_device) for name in names}
         data = self._state.data.replace(**{name: put[name] for name in STATE_FIELDS})
         self._state = self.restored(data, put)

@@ -14,4 +14,10 @@ METRICS = {
         "cost of transport", undefined="the robot walked less than 0.1 m forward"
     ),
     "foot_slip": MetricInfo("foot slip speed", "m/s", undefined="no foot was planted"),
+    "lin_vel_error": MetricInfo("linear velocity error", "m/s", short="lin vel error"),
+    "yaw_rate_error": MetricInfo("yaw-rate error", "rad/s"),
+    "duty_factor": MetricInfo("duty factor"),
+    "planar_cost_of_transport": MetricInfo(
+        "cost of transport (planar)", short="CoT", undefined="the base moved less than 0.1 m"
+    ),
 }

@@ -45,7 +45,12 @@ from cpg_actor.robots.common.mujoco_runtime import mujoco
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.common.quadruped.mjx_ground import GroundState, MjxGround
 from cpg_actor.robots.common.quadruped.model import QuadrupedModel
-from cpg_actor.robots.common.quadruped.vector import QuadrupedVectorEnv, init_spaces, load_model
+from cpg_actor.robots.common.quadruped.vector import (
+    ADDED_FIELDS,
+    QuadrupedVectorEnv,
+    init_spaces,
+    load_model,
+)
 from cpg_actor.tasks import velocity as task
 
 jax, mjx = load()
@@ -272,6 +277,7 @@ class MjxQuadrupedVectorEnv(MjxVectorEnv):
 
     mujoco_env: type[QuadrupedVectorEnv]  # the robot's MuJoCo env (a subclass sets it)
     saved_fields = (*task.Episode._fields, "key")
+    added_fields = ADDED_FIELDS  # zero in states saved before them
 
     @property
     def quadruped(self) -> QuadrupedModel:

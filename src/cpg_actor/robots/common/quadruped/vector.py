@@ -23,7 +23,9 @@ when the base falls (``task.fallen``) or touches the ground (terminated), or aft
 m/s), ``fell`` (1 or 0), ``episode_seconds``, ``cost_of_transport`` (the joints' mechanical
 work, sum of |torque x joint speed| dt, over m g times the distance walked forward; NaN under
 0.1 m), ``foot_slip`` (the planted feet's mean sliding speed, m/s: ``task.planted_slip``
-over every foot and step it applies to; NaN if no foot was planted).
+over every foot and step it applies to; NaN if no foot was planted), ``lin_vel_error`` (mean
+|v_xy - command_xy| in the base frame, m/s), ``yaw_rate_error`` (mean |yaw rate - command|,
+rad/s) and ``duty_factor`` (the share of steps a foot is on the ground, mean over the feet).
 
 ``info`` of a step also has, per env: ``command`` (the one the step ran under, also on the step
 that ends an episode), ``contact`` (4 bool, the feet in the robot's leg order (``foot_names``)
@@ -77,7 +79,10 @@ from cpg_actor.tasks import velocity as task
 
 # the task's episode fields a saved state holds (the feet's positions are its sensors')
 SAVED_FIELDS = tuple(name for name in task.Episode._fields if name != "feet_xy")
-ADDED_FIELDS = ("slip_sum", "planted_steps")  # zero in states saved before they existed
+# zero in states saved before they existed
+ADDED_FIELDS = ("slip_sum", "planted_steps", "lin_vel_error_sum", "yaw_rate_error_sum",
+                "contact_steps", "start_y")  # fmt: skip
+COUNTS = ("planted_steps", "contact_steps")  # the integer ones
 
 
 def load_model(quadruped: QuadrupedModel, config: QuadrupedConfig,
@@ -333,7 +338,7 @@ class QuadrupedVectorEnv(VectorEnv):
             mujoco.mj_getState(self.model, data, self._state[i], STATE_SPEC)
         self._refresh_sensors(index)
         fresh = task.new_episode(command, joints, self.qpos[:, 0].copy(),
-                                 self._feet()[:, :, :2].copy())  # fmt: skip
+                                 self._feet()[:, :, :2].copy(), self.qpos[:, 1].copy())  # fmt: skip
         self.episode = fresh if self.episode is None else task.restart(self.episode, done, fresh)
         self.draws.start(index)
         if self.config.randomize.active:  # each env's episode perturbation
@@ -520,7 +525,7 @@ class QuadrupedVectorEnv(VectorEnv):
         fields = {}
         for name in SAVED_FIELDS:
             if name not in state and name in ADDED_FIELDS:
-                dtype = np.int64 if name == "planted_steps" else np.float64
+                dtype = np.int64 if name in COUNTS else np.float64
                 fields[name] = np.zeros(self.num_envs, dtype=dtype)
                 continue
             fields[name] = np.array(state[name])

@@ -1,0 +1,305 @@
+"""The quadrupeds' evaluation protocol (``cpg-actor eval RUN --grid``; docs/quadruped.md,
+"Evaluation protocol"): a fixed grid of velocity commands, each held for a whole episode, and
+the protocol's payload and push checks, every agent measured the same way.
+
+Why a fixed grid: the omnidirectional task draws its commands at random, so an evaluation of
+it measures a mixture that changes with the seed and the ranges. The grid asks the same
+questions of every policy: walk forward and backward slowly and fast, side-step left and
+right, turn on the spot both ways, a combined command and standing still (the field's
+ranges: vx to 1 m/s, vy to 0.5, yaw to 1 rad/s). Each command is a point range of the run's
+env config with no resampling and no standing draws, so the env's own episode metrics are
+the protocol's (:mod:`cpg_actor.tasks.velocity`): linear velocity error and yaw-rate error
+(means over the episode, start-up included), falls, the planar cost of transport, foot slip
+and the duty factor; the torque rate comes from the traces
+(:mod:`cpg_actor.experiments.physical`).
+
+The checks (CPG-RL's payload, legged_gym's pushes) run at the slow forward command on MuJoCo
+(where perturbations run): a payload of :data:`PAYLOAD_SHARE` of the moving mass on the
+trunk, and a push of :data:`PUSH_SPEED` m/s times the moving mass to the left and to the
+right, with the robustness suite's recovery time (strides back within 10 % of the same
+episode's without the push; :func:`cpg_actor.robustness.suite.recoveries`).
+
+Terrain: every row names the ground it ran on (:data:`TERRAINS`, env fields per ground);
+flat ground is the only one today. A terrain level is an entry there, and the grid runs on
+each ground asked for.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+# ground -> the env config fields that make it; a terrain level is one more entry
+TERRAINS: dict[str, dict[str, Any]] = {"flat": {}}
+
+
+@dataclass(frozen=True)
+class GridCommand:
+    """One command of the grid, held for a whole episode."""
+
+    name: str
+    vx: float  # m/s, forward
+    vy: float  # m/s, to the left
+    yaw: float  # rad/s, counter-clockwise
+
+    @property
+    def values(self) -> tuple[float, float, float]:
+        return (self.vx, self.vy, self.yaw)
+
+
+GRID = (
+    GridCommand("forward 0.5", 0.5, 0.0, 0.0),
+    GridCommand("forward 1.0", 1.0, 0.0, 0.0),
+    GridCommand("backward 0.5", -0.5, 0.0, 0.0),
+    GridCommand("backward 1.0", -1.0, 0.0, 0.0),
+    GridCommand("left 0.3", 0.0, 0.3, 0.0),
+    GridCommand("right 0.3", 0.0, -0.3, 0.0),
+    GridCommand("turn left 0.5", 0.0, 0.0, 0.5),
+    GridCommand("turn left 1.0", 0.0, 0.0, 1.0),
+    GridCommand("turn right 0.5", 0.0, 0.0, -0.5),
+    GridCommand("turn right 1.0", 0.0, 0.0, -1.0),
+    GridCommand("combined", 0.5, 0.2, 0.3),
+    GridCommand("standing", 0.0, 0.0, 0.0),
+)
+CHECK_COMMAND = GRID[0]  # the checks' command: 0.5 m/s forward
+PAYLOAD_SHARE = 1.15  # x the moving mass on the trunk (CPG-RL's 115 %)
+PUSH_SPEED = 1.0  # m/s given to the moving mass by a push (legged_gym's largest)
+PUSH_TIME = (1.0, 2.0)  # s: the window the push comes in (the robustness suite's)
+
+# the table's columns: (key, heading); the env's episode metrics and the physical torque rate
+COLUMNS = (
+    ("lin_vel_error", "lin vel err (m/s)"),
+    ("yaw_rate_error", "yaw err (rad/s)"),
+    ("fell", "falls"),
+    ("planar_cost_of_transport", "CoT"),
+    ("torque_rate", "torque rate (N m/s)"),
+    ("foot_slip", "foot slip (m/s)"),
+    ("duty_factor", "duty factor"),
+)
+COMMAND_FIELDS = ("command_range", "lateral_range", "yaw_range")
+
+
+def check_grid_robot(robot_name: str, env_config: Any) -> None:
+    """ValueError, one line, unless the run's env takes forward, lateral and yaw commands (a
+    quadruped's velocity task)."""
+    if not all(hasattr(env_config, name) for name in COMMAND_FIELDS):
+        raise ValueError(f"--grid evaluates the quadrupeds' velocity task (forward, lateral and "
+                         f"yaw commands); the {robot_name}'s env has none: pass a run of a "
+                         f"quadruped (go1, anymal)")  # fmt: skip
+
+
+def untrained_commands(env_config: Any, grid: Sequence[GridCommand] = GRID) -> list[str]:
+    """The grid's commands outside the ranges the run was trained on (its env config's
+    ``command_range``, ``lateral_range``, ``yaw_range``): a forward-only run has never seen a
+    lateral or turning command. Standing is in every range that holds 0, or trained with a
+    standing share."""
+    ranges = [tuple(getattr(env_config, name)) for name in COMMAND_FIELDS]
+    standing = getattr(env_config, "standing_share", 0.0) > 0
+    out = []
+    for command in grid:
+        if standing and command.values == (0.0, 0.0, 0.0):
+            continue
+        if not all(low - 1e-9 <= v <= high + 1e-9
+                   for v, (low, high) in zip(command.values, ranges, strict=True)):  # fmt: skip
+            out.append(command.name)
+    return out
+
+
+def command_env(env_config: Any, command: GridCommand, terrain: str = "flat", **changes):
+    """``env_config`` holding ``command`` for whole episodes on ``terrain``: point ranges, no
+    resampling, no standing draws."""
+    vx, vy, yaw = command.values
+    return env_config.replace(
+        command_range=(vx, vx), lateral_range=(vy, vy), yaw_range=(yaw, yaw),
+        command_resample_seconds=0.0, standing_share=0.0, **TERRAINS[terrain], **changes,
+    )  # fmt: skip
+
+
+def push_window(episode_seconds: float) -> tuple[float, float]:
+    """:data:`PUSH_TIME`, moved into the first half of an episode shorter than it."""
+    half = 0.5 * episode_seconds
+    return (min(PUSH_TIME[0], half), min(PUSH_TIME[1], half))
+
+
+def checks(moving_mass: float, episode_seconds: float) -> list[tuple[str, dict[str, Any]]]:
+    """The protocol's checks: ``(name, perturbation fields)``: the payload and the pushes to the
+    left and to the right, sized by the robot's ``moving_mass`` (kg)."""
+    window = push_window(episode_seconds)
+    push = round(PUSH_SPEED * moving_mass, 2)
+    return [
+        (f"payload {PAYLOAD_SHARE:.0%}", {"payload": round(PAYLOAD_SHARE * moving_mass, 2)}),
+        *((f"push {side} {PUSH_SPEED:g} m/s",
+           {"push": push, "push_direction": side, "push_time": window})
+          for side in ("left", "right")),
+    ]  # fmt: skip
+
+
+def row_of(traces: dict[str, np.ndarray]) -> dict[str, float]:
+    """One row of the table from an evaluation's traces: each column's mean over the episodes
+    that define it (NaN where none does; ``fell``: the share of episodes that fell)."""
+    from cpg_actor.experiments.physical import torque_rate
+    from cpg_actor.training.evaluation import finite_mean
+
+    row = {}
+    for key, _ in COLUMNS:
+        if key == "torque_rate":
+            dt = float(traces["control_dt"])
+            values = [torque_rate(_rows(traces, "joint_torque", e), dt)
+                      for e in range(len(traces["length"]))] if "joint_torque" in traces else []
+            row[key] = finite_mean(values)  # fmt: skip
+        else:
+            row[key] = finite_mean(traces[key]) if key in traces else math.nan
+    return row
+
+
+def _rows(traces: dict[str, np.ndarray], key: str, episode: int) -> np.ndarray:
+    return np.asarray(traces[key][: int(traces["length"][episode]), episode], dtype=float)
+
+
+def run_grid(
+    policy,
+    config: Any,
+    robot: Any,
+    episodes: int,
+    seed: int,
+    terrains: Sequence[str] = ("flat",),
+    with_checks: bool = True,
+    progress: Callable[[str], None] = print,
+) -> dict[str, Any]:
+    """The protocol on ``policy`` (the run's, ``config`` its TrainConfig, ``robot`` its robot):
+    every command of :data:`GRID` on each of ``terrains``, then (``with_checks``) the payload
+    and push checks on MuJoCo, ``episodes`` deterministic episodes each from env seed
+    ``seed``. Returns ``rows`` (each with ``terrain``, ``command`` and ``check`` names and the
+    :data:`COLUMNS`), ``means`` per terrain (over the grid's commands), ``untrained`` (the
+    commands outside the run's training ranges) and what it ran on."""
+    from cpg_actor.robustness.suite import NO_GAIT, NOT_RECOVERED, recoveries
+    from cpg_actor.training.evaluation import evaluate_policy
+
+    base = config.env
+    dt = float(base.control_dt)
+    rows, means, kept = [], {}, {}
+    for terrain in terrains:
+        grid_rows = []
+        for command in GRID:
+            config.env = command_env(base, command, terrain)
+            traces = evaluate_policy(policy, config, episodes, seed=seed)
+            row = {"terrain": terrain, "command": command.name, "check": "",
+                   "vx": command.vx, "vy": command.vy, "yaw": command.yaw, **row_of(traces)}
+            grid_rows.append(row)  # fmt: skip
+            if command == CHECK_COMMAND and robot.simulator(config.env) == "mujoco":
+                kept[terrain] = traces  # the checks' nominal episodes
+            progress(f"  {terrain}, {command.name}: lin vel error {row['lin_vel_error']:.3f} "
+                     f"m/s, yaw-rate error {row['yaw_rate_error']:.3f} rad/s, falls "
+                     f"{row['fell']:.0%}")  # fmt: skip
+        rows += grid_rows
+        means[terrain] = {key: _nanmean([r[key] for r in grid_rows]) for key, _ in COLUMNS}
+        if not with_checks:
+            continue
+        mujoco = command_env(base, CHECK_COMMAND, terrain, **robot.simulator_config("mujoco"))
+        if terrain not in kept:  # the run is on MJX: the nominal episodes again, on MuJoCo
+            config.env = mujoco
+            kept[terrain] = evaluate_policy(policy, config, episodes, seed=seed)
+        table = robot.perturbations
+        for name, fields in checks(type(base).moving_mass, base.episode_seconds):
+            config.env = mujoco.replace(perturbation=type(mujoco.perturbation)(**fields))
+            traces = evaluate_policy(policy, config, episodes, seed=seed)
+            row = {"terrain": terrain, "command": CHECK_COMMAND.name, "check": name,
+                   "vx": CHECK_COMMAND.vx, "vy": CHECK_COMMAND.vy, "yaw": CHECK_COMMAND.yaw,
+                   **row_of(traces), **fields}  # fmt: skip
+            if "push" in fields:
+                steps = recoveries(traces, kept[terrain], table)
+                done = [s for s in steps if s not in (NOT_RECOVERED, NO_GAIT)]
+                gait = [s for s in steps if s != NO_GAIT]
+                row["recovered"] = len(done) / len(gait) if gait else math.nan
+                row["recovery_seconds"] = float(np.mean(done)) * dt if done else math.nan
+                row["push_time"] = list(fields["push_time"])
+            rows.append(row)
+            progress(f"  {terrain}, {name}: lin vel error {row['lin_vel_error']:.3f} m/s, "
+                     f"falls {row['fell']:.0%}")  # fmt: skip
+    config.env = base
+    return {"rows": rows, "means": means, "untrained": untrained_commands(base),
+            "episodes": episodes, "env_seed": seed, "episode_seconds": base.episode_seconds,
+            "simulator": robot.simulator(base)}  # fmt: skip
+
+
+def _nanmean(values: Sequence[float]) -> float:
+    finite = [v for v in values if math.isfinite(v)]
+    return float(np.mean(finite)) if finite else math.nan
+
+
+def _cell(key: str, value: Any) -> str:
+    if not isinstance(value, float) or not math.isfinite(value):
+        return "—" if isinstance(value, float) else str(value)
+    if key in ("fell", "recovered"):
+        return f"{value:.0%}"
+    return f"{value:.3f}" if abs(value) < 100 else f"{value:.0f}"
+
+
+def table_lines(result: dict[str, Any]) -> list[str]:
+    """The protocol's result as a printed table: a line per row, the means over the grid per
+    terrain, the checks with their recovery, and footnotes."""
+    untrained = set(result["untrained"])
+    heads = ["terrain", "command", *(head for _, head in COLUMNS), "recovered",
+             "recovery (s)"]  # fmt: skip
+    body = []
+    for row in result["rows"]:
+        name = row["check"] or row["command"]
+        if not row["check"] and row["command"] in untrained:
+            name += " *"
+        body.append([row["terrain"], name, *(_cell(k, row[k]) for k, _ in COLUMNS),
+                     _cell("recovered", row.get("recovered", "")),
+                     _cell("", row.get("recovery_seconds", ""))])  # fmt: skip
+    for terrain, mean in result["means"].items():
+        body.append([terrain, "mean over the grid", *(_cell(k, mean[k]) for k, _ in COLUMNS),
+                     "", ""])  # fmt: skip
+    widths = [max(len(r[i]) for r in [heads, *body]) for i in range(len(heads))]
+
+    def line(cells: list[str]) -> str:
+        return "  ".join(c.ljust(w) if i < 2 else c.rjust(w)
+                         for i, (c, w) in enumerate(zip(cells, widths, strict=True)))  # fmt: skip
+
+    lines = [line(heads), line(["-" * w for w in widths]), *(line(r) for r in body)]
+    lines.append(f"{result['episodes']} episode(s) of {result['episode_seconds']:g} s per row "
+                 f"from env seed {result['env_seed']}, on {result['simulator']} (checks on "
+                 f"mujoco, at {CHECK_COMMAND.vx:g} m/s forward); errors are means over the "
+                 f"episode, start-up included; —: undefined (CoT: the base moved < 0.1 m)")
+    if untrained:
+        lines.append("*: outside the ranges the run was trained on (its env's command_range, "
+                     "lateral_range, yaw_range)")  # fmt: skip
+    return lines
+
+
+def csv_text(result: dict[str, Any]) -> str:
+    """The rows and the means as CSV: one line per row, the means with command ``mean``."""
+    keys = ["terrain", "command", "check", "vx", "vy", "yaw", *(k for k, _ in COLUMNS),
+            "payload", "push", "push_direction", "recovered", "recovery_seconds"]  # fmt: skip
+    out = io.StringIO()
+    writer = csv.DictWriter(out, fieldnames=keys, extrasaction="ignore", lineterminator="\n")
+    writer.writeheader()
+    for row in result["rows"]:
+        writer.writerow(row)
+    for terrain, mean in result["means"].items():
+        writer.writerow({"terrain": terrain, "command": "mean", **mean})
+    return out.getvalue()
+
+
+def json_text(result: dict[str, Any]) -> str:
+    """The result as JSON, NaN written as null."""
+
+    def clean(value):
+        if isinstance(value, float) and not math.isfinite(value):
+            return None
+        if isinstance(value, dict):
+            return {k: clean(v) for k, v in value.items()}
+        if isinstance(value, list | tuple):
+            return [clean(v) for v in value]
+        return value
+
+    return json.dumps(clean(result), indent=2) + "\n"
