@@ -151,8 +151,14 @@ def row_of(traces: dict[str, np.ndarray]) -> dict[str, float]:
     for key, _ in COLUMNS:
         if key == "torque_rate":
             dt = float(traces["control_dt"])
-            values = [torque_rate(_rows(traces, "joint_torque", e), dt)
-                      for e in range(len(traces["length"]))] if "joint_torque" in traces else []
+            values = (
+                [
+                    torque_rate(_rows(traces, "joint_torque", e), dt)
+                    for e in range(len(traces["length"]))
+                ]
+                if "joint_torque" in traces
+                else []
+            )
             row[key] = finite_mean(values)  # fmt: skip
         else:
             row[key] = finite_mean(traces[key]) if key in traces else math.nan
@@ -190,8 +196,15 @@ def run_grid(
         for command in GRID:
             config.env = command_env(base, command, terrain)
             traces = evaluate_policy(policy, config, episodes, seed=seed)
-            row = {"terrain": terrain, "command": command.name, "check": "",
-                   "vx": command.vx, "vy": command.vy, "yaw": command.yaw, **row_of(traces)}
+            row = {
+                "terrain": terrain,
+                "command": command.name,
+                "check": "",
+                "vx": command.vx,
+                "vy": command.vy,
+                "yaw": command.yaw,
+                **row_of(traces),
+            }
             grid_rows.append(row)  # fmt: skip
             if command == CHECK_COMMAND and robot.simulator(config.env) == "mujoco":
                 kept[terrain] = traces  # the checks' nominal episodes
@@ -266,10 +279,12 @@ def table_lines(result: dict[str, Any]) -> list[str]:
                          for i, (c, w) in enumerate(zip(cells, widths, strict=True)))  # fmt: skip
 
     lines = [line(heads), line(["-" * w for w in widths]), *(line(r) for r in body)]
-    lines.append(f"{result['episodes']} episode(s) of {result['episode_seconds']:g} s per row "
-                 f"from env seed {result['env_seed']}, on {result['simulator']} (checks on "
-                 f"mujoco, at {CHECK_COMMAND.vx:g} m/s forward); errors are means over the "
-                 f"episode, start-up included; —: undefined (CoT: the base moved < 0.1 m)")
+    lines.append(
+        f"{result['episodes']} episode(s) of {result['episode_seconds']:g} s per row "
+        f"from env seed {result['env_seed']}, on {result['simulator']} (checks on "
+        f"mujoco, at {CHECK_COMMAND.vx:g} m/s forward); errors are means over the "
+        f"episode, start-up included; —: undefined (CoT: the base moved < 0.1 m)"
+    )
     if untrained:
         lines.append("*: outside the ranges the run was trained on (its env's command_range, "
                      "lateral_range, yaw_range)")  # fmt: skip

@@ -336,18 +336,18 @@ def episode_metrics(episode: Episode, x, fell, done, dt: float, weight: float, y
     planar = xp.sqrt(distance**2 + (moved - episode.start_y) ** 2)
     planted = episode.planted_steps
     contact_count = episode.in_contact.shape[1]  # the feet
+    forward_cost = episode.work / (weight * xp.maximum(distance, MIN_DISTANCE))
+    planar_cost = episode.work / (weight * xp.maximum(planar, MIN_DISTANCE))
     metrics = {
         "speed_error": episode.speed_error_sum / steps,
         "forward_speed": episode.speed_sum / steps,
         "fell": fell.astype(steps.dtype),
         "episode_seconds": steps * dt,
-        "cost_of_transport": xp.where(distance >= MIN_DISTANCE,
-                                      episode.work / (weight * distance), xp.nan),
+        "cost_of_transport": xp.where(distance >= MIN_DISTANCE, forward_cost, xp.nan),
         "foot_slip": xp.where(planted > 0, episode.slip_sum / xp.maximum(planted, 1), xp.nan),
         "lin_vel_error": episode.lin_vel_error_sum / steps,
         "yaw_rate_error": episode.yaw_rate_error_sum / steps,
         "duty_factor": episode.contact_steps.astype(steps.dtype) / (contact_count * steps),
-        "planar_cost_of_transport": xp.where(planar >= MIN_DISTANCE,
-                                             episode.work / (weight * planar), xp.nan),
+        "planar_cost_of_transport": xp.where(planar >= MIN_DISTANCE, planar_cost, xp.nan),
     }  # fmt: skip
     return {name: xp.where(done, value, xp.nan) for name, value in metrics.items()}
