@@ -9,8 +9,9 @@ right, turn on the spot both ways, a combined command and standing still (the fi
 ranges: vx to 1 m/s, vy to 0.5, yaw to 1 rad/s). Each command is a point range of the run's
 env config with no resampling and no standing draws, so the env's own episode metrics are
 the protocol's (:mod:`cpg_actor.tasks.velocity`): linear velocity error and yaw-rate error
-(means over the episode, start-up included), falls, the planar cost of transport, foot slip
-and the duty factor; the torque rate comes from the traces
+(means over the episode, start-up included), falls, the planar cost of transport (for the
+commands that ask the base to travel: turning on the spot or standing has no distance to
+divide by, only drift), foot slip and the duty factor; the torque rate comes from the traces
 (:mod:`cpg_actor.experiments.physical`).
 
 The checks (CPG-RL's payload, legged_gym's pushes) run at the slow forward command on MuJoCo
@@ -52,6 +53,14 @@ class GridCommand:
     @property
     def values(self) -> tuple[float, float, float]:
         return (self.vx, self.vy, self.yaw)
+
+    @property
+    def moves(self) -> bool:
+        """Whether it asks the base to travel (a planar speed above the task's ``MOVING``):
+        the cost of transport is reported for those commands alone."""
+        from cpg_actor.tasks.velocity import MOVING
+
+        return math.hypot(self.vx, self.vy) > MOVING
 
 
 GRID = (
@@ -205,7 +214,9 @@ def run_grid(
                 "yaw": command.yaw,
                 **row_of(traces),
             }
-            grid_rows.append(row)  # fmt: skip
+            if not command.moves:  # no distance asked for: the drift's cost means nothing
+                row["planar_cost_of_transport"] = math.nan
+            grid_rows.append(row)
             if command == CHECK_COMMAND and robot.simulator(config.env) == "mujoco":
                 kept[terrain] = traces  # the checks' nominal episodes
             progress(f"  {terrain}, {command.name}: lin vel error {row['lin_vel_error']:.3f} "
@@ -283,7 +294,8 @@ def table_lines(result: dict[str, Any]) -> list[str]:
         f"{result['episodes']} episode(s) of {result['episode_seconds']:g} s per row "
         f"from env seed {result['env_seed']}, on {result['simulator']} (checks on "
         f"mujoco, at {CHECK_COMMAND.vx:g} m/s forward); errors are means over the "
-        f"episode, start-up included; —: undefined (CoT: the base moved < 0.1 m)"
+        f"episode, start-up included; —: undefined (CoT: for the commands that travel, and the "
+        f"base moved >= 0.1 m)"
     )
     if untrained:
         lines.append("*: outside the ranges the run was trained on (its env's command_range, "

@@ -104,6 +104,14 @@ def test_the_grid_and_its_checks():
     assert values[:, 1].min() < 0 < values[:, 1].max() and np.abs(values[:, 1]).max() <= 0.5
     assert (values[:, 2].min(), values[:, 2].max()) == (-1.0, 1.0)
     assert [0.0, 0.0, 0.0] in values.tolist()
+    # the cost of transport only where the command travels: not turning on the spot, standing
+    assert [c.name for c in protocol.GRID if not c.moves] == [
+        "turn left 0.5",
+        "turn left 1.0",
+        "turn right 0.5",
+        "turn right 1.0",
+        "standing",
+    ]
     mass = get_robot("go1").config_class.moving_mass
     checks = dict(protocol.checks(mass, 0.2))
     assert checks["payload 115%"]["payload"] == pytest.approx(1.15 * mass, abs=0.01)
