@@ -191,3 +191,23 @@ def test_bad_input_is_one_clear_line(tmp_path, capsys, go1_run):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--grid" in err
     assert not (tmp_path / "v.mp4").exists()
+
+
+def test_a_state_saved_before_the_new_metrics_still_resumes():
+    """A checkpoint's env state from before the tracking metrics lacks their sums: it resumes
+    with them at zero, and the episode's metrics come out finite."""
+    robot = get_robot("go1")
+    env = robot.make(2, robot.config_class(episode_seconds=0.1), num_threads=1)
+    env.reset(seed=0)
+    pose = np.tile(np.asarray(env.quadruped.nominal_pose), (2, 1))
+    env.step(pose)
+    state = env.get_state()
+    fields = state[env.quadruped.state_key]
+    for name in ("lin_vel_error_sum", "yaw_rate_error_sum", "contact_steps", "start_y"):
+        del fields[name]
+    env.set_state(state)
+    for _ in range(4):
+        *_, info = env.step(pose)
+    for name in ("lin_vel_error", "yaw_rate_error", "duty_factor"):
+        assert np.isfinite(info["episode_metrics"][name]).all()
+    env.close()
