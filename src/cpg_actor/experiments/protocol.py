@@ -9,10 +9,12 @@ right, turn on the spot both ways, a combined command and standing still (the fi
 ranges: vx to 1 m/s, vy to 0.5, yaw to 1 rad/s). Each command is a point range of the run's
 env config with no resampling and no standing draws, so the env's own episode metrics are
 the protocol's (:mod:`cpg_actor.tasks.velocity`): linear velocity error and yaw-rate error
-(means over the episode, start-up included), falls, the planar cost of transport (for the
-commands that ask the base to travel: turning on the spot or standing has no distance to
-divide by, only drift), foot slip and the duty factor; the torque rate comes from the traces
-(:mod:`cpg_actor.experiments.physical`).
+(means over the episode of the per-step errors, start-up included: what the tracking reward
+sees) and their offsets (the errors of the episode's mean velocity: the gait's sway within a
+stride averaged out, which a trot's yaw rocking otherwise dominates), falls, the planar
+cost of transport (for the commands that ask the base to travel: turning on the spot or
+standing has no distance to divide by, only drift), foot slip and the duty factor; the
+torque rate comes from the traces (:mod:`cpg_actor.experiments.physical`).
 
 The checks (CPG-RL's payload, legged_gym's pushes) run at the slow forward command on MuJoCo
 (where perturbations run): a payload of :data:`PAYLOAD_SHARE` of the moving mass on the
@@ -85,7 +87,9 @@ PUSH_TIME = (1.0, 2.0)  # s: the window the push comes in (the robustness suite'
 # the table's columns: (key, heading); the env's episode metrics and the physical torque rate
 COLUMNS = (
     ("lin_vel_error", "lin vel err (m/s)"),
+    ("lin_vel_offset", "offset (m/s)"),
     ("yaw_rate_error", "yaw err (rad/s)"),
+    ("yaw_rate_offset", "offset (rad/s)"),
     ("fell", "falls"),
     ("planar_cost_of_transport", "CoT"),
     ("torque_rate", "torque rate (N m/s)"),

@@ -151,7 +151,7 @@ def fallen(base_height, gravity, fall_height: float, fall_tilt: float) -> np.nda
 
 EPISODE_METRICS = ("speed_error", "forward_speed", "fell", "episode_seconds", "cost_of_transport",
                    "foot_slip", "lin_vel_error", "yaw_rate_error", "duty_factor",
-                   "planar_cost_of_transport")  # fmt: skip
+                   "planar_cost_of_transport", "lin_vel_offset", "yaw_rate_offset")  # fmt: skip
 MIN_DISTANCE = 0.1  # m: below this the cost of transport is not defined (NaN)
 CONTACT_MARGIN = 0.005  # m: a foot whose centre is within its radius plus this touches the ground
 MOVING = 0.1  # m/s: a command faster than this pays the feet's air time
@@ -178,6 +178,9 @@ class Episode(NamedTuple):
     yaw_rate_error_sum: Any  # (N,) sum of |yaw rate - command yaw|, rad/s
     contact_steps: Any  # (N,) int, count of feet on the ground over the episode's steps
     start_y: Any  # (N,) the base's y at the episode's start, m
+    # (N, 3) sum of (v_x, v_y, w_z) - command: its mean is the tracking's offset, the gait's
+    # sway within a stride averaged out
+    velocity_offset_sum: Any
 
 
 class Reading(NamedTuple):
@@ -216,7 +219,7 @@ def new_episode(command, joints, start_x, feet_xy, start_y=None) -> Episode:
         in_contact=xp.ones((n, 4), dtype=bool), speed_error_sum=zero, speed_sum=zero, work=zero,
         start_x=start_x, slip_sum=zero, planted_steps=count, feet_xy=feet_xy,
         lin_vel_error_sum=zero, yaw_rate_error_sum=zero, contact_steps=count,
-        start_y=zero if start_y is None else start_y,
+        start_y=zero if start_y is None else start_y, velocity_offset_sum=xp.zeros_like(command),
     )  # fmt: skip
 
 
@@ -300,6 +303,8 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
         lin_vel_error_sum=episode.lin_vel_error_sum + lin_vel_error(lin_vel, episode.command),
         yaw_rate_error_sum=episode.yaw_rate_error_sum + yaw_rate_error(ang_vel, episode.command),
         contact_steps=episode.contact_steps + contact.sum(axis=1), start_y=episode.start_y,
+        velocity_offset_sum=episode.velocity_offset_sum + xp.concatenate(
+            [lin_vel[:, :2], ang_vel[:, 2:]], axis=1) - episode.command,
     )  # fmt: skip
     truncated = (after.elapsed >= config.episode_steps) & ~terminated
     done = terminated | truncated
@@ -328,7 +333,11 @@ def episode_metrics(episode: Episode, x, fell, done, dt: float, weight: float, y
 
     ``cost_of_transport`` divides by the distance walked forward (world x: the forward
     task's); ``planar_cost_of_transport`` by the distance between the base's start and end in
-    the plane, whichever way it walked (the omnidirectional task's)."""
+    the plane, whichever way it walked (the omnidirectional task's). ``lin_vel_error`` and
+    ``yaw_rate_error`` are the means of the per-step errors (what the tracking reward sees,
+    the gait's sway within a stride included); ``lin_vel_offset`` and ``yaw_rate_offset`` the
+    errors of the mean, ``|mean(v_xy - command_xy)|`` and ``|mean(w_z - command_yaw)|``: how
+    far the robot's average motion is from the command, the sway averaged out."""
     xp = namespace(x)
     steps = episode.elapsed.astype(episode.speed_sum.dtype)
     distance = x - episode.start_x
@@ -338,6 +347,7 @@ def episode_metrics(episode: Episode, x, fell, done, dt: float, weight: float, y
     contact_count = episode.in_contact.shape[1]  # the feet
     forward_cost = episode.work / (weight * xp.maximum(distance, MIN_DISTANCE))
     planar_cost = episode.work / (weight * xp.maximum(planar, MIN_DISTANCE))
+    offset = episode.velocity_offset_sum / steps[:, None]
     metrics = {
         "speed_error": episode.speed_error_sum / steps,
         "forward_speed": episode.speed_sum / steps,
@@ -349,5 +359,7 @@ def episode_metrics(episode: Episode, x, fell, done, dt: float, weight: float, y
         "yaw_rate_error": episode.yaw_rate_error_sum / steps,
         "duty_factor": episode.contact_steps.astype(steps.dtype) / (contact_count * steps),
         "planar_cost_of_transport": xp.where(planar >= MIN_DISTANCE, planar_cost, xp.nan),
+        "lin_vel_offset": xp.sqrt(xp.sum(offset[:, :2] ** 2, axis=1)),
+        "yaw_rate_offset": xp.abs(offset[:, 2]),
     }  # fmt: skip
     return {name: xp.where(done, value, xp.nan) for name, value in metrics.items()}

@@ -34,7 +34,8 @@ def walk(command, lin_vel, yaw_rate, contact, steps=5, n=1, moved=(0.0, 0.0)):
         qvel = np.zeros((n, 18))
         reading = task.Reading(
             qpos=qpos, qvel=qvel, lin_vel=np.tile([*lin_vel, 0.0], (n, 1)),
-            ang_vel=np.tile([0.0, 0.0, yaw_rate], (n, 1)), feet=feet, torque=np.zeros((n, 12)),
+            ang_vel=np.tile([0.0, 0.0, yaw_rate(step) if callable(yaw_rate) else yaw_rate],
+                            (n, 1)), feet=feet, torque=np.zeros((n, 12)),
             work=np.full(n, 1.0), base_touch=np.zeros(n, bool), unstable=np.zeros(n, bool),
         )  # fmt: skip
         episode, out = task.step(config, episode, reading, joints, nominal, 0.023, 100.0)
@@ -44,8 +45,8 @@ def walk(command, lin_vel, yaw_rate, contact, steps=5, n=1, moved=(0.0, 0.0)):
 
 def test_a_robot_walking_exactly_at_its_command_has_no_error():
     metrics = walk((0.5, 0.2, 0.3), (0.5, 0.2), 0.3, [True] * 4)
-    assert metrics["lin_vel_error"] == pytest.approx(0.0, abs=1e-12)
-    assert metrics["yaw_rate_error"] == pytest.approx(0.0, abs=1e-12)
+    for name in ("lin_vel_error", "yaw_rate_error", "lin_vel_offset", "yaw_rate_offset"):
+        assert metrics[name] == pytest.approx(0.0, abs=1e-12)
     assert metrics["duty_factor"] == pytest.approx(1.0)
 
 
@@ -61,8 +62,20 @@ def test_the_errors_are_distances_whatever_the_sign():
     assert walk((0.0, 0.0, 0.0), (0.0, 0.0), -0.2, [True] * 4)["yaw_rate_error"] == (
         pytest.approx(walk((0.0, 0.0, 0.0), (0.0, 0.0), 0.2, [True] * 4)["yaw_rate_error"])
     )
+    # a constant error: the offset (the error of the mean) is the error
+    assert metrics["lin_vel_offset"] == pytest.approx(0.5, rel=1e-9)
+    assert metrics["yaw_rate_offset"] == pytest.approx(0.5, rel=1e-9)
     # the forward-only metric stays what it was: the forward speed's error alone
     assert metrics["speed_error"] == pytest.approx(0.3, rel=1e-9)
+
+
+def test_a_sway_about_the_command_errs_at_each_step_but_has_no_offset():
+    """A trot rocks the base's yaw: +-0.4 rad/s about a 0.5 rad/s turn, step by step, is a
+    yaw-rate error of 0.4 and an offset of 0 (the turn itself is right)."""
+    metrics = walk((0.0, 0.0, 0.5), (0.0, 0.0), lambda step: 0.5 + 0.4 * (-1) ** step,
+                   [True] * 4, steps=6)  # fmt: skip
+    assert metrics["yaw_rate_error"] == pytest.approx(0.4, rel=1e-9)
+    assert metrics["yaw_rate_offset"] == pytest.approx(0.0, abs=1e-12)
 
 
 def test_duty_factor_and_the_planar_cost_of_transport():
@@ -203,7 +216,8 @@ def test_a_state_saved_before_the_new_metrics_still_resumes():
     env.step(pose)
     state = env.get_state()
     fields = state[env.quadruped.state_key]
-    for name in ("lin_vel_error_sum", "yaw_rate_error_sum", "contact_steps", "start_y"):
+    for name in ("lin_vel_error_sum", "yaw_rate_error_sum", "contact_steps", "start_y",
+                 "velocity_offset_sum"):  # fmt: skip
         del fields[name]
     env.set_state(state)
     for _ in range(4):

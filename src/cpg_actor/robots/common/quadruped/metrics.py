@@ -16,6 +16,8 @@ METRICS = {
     "foot_slip": MetricInfo("foot slip speed", "m/s", undefined="no foot was planted"),
     "lin_vel_error": MetricInfo("linear velocity error", "m/s", short="lin vel error"),
     "yaw_rate_error": MetricInfo("yaw-rate error", "rad/s"),
+    "lin_vel_offset": MetricInfo("linear velocity offset", "m/s", short="lin vel offset"),
+    "yaw_rate_offset": MetricInfo("yaw-rate offset", "rad/s"),
     "duty_factor": MetricInfo("duty factor"),
     "planar_cost_of_transport": MetricInfo(
         "cost of transport (planar)", short="CoT", undefined="the base moved less than 0.1 m"

@@ -25,7 +25,10 @@ work, sum of |torque x joint speed| dt, over m g times the distance walked forwa
 0.1 m), ``foot_slip`` (the planted feet's mean sliding speed, m/s: ``task.planted_slip``
 over every foot and step it applies to; NaN if no foot was planted), ``lin_vel_error`` (mean
 |v_xy - command_xy| in the base frame, m/s), ``yaw_rate_error`` (mean |yaw rate - command|,
-rad/s) and ``duty_factor`` (the share of steps a foot is on the ground, mean over the feet).
+rad/s), their offsets ``lin_vel_offset`` and ``yaw_rate_offset`` (the error of the mean: the
+gait's sway averaged out), ``duty_factor`` (the share of steps a foot is on the ground, mean
+over the feet) and ``planar_cost_of_transport`` (as ``cost_of_transport``, over the distance
+moved in the plane).
 
 ``info`` of a step also has, per env: ``command`` (the one the step ran under, also on the step
 that ends an episode), ``contact`` (4 bool, the feet in the robot's leg order (``foot_names``)
@@ -81,7 +84,7 @@ from cpg_actor.tasks import velocity as task
 SAVED_FIELDS = tuple(name for name in task.Episode._fields if name != "feet_xy")
 # zero in states saved before they existed
 ADDED_FIELDS = ("slip_sum", "planted_steps", "lin_vel_error_sum", "yaw_rate_error_sum",
-                "contact_steps", "start_y")  # fmt: skip
+                "contact_steps", "start_y", "velocity_offset_sum")  # fmt: skip
 COUNTS = ("planted_steps", "contact_steps")  # the integer ones
 
 
@@ -526,7 +529,8 @@ class QuadrupedVectorEnv(VectorEnv):
         for name in SAVED_FIELDS:
             if name not in state and name in ADDED_FIELDS:
                 dtype = np.int64 if name in COUNTS else np.float64
-                fields[name] = np.zeros(self.num_envs, dtype=dtype)
+                shape = (self.num_envs, 3) if name == "velocity_offset_sum" else self.num_envs
+                fields[name] = np.zeros(shape, dtype=dtype)
                 continue
             fields[name] = np.array(state[name])
         self.episode = task.Episode(**fields, feet_xy=self._feet()[:, :, :2].copy())
