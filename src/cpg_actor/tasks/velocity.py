@@ -177,7 +177,7 @@ class Episode(NamedTuple):
     lin_vel_error_sum: Any  # (N,) sum of |v_xy - command_xy| in the base frame, m/s
     yaw_rate_error_sum: Any  # (N,) sum of |yaw rate - command yaw|, rad/s
     contact_steps: Any  # (N,) int, count of feet on the ground over the episode's steps
-    start_y: Any  # (N,) the base's y at the episode's start, m
+    path_length: Any  # (N,) m the base travelled in the plane: the sum of |v_xy| dt
     # (N, 3) sum of (v_x, v_y, w_z) - command: its mean is the tracking's offset, the gait's
     # sway within a stride averaged out
     velocity_offset_sum: Any
@@ -206,9 +206,8 @@ def desired_positions(actions, low, high, normalized: bool):
     return xp.clip(actions, low, high)
 
 
-def new_episode(command, joints, start_x, feet_xy, start_y=None) -> Episode:
-    """A fresh :class:`Episode` for robots at rest in ``joints`` (N, J) under ``command``,
-    their bases at ``start_x``, ``start_y`` (N,; None: 0)."""
+def new_episode(command, joints, start_x, feet_xy) -> Episode:
+    """A fresh :class:`Episode` for robots at rest in ``joints`` (N, J) under ``command``."""
     xp = namespace(joints)
     n = joints.shape[0]
     zero = xp.zeros_like(start_x)
@@ -219,7 +218,7 @@ def new_episode(command, joints, start_x, feet_xy, start_y=None) -> Episode:
         in_contact=xp.ones((n, 4), dtype=bool), speed_error_sum=zero, speed_sum=zero, work=zero,
         start_x=start_x, slip_sum=zero, planted_steps=count, feet_xy=feet_xy,
         lin_vel_error_sum=zero, yaw_rate_error_sum=zero, contact_steps=count,
-        start_y=zero if start_y is None else start_y, velocity_offset_sum=xp.zeros_like(command),
+        path_length=zero, velocity_offset_sum=xp.zeros_like(command),
     )  # fmt: skip
 
 
@@ -302,7 +301,8 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
         planted_steps=episode.planted_steps + planted.sum(axis=1), feet_xy=feet[:, :, :2],
         lin_vel_error_sum=episode.lin_vel_error_sum + lin_vel_error(lin_vel, episode.command),
         yaw_rate_error_sum=episode.yaw_rate_error_sum + yaw_rate_error(ang_vel, episode.command),
-        contact_steps=episode.contact_steps + contact.sum(axis=1), start_y=episode.start_y,
+        contact_steps=episode.contact_steps + contact.sum(axis=1),
+        path_length=episode.path_length + xp.sqrt(xp.sum(lin_vel[:, :2] ** 2, axis=1)) * dt,
         velocity_offset_sum=episode.velocity_offset_sum + xp.concatenate(
             [lin_vel[:, :2], ang_vel[:, 2:]], axis=1) - episode.command,
     )  # fmt: skip
@@ -315,8 +315,7 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
         "reward_terms": scaled,
         "terminated": terminated,
         "truncated": truncated,
-        "episode_metrics": episode_metrics(after, qpos[:, 0], terminated, done, dt, weight,
-                                           qpos[:, 1]),
+        "episode_metrics": episode_metrics(after, qpos[:, 0], terminated, done, dt, weight),
         "info": {
             "command": episode.command, "contact": contact, "base_height": height,
             "forward_speed": lin_vel[:, 0], "desired_position": desired,
@@ -327,13 +326,13 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
     return after, outputs
 
 
-def episode_metrics(episode: Episode, x, fell, done, dt: float, weight: float, y=None) -> dict:
+def episode_metrics(episode: Episode, x, fell, done, dt: float, weight: float) -> dict:
     """The :data:`EPISODE_METRICS` of the episodes that ended (``done``), NaN elsewhere; ``x``
-    and ``y`` (N,) the base's position now (``y`` None: at its start), ``fell`` (N,) bool.
+    (N,) the base's position now, ``fell`` (N,) bool.
 
     ``cost_of_transport`` divides by the distance walked forward (world x: the forward
-    task's); ``planar_cost_of_transport`` by the distance between the base's start and end in
-    the plane, whichever way it walked (the omnidirectional task's). ``lin_vel_error`` and
+    task's); ``planar_cost_of_transport`` by the length of the base's path in the plane,
+    whichever way it walked, curves too (the omnidirectional task's). ``lin_vel_error`` and
     ``yaw_rate_error`` are the means of the per-step errors (what the tracking reward sees,
     the gait's sway within a stride included); ``lin_vel_offset`` and ``yaw_rate_offset`` the
     errors of the mean, ``|mean(v_xy - command_xy)|`` and ``|mean(w_z - command_yaw)|``: how
@@ -341,8 +340,7 @@ def episode_metrics(episode: Episode, x, fell, done, dt: float, weight: float, y
     xp = namespace(x)
     steps = episode.elapsed.astype(episode.speed_sum.dtype)
     distance = x - episode.start_x
-    moved = episode.start_y if y is None else y
-    planar = xp.sqrt(distance**2 + (moved - episode.start_y) ** 2)
+    planar = episode.path_length
     planted = episode.planted_steps
     contact_count = episode.in_contact.shape[1]  # the feet
     forward_cost = episode.work / (weight * xp.maximum(distance, MIN_DISTANCE))

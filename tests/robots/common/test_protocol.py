@@ -16,20 +16,20 @@ from cpg_actor.robots.registry import get_robot
 from cpg_actor.tasks import velocity as task
 
 
-def walk(command, lin_vel, yaw_rate, contact, steps=5, n=1, moved=(0.0, 0.0)):
-    """The episode metrics of ``steps`` control steps of hand-made readings: the base moving
-    at ``lin_vel`` (base frame) and turning at ``yaw_rate``, level, the feet on the ground
-    where ``contact`` (4 bool), ending ``moved`` (m, x and y) from its start."""
+def walk(command, lin_vel, yaw_rate, contact, steps=5, n=1):
+    """The episode metrics of ``steps`` control steps (0.02 s) of hand-made readings: the base
+    moving at ``lin_vel`` (base frame) and turning at ``yaw_rate`` (or ``yaw_rate(step)``),
+    level, the feet on the ground where ``contact`` (4 bool), the joints doing 1 J of work per
+    step."""
     config = get_robot("go1").config_class(episode_seconds=steps * 0.02)
     nominal = np.zeros(12)
     joints = np.zeros((n, 12))
     feet = np.zeros((n, 4, 3))
     feet[:, :, 2] = np.where(contact, 0.02, 0.2)  # the Go1's foot radius is 0.023 m
     command = np.tile(np.asarray(command, dtype=float), (n, 1))
-    episode = task.new_episode(command, joints, np.zeros(n), feet[:, :, :2].copy(), np.zeros(n))
+    episode = task.new_episode(command, joints, np.zeros(n), feet[:, :, :2].copy())
     for step in range(1, steps + 1):
         qpos = np.zeros((n, 19))
-        qpos[:, 0:2] = np.asarray(moved) * step / steps
         qpos[:, 2], qpos[:, 3] = 0.3, 1.0  # standing height, level
         qvel = np.zeros((n, 18))
         reading = task.Reading(
@@ -79,16 +79,15 @@ def test_a_sway_about_the_command_errs_at_each_step_but_has_no_offset():
 
 
 def test_duty_factor_and_the_planar_cost_of_transport():
-    """Two feet of four on the ground all episode: a duty factor of a half. A base that moved
-    0.3 m sideways (and none forward) has a planar cost of transport, work / (m g d), where the
-    forward one is undefined; one that moved under 0.1 m has none."""
-    metrics = walk((0.0, 0.3, 0.0), (0.0, 0.3), 0.0, [True, False, False, True],
-                   moved=(0.0, 0.3))  # fmt: skip
+    """Two feet of four on the ground all episode: a duty factor of a half. A base walking
+    sideways at 0.3 m/s for 0.4 s (0.12 m, none forward) has a planar cost of transport, work /
+    (m g d), where the forward one is undefined; one whose path is under 0.1 m has none."""
+    metrics = walk((0.0, 0.3, 0.0), (0.0, 0.3), 0.0, [True, False, False, True], steps=20)
     assert metrics["duty_factor"] == pytest.approx(0.5)
-    assert metrics["planar_cost_of_transport"] == pytest.approx(5 * 1.0 / (100.0 * 0.3))
+    assert metrics["planar_cost_of_transport"] == pytest.approx(20 * 1.0 / (100.0 * 0.12))
     assert math.isnan(metrics["cost_of_transport"])
-    still = walk((0.0, 0.0, 0.0), (0.0, 0.0), 0.0, [True] * 4, moved=(0.05, 0.05))
-    assert math.isnan(still["planar_cost_of_transport"])
+    short = walk((0.0, 0.3, 0.0), (0.0, 0.3), 0.0, [True] * 4, steps=10)  # 0.06 m
+    assert math.isnan(short["planar_cost_of_transport"])
 
 
 def test_a_grid_command_is_held_for_the_whole_episode():
@@ -216,7 +215,7 @@ def test_a_state_saved_before_the_new_metrics_still_resumes():
     env.step(pose)
     state = env.get_state()
     fields = state[env.quadruped.state_key]
-    for name in ("lin_vel_error_sum", "yaw_rate_error_sum", "contact_steps", "start_y",
+    for name in ("lin_vel_error_sum", "yaw_rate_error_sum", "contact_steps", "path_length",
                  "velocity_offset_sum"):  # fmt: skip
         del fields[name]
     env.set_state(state)

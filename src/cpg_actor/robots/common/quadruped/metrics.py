@@ -20,6 +20,8 @@ METRICS = {
     "yaw_rate_offset": MetricInfo("yaw-rate offset", "rad/s"),
     "duty_factor": MetricInfo("duty factor"),
     "planar_cost_of_transport": MetricInfo(
-        "cost of transport (planar)", short="CoT", undefined="the base moved less than 0.1 m"
+        "cost of transport (planar)",
+        short="CoT",
+        undefined="the base's path was shorter than 0.1 m",
     ),
 }

@@ -27,8 +27,8 @@ over every foot and step it applies to; NaN if no foot was planted), ``lin_vel_e
 |v_xy - command_xy| in the base frame, m/s), ``yaw_rate_error`` (mean |yaw rate - command|,
 rad/s), their offsets ``lin_vel_offset`` and ``yaw_rate_offset`` (the error of the mean: the
 gait's sway averaged out), ``duty_factor`` (the share of steps a foot is on the ground, mean
-over the feet) and ``planar_cost_of_transport`` (as ``cost_of_transport``, over the distance
-moved in the plane).
+over the feet) and ``planar_cost_of_transport`` (as ``cost_of_transport``, over the length of
+the base's path in the plane).
 
 ``info`` of a step also has, per env: ``command`` (the one the step ran under, also on the step
 that ends an episode), ``contact`` (4 bool, the feet in the robot's leg order (``foot_names``)
@@ -84,7 +84,7 @@ from cpg_actor.tasks import velocity as task
 SAVED_FIELDS = tuple(name for name in task.Episode._fields if name != "feet_xy")
 # zero in states saved before they existed
 ADDED_FIELDS = ("slip_sum", "planted_steps", "lin_vel_error_sum", "yaw_rate_error_sum",
-                "contact_steps", "start_y", "velocity_offset_sum")  # fmt: skip
+                "contact_steps", "path_length", "velocity_offset_sum")  # fmt: skip
 COUNTS = ("planted_steps", "contact_steps")  # the integer ones
 
 
@@ -341,7 +341,7 @@ class QuadrupedVectorEnv(VectorEnv):
             mujoco.mj_getState(self.model, data, self._state[i], STATE_SPEC)
         self._refresh_sensors(index)
         fresh = task.new_episode(command, joints, self.qpos[:, 0].copy(),
-                                 self._feet()[:, :, :2].copy(), self.qpos[:, 1].copy())  # fmt: skip
+                                 self._feet()[:, :, :2].copy())  # fmt: skip
         self.episode = fresh if self.episode is None else task.restart(self.episode, done, fresh)
         self.draws.start(index)
         if self.config.randomize.active:  # each env's episode perturbation
