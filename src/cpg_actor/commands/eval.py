@@ -190,7 +190,8 @@ def run_grid(args: argparse.Namespace, config, checkpoint: Path, output: Path) -
         print(f"note: the run was trained without {', '.join(untrained)} (its command ranges); "
               "those rows are marked *")  # fmt: skip
     policy = load_policy(checkpoint, run_config=config)
-    print(f"evaluation protocol: {len(protocol.GRID)} commands and 3 checks, "
+    checks = len(protocol.checks(1.0, config.env.episode_seconds))
+    print(f"evaluation protocol: {len(protocol.GRID)} commands and {checks} checks, "
           f"{args.episodes} episode(s) each")  # fmt: skip
     result = protocol.run_grid(policy, config, robot, args.episodes, args.seed)
     result.update(run=str(Path(args.run_dir)), checkpoint=str(checkpoint), agent=config.agent,
