@@ -80,6 +80,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "where the traces go (docs/quadruped.md, 'Evaluation protocol')",
     )
     parser.add_argument(
+        "--grid-levels",
+        type=int,
+        nargs="+",
+        default=None,
+        metavar="LEVEL",
+        help="with --grid: run it on flat ground and on rough ground at each of these "
+        "difficulty levels (every kind of tile, the curriculum off; docs/quadruped.md, "
+        "'Terrain'); default: on the run's ground as evaluated (flat, or --set env.terrain...)",
+    )
+    parser.add_argument(
         "--video-only",
         action="store_true",
         help="with --video: record the video only (a run already evaluated keeps its traces)",
@@ -113,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
         raise ValueError(f"--output must end in .npz, got {output}")
     if args.video_only and not args.video:
         raise ValueError("--video-only needs --video PATH")
+    if args.grid_levels is not None and not args.grid:
+        raise ValueError("--grid-levels needs --grid")
     if args.grid and args.video:
         raise ValueError("--grid writes a table, no video: run eval without --grid for --video")
     if args.video and Path(args.video).suffix.lower() not in VIDEO_SUFFIXES:  # before evaluating
@@ -189,11 +201,20 @@ def run_grid(args: argparse.Namespace, config, checkpoint: Path, output: Path) -
     if untrained:
         print(f"note: the run was trained without {', '.join(untrained)} (its command ranges); "
               "those rows are marked *")  # fmt: skip
+    grounds: list[dict] = [{}]
+    if args.grid_levels is not None:
+        if not hasattr(config.env, "terrain"):
+            raise ValueError(f"--grid-levels: the {robot.name} has no terrain")
+        grounds = [protocol.flat_ground(config.env)]
+        for level in args.grid_levels:  # each checked before anything runs
+            ground = protocol.terrain_level(config.env, level)
+            config.env.replace(**ground)
+            grounds.append(ground)
     policy = load_policy(checkpoint, run_config=config)
     checks = len(protocol.checks(1.0, config.env.episode_seconds))
     print(f"evaluation protocol: {len(protocol.GRID)} commands and {checks} checks, "
           f"{args.episodes} episode(s) each")  # fmt: skip
-    result = protocol.run_grid(policy, config, robot, args.episodes, args.seed)
+    result = protocol.run_grid(policy, config, robot, args.episodes, args.seed, grounds)
     result.update(run=str(Path(args.run_dir)), checkpoint=str(checkpoint), agent=config.agent,
                   robot=robot.name)  # fmt: skip
     for line in protocol.table_lines(result):

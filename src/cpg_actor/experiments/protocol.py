@@ -22,9 +22,9 @@ trunk, and a push of :data:`PUSH_SPEED` m/s times the moving mass to the left an
 right, with the robustness suite's recovery time (strides back within 10 % of the same
 episode's without the push; :func:`cpg_actor.robustness.suite.recoveries`).
 
-Terrain: every row names the ground it ran on (:data:`TERRAINS`, env fields per ground);
-flat ground is the only one today. A terrain level is an entry there, and the grid runs on
-each ground asked for.
+Ground: every row names the ground it ran on (:func:`ground_name`): the run's (flat, or the
+rough ground of its ``env.terrain``), or each of the grounds asked for (:func:`terrain_level`:
+every kind of tile at one difficulty level, the curriculum off).
 """
 
 from __future__ import annotations
@@ -38,9 +38,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-
-# ground -> the env config fields that make it; a terrain level is one more entry
-TERRAINS: dict[str, dict[str, Any]] = {"flat": {}}
 
 
 @dataclass(frozen=True)
@@ -125,13 +122,45 @@ def untrained_commands(env_config: Any, grid: Sequence[GridCommand] = GRID) -> l
     return out
 
 
-def command_env(env_config: Any, command: GridCommand, terrain: str = "flat", **changes):
-    """``env_config`` holding ``command`` for whole episodes on ``terrain``: point ranges, no
-    resampling, no standing draws."""
+def ground_name(env_config: Any) -> str:
+    """The ground an env config walks on, in words: ``flat``, or its terrain's kinds (``all``
+    for every one) and start level (``curriculum`` where the level moves)."""
+    terrain = getattr(env_config, "terrain", None)
+    if terrain is None or not terrain.active:
+        return "flat"
+    from cpg_actor.terrain.config import KINDS
+
+    kinds = "all" if set(terrain.kinds) == set(KINDS) else "+".join(terrain.kinds)
+    moving = ", curriculum" if terrain.curriculum else ""
+    return f"{kinds} level {terrain.start_level}{moving}"
+
+
+def terrain_level(env_config: Any, level: int) -> dict[str, Any]:
+    """The env changes for rough ground at difficulty ``level``: the run's terrain (every
+    kind where it trained on flat ground), every robot starting on that level's tiles, the
+    curriculum off (legged_gym's evaluation on one level). ValueError for a level the
+    terrain does not have."""
+    import dataclasses
+
+    terrain = env_config.terrain
+    kinds = terrain.kinds if terrain.active else "all"
+    return {"terrain": dataclasses.replace(terrain, kinds=kinds, curriculum=False,
+                                           start_level=level)}  # fmt: skip
+
+
+def flat_ground(env_config: Any) -> dict[str, Any]:
+    """The env changes for flat ground (none where the robot has no terrain)."""
+    terrain = getattr(env_config, "terrain", None)
+    return {} if terrain is None else {"terrain": type(terrain)()}
+
+
+def command_env(env_config: Any, command: GridCommand, ground: dict | None = None, **changes):
+    """``env_config`` holding ``command`` for whole episodes on ``ground`` (env changes; None:
+    the config's own): point ranges, no resampling, no standing draws."""
     vx, vy, yaw = command.values
     return env_config.replace(
         command_range=(vx, vx), lateral_range=(vy, vy), yaw_range=(yaw, yaw),
-        command_resample_seconds=0.0, standing_share=0.0, **TERRAINS[terrain], **changes,
+        command_resample_seconds=0.0, standing_share=0.0, **(ground or {}), **changes,
     )  # fmt: skip
 
 
@@ -188,15 +217,16 @@ def run_grid(
     robot: Any,
     episodes: int,
     seed: int,
-    terrains: Sequence[str] = ("flat",),
+    grounds: Sequence[dict] = ({},),
     with_checks: bool = True,
     progress: Callable[[str], None] = print,
 ) -> dict[str, Any]:
     """The protocol on ``policy`` (the run's, ``config`` its TrainConfig, ``robot`` its robot):
-    every command of :data:`GRID` on each of ``terrains``, then (``with_checks``) the payload
+    every command of :data:`GRID` on each of ``grounds`` (env changes: ``{}`` the run's own,
+    :func:`terrain_level`), then (``with_checks``) the payload
     and push checks on MuJoCo, ``episodes`` deterministic episodes each from env seed
     ``seed``. Returns ``rows`` (each with ``terrain``, ``command`` and ``check`` names and the
-    :data:`COLUMNS`), ``means`` per terrain (over the grid's commands), ``untrained`` (the
+    :data:`COLUMNS`), ``means`` per ground (over the grid's commands), ``untrained`` (the
     commands outside the run's training ranges) and what it ran on."""
     from cpg_actor.robustness.suite import NO_GAIT, NOT_RECOVERED, recoveries
     from cpg_actor.training.evaluation import evaluate_policy
@@ -204,10 +234,11 @@ def run_grid(
     base = config.env
     dt = float(base.control_dt)
     rows, means, kept = [], {}, {}
-    for terrain in terrains:
+    for ground in grounds:
+        terrain = ground_name(command_env(base, CHECK_COMMAND, ground))
         grid_rows = []
         for command in GRID:
-            config.env = command_env(base, command, terrain)
+            config.env = command_env(base, command, ground)
             traces = evaluate_policy(policy, config, episodes, seed=seed)
             row = {
                 "terrain": terrain,
@@ -230,7 +261,7 @@ def run_grid(
         means[terrain] = {key: _nanmean([r[key] for r in grid_rows]) for key, _ in COLUMNS}
         if not with_checks:
             continue
-        mujoco = command_env(base, CHECK_COMMAND, terrain, **robot.simulator_config("mujoco"))
+        mujoco = command_env(base, CHECK_COMMAND, ground, **robot.simulator_config("mujoco"))
         if terrain not in kept:  # the run is on MJX: the nominal episodes again, on MuJoCo
             config.env = mujoco
             kept[terrain] = evaluate_policy(policy, config, episodes, seed=seed)

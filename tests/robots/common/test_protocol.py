@@ -171,6 +171,24 @@ def test_the_grid_runs_on_a_trained_go1_and_writes_its_table(go1_run, capsys):
     assert float(table[0]["lin_vel_error"]) == pytest.approx(rows[0]["lin_vel_error"])
 
 
+def test_the_grid_runs_on_flat_ground_and_at_a_terrain_level(go1_run, tmp_path):
+    """--grid-levels: the grid and its checks on flat ground, then on every kind of tile at
+    the level asked for (the curriculum off), each row naming its ground."""
+    output = tmp_path / "levels" / "traces.npz"
+    code = main(["eval", str(go1_run), "--grid", "--grid-levels", "3", "--episodes", "1",
+                 "--output", str(output)])  # fmt: skip
+    assert code == 0
+    result = json.loads((output.parent / "grid.json").read_text())
+    grounds = [row["terrain"] for row in result["rows"]]
+    rows = len(protocol.GRID) + 3
+    assert grounds == ["flat"] * rows + ["all level 3"] * rows
+    assert list(result["means"]) == ["flat", "all level 3"]
+    config = get_robot("go1").config_class()
+    ground = protocol.terrain_level(config, 3)
+    assert protocol.ground_name(config.replace(**ground)) == "all level 3"
+    assert protocol.ground_name(config.replace(**protocol.flat_ground(config))) == "flat"
+
+
 def test_a_forward_only_run_gets_its_untrained_rows_marked(tmp_path, capsys):
     from tiny import trained_run
 
@@ -199,6 +217,10 @@ def test_bad_input_is_one_clear_line(tmp_path, capsys, go1_run):
     assert main(["eval", str(hopper), "--grid"]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "quadruped" in err and "hopper" in err
+    for args in (["--grid", "--grid-levels", "10"], ["--grid-levels", "2"]):
+        assert main(["eval", str(go1_run), *args]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and ("0..9" in err or "needs --grid" in err)
     assert main(["eval", str(go1_run), "--grid", "--video", str(tmp_path / "v.mp4")]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--grid" in err
