@@ -189,26 +189,13 @@ def row_of(traces: dict[str, np.ndarray]) -> dict[str, float]:
     from cpg_actor.experiments.physical import torque_rate
     from cpg_actor.training.evaluation import finite_mean
 
-    row = {}
-    for key, _ in COLUMNS:
-        if key == "torque_rate":
-            dt = float(traces["control_dt"])
-            values = (
-                [
-                    torque_rate(_rows(traces, "joint_torque", e), dt)
-                    for e in range(len(traces["length"]))
-                ]
-                if "joint_torque" in traces
-                else []
-            )
-            row[key] = finite_mean(values)  # fmt: skip
-        else:
-            row[key] = finite_mean(traces[key]) if key in traces else math.nan
+    row = {key: finite_mean(traces[key]) if key in traces else math.nan for key, _ in COLUMNS}
+    if "joint_torque" in traces:  # each episode's rows while it ran
+        dt = float(traces["control_dt"])
+        rates = [torque_rate(traces["joint_torque"][: int(length), e], dt)
+                 for e, length in enumerate(traces["length"])]  # fmt: skip
+        row["torque_rate"] = finite_mean(rates)
     return row
-
-
-def _rows(traces: dict[str, np.ndarray], key: str, episode: int) -> np.ndarray:
-    return np.asarray(traces[key][: int(traces["length"][episode]), episode], dtype=float)
 
 
 def run_grid(
@@ -328,9 +315,9 @@ def table_lines(result: dict[str, Any]) -> list[str]:
     lines.append(
         f"{result['episodes']} episode(s) of {result['episode_seconds']:g} s per row "
         f"from env seed {result['env_seed']}, on {result['simulator']} (checks on "
-        f"mujoco, at {CHECK_COMMAND.vx:g} m/s forward); errors are means over the "
-        f"episode, start-up included; —: undefined (CoT: for the commands that travel, and the "
-        f"base moved >= 0.1 m)"
+        f"mujoco, at {CHECK_COMMAND.vx:g} m/s forward); errors: means over the episode of "
+        f"the per-step errors, start-up included; offsets: the errors of the episode's mean "
+        f"velocity; —: undefined (CoT: for the commands that travel, a path of 0.1 m or more)"
     )
     if untrained:
         lines.append("*: outside the ranges the run was trained on (its env's command_range, "
