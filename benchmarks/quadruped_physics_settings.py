@@ -39,9 +39,10 @@ from cpg_actor.robots.registry import get_robot
 
 ROBOTS = ("go1", "anymal")
 COMMAND = 0.5  # m/s, the trot's
-# name -> (physics_dt, decimation, cone, impratio); None: the robot's own
+# name -> (physics_dt, decimation, cone, impratio); None: the robot's own. The reference is
+# named in full: the Go1's own step is 4 ms x 5 since this measurement
 SETTINGS = {
-    "default (2 ms x 10, elliptic, impratio 100)": (None, None, None, None),
+    "default (2 ms x 10, elliptic, impratio 100)": (0.002, 10, None, None),
     "4 ms x 5": (0.004, 5, None, None),
     "pyramidal cones": (None, None, "pyramidal", None),
     "impratio 10": (None, None, None, 10.0),

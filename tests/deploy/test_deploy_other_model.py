@@ -80,7 +80,9 @@ def test_the_policy_runs_on_the_other_model_its_joints_mapped_by_name(go1_policy
     meta = example["Policy"](go1_policy).meta
     own = example["Simulation"](meta, go1_policy.with_name(meta["mjcf_file"]))
     other = example["Simulation"](meta, VARIANT_PATH, other=True)
-    assert other.torque_law and other.decimation == own.decimation
+    assert other.torque_law  # the file's own timestep, the policy's control period
+    period = own.decimation * own.model.opt.timestep
+    assert other.decimation * other.model.opt.timestep == pytest.approx(period, rel=1e-9)
     # the same joint, wherever the file puts it
     for j, name in enumerate(meta["joint_names"]):
         assert other.qpos_index[j] == other.model.joint(name).qposadr[0]
