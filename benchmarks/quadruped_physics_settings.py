@@ -5,7 +5,7 @@
         [--output benchmarks/results/quadruped_physics_settings.md]
 
 Per robot and setting (the default: 2 ms x 10 substeps per 20 ms control step, elliptic
-friction cones, ``impratio`` 100; then 4 ms x 5 substeps, pyramidal cones, a lower
+friction cones, ``impratio`` 100; then 4 ms x 5 and 5 ms x 4 substeps, pyramidal cones, a lower
 ``impratio``, and their combinations), the robot's MuJoCo env made with that setting
 (``physics_dt`` and ``decimation`` through its config, the cone and ``impratio`` on its model):
 
@@ -39,14 +39,15 @@ from cpg_actor.robots.registry import get_robot
 
 ROBOTS = ("go1", "anymal")
 COMMAND = 0.5  # m/s, the trot's
-# name -> (physics_dt, decimation, cone, impratio); None: the robot's own. The reference is
-# named in full: the Go1's own step is 4 ms x 5 since this measurement
+# name -> (physics_dt, decimation, cone, impratio); None: the robot's own. Every step is named
+# in full: the robots' own differ (the Go1 steps 5 ms x 4, ANYmal B 2 ms x 10)
 SETTINGS = {
     "default (2 ms x 10, elliptic, impratio 100)": (0.002, 10, None, None),
     "4 ms x 5": (0.004, 5, None, None),
-    "pyramidal cones": (None, None, "pyramidal", None),
-    "impratio 10": (None, None, None, 10.0),
-    "impratio 1": (None, None, None, 1.0),
+    "5 ms x 4": (0.005, 4, None, None),
+    "pyramidal cones": (0.002, 10, "pyramidal", None),
+    "impratio 10": (0.002, 10, None, 10.0),
+    "impratio 1": (0.002, 10, None, 1.0),
     "4 ms x 5, pyramidal": (0.004, 5, "pyramidal", None),
     "4 ms x 5, impratio 10": (0.004, 5, None, 10.0),
 }
