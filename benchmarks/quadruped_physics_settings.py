@@ -202,7 +202,8 @@ def main() -> None:
         "pose held; trot: the open-loop foot-space trot at the drive of a "
         f"{COMMAND} m/s command, physics only (module docstring). Speed-ups are the median of "
         "the paired ones (each setting against the default in the same round); the trot's "
-        "physics speed-up is from one run each. No robot's default changed.",
+        "physics speed-up is from one run each. Each step is named in full (the robots' own "
+        "differ).",
         "",
         "| robot | setting | standing ceiling, control steps/s | speed-up | trot physics, "
         "steps/s | speed-up | falls / episodes | forward speed, m/s | speed error, m/s | "
