@@ -18,7 +18,7 @@ evaluation seed) meets it when its mean return is >= ``--target-return`` and its
 is >= ``--target-apex``. The hop apex is :func:`cpg_actor.experiments.physical.hop_apex` (the
 median over an episode's flights, after the start-up, of the highest hip height above
 standing), not the episode's highest hip height: the training-time evaluation gives it when
-asked (``TrainingEvaluation.physical``: the episodes are traced, which costs each evaluation
+asked (``TrainingEvaluation.traced_metrics``: the episodes are traced, which costs each evaluation
 about nothing next to the physics, and evaluations are not timed). The defaults (850, 0.50 m)
 lie above the searched start gait's evaluation (return about 690, apex 0.49 m: a method that
 starts there does not meet it before learning) and below what the tuned warm-started agents
@@ -195,7 +195,9 @@ def train(config, stop) -> tuple[list[dict], dict, object]:
 
             runner.run_warm_start = timed_warm_start  # what learn() calls before PPO
             warm["steps"] = config.warm_start.rollout_steps * config.num_envs
-    runner.evaluation.physical = True  # eval/hop_apex from the evaluation's traces
+    from cpg_actor.experiments.physical import episode_metrics
+
+    runner.evaluation.traced_metrics = episode_metrics  # eval/hop_apex from the traces
     try:
         runner.learn()
     finally:

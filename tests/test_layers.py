@@ -22,6 +22,7 @@ LAYERS = {
     "cpg": 1,  # knows no robot
     "robots.spec": 2, "robots.plugin": 2, "robots.common": 2,  # what robots share; no robot
     "tasks": 3,  # a task (command, reward, observation); knows no robot
+    "terrain": 3,  # the ground a task runs on (height maps, curriculum); knows no robot
     "robots.common.quadruped": 4,  # the quadrupeds' machinery, on the velocity task
     "robots.anymal_leg": 4,  # the leg the hopper and ANYmal B are built of
     "robots": 5,  # a folder per robot (hopper, anymal, go1)

@@ -4,6 +4,7 @@ the same return, lengths and env metrics either way (the time-to-quality benchma
 import pytest
 
 from cpg_actor.config import compose_config
+from cpg_actor.experiments.physical import episode_metrics
 from cpg_actor.training.runner import Runner
 
 
@@ -15,7 +16,7 @@ def test_the_training_evaluation_adds_the_hop_apex_only_when_asked():
     runner = Runner(config, run_dir=None, tensorboard=False)
     try:
         plain = runner.evaluation()
-        runner.evaluation.physical = True
+        runner.evaluation.traced_metrics = episode_metrics
         physical = runner.evaluation()
     finally:
         runner.close()

@@ -9,7 +9,7 @@ measured forward speed (``forward_speed.png``). The video shows one episode of t
 own env, drawn by the env's ``render_frame``.
 
 With ``--grid`` (a quadruped's run): the evaluation protocol instead
-(:mod:`cpg_actor.experiments.protocol`): a fixed grid of velocity commands, each held for an
+(:mod:`cpg_actor.robustness.protocol`): a fixed grid of velocity commands, each held for an
 episode, and the payload and push checks; printed as a table and saved as ``grid.json`` and
 ``grid.csv`` where the traces go.
 """
@@ -188,7 +188,7 @@ def run_grid(args: argparse.Namespace, config, checkpoint: Path, output: Path) -
     :data:`GRID_FILES` in ``output``'s folder (RUN_DIR/eval/'s replaced; a folder the user
     named keeps its files unless --overwrite)."""
     from cpg_actor.deploy import load_policy
-    from cpg_actor.experiments import protocol
+    from cpg_actor.robustness import protocol
 
     robot = get_robot(config.robot)
     protocol.check_grid_robot(robot.name, config.env)

@@ -297,17 +297,19 @@ def _trace_row(
 
 
 def evaluation_row(
-    policy, env, seed: int, control_dt: float, max_steps: int, physical: bool = False
+    policy, env, seed: int, control_dt: float, max_steps: int, traced_metrics=None
 ) -> dict[str, float]:
     """The metrics row of one evaluation during training (both runners' ``eval/*``): the mean
     and worst return, the mean length and the mean of each of the env's own metrics.
 
-    ``physical``: the episodes are traced and the physical metrics their traces define
-    (:mod:`cpg_actor.experiments.physical`: the hopper's ``eval/hop_apex``, ...) are added,
-    the mean over the episodes that define them; off by default, as the traces cost each
-    evaluation a copy of every step to the host (the time-to-quality benchmark asks for it)."""
+    ``traced_metrics``: a function of the traces giving per-episode metrics (e.g.
+    :func:`cpg_actor.experiments.physical.episode_metrics`: the hopper's ``eval/hop_apex``,
+    ...); the episodes are then traced and its metrics added, the mean over the episodes that
+    define them. None by default: traces cost each evaluation a copy of every step to the host
+    (the time-to-quality benchmark asks for them)."""
+    traced = traced_metrics is not None
     result = evaluate(policy, env, seed=seed, control_dt=control_dt, max_steps=max_steps,
-                      traces=physical)  # fmt: skip
+                      traces=traced)  # fmt: skip
     row = {
         "eval/return": float(result["episode_return"].mean()),
         "eval/return_min": float(result["episode_return"].min()),
@@ -315,10 +317,8 @@ def evaluation_row(
     }
     for name in result["metric_names"]:  # the env's own (the hopper's hop height)
         row[f"eval/{name}"] = finite_mean(result[str(name)])
-    if physical:
-        from cpg_actor.experiments.physical import episode_metrics
-
-        for name, values in episode_metrics(result).items():
+    if traced:
+        for name, values in traced_metrics(result).items():
             row[f"eval/{name}"] = finite_mean(values)
     return row
 
@@ -338,13 +338,13 @@ class TrainingEvaluation:
     each of ``config.eval_episodes`` envs of its own (the run's ``robot``'s, built at the first
     evaluation; ``env`` replaces them), always reset with the run's evaluation seed, by a
     policy of its own around the run's agent and normaliser (the training envs' CPG states
-    stay untouched). ``physical``: each evaluation also gives the physical metrics
-    (:func:`evaluation_row`); off unless a caller sets it."""
+    stay untouched). ``traced_metrics``: each evaluation also gives these metrics of its
+    traces (:func:`evaluation_row`); None unless a caller sets it."""
 
     def __init__(
         self, config: Any, robot: Any, agent, normalizer, action_low, action_high, env: Any = None
     ) -> None:
-        self.physical = False
+        self.traced_metrics = None
         self.config = config
         self.robot = robot
         self.agent, self.normalizer = agent, normalizer
@@ -373,7 +373,7 @@ class TrainingEvaluation:
             seed=derived_seed(cfg.seed, EVAL_SEED_KEY),
             control_dt=float(cfg.env.control_dt),
             max_steps=cfg.env.episode_steps,
-            physical=self.physical,
+            traced_metrics=self.traced_metrics,
         )
         row["time/eval"] = time.perf_counter() - start
         return row

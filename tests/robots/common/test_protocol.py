@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from cpg_actor.cli import main
-from cpg_actor.experiments import protocol
 from cpg_actor.robots.registry import get_robot
+from cpg_actor.robustness import protocol
 from cpg_actor.tasks import velocity as task
 
 
