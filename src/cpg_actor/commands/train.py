@@ -225,7 +225,10 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
             return 0
     else:
         runner, run_dir = _new_runner(args, locks)
-    code = _learn(runner, run_dir)
+    code = _learn(runner, lambda: (
+        f"interrupted at iteration {runner.iteration}; last checkpoint "
+        f"{runner.last_checkpoint_path()}; continue with --resume --run-dir {run_dir}"
+    ))  # fmt: skip
     if code is None:
         print(_search_done_text(runner) if _searches(runner.config) else _done_text(runner))
     return code or 0
@@ -236,7 +239,6 @@ def _run_group(args: argparse.Namespace, locks: list[RunLock]) -> int:
     :class:`~cpg_actor.training.many_seeds.SeedGroup`; each seed's run directory is prepared
     and locked as a single run's (an existing one refused unless ``--overwrite``)."""
     from cpg_actor.training.many_seeds import SeedGroup, seed_dir
-    from cpg_actor.training.runner import TrainingDiverged
 
     if args.seeds < 1:
         raise ValueError(f"--seeds takes a number of seeds, at least 1; got {args.seeds}")
@@ -283,26 +285,20 @@ def _run_group(args: argparse.Namespace, locks: list[RunLock]) -> int:
             prepare_run_dir(directory, args.overwrite)
         for runner in group.runners:
             runner.config.save(runner.run_dir / "config.yaml")
-        print(f"{len(seeds)} seeds ({seeds[0]}-{seeds[-1]}) in one process, "
-              f"{len(seeds)} x {config.num_envs} envs; "
-              + _start_text(config, run_dir, args).replace(
-                  f"run directory {run_dir}", f"runs in {run_dir}/seed-S"))  # fmt: skip
-        group.learn()
-    except TrainingDiverged as error:
-        print(f"cpg-actor train: training stopped: {error}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
-        print(
-            f"cpg-actor train: interrupted; each seed's last checkpoint is in "
-            f"{run_dir}/seed-S/checkpoints (each resumes as a run of its own)",
-            file=sys.stderr,
-        )
-        return 130
-    finally:
+    except BaseException:
         group.close()
-    for runner in group.runners:
-        print(f"seed {runner.config.seed}: {_done_text(runner)}")
-    return 0
+        raise
+    print(f"{len(seeds)} seeds ({seeds[0]}-{seeds[-1]}) in one process, "
+          f"{len(seeds)} x {config.num_envs} envs; "
+          + _start_text(config, run_dir, args).replace(
+              f"run directory {run_dir}", f"runs in {run_dir}/seed-S"))  # fmt: skip
+    code = _learn(group, lambda: (
+        f"interrupted; each seed's last checkpoint is in {run_dir}/seed-S/checkpoints (each "
+        "resumes as a run of its own)"))  # fmt: skip
+    if code is None:
+        for runner in group.runners:
+            print(f"seed {runner.config.seed}: {_done_text(runner)}")
+    return code or 0
 
 
 def _check_resume_flags(args: argparse.Namespace) -> None:
@@ -459,8 +455,10 @@ def _start_text(config: TrainConfig, run_dir: Path, args: argparse.Namespace) ->
     return "\n".join(lines)
 
 
-def _learn(runner, run_dir: Path) -> int | None:
-    """Train; the exit status of a run that stopped early (None: it ran to its end)."""
+def _learn(runner, interrupted) -> int | None:
+    """Train ``runner`` (a run, or a group of seeds: anything with ``learn`` and ``close``);
+    the exit status of a run that stopped early (None: it ran to its end). ``interrupted()``:
+    what Ctrl-C leaves and how to continue."""
     from cpg_actor.training.runner import TrainingDiverged
 
     try:
@@ -469,11 +467,7 @@ def _learn(runner, run_dir: Path) -> int | None:
         print(f"cpg-actor train: training stopped: {error}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
-        print(
-            f"cpg-actor train: interrupted at iteration {runner.iteration}; last checkpoint "
-            f"{runner.last_checkpoint_path()}; continue with --resume --run-dir {run_dir}",
-            file=sys.stderr,
-        )
+        print(f"cpg-actor train: {interrupted()}", file=sys.stderr)
         return 130
     finally:
         runner.close()
