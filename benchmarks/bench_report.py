@@ -76,3 +76,27 @@ def evaluation_recorder(stop: Callable[[dict[str, float]], bool] | None = None):
             it.stop = it.stop or self.met
 
     return Recorder()
+
+
+def charged_warm_start(runner, config) -> dict:
+    """What ``runner``'s warm start costs, charged to it: ``{"steps", "wall"}``, 0 for an agent
+    without one. Its env steps (``warm_start.rollout_steps`` control steps on each of
+    ``num_envs`` envs) are known now; its wall time fills in as :meth:`Runner.learn` runs it
+    (``run_warm_start`` is wrapped in a timer)."""
+    import time
+
+    cost = {"steps": 0, "wall": 0.0}
+    if runner.spec.warm_start is None:
+        return cost
+    fit = runner.run_warm_start
+
+    def timed_warm_start() -> list[float]:
+        begin = time.perf_counter()
+        try:
+            return fit()
+        finally:
+            cost["wall"] += time.perf_counter() - begin
+
+    runner.run_warm_start = timed_warm_start  # what learn() calls before PPO
+    cost["steps"] = config.warm_start.rollout_steps * config.num_envs
+    return cost

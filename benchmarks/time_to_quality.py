@@ -169,7 +169,7 @@ def train(config, stop) -> tuple[list[dict], dict, object]:
     """Train ``config`` in this process with every evaluation recorded (hop apex included)
     and its warm start timed; ``(history, warm start's {"steps", "wall"}, runner)`` (the
     runner closed)."""
-    from bench_report import evaluation_recorder
+    from bench_report import charged_warm_start, evaluation_recorder
     from cpg_actor.agents import get_agent_spec
 
     recorder = evaluation_recorder(stop)
@@ -183,18 +183,7 @@ def train(config, stop) -> tuple[list[dict], dict, object]:
         from cpg_actor.training.runner import Runner
 
         runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder])
-        if runner.spec.warm_start is not None:
-            fit = runner.run_warm_start
-
-            def timed_warm_start() -> list[float]:
-                begin = time.perf_counter()
-                try:
-                    return fit()
-                finally:
-                    warm["wall"] += time.perf_counter() - begin
-
-            runner.run_warm_start = timed_warm_start  # what learn() calls before PPO
-            warm["steps"] = config.warm_start.rollout_steps * config.num_envs
+        warm = charged_warm_start(runner, config)
     from cpg_actor.experiments.physical import episode_metrics
 
     runner.evaluation.traced_metrics = episode_metrics  # eval/hop_apex from the traces

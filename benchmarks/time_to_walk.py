@@ -49,13 +49,18 @@ import json
 import math
 import os
 import sys
-import time
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
-from bench_report import evaluation_recorder, json_from_tree, measured, write
+from bench_report import (
+    charged_warm_start,
+    evaluation_recorder,
+    json_from_tree,
+    measured,
+    write,
+)
 from cpg_actor.training.hooks import Hook
 
 HERE = Path(__file__).resolve().parent
@@ -152,20 +157,7 @@ def project_run(spec: RunSpec) -> dict:
     recorder = evaluation_recorder(met)
     stopped = StopOnSignal()
     runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder, stopped])
-    start = {"steps": 0, "wall": 0.0}  # the warm start's (mlp-warm's cloning)
-    if runner.spec.warm_start is not None:
-        fit = runner.run_warm_start
-
-        def timed_warm_start() -> list[float]:
-            begin = time.perf_counter()
-            try:
-                return fit()
-            finally:
-                start["wall"] += time.perf_counter() - begin
-
-        runner.run_warm_start = timed_warm_start  # what learn() calls before PPO
-        # the clone's trot: warm_start.rollout_steps control steps on every env
-        start["steps"] = config.warm_start.rollout_steps * config.num_envs
+    start = charged_warm_start(runner, config)  # mlp-warm's cloning
     try:
         runner.learn()
         trained_steps, train_wall = runner.global_step, runner.train_wall
