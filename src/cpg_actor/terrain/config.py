@@ -3,7 +3,6 @@ with its validation. The defaults are flat ground: no kinds, no height field."""
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -97,19 +96,11 @@ class Terrain:
     def from_value(cls, value: Any) -> Terrain:
         """A :class:`Terrain` from itself or a mapping of its fields (a config file's);
         unknown keys are a ValueError listing the valid ones."""
+        from cpg_actor.robots.common.checks import mapping_fields
+
         if isinstance(value, cls):
             return value
-        if not isinstance(value, dict):
-            raise ValueError(f"terrain must be a mapping of its fields, got {value!r}")
-        names = [f.name for f in dataclasses.fields(cls)]
-        unknown = sorted(str(k) for k in value if k not in names)
-        if unknown:
-            raise ValueError(f"unknown terrain key(s) {', '.join(unknown)}; accepted: "
-                             f"{', '.join(names)}")  # fmt: skip
-        values = dict(value)
-        if isinstance(values.get("kinds"), list):
-            values["kinds"] = tuple(values["kinds"])
-        return cls(**values)
+        return cls(**mapping_fields(cls, value, "terrain", sequences=("kinds",)))
 
 
 def check_terrain(config: Any) -> None:

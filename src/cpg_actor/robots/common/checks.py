@@ -3,6 +3,7 @@ mode the env offers, an episode of a bounded length."""
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -48,3 +49,21 @@ def check_episode_steps(steps: int, given: str) -> None:
     if steps > MAX_EPISODE_STEPS:
         raise ValueError(f"{given} makes episodes of {steps:,} control steps; at most "
                          f"{MAX_EPISODE_STEPS:,} are accepted")  # fmt: skip
+
+
+def mapping_fields(cls: type, value: Any, label: str, sequences: tuple[str, ...] = ()) -> dict:
+    """The fields of dataclass ``cls`` given as a mapping (a config file's ``label`` section);
+    ValueError for what is not a mapping and for unknown keys, listing the valid ones. The
+    fields named in ``sequences`` become tuples (YAML reads them as lists)."""
+    if not isinstance(value, dict):
+        raise ValueError(f"{label} must be a mapping of its fields, got {value!r}")
+    names = [f.name for f in dataclasses.fields(cls)]
+    unknown = sorted(str(k) for k in value if k not in names)
+    if unknown:
+        raise ValueError(f"unknown {label} key(s) {', '.join(unknown)}; accepted: "
+                         f"{', '.join(names)}")  # fmt: skip
+    values = dict(value)
+    for name in sequences:
+        if isinstance(values.get(name), list):
+            values[name] = tuple(values[name])
+    return values

@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from cpg_actor.robots.common.checks import mapping_fields
+
 # the push's direction: along the hopper's rail, or in the quadruped base's heading frame
 PUSH_DIRECTIONS = {
     "up": (0.0, 0.0, 1.0),
@@ -146,16 +148,7 @@ class Perturbation:
         unknown keys are a ValueError listing the valid ones."""
         if isinstance(value, cls):
             return value
-        if not isinstance(value, dict):
-            raise ValueError(f"perturbation must be a mapping of its fields, got {value!r}")
-        names = [f.name for f in dataclasses.fields(cls)]
-        unknown = sorted(str(k) for k in value if k not in names)
-        if unknown:
-            raise ValueError(f"unknown perturbation key(s) {', '.join(unknown)}; accepted: "
-                             f"{', '.join(names)}")  # fmt: skip
-        values = dict(value)
-        if isinstance(values.get("push_time"), list):
-            values["push_time"] = tuple(values["push_time"])
+        values = mapping_fields(cls, value, "perturbation", sequences=("push_time",))
         for name in ("payload", "latency", "obs_noise", "motor_strength", "push", "friction",
                      *MODEL_TERMS):  # fmt: skip
             if isinstance(values.get(name), int) and not isinstance(values[name], bool):
