@@ -43,11 +43,10 @@ class Go1Config(QuadrupedConfig):
         2.0 * robot.TORQUE_LIMITS[k] for k in robot.JOINT_KINDS
     )
     # 5 ms x 4 substeps (legged_gym's sim step): the same 20 ms control step as ANYmal's 2 ms
-    # x 10, 2.5x fewer substeps. Trained on it, the CPG-Actor tracks within 0.01 m/s of one
-    # trained on 2 ms and keeps its tracking on 2 ms physics and on another Go1 model
-    # (benchmarks/results/quadruped_physics_training.md). 4 ms x 5 did as well, but its
-    # substeps do not divide the latencies of the robustness suite and of the field's
-    # randomisation (0.5 and 1.5 control steps)
+    # x 10 with 2.5x fewer substeps, chosen after training on each step and measuring tracking
+    # and transfer (benchmarks/quadruped_physics_training.py; docs/go1.md). 4 ms x 5 did as
+    # well, but its substeps do not divide the latencies of the robustness suite and of the
+    # field's randomisation (0.5 and 1.5 control steps)
     physics_dt: float = 0.005
     decimation: int = 4
     foot_friction: float = robot.FOOT_FRICTION  # Menagerie's feet
