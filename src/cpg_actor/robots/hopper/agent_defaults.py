@@ -35,6 +35,9 @@ AGENT_DEFAULTS: dict[str, dict[str, Any]] = {
         "warm_start": {"action_noise": 0.1},
     },
     "cpg-actor": CPG_ACTOR,
+    # the CPG-Actor's settings without its feedback (not tuned on its own): what PPO adds to
+    # the searched open loop
+    "cpg-actor-open-loop": CPG_ACTOR,
     "cho2019-warm": {
         "agent_config": {"start_gait": "search"},
         "warm_start": {"action_noise": 0.05},
