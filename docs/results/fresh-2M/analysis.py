@@ -1,0 +1,190 @@
+"""The analysis that `PROTOCOL.md` fixes, from a finished `cpg-actor reproduce` folder and its
+robustness suite: per metric the variant with the best mean against each other variant, the
+CPG-Actor against its start, the open-loop CPG-Actor against Cho et al. (warm); one family of
+33 tests, Holm-corrected.
+
+    PYTHONPATH=src python docs/results/fresh-2M/analysis.py results/fresh-2M \\
+        --evaluate-starts > docs/results/fresh-2M/analysis.md
+
+``--evaluate-starts`` runs ``cpg-actor eval`` on each ``cpg-actor`` run's checkpoint before
+its first update (into ``OUT/starts/seedS/traces.npz``, kept); without it those evaluations
+must already be there. Also writes ``OUT/analysis.json`` (every per-seed value and test).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cpg_actor.experiments import metrics as m
+
+VARIANTS = ("cpg-actor", "cpg-actor-open-loop", "open-loop-es", "mlp", "mlp-warm",
+            "cho2019-warm")  # fmt: skip
+# name: (summary key or None for the suite's, higher is better, log scale, minimum effect text)
+METRICS: dict[str, tuple[str | None, bool, bool]] = {
+    "return": ("final_return", True, False),
+    "hop apex (m)": ("hop_apex", True, False),
+    "joint smoothness (rad^2)": ("joint_smoothness", False, True),
+    "command smoothness (rad^2)": ("smoothness", False, True),
+    "torque rate (N m/s)": ("torque_rate", False, True),
+    "latency retention": (None, True, False),
+}
+RATIO_EFFECT = 1.25  # smoothness and torque rate: a factor
+RETENTION_EFFECT = 0.05  # absolute
+RELATIVE_EFFECT = 0.05  # return and hop apex: of the other variant's mean
+
+
+def per_seed(summary: dict[str, Any], variant: str, key: str) -> list[float]:
+    values = summary["variants"].get(variant, {}).get("per_seed", {}).get(key, [])
+    return [float(v) if v is not None else math.nan for v in values]
+
+
+def latency_retention(suite: dict[str, Any], variant: str) -> list[float]:
+    """Per seed, the mean over the latency levels of the return kept (a share of nominal)."""
+    rows = sorted((run for run in suite["runs"] if run["variant"] == variant),
+                  key=lambda run: run["seed"])  # fmt: skip
+    return [float(np.mean([level["retention"] for level in run["perturbations"]["latency"]
+                           ["levels"]])) for run in rows]  # fmt: skip
+
+
+def minimum(name: str, other: list[float]) -> float:
+    """The smallest difference that counts, on the scale the test uses."""
+    if METRICS[name][2]:
+        return math.log(RATIO_EFFECT)
+    if name == "latency retention":
+        return RETENTION_EFFECT
+    return RELATIVE_EFFECT * abs(float(np.nanmean(other)))
+
+
+def start_values(out: Path, evaluate: bool) -> dict[str, list[float]]:
+    """Per ``cpg-actor`` seed: return and hop apex at its start and at its end, both from
+    ``cpg-actor eval`` (5 episodes, env seed 1000)."""
+    values: dict[str, list[float]] = {"start_return": [], "start_apex": [], "end_return": [],
+                                      "end_apex": [], "seeds": []}  # fmt: skip
+    for run in sorted((out / "runs" / "cpg-actor").glob("seed*")):
+        traces = out / "starts" / run.name / "traces.npz"
+        if not traces.is_file():
+            if not evaluate:
+                sys.exit(f"{traces} is missing: run with --evaluate-starts")
+            traces.parent.mkdir(parents=True, exist_ok=True)
+            subprocess.run([sys.executable, "-m", "cpg_actor.cli", "eval", str(run),
+                            "--checkpoint", str(run / "checkpoints" / "iter_000000.pt"),
+                            "--episodes", "5", "--output", str(traces)],
+                           check=True, stdout=subprocess.DEVNULL)  # fmt: skip
+        stages = json.loads((run / "eval" / "stages.json").read_text())
+        end = run / stages[-1]["traces"]
+        for side, path in (("start", traces), ("end", end)):
+            with np.load(path) as data:
+                values[f"{side}_return"].append(float(np.mean(data["episode_return"])))
+                values[f"{side}_apex"].append(float(np.mean(data["physical_hop_apex"])))
+        values["seeds"].append(int(run.name.removeprefix("seed")))
+    return values
+
+
+def shown(value: float, log: bool) -> str:
+    return f"x{math.exp(value):.3g}" if log else f"{value:+.3g}"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("out", type=Path, help="the reproduce folder (results/fresh-2M)")
+    parser.add_argument("--evaluate-starts", action="store_true")
+    args = parser.parse_args()
+    summary = json.loads((args.out / "summary.json").read_text())
+    suite = json.loads((args.out / "robustness" / "robustness.json").read_text())
+
+    data = {name: {v: (per_seed(summary, v, key) if key else latency_retention(suite, v))
+                   for v in VARIANTS} for name, (key, _, _) in METRICS.items()}  # fmt: skip
+    tests: list[dict[str, Any]] = []
+    best: dict[str, str] = {}
+    for name, (_, higher, log) in METRICS.items():
+        scale = np.log if log else np.asarray
+        sign = 1.0 if higher else -1.0
+        means = {v: float(np.nanmean(scale(data[name][v]))) for v in VARIANTS}
+        best[name] = max(VARIANTS, key=lambda v: sign * means[v])
+        for other in VARIANTS:
+            if other == best[name]:
+                continue
+            a, b = scale(data[name][best[name]]), scale(data[name][other])
+            difference, p = m.welch_test(a if higher else b, b if higher else a)
+            tests.append({"group": name, "label": f"{best[name]} vs {other}", "test": m.WELCH,
+                          "difference": difference, "log": log, "p": p,
+                          "minimum": minimum(name, data[name][other])})  # fmt: skip
+    starts = start_values(args.out, args.evaluate_starts)
+    for what, end, start in (("return", "end_return", "start_return"),
+                             ("hop apex (m)", "end_apex", "start_apex")):  # fmt: skip
+        difference, p = m.paired_t_test(starts[end], starts[start])
+        tests.append({"group": "cpg-actor beyond its start", "label": f"{what}: end - start",
+                      "test": m.PAIRED, "difference": difference, "log": False, "p": p,
+                      "minimum": RELATIVE_EFFECT * abs(float(np.mean(starts[start])))})
+    open_loop, cho = data["return"]["cpg-actor-open-loop"], data["return"]["cho2019-warm"]
+    difference, p = m.welch_test(open_loop, cho)
+    tests.append({"group": "the paper's claim", "label": "cpg-actor-open-loop - cho2019-warm, "
+                  "return", "test": m.WELCH, "difference": difference, "log": False, "p": p,
+                  "minimum": RELATIVE_EFFECT * abs(float(np.nanmean(cho)))})  # fmt: skip
+    for test, adjusted in zip(tests, m.holm([t["p"] for t in tests]), strict=True):
+        test["adjusted"] = adjusted
+        test["passed"] = bool(adjusted < m.ALPHA and test["difference"] > 0
+                              and test["difference"] >= test["minimum"])  # fmt: skip
+        # the other way, as plainly (two-sided tests): the claimed side clearly worse
+        test["reversed"] = bool(adjusted < m.ALPHA and -test["difference"] >= test["minimum"])
+
+    print("# fresh-2M: the analysis of `PROTOCOL.md`\n")
+    print(f"Made by `PYTHONPATH=src python docs/results/fresh-2M/analysis.py {args.out}"
+          f"{' --evaluate-starts' if args.evaluate_starts else ''}`. Seeds per variant: "
+          + ", ".join(f"`{v}` {summary['variants'][v]['seeds']}" for v in VARIANTS) + ".\n")
+    print(f"One family of {len(tests)} tests, {m.family_text(len(tests))}; a difference "
+          "counts when its Holm p < 0.05 and it is at least its minimum effect (return and "
+          f"hop apex {RELATIVE_EFFECT:.0%} of the other side's mean, retention "
+          f"{RETENTION_EFFECT}, smoothness and torque rate a factor {RATIO_EFFECT}, tested on "
+          "the logarithm, so ranked and shown by their geometric mean). Means with 95 % "
+          "percentile-bootstrap CIs over seeds (display only).\n")
+    for name, (_, higher, log) in METRICS.items():
+        print(f"## {name} ({'higher' if higher else 'lower'} is better)\n")
+        kind = "geometric mean" if log else "mean"
+        print(f"| variant | {kind} [95 % CI] | per seed |\n| --- | ---: | --- |")
+        for v in VARIANTS:
+            ci = m.bootstrap(np.log(data[name][v]) if log else data[name][v], "mean")
+            if log and ci is not None:
+                ci = m.Interval(*(math.exp(x) for x in (ci.estimate, ci.low, ci.high)))
+            seeds = ", ".join(f"{x:.3g}" for x in data[name][v])
+            print(f"| `{v}`{' (best)' if v == best[name] else ''} | {ci} | {seeds} |")
+        group = [t for t in tests if t["group"] == name]
+        beaten = [t for t in group if t["passed"]]
+        tied = [t["label"].split(" vs ")[1] for t in group if not t["passed"]]
+        print()
+        verdict = (f"**Pick `{best[name]}`**: it beats every other variant." if not tied else
+                   f"`{best[name]}` has the best mean; not separated from "
+                   + ", ".join(f"`{v}`" for v in tied)
+                   + ("; it beats " + ", ".join(f"`{t['label'].split(' vs ')[1]}`"
+                                                for t in beaten) if beaten else "")
+                   + ".")  # fmt: skip
+        print(verdict + "\n")
+    print("## Every test\n")
+    print("The last column: yes, the difference counts; reversed, the other side is ahead by "
+          "at least the minimum with Holm p < 0.05; no, neither.\n")
+    print("| group | comparison | test | difference | minimum | p | Holm p | counts |")
+    print("| --- | --- | --- | ---: | ---: | ---: | ---: | --- |")
+    for t in tests:
+        print(f"| {t['group']} | {t['label']} | {t['test']} | {shown(t['difference'], t['log'])}"
+              f" | {shown(t['minimum'], t['log'])} | {t['p']:.2g} | {t['adjusted']:.2g} | "
+              f"{'yes' if t['passed'] else 'reversed' if t['reversed'] else 'no'} |")
+    print("\n## The CPG-Actor against its start (per seed, `cpg-actor eval`, 5 episodes)\n")
+    print("| seed | start return | end return | start apex (m) | end apex (m) |")
+    print("| --- | ---: | ---: | ---: | ---: |")
+    for i, seed in enumerate(starts["seeds"]):
+        print(f"| {seed} | {starts['start_return'][i]:.1f} | {starts['end_return'][i]:.1f} | "
+              f"{starts['start_apex'][i]:.3f} | {starts['end_apex'][i]:.3f} |")
+    (args.out / "analysis.json").write_text(json.dumps(
+        {"data": data, "starts": starts, "tests": tests, "best": best}, indent=1) + "\n")
+
+
+if __name__ == "__main__":
+    main()
