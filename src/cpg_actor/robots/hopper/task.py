@@ -62,6 +62,20 @@ def desired_positions(actions, normalized: bool):
     return xp.clip(actions, low.astype(xp.float32), high.astype(xp.float32))
 
 
+def command_filter(previous, command, alpha: float):
+    """The desired positions the motors get under a first-order low-pass on the command:
+    ``previous + alpha * (command - previous)`` (``previous``: the last desired positions,
+    the reset's pose at an episode's first step; ``alpha`` in (0, 1], a Python number).
+
+    Why: an agent whose command is not smooth by construction (an MLP) can be made as smooth
+    as a CPG's by the env, for a comparison at matched smoothness. The filter's state is the
+    last desired positions, which the observation already holds, so the task stays Markov.
+    ``alpha`` = 1 is no filter: the command itself, bit for bit."""
+    if alpha == 1.0:
+        return command
+    return previous + alpha * (command - previous)
+
+
 def start_qpos(joint_noise, clearance):
     """``qpos`` ``(..., 3)`` (hip height, HFE, KFE) of a robot at rest in the nominal pose plus
     ``joint_noise`` ``(..., 2)``, the lowest point of its foot ``clearance`` above the ground."""
