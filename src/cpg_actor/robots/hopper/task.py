@@ -24,7 +24,7 @@ OBS_NAMES = (
     "p_m_KFE",
     "v_m_HFE",  # measured joint velocities, rad/s
     "v_m_KFE",
-    "p_d_HFE",  # desired joint positions being tracked (the last action), rad
+    "p_d_HFE",  # desired joint positions being tracked (the last action, filtered), rad
     "p_d_KFE",
     "hip_height",  # m, height of the hip (HFE axis) above the ground
     "hip_velocity",  # m/s, vertical, positive up
