@@ -246,6 +246,12 @@ def export_policy(
         )
     if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
         raise ValueError(f"batch must be a positive integer, got {batch!r}")
+    alpha = getattr(getattr(policy.config, "env", None), "command_filter", 1.0)
+    if alpha != 1.0:
+        raise ValueError(
+            f"the run trained with env.command_filter={alpha}, a low-pass the exported step "
+            "does not contain; only runs without it (1.0) can be exported"
+        )
     from cpg_actor.robots.registry import get_robot
 
     path = Path(path)

@@ -138,6 +138,39 @@ def test_apex_reward_pays_the_same_hops():
     assert paid[0] == pytest.approx(paid[1], rel=0.05)
 
 
+@pytest.mark.slow  # a config of its own: one more compilation
+def test_the_command_filter_runs_inside_the_jitted_step():
+    """``command_filter`` < 1 on MJX: the desired positions follow the same recurrence as on
+    the CPU backends (float32), from the reset's pose, restarting when an episode ends."""
+    alpha, steps = 0.3, 4
+    env = make_vector_env(2, sim="mjx", command_filter=alpha, episode_steps=steps)
+    low, high = robot_limits()
+    rng = np.random.default_rng(0)
+    commands = rng.uniform(low, high, size=(steps + 2, 2, 2)).astype(np.float32)
+    try:
+        env.reset(seed=0)
+        previous = np.tile(HOLD, (2, 1)).astype(np.float32)
+        for k, command in enumerate(commands):
+            obs, _, _, truncated, info = env.step(command)
+            expected = previous + np.float32(alpha) * (command - previous)
+            np.testing.assert_allclose(np.asarray(info["desired_position"]), expected, rtol=1e-6)
+            previous = np.asarray(info["desired_position"])
+            if k == steps - 1:  # the episode ended: the next starts from the nominal pose
+                assert np.asarray(truncated).all()
+                np.testing.assert_allclose(np.asarray(obs)[:, 4:6], np.tile(HOLD, (2, 1)),
+                                           rtol=1e-6)  # fmt: skip
+                previous = np.tile(HOLD, (2, 1)).astype(np.float32)
+    finally:
+        env.close()
+
+
+def robot_limits():
+    """The joint limits, (low, high) (rad)."""
+    low = [robot.JOINT_LIMITS[j][0] for j in robot.JOINT_NAMES]
+    high = [robot.JOINT_LIMITS[j][1] for j in robot.JOINT_NAMES]
+    return np.array(low), np.array(high)
+
+
 # -- the contracts -----------------------------------------------------------------------------
 @pytest.fixture(scope="module")
 def env():

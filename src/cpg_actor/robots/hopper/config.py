@@ -69,6 +69,10 @@ class HopperConfig:
     # actions in [-1, 1] per joint, mapped linearly to the joint's range (the desired
     # position, rad), for off-the-shelf RL libraries; the project's agents act in radians
     normalized_actions: bool = False
+    # a first-order low-pass on the command: the desired positions move by this share of the
+    # way from the last ones to the agent's command each control step (task.command_filter);
+    # 1.0 is no filter. For an agent made as smooth as a CPG by its env (matched smoothness)
+    command_filter: float = 1.0
     # -- rendering ----------------------------------------------------------------------------
     render_width: int = 640
     render_height: int = 480
@@ -90,6 +94,11 @@ class HopperConfig:
 
     def validate(self) -> None:
         """Raise ValueError naming the first invalid field."""
+        alpha = self.command_filter
+        if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 < alpha <= 1:
+            raise ValueError(
+                f"command_filter must be a number in (0, 1] (1.0: no filter), got {alpha!r}"
+            )
         for name, kind in _FIELD_KINDS.items():
             value = getattr(self, name)
             if kind is str:

@@ -136,9 +136,11 @@ class HopperSimulation:
 
     # -- step --------------------------------------------------------------------------------
     def step(self, desired: np.ndarray) -> StepResult:
-        """Track ``desired`` (K, 2) for one control step (``decimation`` physics substeps)."""
+        """Track ``desired`` (K, 2), the agent's command low-passed by ``command_filter``, for
+        one control step (``decimation`` physics substeps)."""
         backend, config = self.backend, self.config
-        np.copyto(self.desired, desired)
+        # the command low-passed onto the last desired positions (none at command_filter 1)
+        np.copyto(self.desired, task.command_filter(self.desired, desired, config.command_filter))
         before = None
         if config.hop_reward == "apex":
             before = task.com_velocity(backend.qpos, backend.qvel)

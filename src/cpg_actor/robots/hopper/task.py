@@ -24,7 +24,7 @@ OBS_NAMES = (
     "p_m_KFE",
     "v_m_HFE",  # measured joint velocities, rad/s
     "v_m_KFE",
-    "p_d_HFE",  # desired joint positions being tracked (the last action), rad
+    "p_d_HFE",  # desired joint positions being tracked (the last action, filtered), rad
     "p_d_KFE",
     "hip_height",  # m, height of the hip (HFE axis) above the ground
     "hip_velocity",  # m/s, vertical, positive up
@@ -60,6 +60,20 @@ def desired_positions(actions, normalized: bool):
         actions = low + (xp.clip(actions, -1.0, 1.0) + 1.0) * (high - low) / 2.0
     # the float32 action space's bounds: a position within them is a valid action
     return xp.clip(actions, low.astype(xp.float32), high.astype(xp.float32))
+
+
+def command_filter(previous, command, alpha: float):
+    """The desired positions the motors get under a first-order low-pass on the command:
+    ``previous + alpha * (command - previous)`` (``previous``: the last desired positions,
+    the reset's pose at an episode's first step; ``alpha`` in (0, 1], a Python number).
+
+    Why: an agent whose command is not smooth by construction (an MLP) can be made as smooth
+    as a CPG's by the env, for a comparison at matched smoothness. The filter's state is the
+    last desired positions, which the observation already holds, so the task stays Markov.
+    ``alpha`` = 1 is no filter: the command itself, bit for bit."""
+    if alpha == 1.0:
+        return command
+    return previous + alpha * (command - previous)
 
 
 def start_qpos(joint_noise, clearance):

@@ -159,7 +159,8 @@ class HopperDynamics:
     def _step(self, state: EnvState, actions, episode: Episode):
         """One control step of all N robots: ``(state, outputs)`` (module docstring)."""
         config = self.config
-        desired = task.desired_positions(actions.astype(jnp.float32), config.normalized_actions)
+        command = task.desired_positions(actions.astype(jnp.float32), config.normalized_actions)
+        desired = task.command_filter(state.desired, command, config.command_filter)
         before = state.data
         data, torque = jax.vmap(self.control)(before, desired)
         qpos, qvel = data.qpos, data.qvel
