@@ -15,25 +15,9 @@ from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.robots.hopper.env import HopperEnv
 from cpg_actor.robots.hopper.vector import HopperVectorEnv
 from cpg_actor.training.evaluation import evaluate
+from training.test_eval_traces import ScriptedPolicy  # tests/training  # noqa: I001
 
 NOMINAL = task.NOMINAL_POSE
-
-
-class ScriptedPolicy:
-    """Env 0's scripted command at each step, as an MLP actor's (no extras)."""
-
-    def __init__(self, actions):
-        self.actions, self.step = np.asarray(actions, dtype=np.float32), 0
-
-    def reset(self, num_envs):
-        self.num_envs, self.step = num_envs, 0
-
-    def act(self, obs, deterministic=True):
-        action = self.actions[min(self.step, len(self.actions) - 1)]
-        self.step += 1
-        return SimpleNamespace(
-            action=np.tile(action, (self.num_envs, 1)), agent=SimpleNamespace(extras={})
-        )
 
 
 def rough_commands(steps: int, num_envs: int, seed: int = 0) -> np.ndarray:
