@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from cpg_actor.experiments import metrics as m
+from cpg_actor.files import atomic_write_text
 
 VARIANTS = ("cpg-actor", "cpg-actor-open-loop", "open-loop-es", "mlp", "mlp-warm",
             "cho2019-warm")  # fmt: skip
@@ -182,8 +183,8 @@ def main() -> None:
     for i, seed in enumerate(starts["seeds"]):
         print(f"| {seed} | {starts['start_return'][i]:.1f} | {starts['end_return'][i]:.1f} | "
               f"{starts['start_apex'][i]:.3f} | {starts['end_apex'][i]:.3f} |")
-    (args.out / "analysis.json").write_text(json.dumps(
-        {"data": data, "starts": starts, "tests": tests, "best": best}, indent=1) + "\n")
+    atomic_write_text(json.dumps({"data": data, "starts": starts, "tests": tests, "best": best},
+                                 indent=1) + "\n", args.out / "analysis.json")
 
 
 if __name__ == "__main__":
