@@ -1,10 +1,12 @@
 """The analysis that `PROTOCOL.md` fixes, from a finished `cpg-actor reproduce` folder and its
 robustness suite: per metric the variant with the best mean against each other variant, the
 CPG-Actor against its start, the open-loop CPG-Actor against Cho et al. (warm); one family of
-33 tests, Holm-corrected.
+33 tests, Holm-corrected; with ``--smooth``, the matched-smoothness MLP at each strength
+against the CPG-Actor, a family of its own (10 tests).
 
     PYTHONPATH=src python docs/results/fresh-2M/analysis.py results/fresh-2M \\
-        --evaluate-starts > docs/results/fresh-2M/analysis.md
+        --evaluate-starts --smooth results/fresh-2M-smooth-a0.1 results/fresh-2M-smooth-a0.2 \\
+        > docs/results/fresh-2M/analysis.md
 
 ``--evaluate-starts`` runs ``cpg-actor eval`` on each ``cpg-actor`` run's checkpoint before
 its first update (into ``OUT/starts/seedS/traces.npz``, kept); without it those evaluations
@@ -22,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 
 from cpg_actor.experiments import metrics as m
 from cpg_actor.files import atomic_write_text
@@ -89,6 +92,109 @@ def start_values(out: Path, evaluate: bool) -> dict[str, list[float]]:
     return values
 
 
+def matched_smoothness(cpg: dict[str, Any], folders: list[Path]) -> list[dict[str, Any]]:
+    """Each filtered ``mlp-warm`` folder against ``cpg-actor`` on the metrics the protocol
+    names: Welch, two-sided, the difference oriented so that > 0 favours the filtered MLP."""
+    tests: list[dict[str, Any]] = []
+    for strength, folder in enumerate(folders, start=1):
+        summary = json.loads((folder / "summary.json").read_text())
+        overrides = yaml.safe_load((folder / "reproduce.yaml").read_text())["settings"]
+        alpha = next((o.replace("env.command_filter=", "alpha ") for o in
+                      overrides["overrides"] or [] if o.startswith("env.command_filter=")),
+                     folder.name)  # fmt: skip
+        for name, (key, higher, log) in METRICS.items():
+            if key is None:
+                continue
+            scale = np.log if log else np.asarray
+            mlp, actor = per_seed(summary, "mlp-warm", key), per_seed(cpg, "cpg-actor", key)
+            a, b = scale(mlp), scale(actor)
+            difference, p = m.welch_test(a if higher else b, b if higher else a)
+            tests.append(
+                {
+                    "group": name,
+                    "label": f"strength {strength} ({alpha})",
+                    "test": m.WELCH,
+                    "difference": difference,
+                    "log": log,
+                    "p": p,
+                    "minimum": minimum(name, actor),
+                    "mlp": mlp,
+                    "cpg": actor,
+                }
+            )
+    for test, adjusted in zip(tests, m.holm([t["p"] for t in tests]), strict=True):
+        test["adjusted"] = adjusted
+        significant = adjusted < m.ALPHA
+        test["passed"] = bool(significant and test["difference"] >= test["minimum"])
+        test["reversed"] = bool(significant and -test["difference"] >= test["minimum"])
+    return tests
+
+
+def print_matched(tests: list[dict[str, Any]]) -> None:
+    print("\n## The matched-smoothness MLP against the CPG-Actor\n")
+    print(
+        f"`mlp-warm` behind a low-pass on its command, each strength against `cpg-actor`; "
+        f"a family of its own of {len(tests)} tests, {m.family_text(len(tests))}, the same "
+        "minimum effects. *Difference*: the filtered MLP's side minus the CPG-Actor's, "
+        "oriented so that > 0 favours the MLP (for smoothness and torque rate the factor "
+        "by which the MLP's is lower). *Verdict*: MLP ahead, CPG-Actor ahead, or not "
+        "separated.\n"
+    )
+    print(
+        "| metric | strength | filtered `mlp-warm` [95 % CI] | `cpg-actor` [95 % CI] | "
+        "difference | minimum | p | Holm p | verdict |"
+    )
+    print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | --- |")
+    for t in tests:
+        sides = []
+        for values in (t["mlp"], t["cpg"]):
+            ci = m.bootstrap(np.log(values) if t["log"] else values, "mean")
+            if t["log"] and ci is not None:
+                ci = m.Interval(*(math.exp(x) for x in (ci.estimate, ci.low, ci.high)))
+            sides.append(str(ci))
+        verdict = ("MLP ahead" if t["passed"] else "CPG-Actor ahead" if t["reversed"]
+                   else "not separated")  # fmt: skip
+        print(
+            f"| {t['group']} | {t['label']} | {sides[0]} | {sides[1]} | "
+            f"{shown(t['difference'], t['log'])} | {shown(t['minimum'], t['log'])} | "
+            f"{t['p']:.2g} | {t['adjusted']:.2g} | {verdict} |"
+        )
+
+
+def figure(
+    data: dict[str, dict[str, list[float]]], matched: list[dict[str, Any]], path: Path
+) -> None:
+    """Per metric one panel: each seed's value per variant (dots), the variant's mean (line;
+    geometric on log axes, where the test takes logarithms); the filtered MLPs at the right."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from cpg_actor.plots import save_figure
+
+    fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True)
+    for ax, (name, (_, higher, log)) in zip(axes.flat, METRICS.items(), strict=True):
+        columns = [(v, data[name][v]) for v in VARIANTS]
+        columns += [(f"mlp-warm {t['label'].split('(')[1].rstrip(')')}", t["mlp"])
+                    for t in matched if t["group"] == name]  # fmt: skip
+        for i, (label, values) in enumerate(columns):
+            values = np.asarray(values, dtype=float)
+            centre = math.exp(np.nanmean(np.log(values))) if log else np.nanmean(values)
+            colour = "C0" if label == "cpg-actor" else "C1" if i >= len(VARIANTS) else "0.3"
+            ax.hlines(centre, i - 0.3, i + 0.3, color=colour, lw=2.5)
+            ax.plot(np.full(len(values), i), values, "k.", ms=5)
+        ax.set_xticks(range(len(columns)), [c[0] for c in columns], rotation=60, ha="right",
+                      fontsize=8)  # fmt: skip
+        if log:
+            ax.set_yscale("log")
+        ax.set_title(f"{name} ({'higher' if higher else 'lower'} is better)", fontsize=9)
+    fig.suptitle("The hopper's agents at 2M steps, fresh seeds 10-14 (line: mean, geometric "
+                 "on log axes; dots: seeds)", fontsize=10)  # fmt: skip
+    save_figure(fig, path)
+    plt.close(fig)
+
+
 def shown(value: float, log: bool) -> str:
     return f"x{math.exp(value):.3g}" if log else f"{value:+.3g}"
 
@@ -97,6 +203,14 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out", type=Path, help="the reproduce folder (results/fresh-2M)")
     parser.add_argument("--evaluate-starts", action="store_true")
+    parser.add_argument(
+        "--smooth",
+        type=Path,
+        nargs="*",
+        default=[],
+        help="the matched-smoothness folders, strength 1 first",
+    )
+    parser.add_argument("--figure", type=Path, help="also draw the per-seed values (PNG)")
     args = parser.parse_args()
     summary = json.loads((args.out / "summary.json").read_text())
     suite = json.loads((args.out / "robustness" / "robustness.json").read_text())
@@ -122,9 +236,17 @@ def main() -> None:
     for what, end, start in (("return", "end_return", "start_return"),
                              ("hop apex (m)", "end_apex", "start_apex")):  # fmt: skip
         difference, p = m.paired_t_test(starts[end], starts[start])
-        tests.append({"group": "cpg-actor beyond its start", "label": f"{what}: end - start",
-                      "test": m.PAIRED, "difference": difference, "log": False, "p": p,
-                      "minimum": RELATIVE_EFFECT * abs(float(np.mean(starts[start])))})
+        tests.append(
+            {
+                "group": "cpg-actor beyond its start",
+                "label": f"{what}: end - start",
+                "test": m.PAIRED,
+                "difference": difference,
+                "log": False,
+                "p": p,
+                "minimum": RELATIVE_EFFECT * abs(float(np.mean(starts[start]))),
+            }
+        )
     open_loop, cho = data["return"]["cpg-actor-open-loop"], data["return"]["cho2019-warm"]
     difference, p = m.welch_test(open_loop, cho)
     tests.append({"group": "the paper's claim", "label": "cpg-actor-open-loop - cho2019-warm, "
@@ -138,15 +260,21 @@ def main() -> None:
         test["reversed"] = bool(adjusted < m.ALPHA and -test["difference"] >= test["minimum"])
 
     print("# fresh-2M: the analysis of `PROTOCOL.md`\n")
-    print(f"Made by `PYTHONPATH=src python docs/results/fresh-2M/analysis.py {args.out}"
-          f"{' --evaluate-starts' if args.evaluate_starts else ''}`. Seeds per variant: "
-          + ", ".join(f"`{v}` {summary['variants'][v]['seeds']}" for v in VARIANTS) + ".\n")
-    print(f"One family of {len(tests)} tests, {m.family_text(len(tests))}; a difference "
-          "counts when its Holm p < 0.05 and it is at least its minimum effect (return and "
-          f"hop apex {RELATIVE_EFFECT:.0%} of the other side's mean, retention "
-          f"{RETENTION_EFFECT}, smoothness and torque rate a factor {RATIO_EFFECT}, tested on "
-          "the logarithm, so ranked and shown by their geometric mean). Means with 95 % "
-          "percentile-bootstrap CIs over seeds (display only).\n")
+    print(
+        "Made by `PYTHONPATH=src python docs/results/fresh-2M/analysis.py "
+        + " ".join(sys.argv[1:])
+        + "`. Seeds per variant: "
+        + ", ".join(f"`{v}` {summary['variants'][v]['seeds']}" for v in VARIANTS)
+        + ".\n"
+    )
+    print(
+        f"One family of {len(tests)} tests, {m.family_text(len(tests))}; a difference "
+        "counts when its Holm p < 0.05 and it is at least its minimum effect (return and "
+        f"hop apex {RELATIVE_EFFECT:.0%} of the other side's mean, retention "
+        f"{RETENTION_EFFECT}, smoothness and torque rate a factor {RATIO_EFFECT}, tested on "
+        "the logarithm, so ranked and shown by their geometric mean). Means with 95 % "
+        "percentile-bootstrap CIs over seeds (display only).\n"
+    )
     for name, (_, higher, log) in METRICS.items():
         print(f"## {name} ({'higher' if higher else 'lower'} is better)\n")
         kind = "geometric mean" if log else "mean"
@@ -169,22 +297,34 @@ def main() -> None:
                    + ".")  # fmt: skip
         print(verdict + "\n")
     print("## Every test\n")
-    print("The last column: yes, the difference counts; reversed, the other side is ahead by "
-          "at least the minimum with Holm p < 0.05; no, neither.\n")
+    print(
+        "The last column: yes, the difference counts; reversed, the other side is ahead by "
+        "at least the minimum with Holm p < 0.05; no, neither.\n"
+    )
     print("| group | comparison | test | difference | minimum | p | Holm p | counts |")
     print("| --- | --- | --- | ---: | ---: | ---: | ---: | --- |")
     for t in tests:
-        print(f"| {t['group']} | {t['label']} | {t['test']} | {shown(t['difference'], t['log'])}"
-              f" | {shown(t['minimum'], t['log'])} | {t['p']:.2g} | {t['adjusted']:.2g} | "
-              f"{'yes' if t['passed'] else 'reversed' if t['reversed'] else 'no'} |")
+        print(
+            f"| {t['group']} | {t['label']} | {t['test']} | {shown(t['difference'], t['log'])}"
+            f" | {shown(t['minimum'], t['log'])} | {t['p']:.2g} | {t['adjusted']:.2g} | "
+            f"{'yes' if t['passed'] else 'reversed' if t['reversed'] else 'no'} |"
+        )
     print("\n## The CPG-Actor against its start (per seed, `cpg-actor eval`, 5 episodes)\n")
     print("| seed | start return | end return | start apex (m) | end apex (m) |")
     print("| --- | ---: | ---: | ---: | ---: |")
     for i, seed in enumerate(starts["seeds"]):
-        print(f"| {seed} | {starts['start_return'][i]:.1f} | {starts['end_return'][i]:.1f} | "
-              f"{starts['start_apex'][i]:.3f} | {starts['end_apex'][i]:.3f} |")
-    atomic_write_text(json.dumps({"data": data, "starts": starts, "tests": tests, "best": best},
-                                 indent=1) + "\n", args.out / "analysis.json")
+        print(
+            f"| {seed} | {starts['start_return'][i]:.1f} | {starts['end_return'][i]:.1f} | "
+            f"{starts['start_apex'][i]:.3f} | {starts['end_apex'][i]:.3f} |"
+        )
+    matched = matched_smoothness(summary, args.smooth) if args.smooth else []
+    if matched:
+        print_matched(matched)
+    if args.figure:
+        figure(data, matched, args.figure)
+    atomic_write_text(json.dumps({"data": data, "starts": starts, "tests": tests, "best": best,
+                                  "matched_smoothness": matched}, indent=1) + "\n",
+                      args.out / "analysis.json")  # fmt: skip
 
 
 if __name__ == "__main__":
