@@ -22,10 +22,10 @@ def measured(command: str) -> str:
 
 
 def write(path: str | Path, lines: list[str]) -> None:
-    """Write ``lines`` to ``path`` (its folder made if needed) and print them."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text("\n".join(lines))
+    """Write ``lines`` to ``path`` atomically (its folder made if needed) and print them."""
+    from cpg_actor.files import atomic_write_text
+
+    atomic_write_text("\n".join(lines), Path(path))
     print("\n".join(lines))
 
 

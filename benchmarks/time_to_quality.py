@@ -389,6 +389,8 @@ def figure(path: Path, methods: list[Method], results: dict[str, list[dict]],
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from cpg_actor.plots import save_figure
+
     fig, axes = plt.subplots(2, 2, figsize=(10, 6.5), sharey="row")
     palette = plt.get_cmap("tab10" if len(methods) <= 10 else "tab20")
     colours = [palette(i % palette.N) for i in range(len(methods))]  # the sweep has more
@@ -422,7 +424,7 @@ def figure(path: Path, methods: list[Method], results: dict[str, list[dict]],
     axes[0, 0].legend(fontsize=7, loc="lower right")
     fig.suptitle(f"Time to quality (target: {target.describe()}, dashed)", fontsize=10)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path)
     plt.close(fig)
 
 
@@ -513,6 +515,13 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seeds", type=positive_int, default=3)
+    parser.add_argument(
+        "--first-seed",
+        type=int,
+        default=0,
+        help="seeds FIRST..FIRST+N-1 (default 0; fresh report seeds need a protocol first: "
+        "docs/results/SEEDS.md)",
+    )
     parser.add_argument("--agents", default=",".join(AGENTS))
     parser.add_argument("--preset", default="paper")
     parser.add_argument(
@@ -614,7 +623,7 @@ def main(argv: list[str] | None = None) -> int:
             searches[budget] = in_fresh_process("--one-search", spec)
             print(f"search {budget or 'file'}: {searches[budget]['steps']:,} steps, "
                   f"{searches[budget]['wall']:.0f} s", flush=True)  # fmt: skip
-        for seed in range(args.seeds):
+        for seed in range(args.first_seed, args.first_seed + args.seeds):
             for method in methods:
                 search = searches.get(method.search_budget) if method.agent in searched else None
                 if method.kind == "sb3":
@@ -627,7 +636,7 @@ def main(argv: list[str] | None = None) -> int:
                     spec = RunSpec(method.agent, args.preset, seed, values, args.budget, start,
                                    list(target), args.stop_at_target)  # fmt: skip
                     run = in_fresh_process("--one-run", spec)
-                results[method.label].append(summarize(run, search, target))
+                results[method.label].append({**summarize(run, search, target), "seed": seed})
                 hit = results[method.label][-1]["hit"]
                 print(
                     f"seed {seed} {method.label}: "
@@ -655,10 +664,12 @@ def main(argv: list[str] | None = None) -> int:
     figure_path.parent.mkdir(parents=True, exist_ok=True)
     figure(figure_path, methods, results, target)
     write(output, lines)
-    json_path = output.with_suffix(".json")  # the curves, for a later figure
-    json_path.write_text(json.dumps({m.label: [{k: r[k] for k in ("curve", "start_steps",
-                                     "start_wall")} for r in results[m.label]]
-                                     for m in methods}))  # fmt: skip
+    from cpg_actor.files import atomic_write_text
+
+    # per method and seed: the charged curve, its start and the first evaluation at the target
+    keys = ("seed", "curve", "start_steps", "start_wall", "hit", "best_return", "best_apex")
+    atomic_write_text(json.dumps({m.label: [{k: r.get(k) for k in keys} for r in results[m.label]]
+                                  for m in methods}), output.with_suffix(".json"))  # fmt: skip
     return 0
 
 

@@ -74,8 +74,9 @@ RUNS = {
                         "--set", "num_envs=2", "--ceiling-steps", "2000"], "--output"),
     # one search of one generation (16 episodes of 50 steps) charged to mlp-warm, which is
     # also charged its cloning; open-loop-es is its own search
-    "time_to_quality.py": (["--seeds", "1", "--agents", "mlp-warm,open-loop-es", "--budget",
-                            "800", "--search-budgets", "800", "--no-sb3", "--set",
+    "time_to_quality.py": (["--seeds", "1", "--first-seed", "4", "--agents",
+                            "mlp-warm,open-loop-es", "--budget", "800", "--search-budgets",
+                            "800", "--no-sb3", "--set",
                             "ppo.compile=false", "--set", "num_envs=2", "--set",
                             "env.episode_steps=50", "--ceiling-steps", "1000"], "--output"),
     # a tiny budget: it may not reach the target; mlp-warm's cloning is charged
@@ -146,6 +147,8 @@ def test_the_script_runs_its_smallest_configuration(script, tmp_path):
     )
     assert result.returncode == 0, result.stdout[-3000:] + result.stderr[-3000:]
     assert output.is_file() and output.stat().st_size > 0
+    if "--first-seed" in arguments:  # its runs take the seeds asked for
+        assert f"seed {arguments[arguments.index('--first-seed') + 1]} " in result.stdout
 
 
 def test_the_gpu_check_script_parses():

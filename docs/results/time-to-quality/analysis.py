@@ -1,0 +1,157 @@
+"""The analysis that `PROTOCOL.md` fixes, from the JSON files of the two runs of
+`benchmarks/time_to_quality.py` (``time_to_quality.json``, ``search_budgets.json`` in FOLDER):
+the time to the target of the CPG-Actor against every other method (12 tests), and the
+search-budget sweep (9 tests), each family Holm-corrected.
+
+    PYTHONPATH=src python docs/results/time-to-quality/analysis.py docs/results/time-to-quality \\
+        > docs/results/time-to-quality/analysis.md
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from cpg_actor.experiments import metrics as m
+
+CPG = "`cpg-actor`"
+SWEPT = ("`cpg-actor`", "`mlp-warm`", "`cho2019-warm`")
+LAST = 5  # evaluations averaged for the final return and apex
+RATIO_EFFECT = 1.25
+RELATIVE_EFFECT = 0.05
+
+
+def time_to_target(run: dict[str, Any], key: str) -> float:
+    """The wall time or env steps of the first evaluation at the target, or, when none was,
+    of the last evaluation (an underestimate of its time)."""
+    hit = run["hit"] if run["hit"] is not None else run["curve"][-1]
+    return float(hit[key])
+
+
+def final(run: dict[str, Any], key: str) -> float:
+    values = [h[key] for h in run["curve"][-LAST:] if h[key] is not None]
+    return float(np.nanmean(values)) if values else math.nan
+
+
+def shown_ci(values: list[float], log: bool) -> str:
+    ci = m.bootstrap(np.log(values) if log else values, "mean")
+    if log and ci is not None:
+        ci = m.Interval(*(math.exp(x) for x in (ci.estimate, ci.low, ci.high)))
+    return str(ci)
+
+
+def judge(tests: list[dict[str, Any]]) -> None:
+    """Holm over ``tests``; a test counts when its Holm p < 0.05 and its difference (oriented
+    so that > 0 favours the claimed side) is at least its minimum; reversed the other way."""
+    for test, adjusted in zip(tests, m.holm([t["p"] for t in tests]), strict=True):
+        test["adjusted"] = adjusted
+        significant = adjusted < m.ALPHA
+        test["verdict"] = (
+            "yes" if significant and test["difference"] >= test["minimum"]
+            else "reversed" if significant and -test["difference"] >= test["minimum"]
+            else "no"
+        )  # fmt: skip
+
+
+def time_tests(runs: dict[str, list[dict[str, Any]]]) -> list[dict[str, Any]]:
+    """``cpg-actor`` against every other method on log wall time and log env steps to the
+    target; > 0 means ``cpg-actor`` is faster."""
+    tests = []
+    for key in ("wall", "steps"):
+        cpg = np.log([time_to_target(r, key) for r in runs[CPG]])
+        for label, others in runs.items():
+            if label == CPG:
+                continue
+            other = np.log([time_to_target(r, key) for r in others])
+            difference, p = m.welch_test(other, cpg)
+            tests.append({"what": f"{key} to the target", "label": f"{CPG} vs {label}",
+                          "test": m.WELCH, "difference": difference, "p": p, "log": True,
+                          "minimum": math.log(RATIO_EFFECT)})  # fmt: skip
+    judge(tests)
+    return tests
+
+
+def sweep_tests(runs: dict[str, list[dict[str, Any]]], budgets: list[str]) -> list[dict[str, Any]]:
+    tests = []
+    for budget in budgets:
+        cpg = runs[f"{CPG} (search {budget})"]
+        end = [final(r, "return") for r in cpg]
+        start = [float(r["curve"][0]["return"]) for r in cpg]
+        difference, p = m.paired_t_test(end, start)
+        tests.append({"what": f"search {budget}", "label": f"{CPG}: final - start",
+                      "test": m.PAIRED, "difference": difference, "p": p, "log": False,
+                      "minimum": RELATIVE_EFFECT * abs(float(np.mean(start)))})  # fmt: skip
+        for other in SWEPT[1:]:
+            values = [final(r, "return") for r in runs[f"{other} (search {budget})"]]
+            difference, p = m.welch_test(end, values)
+            tests.append({"what": f"search {budget}", "label": f"{CPG} - {other}",
+                          "test": m.WELCH, "difference": difference, "p": p, "log": False,
+                          "minimum": RELATIVE_EFFECT * abs(float(np.mean(values)))})  # fmt: skip
+    judge(tests)
+    return tests
+
+
+def print_tests(tests: list[dict[str, Any]]) -> None:
+    print("| question | comparison | test | difference | minimum | p | Holm p | counts |")
+    print("| --- | --- | --- | ---: | ---: | ---: | ---: | --- |")
+    for t in tests:
+        shown = (lambda x: f"x{math.exp(x):.3g}") if t["log"] else (lambda x: f"{x:+.3g}")
+        print(
+            f"| {t['what']} | {t['label']} | {t['test']} | {shown(t['difference'])} | "
+            f"{shown(t['minimum'])} | {t['p']:.2g} | {t['adjusted']:.2g} | {t['verdict']} |"
+        )
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("folder", type=Path)
+    args = parser.parse_args()
+    quality = json.loads((args.folder / "time_to_quality.json").read_text())
+    sweep = json.loads((args.folder / "search_budgets.json").read_text())
+    budgets = sorted({label.split("(search ")[1].rstrip(")") for label in sweep},
+                     key=lambda b: float(b.rstrip("k").replace(",", "")))  # fmt: skip
+    if CPG not in quality or not budgets:
+        sys.exit(f"{args.folder}: the JSON files lack `cpg-actor` or the swept budgets")
+
+    print("# Time to quality and the search-budget sweep: the analysis of `PROTOCOL.md`\n")
+    print(f"Made by `PYTHONPATH=src python docs/results/time-to-quality/analysis.py "
+          f"{' '.join(sys.argv[1:])}`. Means over seeds with 95 % percentile-bootstrap CIs "
+          "(display; times as geometric means). A seed that missed the target counts at its "
+          "last evaluation.\n")  # fmt: skip
+    print("## Time to the target\n")
+    print("| method | seeds at the target | wall time (s) | env steps | final return | "
+          "final hop apex (m) |\n| --- | --- | ---: | ---: | ---: | ---: |")  # fmt: skip
+    for label, runs in quality.items():
+        reached = sum(r["hit"] is not None for r in runs)
+        print(f"| {label} | {reached}/{len(runs)} | "
+              f"{shown_ci([time_to_target(r, 'wall') for r in runs], True)} | "
+              f"{shown_ci([time_to_target(r, 'steps') for r in runs], True)} | "
+              f"{shown_ci([final(r, 'return') for r in runs], False)} | "
+              f"{shown_ci([final(r, 'apex') for r in runs], False)} |")  # fmt: skip
+    times = time_tests(quality)
+    print(f"\n{len(times)} tests, {m.family_text(len(times))}; the difference is the factor by "
+          "which `cpg-actor` is faster (> 1: faster), the minimum a factor "
+          f"{RATIO_EFFECT}.\n")  # fmt: skip
+    print_tests(times)
+    print("\n## The search-budget sweep\n")
+    print("| method | start return | final return | final hop apex (m) | seeds at the target |")
+    print("| --- | ---: | ---: | ---: | --- |")
+    for label, runs in sweep.items():
+        print(f"| {label} | {shown_ci([r['curve'][0]['return'] for r in runs], False)} | "
+              f"{shown_ci([final(r, 'return') for r in runs], False)} | "
+              f"{shown_ci([final(r, 'apex') for r in runs], False)} | "
+              f"{sum(r['hit'] is not None for r in runs)}/{len(runs)} |")  # fmt: skip
+    tests = sweep_tests(sweep, budgets)
+    print(f"\n{len(tests)} tests, {m.family_text(len(tests))}; minimum effect 5 % of the start "
+          "or of the other agent's mean.\n")  # fmt: skip
+    print_tests(tests)
+
+
+if __name__ == "__main__":
+    main()
