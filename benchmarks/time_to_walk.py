@@ -66,30 +66,50 @@ from cpg_actor.training.hooks import Hook
 HERE = Path(__file__).resolve().parent
 OUTPUT = "benchmarks/results/time_to_walk.md"
 AGENTS = ("cpg-actor", "mlp-warm", "mlp")
+GRID_OUTPUT = "benchmarks/results/time_to_walk_grid.md"
 MAX_SPEED_ERROR = 0.1  # m/s
 EVAL_INTERVAL = 40_960  # env steps: 5 iterations of the throughput recipe's 8,192
 EVAL_EPISODES = 10
+# --grid: the issue's target over the protocol's grid, one episode per command, 5 s each
+GRID_MAX_ERROR = 0.15  # m/s
+GRID_EPISODES = 1
+GRID_EPISODE_SECONDS = 5.0
+# each task's error the target is on: the forward speed's, the grid's mean linear velocity's
+ERRORS = {"forward": "eval/speed_error", "grid": "eval/lin_vel_error"}
 # the benchmark's settings over an agent's tuned ones: mlp-warm, which the quadrupeds have
 # no settings for, clones the CPG-Actor's own start (the foot-space trot of the "leg" layout)
 # and explores with its action noise (0.1 of the joint ranges), so that the two differ in
 # the CPG's structure alone (the config default, 1.0, is the joints' whole half-range)
 SETTINGS: dict[str, dict] = {"mlp-warm": {"agent_config": {"cpg_layout": "leg", "init_std": 0.1}}}
 # what each evaluation keeps
-KEPT = ("eval/speed_error", "eval/fell", "eval/forward_speed", "eval/return")
+KEPT = ("eval/speed_error", "eval/fell", "eval/forward_speed", "eval/return",
+        "eval/lin_vel_error", "eval/lin_vel_error_max", "eval/yaw_rate_error",
+        "eval/fell_commands", "time/eval")  # fmt: skip
 
 
-def reached(evaluation: dict[str, float], max_speed_error: float) -> bool:
-    """The evaluation meets the target: a mean speed error of at most ``max_speed_error``
-    (m/s) and no episode fell (a NaN of either is no)."""
-    error, fell = evaluation["eval/speed_error"], evaluation["eval/fell"]
-    return math.isfinite(error) and math.isfinite(fell) and error <= max_speed_error and fell == 0
+def reached(evaluation: dict[str, float], max_speed_error: float,
+            error: str = ERRORS["forward"]) -> bool:  # fmt: skip
+    """The evaluation meets the target: a mean speed error (its ``error``, the forward
+    task's by default) of at most ``max_speed_error`` (m/s) and no episode fell (a NaN of
+    either is no)."""
+    value, fell = evaluation[error], evaluation["eval/fell"]
+    return math.isfinite(value) and math.isfinite(fell) and value <= max_speed_error and fell == 0
+
+
+def reached_grid(evaluation: dict[str, float], max_error: float) -> bool:
+    """``--grid``'s target: the grid evaluation's linear-velocity error, averaged over the
+    protocol's commands, of at most ``max_error`` (m/s) and no episode fell on any command
+    (``eval/fell``, the share of the grid's episodes that fell, is 0)."""
+    return reached(evaluation, max_error, ERRORS["grid"])
 
 
 class RunSpec(NamedTuple):
     """One run: ``agent`` on ``robot`` from ``seed`` until the target or ``max_steps`` PPO
-    steps, evaluated every ``eval_interval`` env steps on ``eval_episodes`` episodes;
-    ``overrides`` the ``--set`` values; the ceiling timed ``ceiling_seconds`` per method.
-    JSON-able as a dict, for a run in a fresh process."""
+    steps, evaluated every ``eval_interval`` env steps on ``eval_episodes`` episodes (with
+    ``grid``: the omnidirectional task, evaluated on the protocol's grid, ``eval_episodes``
+    episodes of ``grid_seconds`` per command); ``overrides`` the ``--set`` values; the
+    ceiling timed ``ceiling_seconds`` per method. JSON-able as a dict, for a run in a fresh
+    process."""
 
     robot: str
     agent: str
@@ -100,12 +120,19 @@ class RunSpec(NamedTuple):
     max_speed_error: float
     overrides: list[str]
     ceiling_seconds: float
+    grid: bool = False
+    grid_seconds: float = GRID_EPISODE_SECONDS
+
+    @property
+    def mode(self) -> str:
+        return "grid" if self.grid else "forward"
 
 
 def run_config(spec: RunSpec):
     """The run's :class:`TrainConfig`: as ``cpg-actor train`` composes it for the robot, the
-    agent and the seed, with :data:`SETTINGS` and the ``--set`` values; evaluated every
-    ``eval_interval`` env steps, rounded to whole iterations (at least one)."""
+    agent and the seed (with ``grid``: and ``--preset omni``), with :data:`SETTINGS` and the
+    ``--set`` values; evaluated every ``eval_interval`` env steps, rounded to whole
+    iterations (at least one)."""
     from cpg_actor.config import compose_config
 
     values = {
@@ -113,7 +140,7 @@ def run_config(spec: RunSpec):
         "total_steps": spec.max_steps, "eval_episodes": spec.eval_episodes,
         **SETTINGS.get(spec.agent, {}),
     }  # fmt: skip
-    config = compose_config(None, None, values, spec.overrides)
+    config = compose_config("omni" if spec.grid else None, None, values, spec.overrides)
     config.eval_interval = max(1, round(spec.eval_interval / config.steps_per_iteration))
     config.validate()
     return config
@@ -146,17 +173,24 @@ def project_run(spec: RunSpec) -> dict:
             "or charge; give agents that start from the CPG preset or nothing"
         )
     robot = get_robot(config.robot)
+    error = ERRORS[spec.mode]
+    grid = None
+    if spec.grid:  # the protocol's grid instead of the trainer's episodes (same seed, hook)
+        from cpg_actor.robustness.grid_evaluation import GridEvaluation
+
+        grid = GridEvaluation(config, robot, spec.eval_episodes, spec.grid_seconds)
     before, threads = ceiling(config, robot, spec.ceiling_seconds)
 
     def met(evaluation: dict[str, float]) -> bool:  # each evaluation, also to the log
         print(f"{spec.agent} seed {spec.seed}: {runner.global_step:,} steps, "
-              f"{runner.train_wall:.0f} s, speed error {evaluation['eval/speed_error']:.3f} "
+              f"{runner.train_wall:.0f} s, {spec.mode} error {evaluation[error]:.3f} "
               f"m/s, fell {evaluation['eval/fell']:.0%}", file=sys.stderr, flush=True)  # fmt: skip
-        return reached(evaluation, spec.max_speed_error)
+        return reached(evaluation, spec.max_speed_error, error)
 
     recorder = evaluation_recorder(met)
     stopped = StopOnSignal()
     runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder, stopped])
+    runner.evaluation.evaluator = grid
     start = charged_warm_start(runner, config)  # mlp-warm's cloning
     try:
         runner.learn()
@@ -166,12 +200,18 @@ def project_run(spec: RunSpec) -> dict:
     after, _ = ceiling(config, robot, spec.ceiling_seconds)
     history = [{"steps": step, "wall": wall, **{k: e[k] for k in KEPT if k in e}}
                for step, wall, e in recorder.history]  # fmt: skip
-    result = summarize(history, spec.max_speed_error, start["steps"], start["wall"])
+    result = summarize(history, spec.max_speed_error, start["steps"], start["wall"], error)
+    evaluation_seconds = [h["time/eval"] for h in history if "time/eval" in h]
     result.update(
         sps=trained_steps / train_wall if train_wall > 0 else math.nan,
         ceiling=[before, after], num_envs=config.num_envs, threads=threads,
         trained_steps=trained_steps, train_wall=train_wall, stopped=stopped.asked,
         episode_seconds=config.env.episode_seconds, command_range=list(config.env.command_range),
+        mode=spec.mode, lateral_range=list(config.env.lateral_range),
+        yaw_range=list(config.env.yaw_range),
+        command_resample_seconds=config.env.command_resample_seconds,
+        eval_episode_seconds=grid.episode_seconds if grid else config.env.episode_seconds,
+        eval_seconds=float(np.mean(evaluation_seconds)) if evaluation_seconds else math.nan,
     )  # fmt: skip
     return result
 
@@ -194,20 +234,21 @@ class StopOnSignal(Hook):
 
 
 def summarize(history: list[dict], max_speed_error: float, start_steps: int = 0,
-              start_wall: float = 0.0) -> dict:  # fmt: skip
+              start_wall: float = 0.0, error: str = ERRORS["forward"]) -> dict:  # fmt: skip
     """A run's result from its evaluations (``steps``, ``wall``: PPO env steps and training
-    wall time at each, and its ``eval/*``): ``reached``; ``steps`` and ``wall``, the first
+    wall time at each, and its ``eval/*``), the target on their ``error`` (the forward
+    speed's by default, :data:`ERRORS`): ``reached``; ``steps`` and ``wall``, the first
     evaluation's that met the target, else the last one's (the run's end); the start's
     ``start_steps`` and ``start_wall``, charged on top; ``first`` (before any update),
-    ``best`` (the lowest speed error of those with no fall) and ``lowest`` (the lowest speed
-    error, falls or not) evaluations, the first of equals, None for none; ``history``."""
-    hit = next((h for h in history if reached(h, max_speed_error)), None)
+    ``best`` (the lowest error of those with no fall) and ``lowest`` (the lowest error,
+    falls or not) evaluations, the first of equals, None for none; ``history``."""
+    hit = next((h for h in history if reached(h, max_speed_error, error)), None)
     end = hit if hit is not None else (history[-1] if history else {"steps": 0, "wall": 0.0})
-    finite = [h for h in history if math.isfinite(h["eval/speed_error"])]
+    finite = [h for h in history if math.isfinite(h[error])]
     standing = [h for h in finite if h["eval/fell"] == 0]  # no episode fell
 
     def lowest(entries: list[dict]) -> dict | None:
-        return min(entries, key=lambda h: h["eval/speed_error"]) if entries else None
+        return min(entries, key=lambda h: h[error]) if entries else None
 
     return {
         "reached": hit is not None,
@@ -260,11 +301,11 @@ def seconds(wall: float) -> str:
     return f"{wall:,.0f} s"
 
 
-def evaluation_text(entry: dict | None) -> str:
+def evaluation_text(entry: dict | None, error: str = ERRORS["forward"]) -> str:
     if entry is None:
         return "-"
     return (
-        f"{entry['eval/speed_error']:.3f} m/s"
+        f"{entry[error]:.3f} m/s"
         + (f", fell {entry['eval/fell']:.0%}" if entry["eval/fell"] else "")
         + f" (at {kilo(entry['steps'])})"
     )
@@ -282,8 +323,10 @@ def overrides(values: dict, prefix: str = "") -> list[str]:
 
 
 def run_row(agent: str, seed: int, run: dict, max_steps: int) -> str:
-    """The report's row of one run."""
+    """The report's row of one run (its task: ``forward``, or ``grid`` for ``--grid``'s)."""
     ceiling_rate = float(np.mean(run["ceiling"]))
+    mode = run.get("mode", "forward")
+    error = ERRORS[mode]
     if run["reached"]:
         steps = split(total_steps(run), run["start_steps"], kilo)
         wall = split(total_wall(run), run["start_wall"], seconds)
@@ -296,11 +339,13 @@ def run_row(agent: str, seed: int, run: dict, max_steps: int) -> str:
         wall = f"- (ran {seconds(total_wall(run))})"
         physics = "-"
     stolen = run.get("stolen", math.nan)
+    each = run.get("eval_seconds", math.nan)
     cells = [
-        f"`{agent}`", str(seed), steps, wall, physics, evaluation_text(run["first"]),
-        evaluation_text(run["best"]), evaluation_text(run["lowest"]), f"{run['sps']:,.0f}",
-        " / ".join(f"{c:,.0f}" for c in run["ceiling"]), f"{run['sps'] / ceiling_rate:.0%}",
-        f"{stolen:.0%}" if math.isfinite(stolen) else "-",
+        f"`{agent}`", str(seed), mode, steps, wall, physics, evaluation_text(run["first"], error),
+        evaluation_text(run["best"], error), evaluation_text(run["lowest"], error),
+        f"{run['sps']:,.0f}", " / ".join(f"{c:,.0f}" for c in run["ceiling"]),
+        f"{run['sps'] / ceiling_rate:.0%}", f"{stolen:.0%}" if math.isfinite(stolen) else "-",
+        f"{each:.1f} s" if math.isfinite(each) else "-",
     ]  # fmt: skip
     return "| " + " | ".join(cells) + " |"
 
@@ -308,30 +353,27 @@ def run_row(agent: str, seed: int, run: dict, max_steps: int) -> str:
 def report(args, runs: list[tuple[str, int, dict]], planned: int, provenance: str) -> list[str]:
     """The Markdown report of the ``runs`` done so far, ``(agent, seed, result)``, of
     ``planned``."""
-    task = runs[0][2] if runs else {"episode_seconds": math.nan, "command_range": [math.nan] * 2}
-    low, high = task["command_range"]
     settings = "; ".join(
         f"`{agent}`: `" + " ".join(overrides(values)) + "`"
         for agent, values in SETTINGS.items()
         if agent in {a for a, _, _ in runs}
     )
+    title, target = target_text(args, runs[0][2] if runs else None)
+    what = "grid lin vel error" if args.grid else "speed error"
     lines = [
-        f"# Time to walk: the {args.robot} from nothing to tracking its forward-speed command",
+        f"# Time to walk: the {args.robot} from nothing to {title}",
         "",
         provenance,
         "",
-        f"Target, one for all agents: the deterministic evaluation ({args.eval_episodes} "
-        f"episodes of {task['episode_seconds']:g} s with the mean action, forward command "
-        f"uniform in [{low:g}, {high:g}] m/s per episode, on envs of its own) has a mean "
-        f"speed error <= {args.max_speed_error} m/s "
-        f"and no episode fell; evaluated before the first update and every "
+        f"Target, one for all agents: {target}; evaluated before the first update and every "
         f"{args.eval_interval:,} env steps (rounded to whole iterations), to "
         f"{args.max_steps:,} PPO steps at most. Time: training wall time (collection and "
         "update, compilation included, evaluations excluded) plus the start's. `cpg-actor` "
         "starts from the trot preset (no search to charge); `mlp-warm` is first cloned from "
         "that trot, and its env steps and wall time are charged (start + PPO = total). "
         "Each run in a fresh process, one at a time. Each agent trains as `cpg-actor train "
-        f"--robot {args.robot} --agent AGENT --seed SEED` composes it"
+        f"--robot {args.robot}{' --preset omni' if args.grid else ''} --agent AGENT --seed "
+        "SEED` composes it"
         + (f", with for {settings}" if settings else "")
         + (
             f"; every run with `{' '.join(f'--set {o}' for o in args.overrides)}`"
@@ -346,17 +388,50 @@ def report(args, runs: list[tuple[str, int, dict]], planned: int, provenance: st
         "mean rate. Training steps/s: the run's PPO steps over its training wall time, "
         "compilation included (a run that stops after a few iterations is mostly "
         "compilation). CPU stolen: the share of the machine's CPU time its hypervisor gave to "
-        "something else during the run.",
+        "something else during the run. One evaluation: its mean wall time (excluded).",
         "",
-        "| agent | seed | env steps to the target | wall time to the target | physics alone "
-        "| before the first update: speed error | best speed error with no fall | lowest speed "
-        "error | training steps/s | ceiling steps/s | of ceiling | CPU stolen |",
-        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |",
+        "| agent | seed | task | env steps to the target | wall time to the target "
+        f"| physics alone | before the first update: {what} | best {what} with no fall "
+        f"| lowest {what} | training steps/s | ceiling steps/s | of ceiling | CPU stolen "
+        "| one evaluation |",
+        "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: "
+        "| ---: |",
     ]
     lines += [run_row(agent, seed, run, args.max_steps) for agent, seed, run in runs]
     if len(runs) < planned:
         lines += ["", f"In progress: {len(runs)} of {planned} runs done."]
     return lines + [""]
+
+
+def target_text(args, run: dict | None) -> tuple[str, str]:
+    """The report's ``(title, target)`` texts of the task that ran (``run``: a result, None
+    before the first)."""
+    nan = [math.nan] * 2
+    if not args.grid:
+        low, high = run["command_range"] if run else nan
+        seconds = run["episode_seconds"] if run else math.nan
+        return "tracking its forward-speed command", (
+            f"the deterministic evaluation ({args.eval_episodes} episodes of {seconds:g} s "
+            f"with the mean action, forward command uniform in [{low:g}, {high:g}] m/s per "
+            f"episode, on envs of its own) has a mean speed error <= {args.max_speed_error} "
+            "m/s and no episode fell"
+        )
+    from cpg_actor.robustness.protocol import GRID
+
+    fields = (("vx", "command_range", "m/s"), ("vy", "lateral_range", "m/s"),
+              ("yaw rate", "yaw_range", "rad/s"))  # fmt: skip
+    ranges = ", ".join(f"{name} in [{low:g}, {high:g}] {unit}" for name, key, unit in fields
+                       for low, high in [run[key] if run else nan])  # fmt: skip
+    resample = run["command_resample_seconds"] if run else math.nan
+    return "tracking the evaluation protocol's grid of velocity commands", (
+        f"the grid evaluation (the evaluation protocol's {len(GRID)} velocity commands, "
+        f"`cpg_actor.robustness.protocol.GRID`, each held for {args.eval_episodes} "
+        f"episode(s) of {args.grid_episode_seconds:g} s with the mean action on flat ground, "
+        "on envs of its own, reset with the same seed every time; no payload or push checks) "
+        f"has a linear-velocity error, averaged over the commands, <= {args.max_speed_error} "
+        "m/s and no episode fell on any command. Trained on the omnidirectional task "
+        f"(`--preset omni`: {ranges}, a new draw every {resample:g} s, some draws standing)"
+    )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -371,16 +446,27 @@ def main(argv: list[str] | None = None) -> int:
                         help="PPO env steps per run at most (default 3000000)")  # fmt: skip
     parser.add_argument("--eval-interval", type=int, default=EVAL_INTERVAL,
                         help="env steps between evaluations (default 40960)")  # fmt: skip
-    parser.add_argument("--eval-episodes", type=int, default=EVAL_EPISODES)
-    parser.add_argument("--max-speed-error", type=float, default=MAX_SPEED_ERROR,
-                        help="the target's speed error, m/s (default 0.1)")  # fmt: skip
+    parser.add_argument("--eval-episodes", type=int, default=None,
+                        help="episodes per evaluation (default 10); with --grid, per "
+                        "command (default 1)")  # fmt: skip
+    parser.add_argument("--max-speed-error", type=float, default=None,
+                        help="the target's speed error, m/s (default 0.1; with --grid, the "
+                        "grid's mean linear-velocity error, default 0.15)")  # fmt: skip
+    parser.add_argument("--grid", action="store_true",
+                        help="the omnidirectional task (--preset omni), evaluated on the "
+                        "evaluation protocol's 12 velocity commands, flat")  # fmt: skip
+    parser.add_argument("--grid-episode-seconds", type=float, default=None,
+                        help="with --grid: each command's episode, s (default 5)")  # fmt: skip
     parser.add_argument("--set", dest="overrides", action="append", default=[],
                         metavar="KEY=VALUE", help="a config value for every run")  # fmt: skip
     parser.add_argument("--ceiling-seconds", type=float, default=3.0,
                         help="timed seconds per ceiling measurement (default 3)")  # fmt: skip
-    parser.add_argument("--output", default=OUTPUT)
+    parser.add_argument("--output", default=None,
+                        help=f"default {OUTPUT} ({GRID_OUTPUT} with --grid)")  # fmt: skip
     args = parser.parse_args(argv)
     agents, seeds = check_args(parser, args)
+    default_output = GRID_OUTPUT if args.grid else OUTPUT
+    args.output = args.output or default_output
 
     from cpg_actor.machine import (
         brief_openmp_spinning,
@@ -401,8 +487,9 @@ def main(argv: list[str] | None = None) -> int:
         f"--seeds {','.join(map(str, seeds))} --max-steps {args.max_steps} "
         f"--eval-interval {args.eval_interval} --eval-episodes {args.eval_episodes} "
         f"--max-speed-error {args.max_speed_error}"
+        + (f" --grid --grid-episode-seconds {args.grid_episode_seconds:g}" if args.grid else "")
         + "".join(f" --set {o}" for o in args.overrides)
-        + (f" --output {args.output}" if args.output != OUTPUT else "")
+        + (f" --output {args.output}" if args.output != default_output else "")
     )
     runs: list[tuple[str, int, dict]] = []
     planned = len(agents) * len(seeds)
@@ -410,7 +497,8 @@ def main(argv: list[str] | None = None) -> int:
         for agent in agents:
             spec = RunSpec(args.robot, agent, seed, args.max_steps, args.eval_interval,
                            args.eval_episodes, args.max_speed_error, args.overrides,
-                           args.ceiling_seconds)  # fmt: skip
+                           args.ceiling_seconds, args.grid,
+                           args.grid_episode_seconds or GRID_EPISODE_SECONDS)  # fmt: skip
             cpu_start = cpu_times()
             run = tree_run(spec)
             run["stolen"] = stolen_share(cpu_start, cpu_times())  # a neighbour's load
@@ -426,10 +514,25 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def check_args(parser: argparse.ArgumentParser, args) -> tuple[list[str], list[int]]:
-    """The agents and seeds; one clear line (parser.error) for what is wrong."""
+    """The agents and seeds, each mode's defaults filled in (``eval_episodes``,
+    ``max_speed_error``, ``grid_episode_seconds``); one clear line (parser.error) for what is
+    wrong."""
     from cpg_actor.agents import AGENTS as REGISTERED
     from cpg_actor.robots.registry import ROBOTS
 
+    if args.grid:
+        omni = sorted(
+            name for name, r in ROBOTS.items() if hasattr(r.config_class, "OMNI_COMMANDS")
+        )
+        if args.robot not in omni:
+            parser.error(f"--grid --robot {args.robot}: no omnidirectional task (--preset omni) "
+                         f"on it; robots with one: {', '.join(omni)}")  # fmt: skip
+    elif args.grid_episode_seconds is not None:
+        parser.error("--grid-episode-seconds is the grid evaluation's: give it with --grid")
+    if args.eval_episodes is None:
+        args.eval_episodes = GRID_EPISODES if args.grid else EVAL_EPISODES
+    if args.max_speed_error is None:
+        args.max_speed_error = GRID_MAX_ERROR if args.grid else MAX_SPEED_ERROR
     quadrupeds = sorted(name for name, r in ROBOTS.items() if "speed_error" in r.metrics)
     if args.robot not in quadrupeds:
         parser.error(f"--robot {args.robot}: not a quadruped; one of {', '.join(quadrupeds)}")
@@ -450,6 +553,13 @@ def check_args(parser: argparse.ArgumentParser, args) -> tuple[list[str], list[i
             parser.error(f"--{name.replace('_', '-')} must be a positive integer")
     if not args.max_speed_error > 0 or not args.ceiling_seconds > 0:
         parser.error("--max-speed-error and --ceiling-seconds must be positive numbers")
+    if args.grid:
+        if args.grid_episode_seconds is None:
+            args.grid_episode_seconds = GRID_EPISODE_SECONDS
+        try:  # a whole number of the robot's control steps
+            ROBOTS[args.robot].config_class().replace(episode_seconds=args.grid_episode_seconds)
+        except ValueError as error:
+            parser.error(f"--grid-episode-seconds {args.grid_episode_seconds:g}: {error}")
     return agents, seeds
 
 

@@ -198,6 +198,22 @@ def row_of(traces: dict[str, np.ndarray]) -> dict[str, float]:
     return row
 
 
+def command_row(command: GridCommand, traces: dict[str, np.ndarray]) -> dict[str, float]:
+    """The row of one grid command from its evaluation (:func:`row_of`), the cost of
+    transport left out (NaN) for a command that asks the base to stay: no distance asked
+    for, the drift's cost means nothing."""
+    row = row_of(traces)
+    if not command.moves:
+        row["planar_cost_of_transport"] = math.nan
+    return row
+
+
+def grid_means(rows: Sequence[dict[str, float]]) -> dict[str, float]:
+    """Each column's mean over the grid's command rows (the NaN of an undefined one skipped;
+    ``fell``: the share of the episodes that fell, with as many per command)."""
+    return {key: _nanmean([r[key] for r in rows]) for key, _ in COLUMNS}
+
+
 def run_grid(
     policy,
     config: Any,
@@ -234,10 +250,8 @@ def run_grid(
                 "vx": command.vx,
                 "vy": command.vy,
                 "yaw": command.yaw,
-                **row_of(traces),
+                **command_row(command, traces),
             }
-            if not command.moves:  # no distance asked for: the drift's cost means nothing
-                row["planar_cost_of_transport"] = math.nan
             grid_rows.append(row)
             if command == CHECK_COMMAND and robot.simulator(config.env) == "mujoco":
                 kept[terrain] = traces  # the checks' nominal episodes
@@ -245,7 +259,7 @@ def run_grid(
                      f"m/s, yaw-rate error {row['yaw_rate_error']:.3f} rad/s, falls "
                      f"{row['fell']:.0%}")  # fmt: skip
         rows += grid_rows
-        means[terrain] = {key: _nanmean([r[key] for r in grid_rows]) for key, _ in COLUMNS}
+        means[terrain] = grid_means(grid_rows)
         if not with_checks:
             continue
         mujoco = command_env(base, CHECK_COMMAND, ground, **robot.simulator_config("mujoco"))

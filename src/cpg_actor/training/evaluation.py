@@ -339,12 +339,18 @@ class TrainingEvaluation:
     evaluation; ``env`` replaces them), always reset with the run's evaluation seed, by a
     policy of its own around the run's agent and normaliser (the training envs' CPG states
     stay untouched). ``traced_metrics``: each evaluation also gives these metrics of its
-    traces (:func:`evaluation_row`); None unless a caller sets it."""
+    traces (:func:`evaluation_row`); None unless a caller sets it. ``evaluator``: a caller's
+    own evaluation instead of those episodes, ``evaluator(policy, seed)`` giving the row
+    (``eval/*`` scalars) for the same policy and seed, on envs of its own and drawing no
+    random numbers (the time-to-walk benchmark's grid of commands,
+    :class:`cpg_actor.robustness.grid_evaluation.GridEvaluation`), closed with this one if
+    it has ``close``; None unless a caller sets it (then the run's envs are never built)."""
 
     def __init__(
         self, config: Any, robot: Any, agent, normalizer, action_low, action_high, env: Any = None
     ) -> None:
         self.traced_metrics = None
+        self.evaluator: Any = None
         self.config = config
         self.robot = robot
         self.agent, self.normalizer = agent, normalizer
@@ -358,8 +364,6 @@ class TrainingEvaluation:
 
         cfg = self.config
         start = time.perf_counter()
-        if self.env is None:
-            self.env = evaluation_env(cfg, self.robot)
         policy = Policy(
             self.agent,
             self.normalizer,
@@ -367,18 +371,27 @@ class TrainingEvaluation:
             self.action_high,
             cfg.ppo.normalize_observations,
         )
-        row = evaluation_row(
-            policy,
-            self.env,
-            seed=derived_seed(cfg.seed, EVAL_SEED_KEY),
-            control_dt=float(cfg.env.control_dt),
-            max_steps=cfg.env.episode_steps,
-            traced_metrics=self.traced_metrics,
-        )
+        seed = derived_seed(cfg.seed, EVAL_SEED_KEY)
+        if self.evaluator is not None:
+            row = dict(self.evaluator(policy, seed))
+        else:
+            if self.env is None:
+                self.env = evaluation_env(cfg, self.robot)
+            row = evaluation_row(
+                policy,
+                self.env,
+                seed=seed,
+                control_dt=float(cfg.env.control_dt),
+                max_steps=cfg.env.episode_steps,
+                traced_metrics=self.traced_metrics,
+            )
         row["time/eval"] = time.perf_counter() - start
         return row
 
     def close(self) -> None:
+        close = getattr(self.evaluator, "close", None)
+        if close is not None:
+            close()
         if self.env is not None:
             self.env.close()
             self.env = None
