@@ -84,6 +84,11 @@ RUNS = {
                          "--eval-interval", "64", "--eval-episodes", "1", "--set",
                          "ppo.compile=false", "--set", "num_envs=2", "--set",
                          "env.episode_seconds=0.5", "--ceiling-seconds", "0.1"], "--output"),
+    # --grid: the omni task, evaluated on the protocol's 12 commands, episodes of 10 steps
+    "time_to_walk.py grid": (["--grid", "--agents", "cpg-actor,mlp-warm", "--max-steps", "128",
+                              "--eval-interval", "64", "--grid-episode-seconds", "0.2", "--set",
+                              "ppo.compile=false", "--set", "num_envs=2", "--set",
+                              "env.episode_seconds=0.5", "--ceiling-seconds", "0.1"], "--output"),
     "train_scaling.py": (["--cores", "1", "--num-envs", "2", "--iterations", "1", "--agent",
                           "mlp"], "--output"),
     "train_throughput.py": (["--presets", "paper", "--agents", "mlp", "--iterations", "1",
@@ -274,6 +279,85 @@ def test_time_to_walk_trains_as_a_run_without_its_evaluations():
         runner.learn()
         runner.close()
         assert len(recorder.history) == (4 if evaluated else 0)  # before, then every iteration
+        parameters.append(runner.agent.state_dict())
+    for key, value in parameters[0].items():
+        assert torch.equal(value, parameters[1][key]), key
+
+
+def grid_evaluation(error: float, fell: float = 0.0) -> dict:
+    """One grid evaluation of time_to_walk --grid: its mean linear-velocity error over the
+    commands and the share of its episodes that fell (no forward speed error in it)."""
+    return {"eval/lin_vel_error": error, "eval/fell": fell, "eval/return": 10.0}
+
+
+def test_time_to_walk_grid_target_is_a_low_grid_error_without_a_fall_on_any_command():
+    walk = benchmark("time_to_walk")
+    assert walk.reached_grid(grid_evaluation(0.15), 0.15)
+    assert walk.reached_grid(grid_evaluation(0.03), 0.15)
+    assert not walk.reached_grid(grid_evaluation(0.1501), 0.15)
+    assert not walk.reached_grid(grid_evaluation(0.05, fell=1 / 12), 0.15)  # one command fell
+    assert not walk.reached_grid(grid_evaluation(math.nan), 0.15)
+    assert not walk.reached_grid(grid_evaluation(0.05, fell=math.nan), 0.15)
+    # the grid's error, not the forward task's: a low speed error alone is no hit
+    assert not walk.reached_grid({**grid_evaluation(0.3), "eval/speed_error": 0.01}, 0.15)
+    history = [{"steps": 0, "wall": 0.0, **grid_evaluation(0.3)},
+               {"steps": 100, "wall": 0.1, **grid_evaluation(0.1, fell=0.5)},
+               {"steps": 200, "wall": 0.2, **grid_evaluation(0.14)}]  # fmt: skip
+    run = walk.summarize(history, 0.15, error=walk.ERRORS["grid"])
+    assert run["reached"] and run["steps"] == 200 and run["lowest"]["steps"] == 100
+    run.update(sps=1000.0, ceiling=[2000.0, 2000.0], stolen=0.0, mode="grid", eval_seconds=3.0)
+    row = walk.run_row("cpg-actor", 100, run, 400)
+    assert "| grid |" in row and "0.300 m/s (at 0)" in row and "| 3.0 s |" in row
+
+
+def test_the_grid_evaluation_is_the_protocols_grid_on_flat_ground():
+    """The grid evaluation holds each of the protocol's commands for its episodes, on the
+    nominal robot on flat ground, with the episode length asked for."""
+    from cpg_actor.config import compose_config
+    from cpg_actor.robots.registry import get_robot
+    from cpg_actor.robustness.grid_evaluation import GridEvaluation
+    from cpg_actor.robustness.protocol import GRID
+
+    config = compose_config("omni", None, {"robot": "go1"}, ["env.terrain.kinds=all"])
+    assert config.env.terrain.active  # trained on rough ground: evaluated on flat
+    grid = GridEvaluation(config, get_robot("go1"), 1, 0.2)
+    assert len(grid.env_configs) == len(GRID) and grid.episode_seconds == 0.2
+    for command, env in zip(GRID, grid.env_configs, strict=True):
+        assert (env.command_range[0], env.lateral_range[0], env.yaw_range[0]) == command.values
+        assert env.command_resample_seconds == 0 and env.standing_share == 0
+        assert not env.terrain.active
+    with pytest.raises(ValueError, match="velocity task"):
+        GridEvaluation(compose_config(None, None, {"robot": "hopper"}), get_robot("hopper"))
+
+
+def test_time_to_walk_grid_trains_as_a_run_without_its_evaluations():
+    """With --grid, the runs trained with the grid evaluations give the same parameters as
+    the same runs with no evaluation: the grid draws nothing from the training's random
+    numbers."""
+    import torch
+
+    from cpg_actor.robots.registry import get_robot
+    from cpg_actor.robustness.grid_evaluation import GridEvaluation
+    from cpg_actor.training.runner import Runner
+
+    walk = benchmark("time_to_walk")
+    tiny = ["ppo.compile=false", "num_envs=2", "env.episode_seconds=0.5"]
+    spec = walk.RunSpec("go1", "mlp-warm", 100, 128, 64, 1, 0.15, tiny, 0.1, True, 0.1)
+    parameters = []
+    for evaluated in (True, False):
+        config = walk.run_config(spec)
+        assert config.preset == "omni" and config.env.lateral_range != (0.0, 0.0)
+        recorder = benchmark("bench_report").evaluation_recorder()
+        if not evaluated:
+            config.eval_interval = 0
+        runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder])
+        runner.evaluation.evaluator = GridEvaluation(config, get_robot("go1"), 1, 0.1)
+        runner.learn()
+        runner.close()
+        assert len(recorder.history) == (3 if evaluated else 0)  # before, then every iteration
+        if evaluated:
+            assert all("eval/lin_vel_error" in e and "eval/speed_error" not in e
+                       for _, _, e in recorder.history)  # fmt: skip
         parameters.append(runner.agent.state_dict())
     for key, value in parameters[0].items():
         assert torch.equal(value, parameters[1][key]), key
