@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from cpg_actor.experiments import family as f
 from cpg_actor.experiments import metrics as m
 from cpg_actor.files import atomic_write_text
 
@@ -122,12 +123,7 @@ def matched_smoothness(cpg: dict[str, Any], folders: list[Path]) -> list[dict[st
                     "cpg": actor,
                 }
             )
-    for test, adjusted in zip(tests, m.holm([t["p"] for t in tests]), strict=True):
-        test["adjusted"] = adjusted
-        significant = adjusted < m.ALPHA
-        test["passed"] = bool(significant and test["difference"] >= test["minimum"])
-        test["reversed"] = bool(significant and -test["difference"] >= test["minimum"])
-    return tests
+    return f.judge(tests)
 
 
 def print_matched(tests: list[dict[str, Any]]) -> None:
@@ -146,17 +142,12 @@ def print_matched(tests: list[dict[str, Any]]) -> None:
     )
     print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | --- |")
     for t in tests:
-        sides = []
-        for values in (t["mlp"], t["cpg"]):
-            ci = m.bootstrap(np.log(values) if t["log"] else values, "mean")
-            if t["log"] and ci is not None:
-                ci = m.Interval(*(math.exp(x) for x in (ci.estimate, ci.low, ci.high)))
-            sides.append(str(ci))
+        sides = [str(f.mean_ci(values, t["log"])) for values in (t["mlp"], t["cpg"])]
         verdict = ("MLP ahead" if t["passed"] else "CPG-Actor ahead" if t["reversed"]
                    else "not separated")  # fmt: skip
         print(
             f"| {t['group']} | {t['label']} | {sides[0]} | {sides[1]} | "
-            f"{shown(t['difference'], t['log'])} | {shown(t['minimum'], t['log'])} | "
+            f"{f.shown(t['difference'], t['log'])} | {f.shown(t['minimum'], t['log'])} | "
             f"{t['p']:.2g} | {t['adjusted']:.2g} | {verdict} |"
         )
 
@@ -195,10 +186,6 @@ def figure(
     plt.close(fig)
 
 
-def shown(value: float, log: bool) -> str:
-    return f"x{math.exp(value):.3g}" if log else f"{value:+.3g}"
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out", type=Path, help="the reproduce folder (results/fresh-2M)")
@@ -220,18 +207,10 @@ def main() -> None:
     tests: list[dict[str, Any]] = []
     best: dict[str, str] = {}
     for name, (_, higher, log) in METRICS.items():
-        scale = np.log if log else np.asarray
-        sign = 1.0 if higher else -1.0
-        means = {v: float(np.nanmean(scale(data[name][v]))) for v in VARIANTS}
-        best[name] = max(VARIANTS, key=lambda v: sign * means[v])
-        for other in VARIANTS:
-            if other == best[name]:
-                continue
-            a, b = scale(data[name][best[name]]), scale(data[name][other])
-            difference, p = m.welch_test(a if higher else b, b if higher else a)
-            tests.append({"group": name, "label": f"{best[name]} vs {other}", "test": m.WELCH,
-                          "difference": difference, "log": log, "p": p,
-                          "minimum": minimum(name, data[name][other])})  # fmt: skip
+        best[name], group = f.best_against_others(
+            data[name], name, higher, log, lambda other, name=name: minimum(name, other)
+        )
+        tests += group
     starts = start_values(args.out, args.evaluate_starts)
     for what, end, start in (("return", "end_return", "start_return"),
                              ("hop apex (m)", "end_apex", "start_apex")):  # fmt: skip
@@ -252,12 +231,7 @@ def main() -> None:
     tests.append({"group": "the paper's claim", "label": "cpg-actor-open-loop - cho2019-warm, "
                   "return", "test": m.WELCH, "difference": difference, "log": False, "p": p,
                   "minimum": RELATIVE_EFFECT * abs(float(np.nanmean(cho)))})  # fmt: skip
-    for test, adjusted in zip(tests, m.holm([t["p"] for t in tests]), strict=True):
-        test["adjusted"] = adjusted
-        test["passed"] = bool(adjusted < m.ALPHA and test["difference"] > 0
-                              and test["difference"] >= test["minimum"])  # fmt: skip
-        # the other way, as plainly (two-sided tests): the claimed side clearly worse
-        test["reversed"] = bool(adjusted < m.ALPHA and -test["difference"] >= test["minimum"])
+    f.judge(tests)
 
     print("# fresh-2M: the analysis of `PROTOCOL.md`\n")
     print(
@@ -280,9 +254,7 @@ def main() -> None:
         kind = "geometric mean" if log else "mean"
         print(f"| variant | {kind} [95 % CI] | per seed |\n| --- | ---: | --- |")
         for v in VARIANTS:
-            ci = m.bootstrap(np.log(data[name][v]) if log else data[name][v], "mean")
-            if log and ci is not None:
-                ci = m.Interval(*(math.exp(x) for x in (ci.estimate, ci.low, ci.high)))
+            ci = f.mean_ci(data[name][v], log)
             seeds = ", ".join(f"{x:.3g}" for x in data[name][v])
             print(f"| `{v}`{' (best)' if v == best[name] else ''} | {ci} | {seeds} |")
         group = [t for t in tests if t["group"] == name]
@@ -301,14 +273,7 @@ def main() -> None:
         "The last column: yes, the difference counts; reversed, the other side is ahead by "
         "at least the minimum with Holm p < 0.05; no, neither.\n"
     )
-    print("| group | comparison | test | difference | minimum | p | Holm p | counts |")
-    print("| --- | --- | --- | ---: | ---: | ---: | ---: | --- |")
-    for t in tests:
-        print(
-            f"| {t['group']} | {t['label']} | {t['test']} | {shown(t['difference'], t['log'])}"
-            f" | {shown(t['minimum'], t['log'])} | {t['p']:.2g} | {t['adjusted']:.2g} | "
-            f"{'yes' if t['passed'] else 'reversed' if t['reversed'] else 'no'} |"
-        )
+    print("\n".join(f.table(tests)))
     print("\n## The CPG-Actor against its start (per seed, `cpg-actor eval`, 5 episodes)\n")
     print("| seed | start return | end return | start apex (m) | end apex (m) |")
     print("| --- | ---: | ---: | ---: | ---: |")

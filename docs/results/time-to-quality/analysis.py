@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from cpg_actor.experiments import family as f
 from cpg_actor.experiments import metrics as m
 
 CPG = "`cpg-actor`"
@@ -40,23 +41,7 @@ def final(run: dict[str, Any], key: str) -> float:
 
 
 def shown_ci(values: list[float], log: bool) -> str:
-    ci = m.bootstrap(np.log(values) if log else values, "mean")
-    if log and ci is not None:
-        ci = m.Interval(*(math.exp(x) for x in (ci.estimate, ci.low, ci.high)))
-    return str(ci)
-
-
-def judge(tests: list[dict[str, Any]]) -> None:
-    """Holm over ``tests``; a test counts when its Holm p < 0.05 and its difference (oriented
-    so that > 0 favours the claimed side) is at least its minimum; reversed the other way."""
-    for test, adjusted in zip(tests, m.holm([t["p"] for t in tests]), strict=True):
-        test["adjusted"] = adjusted
-        significant = adjusted < m.ALPHA
-        test["verdict"] = (
-            "yes" if significant and test["difference"] >= test["minimum"]
-            else "reversed" if significant and -test["difference"] >= test["minimum"]
-            else "no"
-        )  # fmt: skip
+    return str(f.mean_ci(values, log))
 
 
 def time_tests(runs: dict[str, list[dict[str, Any]]]) -> list[dict[str, Any]]:
@@ -70,10 +55,10 @@ def time_tests(runs: dict[str, list[dict[str, Any]]]) -> list[dict[str, Any]]:
                 continue
             other = np.log([time_to_target(r, key) for r in others])
             difference, p = m.welch_test(other, cpg)
-            tests.append({"what": f"{key} to the target", "label": f"{CPG} vs {label}",
+            tests.append({"group": f"{key} to the target", "label": f"{CPG} vs {label}",
                           "test": m.WELCH, "difference": difference, "p": p, "log": True,
                           "minimum": math.log(RATIO_EFFECT)})  # fmt: skip
-    judge(tests)
+    f.judge(tests)
     return tests
 
 
@@ -84,28 +69,17 @@ def sweep_tests(runs: dict[str, list[dict[str, Any]]], budgets: list[str]) -> li
         end = [final(r, "return") for r in cpg]
         start = [float(r["curve"][0]["return"]) for r in cpg]
         difference, p = m.paired_t_test(end, start)
-        tests.append({"what": f"search {budget}", "label": f"{CPG}: final - start",
+        tests.append({"group": f"search {budget}", "label": f"{CPG}: final - start",
                       "test": m.PAIRED, "difference": difference, "p": p, "log": False,
                       "minimum": RELATIVE_EFFECT * abs(float(np.mean(start)))})  # fmt: skip
         for other in SWEPT[1:]:
             values = [final(r, "return") for r in runs[f"{other} (search {budget})"]]
             difference, p = m.welch_test(end, values)
-            tests.append({"what": f"search {budget}", "label": f"{CPG} - {other}",
+            tests.append({"group": f"search {budget}", "label": f"{CPG} - {other}",
                           "test": m.WELCH, "difference": difference, "p": p, "log": False,
                           "minimum": RELATIVE_EFFECT * abs(float(np.mean(values)))})  # fmt: skip
-    judge(tests)
+    f.judge(tests)
     return tests
-
-
-def print_tests(tests: list[dict[str, Any]]) -> None:
-    print("| question | comparison | test | difference | minimum | p | Holm p | counts |")
-    print("| --- | --- | --- | ---: | ---: | ---: | ---: | --- |")
-    for t in tests:
-        shown = (lambda x: f"x{math.exp(x):.3g}") if t["log"] else (lambda x: f"{x:+.3g}")
-        print(
-            f"| {t['what']} | {t['label']} | {t['test']} | {shown(t['difference'])} | "
-            f"{shown(t['minimum'])} | {t['p']:.2g} | {t['adjusted']:.2g} | {t['verdict']} |"
-        )
 
 
 def main() -> None:
@@ -138,7 +112,7 @@ def main() -> None:
     print(f"\n{len(times)} tests, {m.family_text(len(times))}; the difference is the factor by "
           "which `cpg-actor` is faster (> 1: faster), the minimum a factor "
           f"{RATIO_EFFECT}.\n")  # fmt: skip
-    print_tests(times)
+    print("\n".join(f.table(times)))
     print("\n## The search-budget sweep\n")
     print("| method | start return | final return | final hop apex (m) | seeds at the target |")
     print("| --- | ---: | ---: | ---: | --- |")
@@ -150,7 +124,7 @@ def main() -> None:
     tests = sweep_tests(sweep, budgets)
     print(f"\n{len(tests)} tests, {m.family_text(len(tests))}; minimum effect 5 % of the start "
           "or of the other agent's mean.\n")  # fmt: skip
-    print_tests(tests)
+    print("\n".join(f.table(tests)))
 
 
 if __name__ == "__main__":
