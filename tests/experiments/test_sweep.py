@@ -111,3 +111,43 @@ def test_sweep_writes_only_in_its_own_folder_and_overwrite_deletes_only_its_file
     (out / "default" / "notes.txt").unlink()
     sweep.prepare_out_dir(out, overwrite=True)
     assert [p.name for p in out.iterdir()] == [MARKER]
+
+
+def _fake_run(run_dir, robot: str, evaluations: list[dict]) -> None:
+    run_dir.mkdir(parents=True)
+    (run_dir / "config.yaml").write_text(f"robot: {robot}\n")
+    rows = [
+        {"global_step": 1000 * i, "eval/return": 10.0 + i, **e} for i, e in enumerate(evaluations)
+    ]
+    (run_dir / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
+
+
+def test_the_quadrupeds_omnidirectional_score_is_the_metrics_named(tmp_path):
+    """--metrics scores the runs by the episode metrics named (the first one read), e.g. the
+    linear velocity error and the falls of the omnidirectional task, not the headline."""
+    from cpg_actor.experiments import sweep
+
+    settings = build_settings(["agent_config.init_std=1.0"])
+    for setting, error in zip(settings, (0.2, 0.1), strict=True):
+        _fake_run(tmp_path / setting.label / "runs" / "mlp" / "seed100", "go1",
+                  [{"eval/lin_vel_error": 0.5, "eval/fell": 1.0}] +
+                  [{"eval/lin_vel_error": error, "eval/fell": 0.0}] * 3)  # fmt: skip
+    summary = sweep.summarize(tmp_path, settings, ["mlp"], 1, 100, ["lin_vel_error", "fell"])
+    assert summary["metric"] == "lin_vel_error"
+    run = summary["settings"]["init_std=1.0"]["variants"]["mlp"]
+    assert run["lin_vel_error"] == [pytest.approx(0.1, rel=1e-9)] and run["fell"] == [0.0]
+    sweep.write_summary(tmp_path, summary, "cpg-actor sweep ...", 1)
+    table = (tmp_path / "sensitivity.md").read_text()
+    assert "mlp lin vel error (m/s)" in table
+    assert "| `init_std=1.0` | 12 (n=1) | 0.100 (n=1) | 0.000 (n=1) | 3k |" in table
+    with pytest.raises(ValueError, match="hop_height not an episode metric of robot 'go1'"):
+        sweep.summarize(tmp_path, settings, ["mlp"], 1, 100, ["hop_height"])
+
+
+def test_an_unknown_metric_is_refused_before_anything_is_written(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    argv = ["sweep", "--out", str(out), "--variants", "mlp", "--seeds", "1", "--total-steps",
+            "32", "--metrics", "lin_vel_error", "--no-progress"]  # fmt: skip
+    assert main(argv) == 2
+    assert "lin_vel_error not an episode metric of robot 'hopper'" in capsys.readouterr().err
+    assert not out.exists()

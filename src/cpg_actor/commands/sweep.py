@@ -37,6 +37,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     add_set_option(parser, "a config value for every run (repeatable)")
     parser.add_argument(
+        "--metrics",
+        default="",
+        metavar="NAME[,NAME]",
+        help="episode metrics scored besides the return, the first the one the table is read "
+        "by (default: the robot's headline metric, the hopper's hop_height; e.g. "
+        "lin_vel_error,fell on the quadrupeds' omnidirectional task)",
+    )
+    parser.add_argument(
         "--workers", type=int, default=None, help=f"parallel runs (default {os.cpu_count()})"
     )
     parser.add_argument(
@@ -60,6 +68,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import parse_steps
     from cpg_actor.experiments import plan, sweep
+    from cpg_actor.robots.registry import get_robot
 
     variants = plan.parse_variants(args.variants)
     settings = sweep.build_settings(args.vary)
@@ -81,6 +90,8 @@ def run(args: argparse.Namespace) -> int:
         if sys.argv[1:2] == ["sweep"]
         else "cpg-actor sweep"
     )
+    metrics = [name.strip() for name in args.metrics.split(",") if name.strip()]
+    sweep.check_metrics(metrics, get_robot(plan.resolve_config(plans[0][1], variants[0]).robot))
     if args.summary_only and args.overwrite:
         raise ValueError("--summary-only and --overwrite exclude each other")
     sweep.prepare_out_dir(out, args.overwrite, args.summary_only)  # before anything is written
@@ -104,7 +115,7 @@ def run(args: argparse.Namespace) -> int:
         if results is None:
             return 130
     failed = [r for r in results if r["status"] == "failed"]
-    summary = sweep.summarize(out, settings, variants, args.seeds, args.first_seed)
+    summary = sweep.summarize(out, settings, variants, args.seeds, args.first_seed, metrics)
     for path in sweep.write_summary(out, summary, command, args.seeds):
         print(f"wrote {path}")
     if failed:

@@ -6,9 +6,10 @@ changed (``--vary KEY=V1,V2`` or ``--vary KEY1,KEY2=A1:A2,B1:B2``). A setting is
 evaluated once at the end; all runs of all settings share one pool of workers. The summary
 (``OUT/sensitivity.md``, ``OUT/sensitivity.json``, ``OUT/sensitivity.png``) is made from the
 deterministic evaluations logged during training (``eval/return`` and ``eval/`` the robot's
-headline metric, ``Robot.headline_metric``: the hopper's ``hop_height``). ``OUT`` carries the
-project's marker (``cpg_actor.files``): a folder without it is never written in, and
-``--overwrite`` deletes there only what the sweep wrote.
+headline metric, ``Robot.headline_metric``: the hopper's ``hop_height``; or the episode
+metrics ``--metrics`` names, e.g. ``lin_vel_error,fell`` on the quadrupeds' omnidirectional
+task). ``OUT`` carries the project's marker (``cpg_actor.files``): a folder without it is
+never written in, and ``--overwrite`` deletes there only what the sweep wrote.
 """
 
 from __future__ import annotations
@@ -137,26 +138,46 @@ def read_evaluations(
     )
 
 
+def check_metrics(metrics: list[str], robot: Any) -> list[str]:
+    """``metrics`` (episode metrics of ``robot``'s envs) or, when empty, its headline metric;
+    ValueError naming the accepted ones otherwise."""
+    unknown = [name for name in metrics if name not in robot.metrics]
+    if unknown:
+        raise ValueError(f"--metrics: {', '.join(unknown)} not an episode metric of robot "
+                         f"{robot.name!r}; it has {', '.join(robot.metrics)}")  # fmt: skip
+    return list(dict.fromkeys(metrics)) or [robot.headline_metric]
+
+
 def summarize(
-    out: Path, settings: list[Setting], variants: list[str], seeds: int, first_seed: int = 0
+    out: Path,
+    settings: list[Setting],
+    variants: list[str],
+    seeds: int,
+    first_seed: int = 0,
+    metrics: list[str] | None = None,
 ) -> dict[str, Any]:
     """Per setting and variant: each seed's score (mean of the last evaluations: the return
-    and the robot's headline metric, named in ``metric``) and curve."""
+    and each of ``metrics``, by default the robot's headline metric) and curve. ``metric``
+    names the first of them (the score the table is read by)."""
     runs = out / settings[0].label / "runs" / variants[0] / f"seed{first_seed}"
-    metric = run_robot(read_config(runs)).headline_metric
-    summary: dict[str, Any] = {"final_evals": FINAL_EVALS, "metric": metric, "settings": {}}
+    names = check_metrics(metrics or [], run_robot(read_config(runs)))
+    summary: dict[str, Any] = {"final_evals": FINAL_EVALS, "metric": names[0], "metrics": names,
+                               "settings": {}}  # fmt: skip
     for setting in settings:
         entry: dict[str, Any] = {"overrides": list(setting.overrides), "variants": {}}
         for variant in variants:
-            returns, scores, curves = [], [], []
+            values: dict[str, list[float]] = {"return": [], **{name: [] for name in names}}
+            curves = []
             for seed in range(first_seed, first_seed + seeds):
-                steps, ret, score, wall = read_evaluations(
-                    out / setting.label / "runs" / variant / f"seed{seed}", metric
-                )
-                returns.append(float(ret[-FINAL_EVALS:].mean()) if ret.size else math.nan)
-                scores.append(float(score[-FINAL_EVALS:].mean()) if score.size else math.nan)
+                run_dir = out / setting.label / "runs" / variant / f"seed{seed}"
+                for name in names:
+                    steps, ret, score, _ = read_evaluations(run_dir, name)
+                    values[name].append(
+                        float(score[-FINAL_EVALS:].mean()) if score.size else math.nan
+                    )
+                values["return"].append(float(ret[-FINAL_EVALS:].mean()) if ret.size else math.nan)
                 curves.append({"steps": steps.tolist(), "return": ret.tolist()})
-            entry["variants"][variant] = {"return": returns, metric: scores, "curves": curves}
+            entry["variants"][variant] = {**values, "curves": curves}
         summary["settings"][setting.label] = entry
     return summary
 
@@ -176,24 +197,29 @@ def write_summary(out: Path, summary: dict[str, Any], command: str, seeds: int) 
     atomic_write_text(json.dumps(summary, indent=1) + "\n", out / "sensitivity.json")
     labels = list(summary["settings"])
     variants = list(next(iter(summary["settings"].values()))["variants"])
-    metric = summary.get("metric", "hop_height")
-    column = all_metrics()[metric].column if metric in all_metrics() else metric
+    names = summary.get("metrics") or [summary.get("metric", "hop_height")]
+    columns = [all_metrics()[n].column if n in all_metrics() else n for n in names]
     lines = [
         "# Sensitivity of PPO settings (one at a time around the defaults)",
         "",
         f"Produced by `{command}`.",
         "",
         f"Score of a run: the mean of its last {summary['final_evals']} deterministic "
-        f"evaluations (`eval/return`, `eval/{metric}`, 5 episodes each); mean ± std over "
+        "evaluations (`eval/return`, "
+        + ", ".join(f"`eval/{n}`" for n in names)
+        + f", 5 episodes each); mean ± std over "
         f"{seeds} seeds (one seed: its value alone, n=1, no interval); *steps*: the fewest "
         "env steps any seed's run reached (less than the budget for runs that did not "
         "finish). The first row is the defaults; every other row changes only the values it "
         "names.",
         "",
         "| setting | "
-        + " | ".join(f"{v} return | {v} {column} | {v} steps" for v in variants)
+        + " | ".join(
+            " | ".join([f"{v} return", *(f"{v} {c}" for c in columns), f"{v} steps"])
+            for v in variants
+        )
         + " |",
-        "| --- | " + " | ".join("---: | ---: | ---:" for _ in variants) + " |",
+        "| --- | " + " | ".join(" | ".join(["---:"] * (len(names) + 2)) for _ in variants) + " |",
     ]
     for label in labels:
         cells = []
@@ -202,7 +228,7 @@ def write_summary(out: Path, summary: dict[str, Any], command: str, seeds: int) 
             reached = [c["steps"][-1] if c["steps"] else 0 for c in data["curves"]]
             cells += [
                 _mean_std(data["return"], 0),
-                _mean_std(data[metric], 3),
+                *(_mean_std(data[n], 3) for n in names),
                 f"{min(reached) / 1000:.0f}k",
             ]
         lines.append(f"| `{label}` | " + " | ".join(cells) + " |")
