@@ -19,3 +19,20 @@ def test_each_variant_is_its_agent_with_its_settings(variant):
         assert config.ppo.cpg_lr_schedule == "follow"
     if variant.endswith("-floor"):
         assert config.agent_config.action_std_floor == (0 if "no-floor" in variant else 0.1)
+
+
+def test_the_field_mlp_recipe_on_the_go1s_omnidirectional_task():
+    """mlp-field: rsl_rl's actor-critic and PPO weights over the Go1's omni task, whose command
+    ranges and recipe (throughput) stay the task's."""
+    from cpg_actor.experiments import plan
+
+    settings = plan.ReproduceSettings(["mlp-field"], 1, 2_000_000, overrides=["robot=go1"],
+                                      preset="omni")  # fmt: skip
+    config = plan.resolve_config(settings, "mlp-field")
+    assert (config.agent, config.robot, config.preset) == ("mlp", "go1", "omni")
+    assert config.agent_config.actor_hidden == config.agent_config.critic_hidden == (512, 256, 128)
+    assert config.agent_config.activation == "elu"
+    assert (config.ppo.entropy_coef, config.ppo.value_loss_coef, config.ppo.max_grad_norm) == (
+        0.01, 1.0, 1.0)  # fmt: skip
+    assert (config.ppo.learning_rate, config.ppo.lr_schedule) == (1e-3, "adaptive")
+    assert config.env.yaw_range == (-1.0, 1.0) and config.num_envs == 256

@@ -151,3 +151,17 @@ def test_an_unknown_metric_is_refused_before_anything_is_written(tmp_path, capsy
     assert main(argv) == 2
     assert "lin_vel_error not an episode metric of robot 'hopper'" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_sweep_on_the_go1s_omnidirectional_task(tmp_path):
+    """--preset omni with --set robot=go1: each run is the Go1's omnidirectional task."""
+    from cpg_actor.experiments import plan, sweep
+
+    (setting,) = build_settings([])
+    settings = sweep.reproduce_settings(setting, ["mlp-field"], 1, 4096, ["robot=go1"], 100,
+                                        "omni")  # fmt: skip
+    config = plan.resolve_config(settings, "mlp-field", 100)
+    assert (config.robot, config.preset, config.env.lateral_range) == ("go1", "omni", (-0.5, 0.5))
+    (task,) = plan.build_tasks(settings, tmp_path / "default", 1)
+    assert task.train_args[task.train_args.index("--preset") + 1] == "omni"
+    assert "robot=go1" in task.train_args

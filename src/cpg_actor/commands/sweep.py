@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from cpg_actor.commands import add_set_option
+from cpg_actor.config.presets import PRESETS
 
 HELP = "sensitivity study: train variants x seeds for the defaults and each --vary setting"
 
@@ -34,6 +35,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="KEY=V1,V2",
         help="one setting per value, the rest at the defaults (repeatable); several keys "
         "changed together: KEY1,KEY2=A1:A2,B1:B2",
+    )
+    parser.add_argument(
+        "--preset",
+        default=None,
+        choices=sorted(PRESETS),
+        help="every run's `cpg-actor train --preset` (default: the robot's recipe; omni: the "
+        "quadrupeds' omnidirectional task, with --set robot=go1 or anymal)",
     )
     add_set_option(parser, "a config value for every run (repeatable)")
     parser.add_argument(
@@ -80,7 +88,13 @@ def run(args: argparse.Namespace) -> int:
     plans = []
     for setting in settings:  # validate every setting before anything is written
         reproduction = sweep.reproduce_settings(
-            setting, variants, args.seeds, total_steps, args.overrides, args.first_seed
+            setting,
+            variants,
+            args.seeds,
+            total_steps,
+            args.overrides,
+            args.first_seed,
+            args.preset,
         )
         plans.append(
             (setting, reproduction, plan.build_tasks(reproduction, out / setting.label, workers))

@@ -72,6 +72,22 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     "cpg-actor-no-floor": ("cpg-actor", ("agent_config.action_std_floor=0",)),
     "mlp-no-floor": ("mlp", ("agent_config.action_std_floor=0",)),
     "cho2019-warm-floor": ("cho2019-warm", ("agent_config.action_std_floor=0.1",)),
+    # the field's MLP recipe on the quadrupeds (legged_gym / rsl_rl, Rudin et al. 2021): actor
+    # and critic of 512-256-128 ELU units, entropy bonus 0.01, value-loss weight and gradient
+    # norm 1; the rest of rsl_rl's PPO (5 epochs x 4 minibatches, learning rate 1e-3 adapted
+    # to KL 0.01, gamma 0.99, lambda 0.95, clip 0.2) is the throughput recipe's, and the MLP's
+    # init_std 0.3 of the Go1's joint half-ranges is 0.18-0.27 rad (rsl_rl: 1.0 x 0.25 rad)
+    "mlp-field": (
+        "mlp",
+        (
+            "agent_config.actor_hidden=[512,256,128]",
+            "agent_config.critic_hidden=[512,256,128]",
+            "agent_config.activation=elu",
+            "ppo.entropy_coef=0.01",
+            "ppo.value_loss_coef=1.0",
+            "ppo.max_grad_norm=1.0",
+        ),
+    ),
     # randomised training with the hopper's ranges (docs/robustness.md; the payload is in kg)
     "cpg-actor-randomized": ("cpg-actor", HOPPER_RANDOMIZE),
     "mlp-randomized": ("mlp", HOPPER_RANDOMIZE),

@@ -107,6 +107,7 @@ def reproduce_settings(
     total_steps: int,
     overrides: list[str],
     first_seed: int = 0,
+    preset: str | None = None,
 ) -> plan.ReproduceSettings:
     return plan.ReproduceSettings(
         variants=variants,
@@ -115,6 +116,7 @@ def reproduce_settings(
         overrides=[*overrides, *setting.overrides],
         stage_fractions=[1.0],
         first_seed=first_seed,
+        preset=preset,
     )
 
 
