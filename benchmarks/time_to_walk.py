@@ -155,16 +155,20 @@ class RunSpec(NamedTuple):
 def run_config(spec: RunSpec):
     """The run's :class:`TrainConfig`: as ``cpg-actor train`` composes it for the robot, the
     agent and the seed (with ``grid``: and ``--preset omni``), with :data:`SETTINGS` and the
-    ``--set`` values; evaluated every ``eval_interval`` env steps, rounded to whole
-    iterations (at least one)."""
+    ``--set`` values; ``agent`` may be a named variant of ``cpg-actor reproduce`` (e.g.
+    ``mlp-field``, the field's MLP recipe: its agent with its settings, before ``--set``);
+    evaluated every ``eval_interval`` env steps, rounded to whole iterations (at least one)."""
     from cpg_actor.config import compose_config
+    from cpg_actor.experiments.plan import variant_agent
 
+    agent, variant_overrides = variant_agent(spec.agent)
     values = {
-        "robot": spec.robot, "agent": spec.agent, "seed": spec.seed,
+        "robot": spec.robot, "agent": agent, "seed": spec.seed,
         "total_steps": spec.max_steps, "eval_episodes": spec.eval_episodes,
         **SETTINGS.get(spec.agent, {}),
     }  # fmt: skip
-    config = compose_config("omni" if spec.grid else None, None, values, spec.overrides)
+    overrides = [*variant_overrides, *spec.overrides]
+    config = compose_config("omni" if spec.grid else None, None, values, overrides)
     config.eval_interval = max(1, round(spec.eval_interval / config.steps_per_iteration))
     config.validate()
     return config
@@ -464,7 +468,11 @@ def main(argv: list[str] | None = None) -> int:
         return one_run(argv[1])
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--robot", default="go1", help="a quadruped (default go1)")
-    parser.add_argument("--agents", default=",".join(AGENTS), help="comma-separated, in order")
+    parser.add_argument(
+        "--agents",
+        default=",".join(AGENTS),
+        help="comma-separated, in order; agents or named variants (mlp-field)",
+    )
     parser.add_argument("--seeds", default="100", help="comma-separated (default 100)")
     parser.add_argument("--max-steps", type=int, default=3_000_000,
                         help="PPO env steps per run at most (default 3000000)")  # fmt: skip
@@ -560,12 +568,16 @@ def check_args(parser: argparse.ArgumentParser, args) -> tuple[list[str], list[i
     quadrupeds = sorted(name for name, r in ROBOTS.items() if "speed_error" in r.metrics)
     if args.robot not in quadrupeds:
         parser.error(f"--robot {args.robot}: not a quadruped; one of {', '.join(quadrupeds)}")
+    from cpg_actor.experiments.plan import VARIANTS, variant_agent
+
     agents = [a.strip() for a in args.agents.split(",") if a.strip()]
     ppo = sorted(name for name in REGISTERED if REGISTERED[name].trainer == "ppo")
-    unknown = [a for a in agents if a not in ppo]
+    variants = sorted(name for name in VARIANTS if variant_agent(name)[0] in ppo)
+    unknown = [a for a in agents if a not in ppo and a not in variants]
     if not agents or unknown:
         parser.error(f"--agents {args.agents}: unknown {', '.join(unknown) or 'none given'}; "
-                     f"agents trained by PPO: {', '.join(ppo)}")  # fmt: skip
+                     f"agents trained by PPO: {', '.join(ppo)}; or a named variant of one "
+                     f"(cpg-actor reproduce's): {', '.join(variants)}")  # fmt: skip
     try:
         seeds = [int(s) for s in args.seeds.split(",")]
     except ValueError:

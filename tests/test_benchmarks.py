@@ -330,6 +330,20 @@ def test_the_grid_evaluation_is_the_protocols_grid_on_flat_ground():
         GridEvaluation(compose_config(None, None, {"robot": "hopper"}), get_robot("hopper"))
 
 
+def test_time_to_walk_times_a_named_variant_the_fields_mlp_recipe(capsys):
+    """--agents takes reproduce's named variants: mlp-field is the MLP with the field's
+    network and PPO weights on the omni task; an unknown name lists both kinds."""
+    walk = benchmark("time_to_walk")
+    spec = walk.RunSpec("go1", "mlp-field", 100, 128, 64, 1, 0.15, ["num_envs=2"], 0.1, True)
+    config = walk.run_config(spec)
+    assert (config.agent, config.preset) == ("mlp", "omni")
+    assert config.agent_config.actor_hidden == (512, 256, 128) and config.ppo.entropy_coef == 0.01
+    with pytest.raises(SystemExit):
+        walk.main(["--grid", "--agents", "cpg-actor,mlp-fast", "--max-steps", "128"])
+    error = capsys.readouterr().err
+    assert "unknown mlp-fast" in error and "mlp-field" in error
+
+
 def test_time_to_walk_grid_trains_as_a_run_without_its_evaluations():
     """With --grid, the runs trained with the grid evaluations give the same parameters as
     the same runs with no evaluation: the grid draws nothing from the training's random
