@@ -11,7 +11,10 @@ def test_each_variant_is_its_agent_with_its_settings(variant):
     agent, overrides = variant_agent(variant)
     # follow scales the CPG's own rate, which the throughput preset sets and the paper's not
     preset = "throughput" if variant == "cpg-actor-follow" else "paper"
-    config = compose_config(preset, values={"agent": agent}, overrides=overrides)
+    values = {"agent": agent}
+    if variant.endswith("-field"):  # the field's recipe is the quadrupeds'
+        preset, values["robot"] = "omni", "go1"
+    config = compose_config(preset, values=values, overrides=overrides)
     assert config.agent == agent
     if variant.endswith("-randomized"):
         assert config.env.randomize.active
@@ -36,3 +39,9 @@ def test_the_field_mlp_recipe_on_the_go1s_omnidirectional_task():
         0.01, 1.0, 1.0)  # fmt: skip
     assert (config.ppo.learning_rate, config.ppo.lr_schedule) == (1e-3, "adaptive")
     assert config.env.yaw_range == (-1.0, 1.0) and config.num_envs == 256
+    warm = plan.resolve_config(
+        plan.ReproduceSettings(["mlp-warm-field"], 1, 2_000_000, overrides=["robot=go1"],
+                               preset="omni"), "mlp-warm-field")  # fmt: skip
+    assert (warm.agent, warm.agent_config.cpg_layout, warm.agent_config.init_std) == (
+        "mlp-warm", "leg", 0.3)  # fmt: skip
+    assert warm.agent_config.actor_hidden == (512, 256, 128)

@@ -45,6 +45,15 @@ HOPPER_RANDOMIZE = (
     "env.randomize.motor_strength=[0.8,1.2]",
 )
 
+FIELD_MLP = (
+    "agent_config.actor_hidden=[512,256,128]",
+    "agent_config.critic_hidden=[512,256,128]",
+    "agent_config.activation=elu",
+    "ppo.entropy_coef=0.01",
+    "ppo.value_loss_coef=1.0",
+    "ppo.max_grad_norm=1.0",
+)
+
 # Variants that are an agent with settings of their own: name -> (agent, --set overrides).
 # Their settings come before the reproduction's own --set, which can still change them. The
 # paper's CPG-Actor (cpg-actor-paper) with one change each, against which they are compared.
@@ -77,16 +86,12 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     # norm 1; the rest of rsl_rl's PPO (5 epochs x 4 minibatches, learning rate 1e-3 adapted
     # to KL 0.01, gamma 0.99, lambda 0.95, clip 0.2) is the throughput recipe's, and the MLP's
     # init_std 0.3 of the Go1's joint half-ranges is 0.18-0.27 rad (rsl_rl: 1.0 x 0.25 rad)
-    "mlp-field": (
-        "mlp",
-        (
-            "agent_config.actor_hidden=[512,256,128]",
-            "agent_config.critic_hidden=[512,256,128]",
-            "agent_config.activation=elu",
-            "ppo.entropy_coef=0.01",
-            "ppo.value_loss_coef=1.0",
-            "ppo.max_grad_norm=1.0",
-        ),
+    "mlp-field": ("mlp", FIELD_MLP),
+    # the same MLP cloned from the trot the quadrupeds' CPG-Actor starts from (its foot-space
+    # layout), with the MLP's quadruped noise (0.3; mlp-warm's config default is 1.0)
+    "mlp-warm-field": (
+        "mlp-warm",
+        (*FIELD_MLP, "agent_config.cpg_layout=leg", "agent_config.init_std=0.3"),
     ),
     # randomised training with the hopper's ranges (docs/robustness.md; the payload is in kg)
     "cpg-actor-randomized": ("cpg-actor", HOPPER_RANDOMIZE),
