@@ -48,6 +48,8 @@ omni preset, whose planar steps already track much of the grid, lands just above
 start). Excluded from the time like every evaluation; the report gives each run's mean
 seconds per evaluation. Its report goes to
 ``benchmarks/results/time_to_walk_grid.md`` unless ``--output``, and its rows name the task.
+Either mode also writes every run's result (its evaluations included) as JSON beside the
+report (the same name, ``.json``), rewritten with the report after each run.
 
 The start is charged. ``cpg-actor`` starts from the robot's CPG preset, the trot, which no
 search produced: nothing to charge. ``mlp-warm`` is first fitted to that same trot by
@@ -85,6 +87,7 @@ from bench_report import (
     measured,
     write,
 )
+from cpg_actor.files import atomic_write_text
 from cpg_actor.training.hooks import Hook
 
 HERE = Path(__file__).resolve().parent
@@ -542,6 +545,8 @@ def main(argv: list[str] | None = None) -> int:
                 f"{mujoco.__version__}."
             )
             write(args.output, report(args, runs, planned, provenance))  # after every run
+            atomic_write_text(json.dumps([{"agent": a, "seed": s, **r} for a, s, r in runs])
+                              + "\n", Path(args.output).with_suffix(".json"))  # fmt: skip
     return 0
 
 

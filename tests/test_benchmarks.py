@@ -3,6 +3,7 @@ to a temporary file (a script that breaks says so here, not on the next measurem
 whose smallest run compiles (``torch.compile``, MJX's JIT) or trains for seconds are slow."""
 
 import importlib
+import json
 import math
 import os
 import subprocess
@@ -154,6 +155,10 @@ def test_the_script_runs_its_smallest_configuration(script, tmp_path):
     assert output.is_file() and output.stat().st_size > 0
     if "--first-seed" in arguments:  # its runs take the seeds asked for
         assert f"seed {arguments[arguments.index('--first-seed') + 1]} " in result.stdout
+    if script.startswith("time_to_walk"):  # every run's result beside the report
+        runs = json.loads(output.with_suffix(".json").read_text())
+        assert [(r["agent"], r["seed"]) for r in runs] == [("cpg-actor", 100), ("mlp-warm", 100)]
+        assert all(r["history"] and "reached" in r for r in runs)
 
 
 def test_the_gpu_check_script_parses():

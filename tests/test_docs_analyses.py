@@ -4,6 +4,7 @@ time_to_quality.py's JSON made up here. Their output names the family and the ve
 input is one line."""
 
 import json
+import math
 import os
 import subprocess
 import sys
@@ -73,3 +74,72 @@ def test_the_time_to_quality_analysis_orders_the_methods(tmp_path, cpg_hit):
     faster = rows[0].split("|")[-2].strip()
     assert faster == ("yes" if cpg_hit == 0 else "no")
     assert "family of 6 tests" in done.stdout  # the sweep: 2 budgets x 3 tests
+
+
+def fake_grid(error: float, falls: float = 0.0) -> dict:
+    """A grid.json as `cpg-actor eval --grid` writes it, with the fields the analysis reads."""
+    means = {
+        "lin_vel_error": error,
+        "yaw_rate_error": 2 * error,
+        "torque_rate": 80.0,
+        "foot_slip": 0.1 + error,
+        "planar_cost_of_transport": 2.0,
+        "fell": falls,
+    }
+    checks = [
+        {"check": "payload 115%", "fell": falls, "lin_vel_error": 0.4},
+        *(
+            {
+                "check": f"push {side} 1 m/s",
+                "fell": 1.0,
+                "recovered": 0.0,
+                "recovery_seconds": math.nan,
+            }
+            for side in ("left", "right")
+        ),
+    ]
+    return {
+        "rows": [{"check": "", "command": "forward 0.5", **means}, *checks],
+        "means": {"flat": means},
+    }
+
+
+def test_the_go1_analysis_reads_its_folder_and_judges_the_targets(tmp_path):
+    """The CPG-Actor tracks at 0.05-0.06 m/s, the MLPs at 0.2: it is picked, beats its start
+    (0.15) and meets the grid's targets where the MLPs miss the linear one; the other model's
+    and the time to walk's numbers come from their own files."""
+    out = tmp_path / "go1-omni"
+    errors = {"cpg-actor": 0.05, "mlp-field": 0.2, "mlp-warm-field": 0.21, "start": 0.15}
+    for variant, error in errors.items():
+        for i, seed in enumerate((20, 21, 22)):
+            folder = out / "grid" / variant / f"seed{seed}"
+            folder.mkdir(parents=True)
+            (folder / "grid.json").write_text(json.dumps(fake_grid(error + 0.005 * i)))
+    episodes = {"other": {"0.5": [{"speed_error": 0.1, "forward_speed": 0.5, "fell": False}]}}
+    other = out / "other" / "cpg-actor"
+    other.mkdir(parents=True)
+    (other / "seed20.md").write_text("# report\n\n```json\n" + json.dumps(episodes) + "\n```\n")
+    walk = tmp_path / "time_to_walk_grid.json"
+    walk.write_text(json.dumps(
+        [{"agent": a, "seed": s, "start_wall": 0.0, "wall": w * (1 + 0.1 * s), "start_steps": 0,
+          "steps": 1000, "reached": True} for s in (20, 21, 22)
+         for a, w in (("cpg-actor", 10.0), ("mlp-field", 100.0))]))  # fmt: skip
+    done = run(RESULTS / "go1-omni" / "analysis.py", str(out), "--time-to-walk", str(walk))
+    assert done.returncode == 0, done.stderr
+    result = json.loads((out / "analysis.json").read_text())
+    assert len(result["tests"]) == 12
+    assert result["best"]["linear-velocity error (m/s)"] == "cpg-actor"
+    beyond = [t for t in result["tests"] if t["group"] == "cpg-actor beyond its start"]
+    assert [t["verdict"] for t in beyond] == ["yes", "yes"]
+    goals = result["targets"]["cpg-actor"]
+    assert goals["lin_vel_error"]["met"] and goals["yaw_rate_error"]["met"]
+    assert not result["targets"]["mlp-field"]["lin_vel_error"]["met"]
+    assert goals["other_model"]["met"] and "other_model" not in result["targets"]["mlp-field"]
+    assert result["time_to_walk"]["met"] and result["time_to_walk"]["ratio"] > 9
+    assert "**Pick `cpg-actor`**" in done.stdout
+
+
+def test_the_go1_analysis_says_which_evaluation_is_missing(tmp_path):
+    done = run(RESULTS / "go1-omni" / "analysis.py", str(tmp_path))
+    assert done.returncode != 0
+    assert "2 or more seedS/grid.json needed, found 0" in done.stderr
