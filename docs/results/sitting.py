@@ -1,0 +1,129 @@
+"""Carry a reproduction's runs from one sitting (machine) to the next: each finished run's
+logs, stage evaluations, traces and config, without checkpoints or TensorBoard files; with
+``--unfinished``, each run still training too, with the few checkpoints it needs to go on.
+
+    python docs/results/sitting.py save OUT ARCHIVE [--unfinished]
+    python docs/results/sitting.py restore ARCHIVE OUT
+
+``ARCHIVE`` is a folder of the user's (e.g. under the git-ignored ``results/``). ``save`` writes
+``ARCHIVE/VARIANT/seedS.tar.gz`` for every finished run of ``OUT`` that has none yet, and
+copies ``OUT/reproduce.yaml`` and ``OUT/transfer.json`` (run ``cpg-actor transfer OUT --add``
+first, while the checkpoints are there). With ``--unfinished``, an unfinished run goes to
+``ARCHIVE/VARIANT/seedS.partial.tar.gz`` (replaced at each save, removed once the run's
+finished archive is written) with the checkpoints ``cpg-actor train --resume`` and the stage
+evaluations need: the one before the first update, those nearest the stages its training has
+passed (``reproduce.yaml``'s ``stage_fractions``) and the newest. ``restore`` unpacks each
+archived run into ``OUT/runs`` where that run directory does not exist (a finished archive
+before a partial one), and copies the two files where ``OUT`` has none, so that the same
+``cpg-actor reproduce`` command skips the finished runs, resumes the partial ones and trains the
+rest. Nothing that exists is overwritten.
+
+The trio's own archives (``docs/results/trio-20M``) are in git history, at
+``docs/results/trio-20M/runs`` of commit 2d29b10 (its README says how to restore them).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import tarfile
+import tempfile
+from pathlib import Path
+
+import yaml
+
+from cpg_actor.config import TrainConfig
+from cpg_actor.experiments.execute import list_checkpoints, select_stage_checkpoints
+from cpg_actor.experiments.plan import STAGE_FRACTIONS
+from cpg_actor.experiments.results import Results
+
+SKIPPED = {"checkpoints", "tensorboard", ".lock"}
+FILES = ("reproduce.yaml", "transfer.json", ".cpg-actor-run")  # the last: the project's marker
+PARTIAL = ".partial.tar.gz"
+
+
+def kept_checkpoints(run_dir: Path, fractions: tuple[float, ...]) -> list[Path]:
+    """An unfinished run's checkpoints to carry: its first, the nearest to each stage its
+    training has passed, the newest numbered one and ``last.pt``."""
+    numbered = list_checkpoints(run_dir)
+    if not numbered:
+        return []
+    planned = TrainConfig.load(run_dir / "config.yaml").num_iterations
+    newest = max(numbered)
+    passed = tuple(f for f in fractions if f * planned <= newest)
+    kept = {numbered[min(numbered)], numbered[newest]}
+    if passed:
+        kept |= {path for _, _, path in select_stage_checkpoints(numbered, planned, passed)}
+    last = run_dir / "checkpoints" / "last.pt"
+    return sorted(kept | ({last} if last.is_file() else set()))
+
+
+def _pack(run_dir: Path, target: Path, checkpoints: list[Path]) -> None:
+    target.parent.mkdir(parents=True, exist_ok=True)
+    handle, tmp = tempfile.mkstemp(dir=target.parent, suffix=".tmp")
+    os.close(handle)
+    with tarfile.open(tmp, "w:gz") as tar:
+        for path in sorted(run_dir.iterdir()):
+            if path.name not in SKIPPED:
+                tar.add(path, arcname=path.name)
+        for path in checkpoints:
+            tar.add(path, arcname=f"checkpoints/{path.name}")
+    os.replace(tmp, target)
+
+
+def save(out: Path, archive: Path, unfinished: bool = False) -> None:
+    settings = out / "reproduce.yaml"
+    saved = yaml.safe_load(settings.read_text()) if settings.is_file() else {}
+    fractions = tuple((saved or {}).get("settings", {}).get("stage_fractions") or STAGE_FRACTIONS)
+    for run in (run for runs in Results.load(out).runs.values() for run in runs):
+        target = archive / run.variant / f"{run.path.name}.tar.gz"
+        partial = archive / run.variant / f"{run.path.name}{PARTIAL}"
+        if run.finished and not target.exists():
+            _pack(run.path, target, [])
+            print(f"saved {target}")
+        if run.finished and partial.exists():
+            partial.unlink()  # this script's own, superseded by the finished archive
+        elif unfinished and not run.finished:
+            checkpoints = kept_checkpoints(run.path, fractions)
+            if checkpoints:
+                _pack(run.path, partial, checkpoints)
+                print(f"saved {partial} ({len(checkpoints)} checkpoints)")
+    for name in FILES:
+        if (out / name).is_file():
+            shutil.copyfile(out / name, archive / name)
+
+
+def restore(archive: Path, out: Path) -> None:
+    packed = sorted(archive.glob("*/seed*.tar.gz"), key=lambda p: p.name.endswith(PARTIAL))
+    for path in packed:  # the finished archives first
+        seed = path.name.removesuffix(PARTIAL).removesuffix(".tar.gz")
+        run_dir = out / "runs" / path.parent.name / seed
+        if run_dir.exists():
+            print(f"kept {run_dir} (exists)")
+            continue
+        run_dir.parent.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(dir=run_dir.parent, prefix=".restore-"))
+        tmp.chmod(0o755)  # mkdtemp makes it private; a run directory is not
+        with tarfile.open(path) as tar:
+            tar.extractall(tmp, filter="data")
+        tmp.rename(run_dir)
+        print(f"restored {run_dir}" + (" (unfinished: the same command resumes it)"
+                                        if path.name.endswith(PARTIAL) else ""))  # fmt: skip
+    for name in FILES:
+        if (archive / name).is_file() and not (out / name).exists():
+            shutil.copyfile(archive / name, out / name)
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("action", choices=("save", "restore"))
+    parser.add_argument("source", type=Path, help="save: OUT; restore: ARCHIVE")
+    parser.add_argument("target", type=Path, help="save: ARCHIVE; restore: OUT")
+    parser.add_argument("--unfinished", action="store_true",
+                        help="save: the runs in training too, with their checkpoints")  # fmt: skip
+    args = parser.parse_args()
+    if args.action == "save":
+        save(args.source, args.target, args.unfinished)
+    else:
+        restore(args.source, args.target)

@@ -1,0 +1,71 @@
+"""docs/results/sitting.py: a reproduction's runs carried from one machine to the next, the
+finished ones without checkpoints, the unfinished ones with the few a resume and the stage
+evaluations need; nothing that exists is overwritten."""
+
+import importlib.util
+import json
+import shutil
+import tarfile
+from pathlib import Path
+
+import pytest
+import yaml
+
+from cpg_actor.experiments.execute import MARKER, trained_iteration
+
+SCRIPT = Path(__file__).resolve().parents[1] / "docs" / "results" / "sitting.py"
+
+
+@pytest.fixture(scope="module")
+def sitting():
+    spec = importlib.util.spec_from_file_location("sitting", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    """A tiny run of 6 iterations with a checkpoint after each."""
+    from tiny import trained_run  # tests/tiny.py
+
+    return trained_run(tmp_path_factory.mktemp("run") / "seed0", "mlp", total_steps=96,
+                       checkpoint_interval=1)  # fmt: skip
+
+
+def test_an_unfinished_run_is_carried_with_the_checkpoints_it_needs(sitting, trained, tmp_path):
+    out = tmp_path / "out"
+    run = out / "runs" / "mlp" / "seed0"
+    shutil.copytree(trained, run)
+    config = yaml.safe_load((run / "config.yaml").read_text())
+    config["total_steps"] = 960  # planned 60 iterations: 6 done, the first stage (1/60) passed
+    (run / "config.yaml").write_text(yaml.safe_dump(config))
+    kept = [p.name for p in sitting.kept_checkpoints(run, (1 / 60, 1 / 3, 1.0))]
+    assert kept == ["iter_000000.pt", "iter_000001.pt", "iter_000006.pt", "last.pt"]
+
+    archive = tmp_path / "archive"
+    sitting.save(out, archive)  # without --unfinished: nothing to carry
+    assert not (archive / "mlp").exists()
+    sitting.save(out, archive, unfinished=True)
+    assert (archive / "mlp" / "seed0.partial.tar.gz").is_file()
+
+    again = tmp_path / "again"
+    sitting.restore(archive, again)
+    restored = again / "runs" / "mlp" / "seed0"
+    assert sorted(p.name for p in (restored / "checkpoints").iterdir()) == kept
+    assert trained_iteration(restored) == trained_iteration(run) == 6
+    assert (restored / "metrics.jsonl").read_bytes() == (run / "metrics.jsonl").read_bytes()
+
+    # finished: its archive has no checkpoints and replaces the partial one
+    (run / MARKER).write_text(json.dumps({"status": "done"}))
+    sitting.save(out, archive, unfinished=True)
+    assert not (archive / "mlp" / "seed0.partial.tar.gz").exists()
+
+    with tarfile.open(archive / "mlp" / "seed0.tar.gz") as tar:
+        names = tar.getnames()
+    assert MARKER in names and not any(n.startswith("checkpoints") for n in names)
+
+    # a run directory that exists is kept as it is
+    (restored / "metrics.jsonl").write_text("mine\n")
+    sitting.restore(archive, again)
+    assert (restored / "metrics.jsonl").read_text() == "mine\n"
