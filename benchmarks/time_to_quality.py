@@ -47,7 +47,9 @@ defaults otherwise: ``n_steps`` 2,048 per env), with the same budget, target and
 The physics ceiling (``mujoco.rollout``, :func:`time_to_hop.ceiling`) is measured in the same
 run at each env count used. Runs go one at a time, each project run and search in a fresh
 process; time is training wall time (collection and update, compilation included,
-evaluations excluded).
+evaluations excluded). ``--resume`` goes on from a run cut off part way (its searches and
+finished (method, seed) runs are saved after each, in ``OUTPUT`` with ``.partial.json``); the
+report names the machines when a resumed run moved.
 """
 
 from __future__ import annotations
@@ -353,6 +355,56 @@ def summarize(run: dict, search: dict | None, target: Target) -> dict:
             "best_apex": best[-1]["apex"] if best else math.nan}  # fmt: skip
 
 
+class State:
+    """A cut-off run's progress, to go on from with ``--resume``: the command's arguments, each
+    search (its gait file's text with it) and each finished (method, seed) result, in
+    ``path``, rewritten after each (atomically)."""
+
+    def __init__(self, path: Path, arguments: list[str]) -> None:
+        self.path = path
+        self.data: dict = {"arguments": arguments, "searches": {}, "results": {}}
+
+    def load(self) -> None:
+        """ValueError, one line, where there is nothing to go on from or another command
+        made it."""
+        if not self.path.is_file():
+            raise ValueError(f"--resume: no {self.path} to go on from (a run of this command "
+                             "writes it after each run)")  # fmt: skip
+        saved = json.loads(self.path.read_text())
+        if saved.get("arguments") != self.data["arguments"]:
+            raise ValueError(f"--resume: {self.path} was made by another command "
+                             f"({' '.join(saved.get('arguments', []))}); give the same "
+                             "arguments")  # fmt: skip
+        self.data = saved
+
+    def _save(self) -> None:
+        from cpg_actor.files import atomic_write_text
+
+        atomic_write_text(json.dumps(self.data) + "\n", self.path)
+
+    def search(self, budget: int | None, path: str) -> dict | None:
+        """The saved search of ``budget``, its gait written to ``path``; None if not saved."""
+        saved = self.data["searches"].get(str(budget))
+        if saved is None:
+            return None
+        Path(path).write_text(saved["gait_text"])
+        return {**{k: v for k, v in saved.items() if k != "gait_text"}, "gait": path}
+
+    def add_search(self, budget: int | None, search: dict) -> None:
+        self.data["searches"][str(budget)] = {
+            **search,
+            "gait_text": Path(search["gait"]).read_text(),
+        }
+        self._save()
+
+    def result(self, label: str, seed: int) -> dict | None:
+        return next((r for r in self.data["results"].get(label, []) if r["seed"] == seed), None)
+
+    def add_result(self, label: str, result: dict) -> None:
+        self.data["results"].setdefault(label, []).append(result)
+        self._save()
+
+
 def kilo(steps: float) -> str:
     return f"{steps / 1000:,.0f}k"
 
@@ -563,6 +615,12 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--ceiling-steps", type=positive_int, default=50_000)
     parser.add_argument("--output", default=OUTPUT)
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="go on from the runs and searches an earlier, cut-off run of the same command "
+        "saved (OUTPUT with .partial.json; written after each run, removed at the end)",
+    )
     args = parser.parse_args(argv)  # fmt: skip
     if not (math.isfinite(args.target_return) and math.isfinite(args.target_apex)):
         parser.error("--target-return and --target-apex must be finite numbers")
@@ -615,16 +673,32 @@ def main(argv: list[str] | None = None) -> int:
             methods.append(Method(SB3_LABEL.format(n, "" if n == 1 else "s"), "sb3", "", n, None))
     results: dict[str, list[dict]] = {m.label: [] for m in methods}
     searches: dict[int | None, dict] = {}
+    state = State(output.with_suffix(".partial.json"), [a for a in argv if a != "--resume"])
+    if args.resume:
+        try:
+            state.load()
+        except ValueError as error:
+            parser.error(str(error))
+    elif state.path.exists():
+        parser.error(f"{state.path} holds an earlier run's progress: add --resume to go on "
+                     "from it, or delete it to start over")  # fmt: skip
     with tempfile.TemporaryDirectory(prefix="time_to_quality_") as directory:
         for budget in sorted({m.search_budget for m in methods if m.agent in searched},
                              key=lambda b: b or 0):  # fmt: skip
             path = str(Path(directory) / f"gait_{budget or 'file'}.yaml")
-            spec = SearchSpec(searched[0], args.preset, values, budget, path)
-            searches[budget] = in_fresh_process("--one-search", spec)
+            searches[budget] = state.search(budget, path)
+            if searches[budget] is None:
+                spec = SearchSpec(searched[0], args.preset, values, budget, path)
+                searches[budget] = in_fresh_process("--one-search", spec)
+                state.add_search(budget, searches[budget])
             print(f"search {budget or 'file'}: {searches[budget]['steps']:,} steps, "
                   f"{searches[budget]['wall']:.0f} s", flush=True)  # fmt: skip
         for seed in range(args.first_seed, args.first_seed + args.seeds):
             for method in methods:
+                done = state.result(method.label, seed)
+                if done is not None:
+                    results[method.label].append(done)
+                    continue
                 search = searches.get(method.search_budget) if method.agent in searched else None
                 if method.kind == "sb3":
                     run = sb3_run(seed, method.num_envs, values, args.budget, target,
@@ -636,7 +710,9 @@ def main(argv: list[str] | None = None) -> int:
                     spec = RunSpec(method.agent, args.preset, seed, values, args.budget, start,
                                    list(target), args.stop_at_target)  # fmt: skip
                     run = in_fresh_process("--one-run", spec)
-                results[method.label].append({**summarize(run, search, target), "seed": seed})
+                results[method.label].append({**summarize(run, search, target), "seed": seed,
+                                              "machine": cpu_model()})  # fmt: skip
+                state.add_result(method.label, results[method.label][-1])
                 hit = results[method.label][-1]["hit"]
                 print(
                     f"seed {seed} {method.label}: "
@@ -659,6 +735,14 @@ def main(argv: list[str] | None = None) -> int:
     provenance = (f"{measured(command)} on {cpu_model()}, {usable_cores()} usable cores "
                   f"(load {load_average()} at the end), torch {torch.__version__}; each "
                   "project run and search in a fresh process, one at a time.")  # fmt: skip
+    machines: dict[str, set[int]] = {}
+    for runs in results.values():
+        for run in runs:
+            machines.setdefault(run.get("machine", "not recorded"), set()).add(run["seed"])
+    if len(machines) > 1:  # resumed on another machine: its times are not the same clock's
+        provenance += " Resumed across machines: " + "; ".join(
+            f"seeds {', '.join(map(str, sorted(seeds)))} on {name}"
+            for name, seeds in machines.items()) + "."  # fmt: skip
     lines = report(methods, results, {b: s for b, s in searches.items()}, target, args,
                    sb3_note, start_note, ceilings, provenance, figure_path.name)  # fmt: skip
     figure_path.parent.mkdir(parents=True, exist_ok=True)
@@ -667,9 +751,19 @@ def main(argv: list[str] | None = None) -> int:
     from cpg_actor.files import atomic_write_text
 
     # per method and seed: the charged curve, its start and the first evaluation at the target
-    keys = ("seed", "curve", "start_steps", "start_wall", "hit", "best_return", "best_apex")
+    keys = (
+        "seed",
+        "machine",
+        "curve",
+        "start_steps",
+        "start_wall",
+        "hit",
+        "best_return",
+        "best_apex",
+    )
     atomic_write_text(json.dumps({m.label: [{k: r.get(k) for k in keys} for r in results[m.label]]
                                   for m in methods}), output.with_suffix(".json"))  # fmt: skip
+    state.path.unlink(missing_ok=True)  # this benchmark's own progress file, now in the JSON
     return 0
 
 

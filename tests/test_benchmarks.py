@@ -431,3 +431,44 @@ def test_time_to_quality_charges_the_search_and_the_warm_start():
         ttq.Method("`cpg-actor`", "project", "cpg-actor", 16, None), [charged, missed]
     )
     assert "| 1/2 |" in row and "**505k**" in row and "504k, 62 s" in row
+
+
+@pytest.mark.slow
+def test_time_to_quality_resumes_a_cut_off_run_without_redoing_what_it_saved(tmp_path, capsys):
+    """Cut off after its search and first run, the same command with --resume reruns neither
+    (the gait file comes back from the progress file), runs the rest and ends with every seed;
+    without --resume it refuses to start over that progress."""
+    ttq = benchmark("time_to_quality")
+    output = tmp_path / "ttq.md"
+    argv = ["--seeds", "2", "--first-seed", "4", "--agents", "mlp-warm", "--budget", "800",
+            "--search-budgets", "800", "--no-sb3", "--set", "ppo.compile=false", "--set",
+            "num_envs=2", "--set", "env.episode_steps=50", "--ceiling-steps", "1000",
+            "--output", str(output)]  # fmt: skip
+    real, calls = ttq.in_fresh_process, []
+
+    def cut_after_one_run(flag, spec):
+        calls.append(flag)
+        if calls.count("--one-run") == 2:
+            raise KeyboardInterrupt  # the session ends here
+        return real(flag, spec)
+
+    ttq.in_fresh_process = cut_after_one_run
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            ttq.main(argv)
+        partial = json.loads(output.with_suffix(".partial.json").read_text())
+        assert [r["seed"] for r in partial["results"]["`mlp-warm` (search 1k)"]] == [4]
+        with pytest.raises(SystemExit):
+            ttq.main(argv)  # the progress is there: --resume or delete it
+        assert "add --resume" in capsys.readouterr().err
+        calls.clear()
+        assert ttq.main([*argv, "--resume"]) == 0
+    finally:
+        ttq.in_fresh_process = real
+    assert calls == ["--one-run"]  # seed 5 only: no search, no seed 4 again
+    final = json.loads(output.with_suffix(".json").read_text())
+    assert [r["seed"] for r in final["`mlp-warm` (search 1k)"]] == [4, 5]
+    assert not output.with_suffix(".partial.json").exists()
+    with pytest.raises(SystemExit):
+        ttq.main([*argv[:3], "3", *argv[4:], "--resume"])  # other arguments, nothing to resume
+    assert "--resume: no" in capsys.readouterr().err
