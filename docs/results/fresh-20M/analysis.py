@@ -148,15 +148,8 @@ def figure(data: dict[str, dict[str, list[float]]], path: Path) -> None:
 
     fig, axes = plt.subplots(1, len(METRICS), figsize=(15, 3.6), constrained_layout=True)
     for ax, (name, (_, higher, log)) in zip(axes, METRICS.items(), strict=True):
-        for i, v in enumerate(VARIANTS):
-            values = np.asarray(data[name][v], dtype=float)
-            centre = math.exp(np.nanmean(np.log(values))) if log else np.nanmean(values)
-            ax.hlines(centre, i - 0.3, i + 0.3, color="C0" if v == "cpg-actor" else "0.3", lw=2.5)
-            ax.plot(np.full(len(values), i), values, "k.", ms=5)
-        ax.set_xticks(range(len(VARIANTS)), VARIANTS, rotation=30, ha="right", fontsize=8)
-        if log:
-            ax.set_yscale("log")
-        ax.set_title(f"{name} ({'higher' if higher else 'lower'} is better)", fontsize=9)
+        columns = [(v, data[name][v], "C0" if v == "cpg-actor" else "0.3") for v in VARIANTS]
+        f.seed_panel(ax, columns, log, f"{name} ({'higher' if higher else 'lower'} is better)")
     fig.suptitle("The hopper's warm-started agents at 20M steps, fresh seeds 15-19 (line: "
                  "mean, geometric on log axes; dots: seeds)", fontsize=10)  # fmt: skip
     save_figure(fig, path)

@@ -169,17 +169,10 @@ def figure(
         columns = [(v, data[name][v]) for v in VARIANTS]
         columns += [(f"mlp-warm {t['label'].split('(')[1].rstrip(')')}", t["mlp"])
                     for t in matched if t["group"] == name]  # fmt: skip
-        for i, (label, values) in enumerate(columns):
-            values = np.asarray(values, dtype=float)
-            centre = math.exp(np.nanmean(np.log(values))) if log else np.nanmean(values)
-            colour = "C0" if label == "cpg-actor" else "C1" if i >= len(VARIANTS) else "0.3"
-            ax.hlines(centre, i - 0.3, i + 0.3, color=colour, lw=2.5)
-            ax.plot(np.full(len(values), i), values, "k.", ms=5)
-        ax.set_xticks(range(len(columns)), [c[0] for c in columns], rotation=60, ha="right",
-                      fontsize=8)  # fmt: skip
-        if log:
-            ax.set_yscale("log")
-        ax.set_title(f"{name} ({'higher' if higher else 'lower'} is better)", fontsize=9)
+        coloured = [(label, values, "C0" if label == "cpg-actor" else
+                     "C1" if i >= len(VARIANTS) else "0.3")
+                    for i, (label, values) in enumerate(columns)]  # fmt: skip
+        f.seed_panel(ax, coloured, log, f"{name} ({'higher' if higher else 'lower'} is better)")
     fig.suptitle("The hopper's agents at 2M steps, fresh seeds 10-14 (line: mean, geometric "
                  "on log axes; dots: seeds)", fontsize=10)  # fmt: skip
     save_figure(fig, path)

@@ -102,3 +102,21 @@ def table(tests: Sequence[dict[str, Any]]) -> list[str]:
             f"{t['verdict']} |"
         )
     return rows
+
+
+def seed_panel(ax: Any, columns: Sequence[tuple[str, Sequence[float], str]], log: bool,
+               title: str) -> None:  # fmt: skip
+    """One metric's panel of a results figure: per column ``(label, per-seed values, colour)``
+    each seed as a dot and the mean as a line (geometric on a log axis, where the tests take
+    logarithms)."""
+    for i, (_, values, colour) in enumerate(columns):
+        values = np.asarray(values, dtype=float)
+        centre = math.exp(np.nanmean(np.log(values))) if log else np.nanmean(values)
+        ax.hlines(centre, i - 0.3, i + 0.3, color=colour, lw=2.5)
+        ax.plot(np.full(len(values), i), values, "k.", ms=5)
+    rotation = 60 if len(columns) > 4 else 30
+    ax.set_xticks(range(len(columns)), [c[0] for c in columns], rotation=rotation, ha="right",
+                  fontsize=8)  # fmt: skip
+    if log:
+        ax.set_yscale("log")
+    ax.set_title(title, fontsize=9)
