@@ -159,3 +159,21 @@ def test_each_worker_gets_its_share_of_the_cores(tmp_path, monkeypatch):
     (task,) = plan.build_tasks(mine, tmp_path, workers=4)
     sets = [task.train_args[i + 1] for i, a in enumerate(task.train_args) if a == "--set"]
     assert "update_threads=2" not in sets and "update_threads=3" in sets
+
+
+@pytest.mark.slow
+def test_a_quadruped_reproduction_ends_cleanly_without_the_hoppers_report(tmp_path, capsys):
+    """On the Go1 (the omni task, the field's MLP) the runs train and are evaluated at their
+    stages; the hopper's report and open-loop floor are not attempted, and the command ends
+    with 0."""
+    out = tmp_path / "go1"
+    argv = ["reproduce", "--set", "robot=go1", *TINY, "--seeds", "1",
+            "--variants", "mlp-field", "--preset", "omni",
+            "--workers", "1", "--out", str(out)]  # fmt: skip
+    argv = [a.replace("env.episode_steps=10", "env.episode_seconds=0.2") for a in argv]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "the report and its claims are the paper's hopper's" in text
+    marker = json.loads((out / "runs" / "mlp-field" / "seed0" / "reproduce_run.json").read_text())
+    assert marker["status"] == "done"
+    assert not (out / "report.md").exists()

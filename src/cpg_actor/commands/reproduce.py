@@ -202,10 +202,19 @@ def _run(args: argparse.Namespace, settings, workers: int, out: Path, tasks: lis
         if result.get("error"):
             line += f": {result['error']}"
         print(line)
-    print("reproduce: the open-loop grid floor (960 constant CPG parameter sets)", flush=True)
-    ensure_floor(out, settings)
-    report = write_report(out, results)
-    print(f"report {report}; figures in {out / 'figures'}")
+    from cpg_actor.experiments.plan import resolve_config
+    from cpg_actor.robots.registry import get_robot
+
+    robot = get_robot(resolve_config(settings, settings.variants[0]).robot)
+    if robot.paper is None:  # the report and its floor are the paper's study of its robot
+        print(f"reproduce: runs of {robot.name} in {out / 'runs'}; the report and its claims are "
+              "the paper's hopper's (evaluate these runs with `cpg-actor eval RUN`, or `--grid` "
+              "on a quadruped)")  # fmt: skip
+    else:
+        print("reproduce: the open-loop grid floor (960 constant CPG parameter sets)", flush=True)
+        ensure_floor(out, settings)
+        report = write_report(out, results)
+        print(f"report {report}; figures in {out / 'figures'}")
     failed = [r for r in results if r["status"] == "failed"]
     if failed:
         print(
