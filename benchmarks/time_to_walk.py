@@ -537,6 +537,7 @@ def main(argv: list[str] | None = None) -> int:
             cpu_start = cpu_times()
             run = tree_run(spec)
             run["stolen"] = stolen_share(cpu_start, cpu_times())  # a neighbour's load
+            run["machine"] = cpu_model()  # the clock its times were read on
             runs.append((agent, seed, run))
             print(f"seed {seed} {agent}: {json.dumps(run)}", flush=True)
             provenance = (

@@ -6,11 +6,14 @@ input is one line."""
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+from cpg_actor.robustness.protocol import json_text
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULTS = ROOT / "docs" / "results"
@@ -114,17 +117,32 @@ def test_the_go1_analysis_reads_its_folder_and_judges_the_targets(tmp_path):
         for i, seed in enumerate((20, 21, 22)):
             folder = out / "grid" / variant / f"seed{seed}"
             folder.mkdir(parents=True)
-            (folder / "grid.json").write_text(json.dumps(fake_grid(error + 0.005 * i)))
+            (folder / "grid.json").write_text(json_text(fake_grid(error + 0.005 * i)))
     episodes = {"other": {"0.5": [{"speed_error": 0.1, "forward_speed": 0.5, "fell": False}]}}
     other = out / "other" / "cpg-actor"
     other.mkdir(parents=True)
     (other / "seed20.md").write_text("# report\n\n```json\n" + json.dumps(episodes) + "\n```\n")
     walk = tmp_path / "time_to_walk_grid.json"
-    walk.write_text(json.dumps(
-        [{"agent": a, "seed": s, "start_wall": 0.0, "wall": w * (1 + 0.1 * s), "start_steps": 0,
-          "steps": 1000, "reached": True} for s in (20, 21, 22)
-         for a, w in (("cpg-actor", 10.0), ("mlp-field", 100.0))]))  # fmt: skip
-    done = run(RESULTS / "go1-omni" / "analysis.py", str(out), "--time-to-walk", str(walk))
+    # the CPG-Actor's seed 20 walks before its first update: counted at the next evaluation
+    runs = [
+        {
+            "agent": a,
+            "seed": s,
+            "start_wall": 0.0,
+            "wall": (w + s - 20) * (s > 20),
+            "start_steps": 0,
+            "steps": 1000 * (s - 20),
+            "reached": True,
+            "history": [{"steps": 0, "wall": 0.0}, {"steps": 40960, "wall": w}],
+        }
+        for s in (20, 21, 22, 23)
+        for a, w in (("cpg-actor", 10.0), ("mlp-field", 100.0))
+    ]
+    walk.write_text(json.dumps(runs[:4]))
+    more = tmp_path / "time_to_walk_grid-2.json"  # another sitting's part
+    more.write_text(json.dumps(runs[4:]))
+    done = run(RESULTS / "go1-omni" / "analysis.py", str(out), "--time-to-walk", str(walk),
+               str(more))  # fmt: skip
     assert done.returncode == 0, done.stderr
     result = json.loads((out / "analysis.json").read_text())
     assert len(result["tests"]) == 12
@@ -135,8 +153,15 @@ def test_the_go1_analysis_reads_its_folder_and_judges_the_targets(tmp_path):
     assert goals["lin_vel_error"]["met"] and goals["yaw_rate_error"]["met"]
     assert not result["targets"]["mlp-field"]["lin_vel_error"]["met"]
     assert goals["other_model"]["met"] and "other_model" not in result["targets"]["mlp-field"]
-    assert result["time_to_walk"]["met"] and result["time_to_walk"]["ratio"] > 9
+    walked = result["time_to_walk"]
+    assert walked["times"]["cpg-actor"]["wall"] == [10.0, 11.0, 12.0, 13.0]
+    assert walked["met"] and walked["ratio"] > 8
+    assert walked["test"]["verdict"] == "yes"  # 10x, tested against 5x
     assert "**Pick `cpg-actor`**" in done.stdout
+    assert "| the CPG-Actor's start |" in done.stdout and "recovery (s) nan" in done.stdout
+    shutil.rmtree(out / "grid" / "start" / "seed22")  # a start not evaluated: no pairing
+    done = run(RESULTS / "go1-omni" / "analysis.py", str(out))
+    assert done.returncode != 0 and "every variant and the start need the same seeds" in done.stderr
 
 
 def test_the_go1_analysis_says_which_evaluation_is_missing(tmp_path):
