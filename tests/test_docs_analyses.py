@@ -42,6 +42,16 @@ def test_the_20M_analysis_judges_the_family_of_its_protocol(tmp_path):
     assert (tmp_path / "c.png").stat().st_size > 0
 
 
+def test_the_20M_analysis_waits_for_every_run_to_finish(tmp_path):
+    summary = json.loads((RESULTS / "fresh-2M" / "summary.json").read_text())
+    summary["variants"]["mlp-warm"]["finished"] = 4
+    path = tmp_path / "summary.json"
+    path.write_text(json.dumps(summary))
+    done = run(RESULTS / "fresh-20M" / "analysis.py", str(path))
+    assert done.returncode != 0 and "runs not finished yet" in done.stderr
+    assert "'mlp-warm': 4" in done.stderr
+
+
 def test_the_20M_analysis_refuses_a_summary_without_its_agents(tmp_path):
     summary = tmp_path / "summary.json"
     summary.write_text(json.dumps({"variants": {"mlp": {"per_seed": {"final_return": [1, 2]}}}}))

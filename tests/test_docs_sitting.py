@@ -41,7 +41,7 @@ def test_an_unfinished_run_is_carried_with_the_checkpoints_it_needs(sitting, tra
     config["total_steps"] = 960  # planned 60 iterations: 6 done, the first stage (1/60) passed
     (run / "config.yaml").write_text(yaml.safe_dump(config))
     kept = [p.name for p in sitting.kept_checkpoints(run, (1 / 60, 1 / 3, 1.0))]
-    assert kept == ["iter_000000.pt", "iter_000001.pt", "iter_000006.pt", "last.pt"]
+    assert kept == ["iter_000000.pt", "iter_000001.pt", "iter_000006.pt"]
 
     archive = tmp_path / "archive"
     sitting.save(out, archive)  # without --unfinished: nothing to carry
@@ -55,6 +55,15 @@ def test_an_unfinished_run_is_carried_with_the_checkpoints_it_needs(sitting, tra
     assert sorted(p.name for p in (restored / "checkpoints").iterdir()) == kept
     assert trained_iteration(restored) == trained_iteration(run) == 6
     assert (restored / "metrics.jsonl").read_bytes() == (run / "metrics.jsonl").read_bytes()
+
+    # a run started over (a sitting that did not restore) does not replace a further archive
+    behind = tmp_path / "behind"
+    shutil.copytree(out, behind)
+    for name in ("iter_000003.pt", "iter_000004.pt", "iter_000005.pt", "iter_000006.pt"):
+        (behind / "runs" / "mlp" / "seed0" / "checkpoints" / name).unlink()
+    sitting.save(behind, archive, unfinished=True)
+    assert sitting.archived_iteration(archive / "mlp" / "seed0.partial.tar.gz") == 6
+    assert not list(archive.rglob("*.tmp"))
 
     # finished: its archive has no checkpoints and replaces the partial one
     (run / MARKER).write_text(json.dumps({"status": "done"}))

@@ -12,7 +12,8 @@ first, while the checkpoints are there). With ``--unfinished``, an unfinished ru
 ``ARCHIVE/VARIANT/seedS.partial.tar.gz`` (replaced at each save, removed once the run's
 finished archive is written) with the checkpoints ``cpg-actor train --resume`` and the stage
 evaluations need: the one before the first update, those nearest the stages its training has
-passed (``reproduce.yaml``'s ``stage_fractions``) and the newest. ``restore`` unpacks each
+passed (``reproduce.yaml``'s ``stage_fractions``) and the newest; a partial archive further
+along than the run (a sitting that forgot to restore) is kept. ``restore`` unpacks each
 archived run into ``OUT/runs`` where that run directory does not exist (a finished archive
 before a partial one), and copies the two files where ``OUT`` has none, so that the same
 ``cpg-actor reproduce`` command skips the finished runs, resumes the partial ones and trains the
@@ -45,31 +46,41 @@ PARTIAL = ".partial.tar.gz"
 
 def kept_checkpoints(run_dir: Path, fractions: tuple[float, ...]) -> list[Path]:
     """An unfinished run's checkpoints to carry: its first, the nearest to each stage its
-    training has passed, the newest numbered one and ``last.pt``."""
+    training has passed and the newest (``train --resume`` starts from it)."""
     numbered = list_checkpoints(run_dir)
     if not numbered:
         return []
     planned = TrainConfig.load(run_dir / "config.yaml").num_iterations
     newest = max(numbered)
     passed = tuple(f for f in fractions if f * planned <= newest)
-    kept = {numbered[min(numbered)], numbered[newest]}
+    kept = {numbered[min(numbered)], numbered[newest]}  # the newest: what a resume starts from
     if passed:
         kept |= {path for _, _, path in select_stage_checkpoints(numbered, planned, passed)}
-    last = run_dir / "checkpoints" / "last.pt"
-    return sorted(kept | ({last} if last.is_file() else set()))
+    return sorted(kept)
+
+
+def archived_iteration(partial: Path) -> int:
+    """The newest checkpoint's iteration in a partial archive (-1: none)."""
+    with tarfile.open(partial) as tar:
+        numbers = [int(name[len("checkpoints/iter_"):-3]) for name in tar.getnames()
+                   if name.startswith("checkpoints/iter_") and name.endswith(".pt")]  # fmt: skip
+    return max(numbers, default=-1)
 
 
 def _pack(run_dir: Path, target: Path, checkpoints: list[Path]) -> None:
     target.parent.mkdir(parents=True, exist_ok=True)
     handle, tmp = tempfile.mkstemp(dir=target.parent, suffix=".tmp")
     os.close(handle)
-    with tarfile.open(tmp, "w:gz") as tar:
-        for path in sorted(run_dir.iterdir()):
-            if path.name not in SKIPPED:
-                tar.add(path, arcname=path.name)
-        for path in checkpoints:
-            tar.add(path, arcname=f"checkpoints/{path.name}")
-    os.replace(tmp, target)
+    try:
+        with tarfile.open(tmp, "w:gz") as tar:
+            for path in sorted(run_dir.iterdir()):
+                if path.name not in SKIPPED:
+                    tar.add(path, arcname=path.name)
+            for path in checkpoints:
+                tar.add(path, arcname=f"checkpoints/{path.name}")
+        os.replace(tmp, target)
+    finally:
+        Path(tmp).unlink(missing_ok=True)  # left only where packing failed
 
 
 def save(out: Path, archive: Path, unfinished: bool = False) -> None:
@@ -86,7 +97,11 @@ def save(out: Path, archive: Path, unfinished: bool = False) -> None:
             partial.unlink()  # this script's own, superseded by the finished archive
         elif unfinished and not run.finished:
             checkpoints = kept_checkpoints(run.path, fractions)
-            if checkpoints:
+            newest = int(checkpoints[-1].stem.removeprefix("iter_")) if checkpoints else -1
+            if partial.exists() and archived_iteration(partial) > newest:
+                print(f"kept {partial}: it is further along (iteration "
+                      f"{archived_iteration(partial)} > {newest}); restore it first")  # fmt: skip
+            elif checkpoints:
                 _pack(run.path, partial, checkpoints)
                 print(f"saved {partial} ({len(checkpoints)} checkpoints)")
     for name in FILES:

@@ -60,6 +60,14 @@ def analyse(summary: dict[str, Any]) -> dict[str, Any]:
     if missing:
         raise ValueError(f"the summary lacks 2 or more seeds of {missing}; it holds "
                          f"{sorted(summary['variants'])}")  # fmt: skip
+    unfinished = {
+        v: summary["variants"][v].get("finished")
+        for v in VARIANTS
+        if summary["variants"][v].get("finished") != summary["variants"][v]["seeds"]
+    }
+    if unfinished:  # runs carried across sittings: judge only the finished comparison
+        raise ValueError(f"runs not finished yet (finished per variant: {unfinished} of "
+                         f"{summary['variants'][VARIANTS[0]]['seeds']} seeds)")  # fmt: skip
     data = {name: {v: per_seed(summary, v, key) for v in VARIANTS}
             for name, (key, _, _) in METRICS.items()}  # fmt: skip
     tests: list[dict[str, Any]] = []
