@@ -374,3 +374,12 @@ def test_bound_share_counts_feedback_at_its_bound_and_variability_flat_signals()
     moving = flat + 2.0 * np.sin(2 * np.pi * t)[:, None, None]
     assert variability(flat) == pytest.approx(0.0, abs=1e-9)
     assert variability(moving) == pytest.approx(2.0 / np.sqrt(2), rel=0.02)
+
+
+def test_numbers_in_tables_read_without_an_exponent_below_100000():
+    assert m.three_figures(1083.4) == "1083"
+    assert m.three_figures(-12345.6) == "-12346"
+    assert m.three_figures(0.000172) == "0.000172"
+    assert m.three_figures(926.2) == "926"
+    assert m.three_figures(2.5e5) == "2.5e+05"
+    assert str(m.Interval(1083.4, 1070.2, 1090.0)) == "1083 [1070, 1090]"

@@ -248,7 +248,7 @@ def main() -> None:
         print(f"| variant | {kind} [95 % CI] | per seed |\n| --- | ---: | --- |")
         for v in VARIANTS:
             ci = f.mean_ci(data[name][v], log)
-            seeds = ", ".join(f"{x:.3g}" for x in data[name][v])
+            seeds = ", ".join(m.three_figures(x) for x in data[name][v])
             print(f"| `{v}`{' (best)' if v == best[name] else ''} | {ci} | {seeds} |")
         group = [t for t in tests if t["group"] == name]
         beaten = [t for t in group if t["passed"]]

@@ -201,7 +201,7 @@ def time_to_walk(paths: list[Path]) -> dict[str, Any] | None:
 
 
 def shown(values: list[float]) -> str:
-    return ", ".join(f"{x:.3g}" for x in values)
+    return ", ".join(m.three_figures(x) for x in values)
 
 
 def report(data, tests, best, goals, walk, seeds) -> None:

@@ -232,6 +232,12 @@ def enough_seeds(*groups: Sequence[float] | None) -> bool:
     return all(seeds_with_data(group) >= MIN_SEEDS for group in groups)
 
 
+def three_figures(value: float) -> str:
+    """Three significant figures, without an exponent for 1,000 to 99,999 (a return reads
+    1083, not 1.08e+03)."""
+    return f"{value:.0f}" if 1e3 <= abs(value) < 1e5 else f"{value:.3g}"
+
+
 @dataclass
 class Interval:
     estimate: float
@@ -239,7 +245,8 @@ class Interval:
     high: float
 
     def __str__(self) -> str:
-        return f"{self.estimate:.3g} [{self.low:.3g}, {self.high:.3g}]"
+        low, high = three_figures(self.low), three_figures(self.high)
+        return f"{three_figures(self.estimate)} [{low}, {high}]"
 
 
 STATISTICS: dict[str, Callable[..., Any]] = {"mean": np.mean, "median": np.median}
