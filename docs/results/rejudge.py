@@ -42,7 +42,7 @@ from cpg_actor.robustness.summary import retention_scores, verdicts
 RESULTS = Path(__file__).resolve().parent
 # the reproductions whose reports state verdicts, in the order of docs/results/README.md
 REPRODUCTIONS = ("repro-2M", "repro-2M-throughput-preset", "repro-20M", "pybullet-500k",
-                 "pybullet-2M", "fresh-2M", "decisive-2M", "trio-20M", "beyond-500k",
+                 "pybullet-2M", "fresh-2M", "fresh-20M", "decisive-2M", "trio-20M", "beyond-500k",
                  "randomized-2M", "mjx-500k")  # fmt: skip
 SUITES = ("robustness-2M", "randomized-2M")
 GO1_SUITE = "robustness-go1-2M"

@@ -4,7 +4,7 @@ folder (its ``summary.json``): per metric the variant with the best mean against
 Holm-corrected; next to each variant its 2M values from ``../fresh-2M`` (other seeds: shown,
 not tested).
 
-    cpg-actor report results/fresh-20M            # writes results/fresh-20M/summary.json
+    cpg-actor reproduce ...   # the protocol's; it writes results/fresh-20M/summary.json
     PYTHONPATH=src python docs/results/fresh-20M/analysis.py results/fresh-20M/summary.json \\
         --figure docs/results/fresh-20M/comparison.png > docs/results/fresh-20M/analysis.md
 
@@ -122,7 +122,7 @@ def report(result: dict[str, Any], summary: dict[str, Any], at_2m: dict[str, Any
         print(f"| variant | {kind} at 20M [95 % CI] | per seed | at 2M (fresh-2M) |")
         print("| --- | ---: | --- | ---: |")
         for v in VARIANTS:
-            seeds = ", ".join(f"{x:.3g}" for x in data[name][v])
+            seeds = ", ".join(m.three_figures(x) for x in data[name][v])
             earlier = f.mean_ci(per_seed(at_2m, v, key), log) if at_2m else None
             print(f"| `{v}`{' (best)' if v == best[name] else ''} | "
                   f"{f.mean_ci(data[name][v], log)} | {seeds} | {earlier or '-'} |")  # fmt: skip
@@ -157,7 +157,7 @@ def figure(data: dict[str, dict[str, list[float]]], path: Path) -> None:
     fig, axes = plt.subplots(1, len(METRICS), figsize=(15, 3.6), constrained_layout=True)
     for ax, (name, (_, higher, log)) in zip(axes, METRICS.items(), strict=True):
         columns = [(v, data[name][v], "C0" if v == "cpg-actor" else "0.3") for v in VARIANTS]
-        f.seed_panel(ax, columns, log, f"{name} ({'higher' if higher else 'lower'} is better)")
+        f.seed_panel(ax, columns, log, f"{name}\n({'higher' if higher else 'lower'} is better)")
     fig.suptitle("The hopper's warm-started agents at 20M steps, fresh seeds 15-19 (line: "
                  "mean, geometric on log axes; dots: seeds)", fontsize=10)  # fmt: skip
     save_figure(fig, path)
@@ -170,7 +170,8 @@ def main() -> None:
     parser.add_argument("--figure", type=Path, help="also draw the per-seed values (PNG)")
     args = parser.parse_args()
     if not args.summary.is_file():
-        sys.exit(f"{args.summary}: no such file; give the summary.json of `cpg-actor report`")
+        sys.exit(f"{args.summary}: no such file; give the summary.json that "
+                 "`cpg-actor reproduce` (or `cpg-actor figures`) writes")  # fmt: skip
     summary = json.loads(args.summary.read_text())
     try:
         result = analyse(summary)
