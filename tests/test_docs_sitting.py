@@ -78,3 +78,40 @@ def test_an_unfinished_run_is_carried_with_the_checkpoints_it_needs(sitting, tra
     (restored / "metrics.jsonl").write_text("mine\n")
     sitting.restore(archive, again)
     assert (restored / "metrics.jsonl").read_text() == "mine\n"
+
+
+def test_a_sweep_is_carried_setting_by_setting_and_its_command_goes_on(sitting, trained, tmp_path):
+    from cpg_actor.experiments import sweep
+    from cpg_actor.files import MARKER as PROJECT_MARKER
+    from cpg_actor.files import RESULTS, SWEEP, marker_kind, write_marker
+
+    out = tmp_path / "sweep"
+    out.mkdir()
+    write_marker(out, SWEEP)
+    for label in ("defaults", "ppo.lr=0.001"):
+        setting = out / label
+        shutil.copytree(trained, setting / "runs" / "mlp" / "seed0")
+        write_marker(setting, RESULTS)
+        (setting / "reproduce.yaml").write_text(yaml.safe_dump({"settings": {"seeds": 1}}))
+    (out / "defaults" / "runs" / "mlp" / "seed0" / MARKER).write_text('{"status": "done"}')
+
+    archive = tmp_path / "archive"
+    sitting.save(out, archive, unfinished=True)
+    assert marker_kind(archive) == SWEEP
+    assert (archive / "defaults" / "mlp" / "seed0.tar.gz").is_file()
+    assert (archive / "ppo.lr=0.001" / "mlp" / "seed0.partial.tar.gz").is_file()
+    assert oct((archive / "defaults" / "mlp" / "seed0.tar.gz").stat().st_mode & 0o777) == "0o644"
+
+    again = tmp_path / "again"
+    sitting.restore(archive, again)
+    assert marker_kind(again) == SWEEP and marker_kind(again / "defaults") == RESULTS
+    for label in ("defaults", "ppo.lr=0.001"):
+        restored = again / label / "runs" / "mlp" / "seed0"
+        assert trained_iteration(restored) == trained_iteration(
+            out / label / "runs" / "mlp" / "seed0"
+        )
+        assert (again / label / "reproduce.yaml").read_text() == (
+            out / label / "reproduce.yaml"
+        ).read_text()
+    sweep.prepare_out_dir(again)  # the same `cpg-actor sweep` command accepts the folder
+    assert (again / PROJECT_MARKER).read_bytes() == (out / PROJECT_MARKER).read_bytes()

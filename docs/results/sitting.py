@@ -1,6 +1,7 @@
 """Carry a reproduction's runs from one sitting (machine) to the next: each finished run's
 logs, stage evaluations, traces and config, without checkpoints or TensorBoard files; with
-``--unfinished``, each run still training too, with the few checkpoints it needs to go on.
+``--unfinished``, each run still training too, with the few checkpoints it needs to go on. A
+``cpg-actor sweep`` folder is carried the same way, one reproduction per setting.
 
     python docs/results/sitting.py save OUT ARCHIVE [--unfinished]
     python docs/results/sitting.py restore ARCHIVE OUT
@@ -17,7 +18,9 @@ along than the run (a sitting that forgot to restore) is kept. ``restore`` unpac
 archived run into ``OUT/runs`` where that run directory does not exist (a finished archive
 before a partial one), and copies the two files where ``OUT`` has none, so that the same
 ``cpg-actor reproduce`` command skips the finished runs, resumes the partial ones and trains the
-rest. Nothing that exists is overwritten.
+rest. Nothing that exists is overwritten. For a sweep's ``OUT`` (its marker says so) each
+setting's folder goes to ``ARCHIVE/SETTING`` with the sweep's marker beside them, and
+``restore`` remakes the sweep's folder, so that the same ``cpg-actor sweep`` command goes on.
 
 The trio's own archives (``docs/results/trio-20M``) are in git history, at
 ``docs/results/trio-20M/runs`` of commit 2d29b10 (its README says how to restore them).
@@ -38,9 +41,10 @@ from cpg_actor.config import TrainConfig
 from cpg_actor.experiments.execute import list_checkpoints, select_stage_checkpoints
 from cpg_actor.experiments.plan import STAGE_FRACTIONS
 from cpg_actor.experiments.results import Results
+from cpg_actor.files import MARKER, SWEEP, marker_kind
 
 SKIPPED = {"checkpoints", "tensorboard", ".lock"}
-FILES = ("reproduce.yaml", "transfer.json", ".cpg-actor-run")  # the last: the project's marker
+FILES = ("reproduce.yaml", "transfer.json", MARKER)  # the last: the project's marker
 PARTIAL = ".partial.tar.gz"
 
 
@@ -78,12 +82,24 @@ def _pack(run_dir: Path, target: Path, checkpoints: list[Path]) -> None:
                     tar.add(path, arcname=path.name)
             for path in checkpoints:
                 tar.add(path, arcname=f"checkpoints/{path.name}")
+        os.chmod(tmp, 0o644)  # mkstemp makes it private; an archive to commit is not
         os.replace(tmp, target)
     finally:
         Path(tmp).unlink(missing_ok=True)  # left only where packing failed
 
 
+def sweep_settings(directory: Path) -> list[Path]:
+    """A sweep's folders of one setting each (a reproduction's ``reproduce.yaml`` in each)."""
+    return sorted(p for p in directory.iterdir() if (p / "reproduce.yaml").is_file())
+
+
 def save(out: Path, archive: Path, unfinished: bool = False) -> None:
+    if marker_kind(out) == SWEEP:
+        for setting in sweep_settings(out):
+            save(setting, archive / setting.name, unfinished)
+        archive.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(out / MARKER, archive / MARKER)  # the sweep's: restore remakes it
+        return
     settings = out / "reproduce.yaml"
     saved = yaml.safe_load(settings.read_text()) if settings.is_file() else {}
     fractions = tuple((saved or {}).get("settings", {}).get("stage_fractions") or STAGE_FRACTIONS)
@@ -104,12 +120,19 @@ def save(out: Path, archive: Path, unfinished: bool = False) -> None:
             elif checkpoints:
                 _pack(run.path, partial, checkpoints)
                 print(f"saved {partial} ({len(checkpoints)} checkpoints)")
+    archive.mkdir(parents=True, exist_ok=True)  # a reproduction with no run archived yet
     for name in FILES:
         if (out / name).is_file():
             shutil.copyfile(out / name, archive / name)
 
 
 def restore(archive: Path, out: Path) -> None:
+    if marker_kind(archive) == SWEEP:
+        for setting in sweep_settings(archive):
+            restore(setting, out / setting.name)
+        if not (out / MARKER).exists():
+            shutil.copyfile(archive / MARKER, out / MARKER)
+        return
     packed = sorted(archive.glob("*/seed*.tar.gz"), key=lambda p: p.name.endswith(PARTIAL))
     for path in packed:  # the finished archives first
         seed = path.name.removesuffix(PARTIAL).removesuffix(".tar.gz")
@@ -125,6 +148,7 @@ def restore(archive: Path, out: Path) -> None:
         tmp.rename(run_dir)
         print(f"restored {run_dir}" + (" (unfinished: the same command resumes it)"
                                         if path.name.endswith(PARTIAL) else ""))  # fmt: skip
+    out.mkdir(parents=True, exist_ok=True)
     for name in FILES:
         if (archive / name).is_file() and not (out / name).exists():
             shutil.copyfile(archive / name, out / name)
