@@ -26,6 +26,7 @@ import numpy as np
 from cpg_actor.experiments import family as f
 from cpg_actor.experiments import metrics as m
 from cpg_actor.files import atomic_write_text
+from cpg_actor.robustness import protocol
 
 VARIANTS = ("cpg-actor", "mlp-field", "mlp-warm-field")
 START = "start"  # the CPG-Actor's checkpoint before its first update
@@ -52,13 +53,8 @@ def grid_of(out: Path, variant: str) -> list[dict[str, Any]]:
         sys.exit(f"{out / 'grid' / variant}: 2 or more seedS/grid.json needed, found "
                  f"{len(folders)} (`cpg-actor eval RUN --grid`, as PROTOCOL.md says)")  # fmt: skip
     return [{"seed": int(p.name.removeprefix("seed")),
-             **json.loads((p / "grid.json").read_text(), object_hook=nan_for_null)}
+             **protocol.read_json((p / "grid.json").read_text())}
             for p in folders]  # fmt: skip
-
-
-def nan_for_null(mapping: dict[str, Any]) -> dict[str, Any]:
-    """``grid.json`` writes an undefined number (NaN) as null: read it back as NaN."""
-    return {k: math.nan if v is None else v for k, v in mapping.items()}
 
 
 def same_seeds(grids: dict[str, list[dict[str, Any]]]) -> list[int]:

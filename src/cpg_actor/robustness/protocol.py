@@ -366,3 +366,12 @@ def json_text(result: dict[str, Any]) -> str:
         return value
 
     return json.dumps(clean(result), indent=2) + "\n"
+
+
+def read_json(text: str) -> dict[str, Any]:
+    """A result :func:`json_text` wrote, each null (an undefined number) read back as NaN."""
+
+    def nan_for_null(mapping: dict[str, Any]) -> dict[str, Any]:
+        return {k: math.nan if v is None else v for k, v in mapping.items()}
+
+    return json.loads(text, object_hook=nan_for_null)
