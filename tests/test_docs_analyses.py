@@ -88,6 +88,13 @@ def test_the_time_to_quality_analysis_orders_the_methods(tmp_path, cpg_hit):
     assert faster == ("yes" if cpg_hit == 0 else "no")
     assert "family of 6 tests" in done.stdout  # the sweep: 2 budgets x 3 tests
 
+    # before the sweep has run, the time to quality (a family of its own) stands alone
+    (tmp_path / "search_budgets.json").unlink()
+    done = run(RESULTS / "time-to-quality" / "analysis.py", str(tmp_path))
+    assert done.returncode == 0, done.stderr
+    assert "Not yet run: no `search_budgets.json`" in done.stdout
+    assert len([line for line in done.stdout.splitlines() if "to the target |" in line]) == 4
+
 
 def fake_grid(error: float, falls: float = 0.0) -> dict:
     """A grid.json as `cpg-actor eval --grid` writes it, with the fields the analysis reads."""
