@@ -174,7 +174,7 @@ def test_the_go1_analysis_reads_its_folder_and_judges_the_targets(tmp_path):
     assert walked["times"]["cpg-actor"]["wall"] == [10.0, 11.0, 12.0, 13.0]
     assert walked["met"] and walked["ratio"] > 8
     assert walked["test"]["verdict"] == "yes"  # 10x, tested against 5x
-    assert "**Pick `cpg-actor`**" in done.stdout
+    assert "**Pick `cpg-actor`**" in done.stdout and done.stdout.startswith("# go1-omni:")
     assert "| the CPG-Actor's start |" in done.stdout and "recovery (s) nan" in done.stdout
     shutil.rmtree(out / "grid" / "start" / "seed22")  # a start not evaluated: no pairing
     done = run(RESULTS / "go1-omni" / "analysis.py", str(out))

@@ -1,7 +1,8 @@
-"""The analysis that `PROTOCOL.md` fixes, from the folder its commands fill: per grid metric the
-variant with the best geometric mean against the 2 others (10 tests) and the CPG-Actor against
-its start (2 paired tests), one family, Holm-corrected; the issue's targets per variant; the
-time to walk, a family of its own (1 test).
+"""The analysis that `PROTOCOL.md` fixes (and `../anymal-omni/PROTOCOL.md`, the same on
+ANYmal B), from the folder its commands fill: per grid metric the variant with the best
+geometric mean against the 2 others (10 tests) and the CPG-Actor against its start (2 paired
+tests), one family, Holm-corrected; the issue's targets per variant; the time to walk, a
+family of its own (1 test).
 
     PYTHONPATH=src python docs/results/go1-omni/analysis.py results/go1-omni \\
         --time-to-walk docs/results/go1-omni/time_to_walk_grid.json \\
@@ -200,8 +201,8 @@ def shown(values: list[float]) -> str:
     return ", ".join(m.three_figures(x) for x in values)
 
 
-def report(data, tests, best, goals, walk, seeds) -> None:
-    print("# go1-omni: the analysis of `PROTOCOL.md`\n")
+def report(data, tests, best, goals, walk, seeds, name: str) -> None:
+    print(f"# {name}: the analysis of `PROTOCOL.md`\n")
     print("Made by `PYTHONPATH=src python docs/results/go1-omni/analysis.py "
           f"{' '.join(sys.argv[1:])}`. Seeds: " + ", ".join(f"`{v}` {seeds[v]}" for v in seeds)
           + ".\n")  # fmt: skip
@@ -279,7 +280,8 @@ def main() -> None:
     tests, best = tests_of(data)
     goals = targets(grids, {v: other_model(args.out, v) for v in VARIANTS})
     walk = time_to_walk(args.time_to_walk)
-    report(data, tests, best, goals, walk, {v: [g["seed"] for g in grids[v]] for v in grids})
+    seeds = {v: [g["seed"] for g in grids[v]] for v in grids}
+    report(data, tests, best, goals, walk, seeds, args.out.resolve().name)
     atomic_write_text(json.dumps({"data": data, "tests": tests, "best": best, "targets": goals,
                                   "time_to_walk": walk}, indent=1) + "\n",
                       args.out / "analysis.json")  # fmt: skip
