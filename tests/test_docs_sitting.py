@@ -88,7 +88,8 @@ def test_a_sweep_is_carried_setting_by_setting_and_its_command_goes_on(sitting, 
     out = tmp_path / "sweep"
     out.mkdir()
     write_marker(out, SWEEP)
-    for label in ("defaults", "ppo.lr=0.001"):
+    out_labels = ("defaults", "ppo.lr=0.001")  # the first finished, the second not
+    for label in out_labels:
         setting = out / label
         shutil.copytree(trained, setting / "runs" / "mlp" / "seed0")
         write_marker(setting, RESULTS)
@@ -105,11 +106,14 @@ def test_a_sweep_is_carried_setting_by_setting_and_its_command_goes_on(sitting, 
     again = tmp_path / "again"
     sitting.restore(archive, again)
     assert marker_kind(again) == SWEEP and marker_kind(again / "defaults") == RESULTS
-    for label in ("defaults", "ppo.lr=0.001"):
+    finished, unfinished = (again / label / "runs" / "mlp" / "seed0" for label in out_labels)
+    assert (finished / MARKER).read_text() == '{"status": "done"}'
+    assert not (finished / "checkpoints").exists()  # a finished run travels without them
+    assert trained_iteration(unfinished) == 6
+    for label in out_labels:
+        run = out / label / "runs" / "mlp" / "seed0"
         restored = again / label / "runs" / "mlp" / "seed0"
-        assert trained_iteration(restored) == trained_iteration(
-            out / label / "runs" / "mlp" / "seed0"
-        )
+        assert (restored / "metrics.jsonl").read_bytes() == (run / "metrics.jsonl").read_bytes()
         assert (again / label / "reproduce.yaml").read_text() == (
             out / label / "reproduce.yaml"
         ).read_text()

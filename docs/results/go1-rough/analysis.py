@@ -53,7 +53,7 @@ REACHED = "terrain level reached (0-9)"
 def seed_folders(folder: Path, what: str) -> list[Path]:
     folders = sorted(folder.glob("seed*"), key=lambda p: int(p.name.removeprefix("seed")))
     if len(folders) < 2:
-        sys.exit(f"{folder}: 2 or more seedS {what} needed, found {len(folders)} (PROTOCOL.md "
+        sys.exit(f"{folder}: 2 or more seedS{what} needed, found {len(folders)} (PROTOCOL.md "
                  "says how to make them)")  # fmt: skip
     return folders
 
