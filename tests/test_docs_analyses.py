@@ -3,6 +3,7 @@ on a committed summary (fresh-2M's, which holds the three agents of fresh-20M) a
 time_to_quality.py's JSON made up here. Their output names the family and the verdicts; bad
 input is one line."""
 
+import gzip
 import json
 import math
 import os
@@ -79,8 +80,8 @@ def test_the_time_to_quality_analysis_orders_the_methods(tmp_path, cpg_hit):
              for budget in ("50k", "150k") for label in ("`cpg-actor`", "`mlp-warm`",
                                                           "`cho2019-warm`")}  # fmt: skip
     (tmp_path / "time_to_quality.json").write_text(json.dumps(quality))
-    (tmp_path / "search_budgets.json").write_text(json.dumps(sweep))
-    done = run(RESULTS / "time-to-quality" / "analysis.py", str(tmp_path))
+    (tmp_path / "search_budgets.json.gz").write_bytes(gzip.compress(json.dumps(sweep).encode()))
+    done = run(RESULTS / "time-to-quality" / "analysis.py", str(tmp_path))  # one as committed
     assert done.returncode == 0, done.stderr
     rows = [line for line in done.stdout.splitlines() if line.startswith("| wall to the target")]
     assert len(rows) == 2
@@ -89,7 +90,7 @@ def test_the_time_to_quality_analysis_orders_the_methods(tmp_path, cpg_hit):
     assert "family of 6 tests" in done.stdout  # the sweep: 2 budgets x 3 tests
 
     # before the sweep has run, the time to quality (a family of its own) stands alone
-    (tmp_path / "search_budgets.json").unlink()
+    (tmp_path / "search_budgets.json.gz").unlink()
     done = run(RESULTS / "time-to-quality" / "analysis.py", str(tmp_path))
     assert done.returncode == 0, done.stderr
     assert "Not yet run: no `search_budgets.json`" in done.stdout

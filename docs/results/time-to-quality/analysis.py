@@ -1,5 +1,6 @@
 """The analysis that `PROTOCOL.md` fixes, from the JSON files of the two runs of
-`benchmarks/time_to_quality.py` (``time_to_quality.json``, ``search_budgets.json`` in FOLDER):
+`benchmarks/time_to_quality.py` (``time_to_quality.json``, ``search_budgets.json`` in FOLDER, or
+their ``.gz``):
 the time to the target of the CPG-Actor against every other method (12 tests), and the
 search-budget sweep (9 tests), each family Holm-corrected.
 
@@ -10,6 +11,7 @@ search-budget sweep (9 tests), each family Holm-corrected.
 from __future__ import annotations
 
 import argparse
+import gzip
 import json
 import math
 import sys
@@ -82,16 +84,27 @@ def sweep_tests(runs: dict[str, list[dict[str, Any]]], budgets: list[str]) -> li
     return tests
 
 
+def read_json(folder: Path, name: str) -> Any:
+    """``NAME.json`` as the benchmark writes it, or ``NAME.json.gz`` as it is committed (the
+    docs' size budget); None when neither is there."""
+    plain = folder / f"{name}.json"
+    packed = folder / f"{name}.json.gz"
+    if plain.is_file():
+        return json.loads(plain.read_text())
+    if packed.is_file():
+        return json.loads(gzip.decompress(packed.read_bytes()))
+    return None
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("folder", type=Path)
     args = parser.parse_args()
-    quality_file, sweep_file = (args.folder / f"{name}.json"
-                                for name in ("time_to_quality", "search_budgets"))  # fmt: skip
-    if not quality_file.is_file():
-        sys.exit(f"{quality_file}: no such file (the protocol's first command writes it)")
-    quality = json.loads(quality_file.read_text())
-    sweep = json.loads(sweep_file.read_text()) if sweep_file.is_file() else None
+    quality = read_json(args.folder, "time_to_quality")
+    if quality is None:
+        sys.exit(f"{args.folder / 'time_to_quality.json'}: no such file, nor its .gz (the "
+                 "protocol's first command writes it)")  # fmt: skip
+    sweep = read_json(args.folder, "search_budgets")
     budgets = sorted({label.split("(search ")[1].rstrip(")") for label in sweep or {}},
                      key=lambda b: float(b.rstrip("k").replace(",", "")))  # fmt: skip
     if CPG not in quality or (sweep is not None and not budgets):
@@ -119,7 +132,7 @@ def main() -> None:
     print("\n".join(f.table(times)))
     print("\n## The search-budget sweep\n")
     if sweep is None:  # a family of its own: the first one stands without it
-        print(f"Not yet run: no `{sweep_file.name}` (the protocol's second command).")
+        print("Not yet run: no `search_budgets.json` (the protocol's second command).")
         return
     print("| method | start return | final return | final hop apex (m) | seeds at the target |")
     print("| --- | ---: | ---: | ---: | --- |")
