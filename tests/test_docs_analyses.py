@@ -96,6 +96,12 @@ def test_the_time_to_quality_analysis_orders_the_methods(tmp_path, cpg_hit):
     assert "Not yet run: no `search_budgets.json`" in done.stdout
     assert len([line for line in done.stdout.splitlines() if "to the target |" in line]) == 4
 
+    # a damaged file is one line naming it, not a traceback
+    (tmp_path / "search_budgets.json.gz").write_bytes(b"not gzip")
+    done = run(RESULTS / "time-to-quality" / "analysis.py", str(tmp_path))
+    assert done.returncode != 0 and "Traceback" not in done.stderr
+    assert "search_budgets.json(.gz): not the benchmark's JSON" in done.stderr
+
 
 def fake_grid(error: float, falls: float = 0.0) -> dict:
     """A grid.json as `cpg-actor eval --grid` writes it, with the fields the analysis reads."""

@@ -89,10 +89,14 @@ def read_json(folder: Path, name: str) -> Any:
     docs' size budget); None when neither is there."""
     plain = folder / f"{name}.json"
     packed = folder / f"{name}.json.gz"
-    if plain.is_file():
-        return json.loads(plain.read_text())
-    if packed.is_file():
-        return json.loads(gzip.decompress(packed.read_bytes()))
+    try:
+        if plain.is_file():
+            return json.loads(plain.read_text())
+        if packed.is_file():
+            return json.loads(gzip.decompress(packed.read_bytes()))
+    except (OSError, ValueError) as error:  # a bad gzip is an OSError, bad JSON a ValueError
+        sys.exit(f"{folder / name}.json(.gz): not the benchmark's JSON ({error}); "
+                 "benchmarks/time_to_quality.py writes it")  # fmt: skip
     return None
 
 
