@@ -39,9 +39,14 @@ def test_the_field_mlp_recipe_on_the_go1s_omnidirectional_task():
         0.01, 1.0, 1.0)  # fmt: skip
     assert (config.ppo.learning_rate, config.ppo.lr_schedule) == (1e-3, "adaptive")
     assert config.env.yaw_range == (-1.0, 1.0) and config.num_envs == 256
+    assert config.env.tracking_sigma == 0.25  # its tuning's choice (the task's own is 0.1)
+    own = plan.resolve_config(plan.ReproduceSettings(["cpg-actor"], 1, 2_000_000,
+                              overrides=["robot=go1"], preset="omni"), "cpg-actor")  # fmt: skip
+    assert own.env.tracking_sigma == 0.1
     warm = plan.resolve_config(
         plan.ReproduceSettings(["mlp-warm-field"], 1, 2_000_000, overrides=["robot=go1"],
                                preset="omni"), "mlp-warm-field")  # fmt: skip
     assert (warm.agent, warm.agent_config.cpg_layout, warm.agent_config.init_std) == (
         "mlp-warm", "leg", 0.3)  # fmt: skip
     assert warm.agent_config.actor_hidden == (512, 256, 128)
+    assert warm.env.tracking_sigma == 0.25

@@ -85,13 +85,20 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     # and critic of 512-256-128 ELU units, entropy bonus 0.01, value-loss weight and gradient
     # norm 1; the rest of rsl_rl's PPO (5 epochs x 4 minibatches, learning rate 1e-3 adapted
     # to KL 0.01, gamma 0.99, lambda 0.95, clip 0.2) is the throughput recipe's, and the MLP's
-    # init_std 0.3 of the Go1's joint half-ranges is 0.18-0.27 rad (rsl_rl: 1.0 x 0.25 rad)
-    "mlp-field": ("mlp", FIELD_MLP),
+    # init_std 0.3 of the Go1's joint half-ranges is 0.18-0.27 rad (rsl_rl: 1.0 x 0.25 rad);
+    # legged_gym's tracking kernel 0.25, chosen by the tuning of docs/results/tuning/go1-omni
+    "mlp-field": ("mlp", (*FIELD_MLP, "env.tracking_sigma=0.25")),
     # the same MLP cloned from the trot the quadrupeds' CPG-Actor starts from (its foot-space
-    # layout), with the MLP's quadruped noise (0.3; mlp-warm's config default is 1.0)
+    # layout), with the MLP's quadruped noise (0.3; mlp-warm's config default is 1.0) and
+    # mlp-field's tracking kernel, from which its tuning started
     "mlp-warm-field": (
         "mlp-warm",
-        (*FIELD_MLP, "agent_config.cpg_layout=leg", "agent_config.init_std=0.3"),
+        (
+            *FIELD_MLP,
+            "env.tracking_sigma=0.25",
+            "agent_config.cpg_layout=leg",
+            "agent_config.init_std=0.3",
+        ),
     ),
     # randomised training with the hopper's ranges (docs/robustness.md; the payload is in kg)
     "cpg-actor-randomized": ("cpg-actor", HOPPER_RANDOMIZE),
@@ -102,6 +109,15 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
 def variant_agent(variant: str) -> tuple[str, tuple[str, ...]]:
     """The agent a variant trains and the overrides that make it that variant."""
     return VARIANTS.get(variant, (variant, ()))
+
+
+def run_overrides(variant: str, overrides: list[str]) -> list[str]:
+    """One run's ``--set`` values in order: the user's ``robot=`` first (it picks the env's
+    config, which a variant's ``env.*`` keys need), then the variant's settings, then the
+    user's others (which can still change the variant's)."""
+    robot = [text for text in overrides if text.partition("=")[0].strip() == "robot"]
+    rest = [text for text in overrides if text not in robot]
+    return [*robot, *variant_agent(variant)[1], *rest]
 
 
 @dataclass
@@ -190,13 +206,13 @@ def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
     from cpg_actor.config import compose_config, without_compile_if_no_compiler
     from cpg_actor.robots.registry import get_robot
 
-    agent, variant_overrides = variant_agent(variant)
+    agent = variant_agent(variant)[0]
     values = {"agent": agent, "seed": seed, "total_steps": settings.total_steps}
     if settings.num_envs is not None:
         values["num_envs"] = settings.num_envs
     if settings.sim is not None:
         values["env"] = {"sim": settings.sim}
-    overrides = [*variant_overrides, *settings.overrides]
+    overrides = run_overrides(variant, settings.overrides)
     config = compose_config(preset=settings.preset, values=values, overrides=overrides)
     from cpg_actor.agents import get_agent_spec
 
@@ -285,8 +301,7 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
                 extra += ["--set", f"{key}={value}"]
         for seed in settings.seed_range:
             run_dir = out / "runs" / variant / f"seed{seed}"
-            agent, variant_overrides = variant_agent(variant)
-            args = ["--agent", agent, "--seed", str(seed)]
+            args = ["--agent", variant_agent(variant)[0], "--seed", str(seed)]
             if settings.preset is not None:
                 args += ["--preset", settings.preset]
             args += ["--total-steps", str(settings.total_steps), "--run-dir", str(run_dir)]
@@ -295,7 +310,7 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
             if settings.sim is not None:
                 args += ["--sim", settings.sim]
             args += extra
-            for text in [*variant_overrides, *settings.overrides]:
+            for text in run_overrides(variant, settings.overrides):
                 args += ["--set", text]
             args.append("--no-progress")
             tasks.append(

@@ -207,6 +207,7 @@ class QuadrupedConfig:
             ):
                 raise ValueError(f"{name} must be [low, high] in {unit} with low <= high, got "
                                  f"{bounds!r}")  # fmt: skip
+            setattr(self, name, tuple(bounds))  # a list from YAML or --set, as the defaults
         period = self.command_resample_seconds
         if period is not None and not _number(period, 0.0, strict=False):
             raise ValueError(f"command_resample_seconds must be a finite number of seconds >= 0 "
