@@ -53,6 +53,7 @@ FIELD_MLP = (
     "ppo.value_loss_coef=1.0",
     "ppo.max_grad_norm=1.0",
 )
+FIELD_MLP_TUNED = (*FIELD_MLP, "env.tracking_sigma=0.25")  # the recipe with its tuning's choice
 
 # Variants that are an agent with settings of their own: name -> (agent, --set overrides).
 # Their settings come before the reproduction's own --set, which can still change them. The
@@ -86,19 +87,14 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     # norm 1; the rest of rsl_rl's PPO (5 epochs x 4 minibatches, learning rate 1e-3 adapted
     # to KL 0.01, gamma 0.99, lambda 0.95, clip 0.2) is the throughput recipe's, and the MLP's
     # init_std 0.3 of the Go1's joint half-ranges is 0.18-0.27 rad (rsl_rl: 1.0 x 0.25 rad);
-    # legged_gym's tracking kernel 0.25, chosen by the tuning of docs/results/tuning/go1-omni
-    "mlp-field": ("mlp", (*FIELD_MLP, "env.tracking_sigma=0.25")),
+    # legged_gym's tracking kernel 0.25, chosen by its tuning on the omnidirectional task
+    "mlp-field": ("mlp", FIELD_MLP_TUNED),
     # the same MLP cloned from the trot the quadrupeds' CPG-Actor starts from (its foot-space
     # layout), with the MLP's quadruped noise (0.3; mlp-warm's config default is 1.0) and
     # mlp-field's tracking kernel, from which its tuning started
     "mlp-warm-field": (
         "mlp-warm",
-        (
-            *FIELD_MLP,
-            "env.tracking_sigma=0.25",
-            "agent_config.cpg_layout=leg",
-            "agent_config.init_std=0.3",
-        ),
+        (*FIELD_MLP_TUNED, "agent_config.cpg_layout=leg", "agent_config.init_std=0.3"),
     ),
     # randomised training with the hopper's ranges (docs/robustness.md; the payload is in kg)
     "cpg-actor-randomized": ("cpg-actor", HOPPER_RANDOMIZE),
