@@ -584,6 +584,17 @@ def test_compose_config_applies_each_layer_in_order(tmp_path):
         compose_config(config_file=tmp_path / "missing.yaml")
 
 
+def test_compose_config_takes_a_robots_env_keys_before_the_robot():
+    """A quadruped's env key given before ``robot=`` (as a variant's settings come before the
+    user's): the robot picks the env's config first, whatever the order."""
+    config = compose_config(
+        "omni", overrides=["env.tracking_sigma=0.25", "robot=go1", "env.tracking_sigma=0.3"]
+    )
+    assert (config.robot, config.env.tracking_sigma) == ("go1", 0.3)
+    with pytest.raises(ValueError, match=r"unknown HopperConfig key\(s\): tracking_sigma"):
+        compose_config(overrides=["env.tracking_sigma=0.25"])  # the hopper has no such key
+
+
 @pytest.mark.parametrize("robot", ["go1", "anymal"])
 def test_a_recipe_sets_the_env_of_the_robot_the_flags_name(robot):
     """`--preset gpu --robot go1` trains the Go1 on MJX: the recipe's env values land on the

@@ -270,7 +270,10 @@ def compose_config(
     given = [dict(values or {}), *(parse_override(text) for text in overrides)]
 
     def compose(
-        agent_defaults: Mapping[str, Any], recipe: str, robot: str | None = None
+        agent_defaults: Mapping[str, Any],
+        recipe: str,
+        robot: str | None = None,
+        layers: list[dict[str, Any]] = given,
     ) -> TrainConfig:
         config = TrainConfig()
         if robot is not None:  # first: the recipe's env values are then the robot's
@@ -280,13 +283,15 @@ def compose_config(
         apply_dict(config, preset_values(recipe, env_class), prefix="")
         apply_dict(config, file_data, prefix="")
         config.preset = recipe
-        for layer in given:
+        for layer in layers:
             apply_dict(config, layer, prefix="")
         return config
 
-    # which agent and robot (no recipe names one but the old "anymal"); then the robot's recipe,
-    # unless one is named, and its defaults for the agent
-    config = compose({}, chosen or TrainConfig.preset)
+    # which agent and robot (no recipe names one but the old "anymal"): from the flags and --set
+    # only those two keys, since the others can be the robot's env keys, in any order; then the
+    # robot's recipe, unless one is named, and its defaults for the agent
+    choice = [{key: layer[key] for key in ("agent", "robot") if key in layer} for layer in given]
+    config = compose({}, chosen or TrainConfig.preset, layers=choice)
     get_agent_spec(config.agent)  # an unknown agent: its ValueError now
     robot = ROBOTS.get(config.robot)  # an unknown robot: validate() says so
     if robot is not None:

@@ -108,12 +108,9 @@ def variant_agent(variant: str) -> tuple[str, tuple[str, ...]]:
 
 
 def run_overrides(variant: str, overrides: list[str]) -> list[str]:
-    """One run's ``--set`` values in order: the user's ``robot=`` first (it picks the env's
-    config, which a variant's ``env.*`` keys need), then the variant's settings, then the
-    user's others (which can still change the variant's)."""
-    robot = [text for text in overrides if text.partition("=")[0].strip() == "robot"]
-    rest = [text for text in overrides if text not in robot]
-    return [*robot, *variant_agent(variant)[1], *rest]
+    """One run's ``--set`` values in order: the variant's settings, then the user's (which can
+    change the variant's)."""
+    return [*variant_agent(variant)[1], *overrides]
 
 
 @dataclass
