@@ -119,3 +119,25 @@ def test_a_sweep_is_carried_setting_by_setting_and_its_command_goes_on(sitting, 
         ).read_text()
     sweep.prepare_out_dir(again)  # the same `cpg-actor sweep` command accepts the folder
     assert (again / PROJECT_MARKER).read_bytes() == (out / PROJECT_MARKER).read_bytes()
+
+
+def test_without_traces_a_finished_run_travels_without_its_stage_traces(sitting, trained, tmp_path):
+    out = tmp_path / "out"
+    run = out / "runs" / "mlp" / "seed0"
+    shutil.copytree(trained, run)
+    (run / MARKER).write_text(json.dumps({"status": "done"}))
+    stage = run / "eval" / "stage0"
+    stage.mkdir(parents=True)
+    for name in ("traces.npz", "traces.png"):
+        (stage / name).write_bytes(b"x" * 100)
+    (run / "eval" / "stages.json").write_text("[]\n")
+
+    sitting.save(out, tmp_path / "light", traces=False)
+    sitting.save(out, tmp_path / "full")
+    with tarfile.open(tmp_path / "light" / "mlp" / "seed0.tar.gz") as tar:
+        light = set(tar.getnames())
+    with tarfile.open(tmp_path / "full" / "mlp" / "seed0.tar.gz") as tar:
+        full = set(tar.getnames())
+    assert full - light == {"eval/stage0/traces.npz", "eval/stage0/traces.png"}
+    assert {"eval/stages.json", "metrics.jsonl", MARKER} <= light
+    assert stage.joinpath("traces.npz").is_file()  # the run itself keeps them

@@ -3,7 +3,7 @@ logs, stage evaluations, traces and config, without checkpoints or TensorBoard f
 ``--unfinished``, each run still training too, with the few checkpoints it needs to go on. A
 ``cpg-actor sweep`` folder is carried the same way, one reproduction per setting.
 
-    python docs/results/sitting.py save OUT ARCHIVE [--unfinished]
+    python docs/results/sitting.py save OUT ARCHIVE [--unfinished] [--without-traces]
     python docs/results/sitting.py restore ARCHIVE OUT
 
 ``ARCHIVE`` is a folder of the user's (e.g. under the git-ignored ``results/``). ``save`` writes
@@ -14,7 +14,10 @@ first, while the checkpoints are there). With ``--unfinished``, an unfinished ru
 finished archive is written) with the checkpoints ``cpg-actor train --resume`` and the stage
 evaluations need: the one before the first update, those nearest the stages its training has
 passed (``reproduce.yaml``'s ``stage_fractions``) and the newest; a partial archive further
-along than the run (a sitting that forgot to restore) is kept. ``restore`` unpacks each
+along than the run (a sitting that forgot to restore) is kept. With ``--without-traces``, the
+stage evaluations' traces and figures (``eval/stageK/traces.npz`` and PNGs, most of a run's
+bytes) stay behind, for a study whose analysis reads other files (``stages.json`` is kept;
+the reproduction's own summary then lacks those runs' stage metrics). ``restore`` unpacks each
 archived run into ``OUT/runs`` where that run directory does not exist (a finished archive
 before a partial one), and copies the two files where ``OUT`` has none, so that the same
 ``cpg-actor reproduce`` command skips the finished runs, resumes the partial ones and trains the
@@ -71,7 +74,14 @@ def archived_iteration(partial: Path) -> int:
     return max(numbers, default=-1)
 
 
-def _pack(run_dir: Path, target: Path, checkpoints: list[Path]) -> None:
+def stage_figure_or_traces(name: str) -> bool:
+    """A stage evaluation's traces or figure (``eval/stageK/...``), by its archive name."""
+    parts = name.split("/")
+    return (len(parts) == 3 and parts[0] == "eval" and parts[1].startswith("stage")
+            and parts[2].endswith((".npz", ".png")))  # fmt: skip
+
+
+def _pack(run_dir: Path, target: Path, checkpoints: list[Path], traces: bool = True) -> None:
     target.parent.mkdir(parents=True, exist_ok=True)
     handle, tmp = tempfile.mkstemp(dir=target.parent, suffix=".tmp")
     os.close(handle)
@@ -79,7 +89,7 @@ def _pack(run_dir: Path, target: Path, checkpoints: list[Path]) -> None:
         with tarfile.open(tmp, "w:gz") as tar:
             for path in sorted(run_dir.iterdir()):
                 if path.name not in SKIPPED:
-                    tar.add(path, arcname=path.name)
+                    tar.add(path, arcname=path.name, filter=None if traces else _without_traces)
             for path in checkpoints:
                 tar.add(path, arcname=f"checkpoints/{path.name}")
         os.chmod(tmp, 0o644)  # mkstemp makes it private; an archive to commit is not
@@ -88,15 +98,19 @@ def _pack(run_dir: Path, target: Path, checkpoints: list[Path]) -> None:
         Path(tmp).unlink(missing_ok=True)  # left only where packing failed
 
 
+def _without_traces(info: tarfile.TarInfo) -> tarfile.TarInfo | None:
+    return None if stage_figure_or_traces(info.name) else info
+
+
 def sweep_settings(directory: Path) -> list[Path]:
     """A sweep's folders of one setting each (a reproduction's ``reproduce.yaml`` in each)."""
     return sorted(p for p in directory.iterdir() if (p / "reproduce.yaml").is_file())
 
 
-def save(out: Path, archive: Path, unfinished: bool = False) -> None:
+def save(out: Path, archive: Path, unfinished: bool = False, traces: bool = True) -> None:
     if marker_kind(out) == SWEEP:
         for setting in sweep_settings(out):
-            save(setting, archive / setting.name, unfinished)
+            save(setting, archive / setting.name, unfinished, traces)
         archive.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(out / MARKER, archive / MARKER)  # the sweep's: restore remakes it
         return
@@ -107,7 +121,7 @@ def save(out: Path, archive: Path, unfinished: bool = False) -> None:
         target = archive / run.variant / f"{run.path.name}.tar.gz"
         partial = archive / run.variant / f"{run.path.name}{PARTIAL}"
         if run.finished and not target.exists():
-            _pack(run.path, target, [])
+            _pack(run.path, target, [], traces)
             print(f"saved {target}")
         if run.finished and partial.exists():
             partial.unlink()  # this script's own, superseded by the finished archive
@@ -118,7 +132,7 @@ def save(out: Path, archive: Path, unfinished: bool = False) -> None:
                 print(f"kept {partial}: it is further along (iteration "
                       f"{archived_iteration(partial)} > {newest}); restore it first")  # fmt: skip
             elif checkpoints:
-                _pack(run.path, partial, checkpoints)
+                _pack(run.path, partial, checkpoints, traces)
                 print(f"saved {partial} ({len(checkpoints)} checkpoints)")
     archive.mkdir(parents=True, exist_ok=True)  # a reproduction with no run archived yet
     for name in FILES:
@@ -161,8 +175,10 @@ if __name__ == "__main__":
     parser.add_argument("target", type=Path, help="save: ARCHIVE; restore: OUT")
     parser.add_argument("--unfinished", action="store_true",
                         help="save: the runs in training too, with their checkpoints")  # fmt: skip
+    parser.add_argument("--without-traces", action="store_true",
+                        help="save: without the stage evaluations' traces and figures")  # fmt: skip
     args = parser.parse_args()
     if args.action == "save":
-        save(args.source, args.target, args.unfinished)
+        save(args.source, args.target, args.unfinished, traces=not args.without_traces)
     else:
         restore(args.source, args.target)
