@@ -74,11 +74,11 @@ def archived_iteration(partial: Path) -> int:
     return max(numbers, default=-1)
 
 
-def stage_figure_or_traces(name: str) -> bool:
-    """A stage evaluation's traces or figure (``eval/stageK/...``), by its archive name."""
-    parts = name.split("/")
-    return (len(parts) == 3 and parts[0] == "eval" and parts[1].startswith("stage")
-            and parts[2].endswith((".npz", ".png")))  # fmt: skip
+def _without_traces(info: tarfile.TarInfo) -> tarfile.TarInfo | None:
+    """A tar filter leaving out the stage evaluations' traces and figures (``eval/stageK/``)."""
+    parts = info.name.split("/")
+    stage = len(parts) == 3 and parts[0] == "eval" and parts[1].startswith("stage")
+    return None if stage and parts[2].endswith((".npz", ".png")) else info
 
 
 def _pack(run_dir: Path, target: Path, checkpoints: list[Path], traces: bool = True) -> None:
@@ -96,10 +96,6 @@ def _pack(run_dir: Path, target: Path, checkpoints: list[Path], traces: bool = T
         os.replace(tmp, target)
     finally:
         Path(tmp).unlink(missing_ok=True)  # left only where packing failed
-
-
-def _without_traces(info: tarfile.TarInfo) -> tarfile.TarInfo | None:
-    return None if stage_figure_or_traces(info.name) else info
 
 
 def sweep_settings(directory: Path) -> list[Path]:
