@@ -107,7 +107,9 @@ def fake_grid(error: float, falls: float = 0.0) -> dict:
     """A grid.json as `cpg-actor eval --grid` writes it, with the fields the analysis reads."""
     means = {
         "lin_vel_error": error,
+        "lin_vel_offset": error / 2,
         "yaw_rate_error": 2 * error,
+        "yaw_rate_offset": error / 4,
         "torque_rate": 80.0,
         "foot_slip": 0.1 + error,
         "planar_cost_of_transport": 2.0,
@@ -183,6 +185,7 @@ def test_the_go1_analysis_reads_its_folder_and_judges_the_targets(tmp_path):
     assert walked["test"]["verdict"] == "yes"  # 10x, tested against 5x
     assert "**Pick `cpg-actor`**" in done.stdout and done.stdout.startswith("# go1-omni:")
     assert "| the CPG-Actor's start |" in done.stdout and "recovery (s) nan" in done.stdout
+    assert result["offsets"]["cpg-actor"]["lin_vel_offset"] == pytest.approx([0.025, 0.0275, 0.03])
     shutil.rmtree(out / "grid" / "start" / "seed22")  # a start not evaluated: no pairing
     done = run(RESULTS / "go1-omni" / "analysis.py", str(out))
     assert done.returncode != 0 and "every variant and the start need the same seeds" in done.stderr

@@ -39,6 +39,12 @@ METRICS = {
     "foot slip (m/s)": "foot_slip",
     "planar cost of transport": "planar_cost_of_transport",
 }
+# display only (PROTOCOL.md: "the offsets stay in the grid files, for the README"): the error of
+# each command's mean velocity, without the per-step sway of a gait the per-step errors include
+OFFSETS = {
+    "linear-velocity offset (m/s)": "lin_vel_offset",
+    "yaw-rate offset (rad/s)": "yaw_rate_offset",
+}
 RATIO_EFFECT = 1.25
 TARGETS = {"lin_vel_error": 0.10, "yaw_rate_error": 0.20}  # the flat grid's, per step
 OTHER_MODEL_TARGET = 0.15  # m/s at each forward command
@@ -201,7 +207,7 @@ def shown(values: list[float]) -> str:
     return ", ".join(m.three_figures(x) for x in values)
 
 
-def report(data, tests, best, goals, walk, seeds, name: str) -> None:
+def report(data, offsets, tests, best, goals, walk, seeds, name: str) -> None:
     print(f"# {name}: the analysis of `PROTOCOL.md`\n")
     print("Made by `PYTHONPATH=src python docs/results/go1-omni/analysis.py "
           f"{' '.join(sys.argv[1:])}`. Seeds: " + ", ".join(f"`{v}` {seeds[v]}" for v in seeds)
@@ -224,7 +230,14 @@ def report(data, tests, best, goals, walk, seeds, name: str) -> None:
         print("\n" + (f"**Pick `{best[name]}`**: it beats both others." if not tied else
                       f"`{best[name]}` has the best mean; not separated from "
                       + ", ".join(f"`{v}`" for v in tied) + ".") + "\n")  # fmt: skip
-    print("## The issue's targets\n")
+    print("## Offsets of the mean velocity (display only, not tested)\n")
+    print("| variant | " + " | ".join(f"{name}, mean [95 % CI]" for name in OFFSETS) + " |")
+    print("| --- |" + " ---: |" * len(OFFSETS))
+    for v, values in offsets.items():
+        label = f"`{v}`" if v != START else "the CPG-Actor's start"
+        print(f"| {label} | " + " | ".join(f"{f.mean_ci(values[k])} ({shown(values[k])})"
+                                           for k in OFFSETS.values()) + " |")  # fmt: skip
+    print("\n## The issue's targets\n")
     print(
         "| variant | grid lin vel error <= 0.10 | grid yaw-rate error <= 0.20 | no fall on "
         "the grid | payload 115 %: no fall | other model <= 0.15 m/s, no fall |"
@@ -280,10 +293,12 @@ def main() -> None:
     tests, best = tests_of(data)
     goals = targets(grids, {v: other_model(args.out, v) for v in VARIANTS})
     walk = time_to_walk(args.time_to_walk)
+    offsets = {v: {key: [flat_means(g)[key] for g in grids[v]] for key in OFFSETS.values()}
+               for v in grids}  # fmt: skip
     seeds = {v: [g["seed"] for g in grids[v]] for v in grids}
-    report(data, tests, best, goals, walk, seeds, args.out.resolve().name)
+    report(data, offsets, tests, best, goals, walk, seeds, args.out.resolve().name)
     atomic_write_text(json.dumps({"data": data, "tests": tests, "best": best, "targets": goals,
-                                  "time_to_walk": walk}, indent=1) + "\n",
+                                  "offsets": offsets, "time_to_walk": walk}, indent=1) + "\n",
                       args.out / "analysis.json")  # fmt: skip
 
 
