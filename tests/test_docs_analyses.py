@@ -245,3 +245,21 @@ def test_the_rough_ground_analysis_judges_falls_tracking_and_the_level_reached(t
     assert done.returncode != 0 and "needs the grounds flat and 'all level 4'" in done.stderr
     done = run(script, str(out), "--variants", "cpg-actor-omni")
     assert done.returncode != 0 and "--variants takes two names" in done.stderr
+
+
+def test_the_go1_figure_draws_every_variant_it_finds(tmp_path):
+    out = tmp_path / "go1-omni"
+    for variant in ("cpg-actor", "mlp-field"):
+        for seed in (20, 21):
+            folder = out / "grid" / variant / f"seed{seed}"
+            folder.mkdir(parents=True)
+            grid = fake_grid(0.1)
+            for row in grid["rows"]:
+                row["terrain"] = "flat"
+            (folder / "grid.json").write_text(json_text(grid))
+    figure = tmp_path / "errors.png"
+    done = run(RESULTS / "go1-omni" / "figure.py", str(out), str(figure))
+    assert done.returncode == 0, done.stderr
+    assert figure.read_bytes().startswith(b"\x89PNG")
+    done = run(RESULTS / "go1-omni" / "figure.py", str(tmp_path / "empty"), str(figure))
+    assert done.returncode != 0 and "no VARIANT/seedS/grid.json" in done.stderr
