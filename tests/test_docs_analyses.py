@@ -261,5 +261,7 @@ def test_the_go1_figure_draws_every_variant_it_finds(tmp_path):
     done = run(RESULTS / "go1-omni" / "figure.py", str(out), str(figure))
     assert done.returncode == 0, done.stderr
     assert figure.read_bytes().startswith(b"\x89PNG")
+    done = run(RESULTS / "go1-omni" / "figure.py", str(out), str(tmp_path / "errors.txt"))
+    assert done.returncode != 0 and "one of .png, .svg, .pdf" in done.stderr
     done = run(RESULTS / "go1-omni" / "figure.py", str(tmp_path / "empty"), str(figure))
     assert done.returncode != 0 and "no VARIANT/seedS/grid.json" in done.stderr

@@ -16,14 +16,18 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from analysis import START, TARGETS, VARIANTS  # this folder's analysis: its names and targets
 
 from cpg_actor.plots import save_figure
 from cpg_actor.robustness import protocol
 
-ORDER = ("cpg-actor", "start", "mlp-field", "mlp-warm-field")
-LABELS = {"start": "the CPG-Actor's start"}
-PANELS = (("lin_vel_error", "linear-velocity error (m/s)", 0.10),
-          ("yaw_rate_error", "yaw-rate error (rad/s)", 0.20))  # fmt: skip
+ORDER = (VARIANTS[0], START, *VARIANTS[1:])  # the CPG-Actor beside its start
+LABELS = {START: "the CPG-Actor's start"}
+PANELS = {
+    "lin_vel_error": "linear-velocity error (m/s)",
+    "yaw_rate_error": "yaw-rate error (rad/s)",
+}
+FORMATS = (".png", ".svg", ".pdf")
 
 
 def flat_rows(folder: Path) -> dict[str, list[dict[str, dict]]]:
@@ -52,7 +56,8 @@ def draw(rows: dict[str, list[dict[str, dict]]], path: Path) -> Path:
     fig, axes = plt.subplots(len(PANELS), 1, figsize=(11, 6.5), sharex=True)
     width = 0.8 / len(rows)
     x = np.arange(len(commands))
-    for axis, (key, label, target) in zip(axes, PANELS, strict=True):
+    for axis, (key, label) in zip(axes, PANELS.items(), strict=True):
+        target = TARGETS[key]
         for i, (variant, seeds) in enumerate(rows.items()):
             values = np.array([[s[c][key] if c in s else np.nan for c in commands]
                                for s in seeds])  # fmt: skip
@@ -80,8 +85,10 @@ def draw(rows: dict[str, list[dict[str, dict]]], path: Path) -> Path:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("folder", type=Path, help="holds grid/VARIANT/seedS/grid.json")
-    parser.add_argument("output", type=Path, help="the figure (.png)")
+    parser.add_argument("output", type=Path, help="the figure (.png, .svg or .pdf)")
     args = parser.parse_args()
+    if args.output.suffix.lower() not in FORMATS:
+        parser.error(f"output {args.output}: a figure file is needed, one of {', '.join(FORMATS)}")
     print(draw(flat_rows(args.folder), args.output))
 
 
