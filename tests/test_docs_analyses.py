@@ -219,7 +219,8 @@ def test_the_rough_ground_analysis_judges_falls_tracking_and_the_level_reached(t
         for i, seed in enumerate((25, 26, 27)):
             run_dir = out / "runs" / variant / f"seed{seed}"
             run_dir.mkdir(parents=True)
-            rows = [{"iteration": k, "charts/terrain_level": level * k / 20 + 0.1 * i}
+            rows = [{"iteration": k, "global_step": 8192 * k,
+                     "charts/terrain_level": level * k / 20 + 0.1 * i}
                     for k in range(1, 21)]  # fmt: skip
             rows.insert(0, {"iteration": 0, "eval/return": 1.0})  # rows without the key
             (run_dir / "metrics.jsonl").write_text("".join(json.dumps(r) + "\n" for r in rows))
@@ -235,6 +236,20 @@ def test_the_rough_ground_analysis_judges_falls_tracking_and_the_level_reached(t
     assert goals["cpg-actor"]["falls"]["met"] and goals["cpg-actor"]["error"]["met"]
     assert not goals["mlp-field"]["falls"]["met"] and not goals["start"]["error"]["met"]
     assert "| the CPG-Actor's start |" in done.stdout
+    kept = json.loads((out / "terrain_levels.json").read_text())
+    assert kept["mlp-field"]["27"][-1] == [8192 * 20, pytest.approx(1.2)]
+
+    # a folder without the runs (docs/ keeps no run logs) is read from the levels kept
+    docs = tmp_path / "docs-folder"
+    shutil.copytree(out / "grid", docs / "grid")
+    done = run(script, str(docs), "--variants", "cpg-actor-omni,mlp-field")
+    assert "neither runs/VARIANT/seedS/metrics.jsonl nor terrain_levels.json" in done.stderr
+    shutil.copy(out / "terrain_levels.json", docs)
+    again = run(script, str(docs), "--variants", "cpg-actor-omni,mlp-field")
+    assert again.returncode == 0, again.stderr
+    assert json.loads((docs / "analysis.json").read_text())["data"] == result["data"]
+    done = run(script, str(docs))
+    assert done.returncode != 0 and "no variant ['cpg-actor']" in done.stderr
 
     # the default names find no cpg-actor runs; a grid without level 4 is named
     done = run(script, str(out))
@@ -265,3 +280,38 @@ def test_the_go1_figure_draws_every_variant_it_finds(tmp_path):
     assert done.returncode != 0 and "one of .png, .svg, .pdf" in done.stderr
     done = run(RESULTS / "go1-omni" / "figure.py", str(tmp_path / "empty"), str(figure))
     assert done.returncode != 0 and "no VARIANT/seedS/grid.json" in done.stderr
+
+
+def test_the_rough_ground_figure_draws_the_curricula_and_the_level(tmp_path):
+    from cpg_actor.robustness.protocol import GRID
+
+    out = tmp_path / "go1-rough"
+    for role in ("cpg-actor", "start", "mlp-field"):
+        for seed in (25, 26):
+            rows = [
+                {
+                    "terrain": ground,
+                    "command": c.name,
+                    "check": "",
+                    "fell": 0.1,
+                    "lin_vel_error": 0.2,
+                }
+                for c in GRID
+                for ground in ("flat", "all level 4")
+            ]
+            folder = out / "grid" / role / f"seed{seed}"
+            folder.mkdir(parents=True)
+            (folder / "grid.json").write_text(json_text({"rows": rows, "means": {}}))
+    levels = {v: {str(s): [[8192 * k, k / 10] for k in range(20)] for s in (25, 26)}
+              for v in ("cpg-actor", "mlp-field")}  # fmt: skip
+    (out / "terrain_levels.json").write_text(json.dumps(levels))
+    script = RESULTS / "go1-rough" / "figure.py"
+    figure = tmp_path / "rough.png"
+    done = run(script, str(out), str(figure))
+    assert done.returncode == 0, done.stderr
+    assert figure.read_bytes().startswith(b"\x89PNG")
+    done = run(script, str(out), str(tmp_path / "rough.txt"))
+    assert done.returncode != 0 and "one of .png, .svg, .pdf" in done.stderr
+    shutil.rmtree(out / "grid")
+    done = run(script, str(out), str(figure))
+    assert done.returncode != 0 and "no ROLE/seedS/grid.json with 'all level 4' rows" in done.stderr

@@ -7,8 +7,10 @@ one family, Holm-corrected; the issue's rough-ground target per agent.
 
 Reads ``OUT/grid/ROLE/seedS/grid.json`` (``cpg-actor eval --grid --grid-levels 4``; ROLE
 ``cpg-actor``, ``mlp-field`` or ``start``) and each run's ``OUT/runs/VARIANT/seedS/metrics.jsonl``
-(``--variants`` names the two reproduction variants, CPG-Actor first); writes
-``OUT/analysis.json`` (every per-seed value and test).
+(``--variants`` names the two reproduction variants, CPG-Actor first), whose logged terrain
+levels it keeps in ``OUT/terrain_levels.json``; a folder without ``runs/`` (this one: run logs
+stay out of docs/) is read from that file. Writes ``OUT/analysis.json`` (every per-seed value
+and test).
 """
 
 from __future__ import annotations
@@ -70,26 +72,54 @@ def grids_of(out: Path, role: str) -> dict[int, dict[str, Any]]:
     return grids
 
 
-def level_reached(out: Path, variant: str) -> dict[int, float]:
-    """Per seed, the mean of the last logged ``charts/terrain_level`` of its run."""
-    reached = {}
-    for folder in seed_folders(out / "runs" / variant, "/metrics.jsonl"):
-        rows = [json.loads(line) for line in (folder / "metrics.jsonl").read_text().splitlines()
-                if line.strip()]  # fmt: skip
-        levels = [r["charts/terrain_level"] for r in rows
-                  if isinstance(r.get("charts/terrain_level"), int | float)]  # fmt: skip
-        if not levels:
-            sys.exit(f"{folder / 'metrics.jsonl'}: no charts/terrain_level logged (a run on "
-                     "rough ground with the curriculum logs it)")  # fmt: skip
-        reached[int(folder.name.removeprefix("seed"))] = float(np.mean(levels[-LAST_LOGGED:]))
-    return reached
+CURRICULA = "terrain_levels.json"  # per variant, per seed: [env steps, terrain level] as logged
+
+
+def read_curricula(
+    out: Path, variants: tuple[str, ...], keep: bool = True
+) -> dict[str, dict[int, list]]:
+    """Per variant, per seed, its run's logged ``charts/terrain_level`` with the env steps, from
+    ``OUT/runs`` (then, with ``keep``, kept in ``OUT/terrain_levels.json``) or, without runs,
+    from that file."""
+    if not (out / "runs").is_dir():
+        path = out / CURRICULA
+        if not path.is_file():
+            sys.exit(f"{out}: neither runs/VARIANT/seedS/metrics.jsonl nor {CURRICULA} "
+                     "(PROTOCOL.md says how to make them)")  # fmt: skip
+        kept = json.loads(path.read_text())
+        missing = [v for v in variants if v not in kept]
+        if missing:
+            sys.exit(f"{path}: no variant {missing}; it holds {sorted(kept)}")
+        return {v: {int(s): rows for s, rows in kept[v].items()} for v in variants}
+    curricula: dict[str, dict[int, list]] = {}
+    for variant in variants:
+        curricula[variant] = {}
+        for folder in seed_folders(out / "runs" / variant, "/metrics.jsonl"):
+            lines = (folder / "metrics.jsonl").read_text().splitlines()
+            rows = [json.loads(line) for line in lines if line.strip()]
+            levels = [[r.get("global_step"), r["charts/terrain_level"]] for r in rows
+                      if isinstance(r.get("charts/terrain_level"), int | float)]  # fmt: skip
+            if not levels:
+                sys.exit(f"{folder / 'metrics.jsonl'}: no charts/terrain_level logged (a run on "
+                         "rough ground with the curriculum logs it)")  # fmt: skip
+            curricula[variant][int(folder.name.removeprefix("seed"))] = levels
+    if keep:
+        atomic_write_text(json.dumps(curricula) + "\n", out / CURRICULA)
+    return curricula
+
+
+def level_reached(levels: dict[int, list]) -> dict[int, float]:
+    """Per seed, the mean of the last logged terrain levels of its run."""
+    return {seed: float(np.mean([level for _, level in rows[-LAST_LOGGED:]]))
+            for seed, rows in levels.items()}  # fmt: skip
 
 
 def collect(out: Path, variants: tuple[str, str]) -> tuple[dict, list[int]]:
     """Per metric, per role (and the start), the per-seed values, in the order of the seeds
     every one of them has; SystemExit where they differ (the paired test pairs by seed)."""
     grids = {role: grids_of(out, role) for role in (*ROLES, START)}
-    reached = {role: level_reached(out, v) for role, v in zip(ROLES, variants, strict=True)}
+    curricula = read_curricula(out, variants)
+    reached = {role: level_reached(curricula[v]) for role, v in zip(ROLES, variants, strict=True)}
     seeds = {role: sorted(g) for role, g in grids.items()}
     seeds |= {f"{role} runs": sorted(r) for role, r in reached.items()}
     if len({tuple(s) for s in seeds.values()}) != 1:
