@@ -11,12 +11,13 @@ train`` processes together (seeds 0..K-1, the preset's settings plus ``--train-a
 with its share of the cores for its simulator and update threads and one torch thread for its
 rollout, as ``reproduce`` starts them (``--automatic-threads``: the runs' own automatic
 threads, every usable core each, as runs started by hand get), watches their ``metrics.jsonl``
-(a row per iteration, stamped with the time this script saw it) for ``--seconds``, then stops
-them. Each run's rate is taken over the window in which every run was past its second iteration
-(start-up, JIT and ``torch.compile`` excluded): its control steps in the window over the
-window's wall time, evaluations and checkpoints included, as a user waits for them. The
-combined rate is their sum, and the paper's budget is given at it. K = 1 is the reference,
-measured in the same run.
+(a row per iteration, stamped with the time this script saw it) for ``--seconds``, longer
+where a run has not yet finished the 3 iterations a window needs (a busy or slow machine; up to
+``WAIT_FACTOR`` times ``--seconds``), then stops them. Each run's rate is taken over the
+window in which every run was past its second iteration (start-up, JIT and ``torch.compile``
+excluded): its control steps in the window over the window's wall time, evaluations and
+checkpoints included, as a user waits for them. The combined rate is their sum, and the
+paper's budget is given at it. K = 1 is the reference, measured in the same run.
 """
 
 from __future__ import annotations
@@ -37,6 +38,8 @@ from cpg_actor.machine import cpu_model, load_average, usable_cores
 
 PAPER_BUDGET = 5 * 5 * 20_000_000  # control steps: 5 variants x 5 seeds x 20M
 POLL_S = 0.25
+NEEDED = 3  # iterations per run: 2 of start-up, then the window
+WAIT_FACTOR = 10  # the longest wait for them, in multiples of --seconds
 
 
 def read_rows(path: Path, seen: int) -> list[str]:
@@ -49,7 +52,8 @@ def read_rows(path: Path, seen: int) -> list[str]:
 
 def watch(commands: list[list[str]], run_dirs: list[Path], seconds: float) -> list[list]:
     """Start the processes, stamp each new metrics row with the time it appeared, stop them
-    after ``seconds`` (or when all have ended); per run: [(time, global_step), ...]."""
+    after ``seconds`` once every run has ``NEEDED`` iterations (at most ``WAIT_FACTOR`` times
+    ``seconds``), or when all have ended; per run: [(time, global_step), ...]."""
     import json
 
     logs = [open(d.parent / f"{d.name}.log", "w") for d in run_dirs]  # noqa: SIM115
@@ -59,9 +63,15 @@ def watch(commands: list[list[str]], run_dirs: list[Path], seconds: float) -> li
     ]
     stamps: list[list] = [[] for _ in run_dirs]
     seen = [0] * len(run_dirs)
-    deadline = time.monotonic() + seconds
+    begun = time.monotonic()
+
+    def going_on() -> bool:
+        elapsed = time.monotonic() - begun
+        short = any(len(s) < NEEDED for s in stamps)
+        return elapsed < seconds or (short and elapsed < WAIT_FACTOR * seconds)
+
     try:
-        while time.monotonic() < deadline and any(p.poll() is None for p in processes):
+        while going_on() and any(p.poll() is None for p in processes):
             time.sleep(POLL_S)
             now = time.monotonic()
             for i, run_dir in enumerate(run_dirs):
@@ -79,7 +89,7 @@ def watch(commands: list[list[str]], run_dirs: list[Path], seconds: float) -> li
         for log in logs:
             log.close()
     for i, process in enumerate(processes):
-        if process.returncode not in (0, -signal.SIGTERM) and len(stamps[i]) < 3:
+        if process.returncode not in (0, -signal.SIGTERM) and len(stamps[i]) < NEEDED:
             log = (run_dirs[i].parent / f"{run_dirs[i].name}.log").read_text()
             raise RuntimeError(f"run {i} failed (exit {process.returncode}):\n{log[-3000:]}")
     return stamps
@@ -88,9 +98,9 @@ def watch(commands: list[list[str]], run_dirs: list[Path], seconds: float) -> li
 def window_rates(stamps: list[list]) -> tuple[list[float], float]:
     """Each run's control steps per second over the window where all were past their second
     iteration, and the window's length (s); ValueError if the runs never overlapped so."""
-    if any(len(s) < 3 for s in stamps):
+    if any(len(s) < NEEDED for s in stamps):
         raise ValueError(
-            "a run did not finish 3 iterations in the time given; raise --seconds "
+            f"a run did not finish {NEEDED} iterations in the time given; raise --seconds "
             f"(iterations seen: {[len(s) for s in stamps]})"
         )
     start = max(s[1][0] for s in stamps)  # every run has finished its second iteration

@@ -472,3 +472,35 @@ def test_time_to_quality_resumes_a_cut_off_run_without_redoing_what_it_saved(tmp
     with pytest.raises(SystemExit):
         ttq.main([*argv[:3], "3", *argv[4:], "--resume"])  # other arguments, nothing to resume
     assert "--resume: no" in capsys.readouterr().err
+
+
+def fake_trainer(run_dir: Path, rows: int, every: float) -> list[str]:
+    """A process that logs ``rows`` training iterations to RUN_DIR/metrics.jsonl, one each
+    ``every`` seconds, then sleeps (as a run that trains until it is stopped)."""
+    code = (
+        "import json, sys, time\n"
+        "from pathlib import Path\n"
+        "d = Path(sys.argv[1]); d.mkdir(parents=True)\n"
+        "for i in range(int(sys.argv[2])):\n"
+        "    time.sleep(float(sys.argv[3]))\n"
+        "    with open(d / 'metrics.jsonl', 'a') as f:\n"
+        "        f.write(json.dumps({'global_step': 100 * (i + 1), 'charts/SPS': 1}) + '\\n')\n"
+        "time.sleep(60)\n"
+    )
+    return [sys.executable, "-c", code, str(run_dir), str(rows), str(every)]
+
+
+def test_shared_device_waits_for_the_iterations_its_window_needs_on_a_slow_machine(tmp_path):
+    shared = benchmark("shared_device")
+    run_dir = tmp_path / "seed0"
+    # a run slower than --seconds: its 3 iterations come after 0.9 s of a 0.3 s watch
+    stamps = shared.watch([fake_trainer(run_dir, 3, 0.3)], [run_dir], seconds=0.3)
+    assert [step for _, step in stamps[0]] == [100, 200, 300]
+    rates, window = shared.window_rates(stamps)
+    assert window > 0 and rates[0] > 0
+    # a run that never gets there: the watch ends at WAIT_FACTOR x --seconds and says so
+    quiet = tmp_path / "seed1"
+    stamps = shared.watch([fake_trainer(quiet, 1, 0.05)], [quiet], seconds=0.1)
+    assert len(stamps[0]) == 1
+    with pytest.raises(ValueError, match="did not finish 3 iterations"):
+        shared.window_rates(stamps)
