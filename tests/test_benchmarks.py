@@ -493,8 +493,8 @@ def fake_trainer(run_dir: Path, rows: int, every: float) -> list[str]:
 def test_shared_device_waits_for_the_iterations_its_window_needs_on_a_slow_machine(tmp_path):
     shared = benchmark("shared_device")
     run_dir = tmp_path / "seed0"
-    # a run slower than --seconds: its 3 iterations come after 0.9 s of a 0.3 s watch
-    stamps = shared.watch([fake_trainer(run_dir, 3, 0.3)], [run_dir], seconds=0.3)
+    # a run slower than --seconds: its 3 iterations come after 1.5 s of a 1 s watch (10 s cap)
+    stamps = shared.watch([fake_trainer(run_dir, 3, 0.5)], [run_dir], seconds=1.0)
     assert [step for _, step in stamps[0]] == [100, 200, 300]
     rates, window = shared.window_rates(stamps)
     assert window > 0 and rates[0] > 0

@@ -250,6 +250,9 @@ def test_the_rough_ground_analysis_judges_falls_tracking_and_the_level_reached(t
     assert json.loads((docs / "analysis.json").read_text())["data"] == result["data"]
     done = run(script, str(docs))
     assert done.returncode != 0 and "no variant ['cpg-actor']" in done.stderr
+    (docs / "terrain_levels.json").write_text("[1, 2")
+    done = run(script, str(docs), "--variants", "cpg-actor-omni,mlp-field")
+    assert done.returncode != 0 and "not the terrain levels this analysis keeps" in done.stderr
 
     # the default names find no cpg-actor runs; a grid without level 4 is named
     done = run(script, str(out))

@@ -86,8 +86,12 @@ def read_curricula(
         if not path.is_file():
             sys.exit(f"{out}: neither runs/VARIANT/seedS/metrics.jsonl nor {CURRICULA} "
                      "(PROTOCOL.md says how to make them)")  # fmt: skip
-        kept = json.loads(path.read_text())
-        missing = [v for v in variants if v not in kept]
+        try:
+            kept = json.loads(path.read_text())
+            missing = [v for v in variants if v not in kept]
+        except (ValueError, TypeError):
+            sys.exit(f"{path}: not the terrain levels this analysis keeps (a JSON object of "
+                     "variant: seed: [[env steps, level], ...])")  # fmt: skip
         if missing:
             sys.exit(f"{path}: no variant {missing}; it holds {sorted(kept)}")
         return {v: {int(s): rows for s, rows in kept[v].items()} for v in variants}
