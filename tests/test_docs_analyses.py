@@ -212,6 +212,10 @@ def test_the_rough_ground_analysis_judges_falls_tracking_and_the_level_reached(t
             grid = fake_grid(flat + 0.002 * i)
             grid["means"]["all level 4"] = {**grid["means"]["flat"], "fell": falls + 0.01 * i,
                                             "lin_vel_error": rough + 0.003 * i}  # fmt: skip
+            flat_rows = [{**row, "terrain": "flat"} for row in grid["rows"]]
+            rough_rows = [{**row, "terrain": "all level 4"} for row in grid["rows"]]
+            rough_rows[-1] |= {"fell": 0.1 * i, "recovered": 1 - 0.1 * i}  # push right
+            grid["rows"] = flat_rows + rough_rows
             folder = out / "grid" / role / f"seed{seed}"
             folder.mkdir(parents=True)
             (folder / "grid.json").write_text(json_text(grid))
@@ -236,6 +240,14 @@ def test_the_rough_ground_analysis_judges_falls_tracking_and_the_level_reached(t
     assert goals["cpg-actor"]["falls"]["met"] and goals["cpg-actor"]["error"]["met"]
     assert not goals["mlp-field"]["falls"]["met"] and not goals["start"]["error"]["met"]
     assert "| the CPG-Actor's start |" in done.stdout
+    pushed = result["checks"]["mlp-field"]["all level 4"]["push right"]
+    assert pushed["fell"] == pytest.approx([0.0, 0.1, 0.2])
+    assert pushed["recovered"] == pytest.approx([1.0, 0.9, 0.8])
+    assert result["checks"]["start"]["flat"]["push left"]["fell"] == [1.0, 1.0, 1.0]
+    assert "| `mlp-field` | all level 4 | push right | 0.10 (0.00, 0.10, 0.20) | 0.90 " in (
+        done.stdout
+    )
+    assert "| `cpg-actor` | flat | payload | 0.00 (0.00, 0.00, 0.00) | - |" in done.stdout
     kept = json.loads((out / "terrain_levels.json").read_text())
     assert kept["mlp-field"]["27"][-1] == [8192 * 20, pytest.approx(1.2)]
 
@@ -261,6 +273,13 @@ def test_the_rough_ground_analysis_judges_falls_tracking_and_the_level_reached(t
     bare.write_text(json_text(fake_grid(0.1)))
     done = run(script, str(out), "--variants", "cpg-actor-omni,mlp-field")
     assert done.returncode != 0 and "needs the grounds flat and 'all level 4'" in done.stderr
+    grid = fake_grid(0.1)
+    grid["means"]["all level 4"] = grid["means"]["flat"]
+    grid["rows"] = [{**row, "terrain": "flat"} for row in grid["rows"]]
+    bare.write_text(json_text(grid))
+    done = run(script, str(out), "--variants", "cpg-actor-omni,mlp-field")
+    assert done.returncode != 0
+    assert "grid/start/seed25/grid.json: no 'payload' row on 'all level 4'" in done.stderr
     done = run(script, str(out), "--variants", "cpg-actor-omni")
     assert done.returncode != 0 and "--variants takes two names" in done.stderr
 

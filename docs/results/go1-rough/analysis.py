@@ -10,7 +10,7 @@ Reads ``OUT/grid/ROLE/seedS/grid.json`` (``cpg-actor eval --grid --grid-levels 4
 (``--variants`` names the two reproduction variants, CPG-Actor first), whose logged terrain
 levels it keeps in ``OUT/terrain_levels.json``; a folder without ``runs/`` (this one: run logs
 stay out of docs/) is read from that file. Writes ``OUT/analysis.json`` (every per-seed value
-and test).
+and test, and the payload and push rows, shown, not tested).
 """
 
 from __future__ import annotations
@@ -50,6 +50,7 @@ SHOWN = {  # reported, not tested
     "yaw-rate error on flat ground (rad/s)": ("flat", "yaw_rate_error"),
 }
 REACHED = "terrain level reached (0-9)"
+CHECKS = ("payload", "push left", "push right")  # the grid's rows beyond its commands
 
 
 def seed_folders(folder: Path, what: str) -> list[Path]:
@@ -118,9 +119,34 @@ def level_reached(levels: dict[int, list]) -> dict[int, float]:
             for seed, rows in levels.items()}  # fmt: skip
 
 
-def collect(out: Path, variants: tuple[str, str]) -> tuple[dict, list[int]]:
+def check_row(grid: dict[str, Any], ground: str, check: str, where: str) -> dict[str, Any]:
+    """The grid's row of ``check`` (payload, push left, push right) on ``ground``."""
+    for row in grid["rows"]:
+        if row.get("terrain") == ground and row.get("check", "").startswith(check):
+            return row
+    sys.exit(f"{where}: no {check!r} row on {ground!r} (`cpg-actor eval --grid` writes one)")
+
+
+def checks_of(grids: dict[str, dict[int, dict]], order: list[int]) -> dict[str, dict]:
+    """Per role, ground and check, the per-seed share of episodes that fell and, after a push,
+    that recovered: reported, not tested."""
+    result: dict[str, dict] = {}
+    for role, by_seed in grids.items():
+        for ground in ("flat", ROUGH):
+            for check in CHECKS:
+                rows = [check_row(by_seed[s], ground, check, f"grid/{role}/seed{s}/grid.json")
+                        for s in order]  # fmt: skip
+                entry = {"fell": [float(r["fell"]) for r in rows]}
+                if check.startswith("push"):
+                    entry["recovered"] = [float(r.get("recovered", math.nan)) for r in rows]
+                result.setdefault(role, {}).setdefault(ground, {})[check] = entry
+    return result
+
+
+def collect(out: Path, variants: tuple[str, str]) -> tuple[dict, dict, list[int]]:
     """Per metric, per role (and the start), the per-seed values, in the order of the seeds
-    every one of them has; SystemExit where they differ (the paired test pairs by seed)."""
+    every one of them has, and the payload and push rows (`checks_of`); SystemExit where the
+    seeds differ (the paired test pairs by seed)."""
     grids = {role: grids_of(out, role) for role in (*ROLES, START)}
     curricula = read_curricula(out, variants)
     reached = {role: level_reached(curricula[v]) for role, v in zip(ROLES, variants, strict=True)}
@@ -136,7 +162,7 @@ def collect(out: Path, variants: tuple[str, str]) -> tuple[dict, list[int]]:
         data[name] = {role: [float(grids[role][s]["means"][ground][key]) for s in order]
                       for role in grids}  # fmt: skip
     data[REACHED] = {role: [reached[role][s] for s in order] for role in ROLES}
-    return data, order
+    return data, checks_of(grids, order), order
 
 
 def tests_of(data: dict[str, dict[str, list[float]]]) -> list[dict[str, Any]]:
@@ -175,11 +201,18 @@ def targets(data: dict[str, dict[str, list[float]]]) -> dict[str, dict[str, Any]
     return result
 
 
+def seeds_text(values: list[float]) -> str:
+    """The mean over the seeds with a value, then each seed's ("no gait": none to recover)."""
+    known = [x for x in values if math.isfinite(x)]
+    mean = f"{np.mean(known):.2f}" if known else "no gait"
+    return f"{mean} ({', '.join(f'{x:.2f}' if math.isfinite(x) else 'no gait' for x in values)})"
+
+
 def label(role: str) -> str:
     return "the CPG-Actor's start" if role == START else f"`{role}`"
 
 
-def report(data, tests, goals, seeds, variants) -> None:
+def report(data, checks, tests, goals, seeds, variants) -> None:
     print("# go1-rough: the analysis of `PROTOCOL.md`\n")
     print("Made by `PYTHONPATH=src python docs/results/go1-rough/analysis.py "
           f"{' '.join(sys.argv[1:])}`. Seeds {seeds}; runs of the variants "
@@ -210,6 +243,18 @@ def report(data, tests, goals, seeds, variants) -> None:
             cells.append(f"{'met' if entry['met'] else 'missed'} ({entry['mean']:.3f} "
                          f"[{low:.3f}, {high:.3f}])")  # fmt: skip
         print(f"| {label(role)} | {cells[0]} | {cells[1]} |")
+    print("\n## Payload (115 %) and pushes (1 m/s) while walking forward at 0.5 m/s (shown, "
+          "not tested)\n")  # fmt: skip
+    print("Per seed, the share of the episodes that fell and, after a push, the share that "
+          "recovered its gait (\"no gait\": the agent has no periodic gait without the push, "
+          "so none to recover); the mean over the seeds first.\n")  # fmt: skip
+    print("| agent | ground | check | fell | recovered |\n| --- | --- | --- | --- | --- |")
+    for role, grounds in checks.items():
+        for ground, rows in grounds.items():
+            for check, entry in rows.items():
+                recovered = seeds_text(entry["recovered"]) if "recovered" in entry else "-"
+                print(f"| {label(role)} | {ground} | {check} | {seeds_text(entry['fell'])} | "
+                      f"{recovered} |")  # fmt: skip
     print("\n## Every test\n")
     print("The last column: yes, the first side is ahead by at least the minimum with Holm p < "
           "0.05; reversed, the second side is; no, neither.\n")  # fmt: skip
@@ -226,12 +271,13 @@ def main() -> None:
     variants = tuple(v.strip() for v in args.variants.split(","))
     if len(variants) != 2 or not all(variants):
         parser.error(f"--variants takes two names, CPG-Actor first, got {args.variants!r}")
-    data, seeds = collect(args.out, variants)
+    data, checks, seeds = collect(args.out, variants)
     tests = tests_of(data)
     goals = targets(data)
-    report(data, tests, goals, seeds, variants)
+    report(data, checks, tests, goals, seeds, variants)
     atomic_write_text(json.dumps({"seeds": seeds, "variants": variants, "data": data,
-                                  "tests": tests, "targets": goals}, indent=1) + "\n",
+                                  "checks": checks, "tests": tests, "targets": goals},
+                                 indent=1) + "\n",
                       args.out / "analysis.json")  # fmt: skip
 
 
