@@ -1,8 +1,8 @@
 """The untrained prior with the whole command: the open-loop gait CPG of the ``leg`` layout
 with planar steps (``agent_config.cpg_planar_steps``: each leg's drive and step direction
 from the command, :mod:`cpg_actor.robots.common.quadruped.planar_drive`), no feedback, no
-learning, on flat ground on MuJoCo. For each command held for ``--seconds`` (forward,
-backward, left, right, turn left, turn right, standing), ``--robots`` robots (the task's
+learning, on flat ground on MuJoCo. For each command of the evaluation protocol's grid
+(``cpg_actor.robustness.protocol.GRID``) held for ``--seconds``, ``--robots`` robots (the task's
 reset noise, seeds 0..) walk it; the table gives the mean achieved forward and lateral speed
 (base frame, m/s) and yaw rate (rad/s) over the second half of the run, next to the command,
 and the robots that fell. It shows how much of the command the prior alone walks (the
@@ -22,16 +22,10 @@ import torch
 
 from bench_report import measured, write
 from cpg_actor.robots.registry import get_robot
+from cpg_actor.robustness.protocol import GRID
 
-COMMANDS = {  # name: (forward m/s, lateral m/s, yaw rate rad/s)
-    "forward": (0.5, 0.0, 0.0),
-    "backward": (-0.5, 0.0, 0.0),
-    "left": (0.0, 0.3, 0.0),
-    "right": (0.0, -0.3, 0.0),
-    "turn left": (0.0, 0.0, 0.5),
-    "turn right": (0.0, 0.0, -0.5),
-    "standing": (0.0, 0.0, 0.0),
-}
+# the evaluation protocol's command grid: name -> (forward m/s, lateral m/s, yaw rate rad/s)
+COMMANDS = {c.name: (c.vx, c.vy, c.yaw) for c in GRID}
 
 
 def base_velocity(qpos: np.ndarray, qvel: np.ndarray) -> np.ndarray:
