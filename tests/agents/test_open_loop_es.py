@@ -107,6 +107,25 @@ def _call(module: str, name: str, *args: str) -> bytes:
     return pickle.PROTO + b"\x04" + _global(module, name) + arguments + pickle.REDUCE + pickle.STOP
 
 
+def _logger_payload(marker: str) -> bytes:
+    """cma's data logger made with NEWOBJ, its file names set by BUILD, then ADDITEMS calls
+    its ``add()``: the payload that wrote a file where the pickle said (a ``.pth`` in
+    site-packages runs code at every Python start)."""
+    logger = _global("cma.logger", "CMADataLogger") + pickle.EMPTY_TUPLE + pickle.NEWOBJ
+    fields = pickle.EMPTY_DICT + pickle.MARK
+    fields += _text("name_prefix") + _text(marker) + _text("file_parameters") + _text(".pth")
+    fields += pickle.SETITEMS
+    return (
+        pickle.PROTO + b"\x04" + logger + fields + pickle.BUILD
+        + pickle.MARK + _text("import os") + pickle.ADDITEMS + pickle.STOP
+    )  # fmt: skip
+
+
+def _randomstate_payload(marker: str) -> bytes:
+    """numpy's ``__randomstate_ctor(arg, f)`` calls ``f(arg)``: here ``print``."""
+    return _call("numpy.random._pickle", "__randomstate_ctor", marker)
+
+
 CRAFTED = {
     # the payload that ran a command: cma + a dotted name reaching subprocess.Popen via numpy
     "popen": lambda marker: _call("cma", "_np.f2py.subprocess.Popen", "touch", marker),
@@ -116,6 +135,8 @@ CRAFTED = {
     "cma-constructor": lambda marker: _call(
         "cma.evolution_strategy", "CMAEvolutionStrategy", marker
     ),
+    "cma-logger": _logger_payload,
+    "numpy-randomstate-ctor": _randomstate_payload,
     # BUILD on a listed class itself would patch that class for the whole process
     "build-class": lambda marker: pickle.PROTO + b"\x04"
     + _global("cma.evolution_strategy", "CMAEvolutionStrategy")
@@ -125,28 +146,228 @@ CRAFTED = {
 
 
 @pytest.mark.parametrize("payload", sorted(CRAFTED))
-def test_a_crafted_search_state_runs_no_code_and_is_one_line(payload, tmp_path):
+def test_a_pickled_search_state_is_never_read(payload, tmp_path, monkeypatch):
+    """A checkpoint whose CMA-ES state is pickle bytes (the older format, or a crafted file):
+    refused in one line before anything reads it; nothing runs, nothing is written."""
     import cma
 
+    monkeypatch.chdir(tmp_path)
     marker = tmp_path / "ran"
     search = CMASearch(np.zeros(3), 0.3, 4, seed=0)
     state = _with_bytes(search.state_dict(), CRAFTED[payload](str(marker)))
-    with pytest.raises(ValueError, match="CMA-ES state") as error:
+    with pytest.raises(ValueError, match="CMA-ES state is a pickle") as error:
         search.load_state_dict(state)
     assert "\n" not in str(error.value)
     assert list(tmp_path.iterdir()) == []  # nothing ran, nothing was written
     assert "__setstate__" not in vars(cma.CMAEvolutionStrategy)
 
 
-def test_a_search_state_with_other_options_is_refused():
-    """cma evaluates, calls and writes to disk what its options say: a state whose options
-    differ from the running search's (here: a log file prefix and logging on) is refused."""
+@pytest.mark.parametrize("payload", ["cma-logger", "numpy-randomstate-ctor", "popen"])
+def test_a_crafted_open_loop_es_checkpoint_neither_writes_nor_runs(payload, tmp_path, capsys):
+    """The whole path a user takes: ``cpg-actor train --resume`` on a downloaded open-loop-es
+    run whose checkpoint carries a crafted pickle. One line, exit 2, no file written outside
+    what the run itself had."""
+    run = tmp_path / "run"
+    args = [*TINY, "--total-steps", str(2 * GENERATION), "--set", "checkpoint_interval=1"]
+    assert main(["train", "--run-dir", str(run), *args, "--set", "eval_interval=0"]) == 0
+    path = run / "checkpoints" / "last.pt"
+    data = torch.load(path, weights_only=True)
+    marker = tmp_path / "planted"
+    data["es"] = _with_bytes(data["es"], CRAFTED[payload](str(marker)))
+    torch.save(data, path)
+    before = sorted(p for p in tmp_path.rglob("*"))
+    capsys.readouterr()
+    more = str(3 * GENERATION)
+    code = main(
+        ["train", "--run-dir", str(run), "--resume", "--total-steps", more, "--no-progress"]
+    )
+    err = capsys.readouterr().err
+    assert code == 2 and "pickle" in err and len(err.strip().splitlines()) == 1, err
+    assert sorted(p for p in tmp_path.rglob("*")) == before
+    assert not any(tmp_path.parent.glob("*.pth")) and not marker.exists()
+
+
+def _state_values(value):
+    """Every leaf of a saved search state."""
+    if isinstance(value, dict):
+        for item in value.values():
+            yield from _state_values(item)
+    elif isinstance(value, list):
+        for item in value:
+            yield from _state_values(item)
+    else:
+        yield value
+
+
+def test_a_search_state_is_tensors_and_plain_numbers_only(tmp_path):
+    search = CMASearch(np.zeros(4), 0.3, 4, seed=0)
+    for _ in range(5):
+        candidates = search.ask()
+        search.tell(candidates, -np.sum(candidates**2, axis=1))
+    state = search.state_dict()
+    kinds = {type(v) for v in _state_values(state)}
+    assert kinds <= {torch.Tensor, int, float, bool, type(None)}, kinds
+    torch.save(state, tmp_path / "state.pt")
+    read = torch.load(tmp_path / "state.pt", weights_only=True)
+    copy = CMASearch(np.ones(4), 1.0, 4, seed=3)
+    copy.load_state_dict(read)
+    assert np.array_equal(copy.ask(), search.ask())
+
+
+def _numeric_leaves(root, prefix="", seen=None, out=None):
+    """Every number, array and list of numbers reachable from a cma object, by path."""
+    seen = set() if seen is None else seen
+    out = {} if out is None else out
+    if id(root) in seen:
+        return out
+    seen.add(id(root))
+    if isinstance(root, dict):
+        items = [(str(key), value) for key, value in root.items()]
+    elif type(root).__module__.startswith("cma") and hasattr(root, "__dict__"):
+        items = list(vars(root).items())
+    else:
+        return out
+    for name, value in items:
+        path = prefix + name
+        if isinstance(value, (np.ndarray, int, float, np.number, type(None), range)):
+            out[path] = value
+        elif isinstance(value, (list, tuple)):
+            out[path] = [np.asarray(v).tolist() for v in value]
+        else:
+            _numeric_leaves(value, path + ".", seen, out)
+    return out
+
+
+# what changes in a running search and is not its state: wall-clock timers, the options, a
+# cache keyed by constants, the arguments of the last tell kept for debugging, the population
+# of a generation (emptied by tell)
+NOT_STATE = ("opts.", "inopts.", "adapt_sigma._es_opts.", "_round_integer_variables.params.",
+             "timer.", "logger.timer_", "sigma_vec._parameters.", "_tell2_args.",
+             "pop")  # fmt: skip
+
+
+@pytest.mark.parametrize("popsize", [4, 8])  # 4: cma's selective mirrors are on
+def test_every_value_a_running_search_changes_is_in_its_saved_state(popsize):
+    """A guard for cma versions: whatever a running search changes is listed in
+    cma_state.FIELDS (or is a documented non-state), else resume could be inexact."""
+    from cpg_actor.agents.cma_state import ALIASES, FIELDS
+
+    def same(a, b):
+        if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+            return np.shape(a) == np.shape(b) and np.array_equal(a, b, equal_nan=True)
+        return type(a) is type(b) and (a == b or a != a and b != b)
+
+    fresh = _numeric_leaves(CMASearch(np.zeros(3), 0.3, popsize, seed=1).es)
+    search = CMASearch(np.zeros(3), 0.3, popsize, seed=1)
+    changed = set()
+    for _ in range(60):
+        candidates = search.ask()
+        search.tell(candidates, -np.sum(np.cos(3 * candidates) + candidates**2, axis=1))
+        leaves = _numeric_leaves(search.es)
+        changed |= {path for path, value in leaves.items() if not same(fresh.get(path), value)}
+    unlisted = {
+        path for path in changed
+        if path not in FIELDS and path not in ALIASES and not path.startswith(NOT_STATE)
+    }  # fmt: skip
+    assert unlisted == set()
+
+
+def _rosenbrock(candidates: np.ndarray) -> np.ndarray:
+    x = candidates
+    return -np.sum(100 * (x[:, 1:] - x[:, :-1] ** 2) ** 2 + (1 - x[:, :-1]) ** 2, axis=1)
+
+
+@pytest.mark.parametrize(("dimension", "popsize", "cut"), [(5, 8, 0), (5, 8, 7), (3, 4, 40)])
+def test_a_restored_search_continues_exactly_to_its_stop(dimension, popsize, cut):
+    """Saved after ``cut`` generations and rebuilt in a search made with another start, step
+    size and seed: every later generation's candidates, the stopping criteria and the result
+    equal the uninterrupted search's, bit for bit, until CMA-ES stops (a NaN fitness now and
+    then)."""
+    straight = CMASearch(np.zeros(dimension), 0.3, popsize, seed=1)
+    for _ in range(cut):
+        candidates = straight.ask()
+        straight.tell(candidates, _rosenbrock(candidates))
+    resumed = CMASearch(np.ones(dimension), 0.9, popsize, seed=5)
+    resumed.load_state_dict(straight.state_dict())
+    for generation in range(400):
+        candidates = straight.ask()
+        assert np.array_equal(resumed.ask(), candidates), generation
+        fitness = _rosenbrock(candidates)
+        if generation % 37 == 5:
+            fitness[1] = np.nan
+        straight.tell(candidates, fitness)
+        resumed.tell(candidates, fitness.copy())
+        assert resumed.stop_reason == straight.stop_reason
+        if straight.stop_reason:
+            break
+    assert straight.stop_reason  # it ran to CMA-ES's own end
+    assert resumed.best_fitness == straight.best_fitness
+    assert np.array_equal(resumed.best_x, straight.best_x)
+
+
+def _saved_state() -> tuple[CMASearch, dict]:
     search = CMASearch(np.zeros(3), 0.3, 4, seed=0)
-    search.es.opts["verb_log"] = 1
-    search.es.opts["verb_filenameprefix"] = "/tmp/elsewhere/"
-    fresh = CMASearch(np.zeros(3), 0.3, 4, seed=0)
-    with pytest.raises(ValueError, match="option 'verb_"):
-        fresh.load_state_dict(search.state_dict())
+    for _ in range(3):
+        candidates = search.ask()
+        search.tell(candidates, -np.sum(candidates**2, axis=1))
+    return search, search.state_dict()
+
+
+def _edit(state: dict, path: str, value) -> dict:
+    edited = {**state, "cma": {**state["cma"]}}
+    if path.startswith("randn."):
+        edited["cma"]["randn"] = {**state["cma"]["randn"], path[6:]: value}
+    elif path in edited["cma"]:
+        edited["cma"][path] = value
+    else:
+        edited[path] = value
+    return edited
+
+
+BAD_STATES = {
+    "mean of another size": ("mean", torch.zeros(5, dtype=torch.float64)),
+    "covariance as float32": ("sm.C", torch.eye(3)),
+    "NaN step size": ("sigma", float("nan")),
+    "step size as text": ("sigma", "0.3"),
+    "counter as float": ("countiter", 3.0),
+    "huge history": ("fit.hist", [0.0] * 200_001),
+    "history of strings": ("fit.hist", ["1"]),
+    "order not a permutation": ("fit.idx", torch.zeros(4, dtype=torch.int64)),
+    "a nested dict": ("pc", {"a": {"b": 1}}),
+    "generator keys short": ("randn.keys", torch.zeros(3, dtype=torch.int64)),
+    "generator keys out of range": ("randn.keys", torch.full((624,), 2**40)),
+    "generator pos out of range": ("randn.pos", 10**6),
+    "best_x of another size": ("best_x", torch.zeros(9, dtype=torch.float64)),
+    "generation as text": ("generation", "3"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_STATES))
+def test_a_damaged_search_state_is_one_line_and_changes_nothing(case):
+    search, state = _saved_state()
+    before = search.ask()
+    search, state = _saved_state()
+    path, value = BAD_STATES[case]
+    with pytest.raises(ValueError) as error:
+        search.load_state_dict(_edit(state, path, value))
+    message = str(error.value)
+    assert "\n" not in message and len(message) < 300, message
+    assert np.array_equal(search.ask(), before)  # the running search is untouched
+
+
+@pytest.mark.parametrize("change", ["unknown field", "missing field", "not a dict"])
+def test_a_search_state_of_another_shape_is_refused(change):
+    search, state = _saved_state()
+    cma = dict(state["cma"])
+    if change == "unknown field":
+        cma["logger.name_prefix"] = 1.0
+    elif change == "missing field":
+        del cma["sm.C"]
+    else:
+        cma = [1, 2, 3]
+    with pytest.raises(ValueError, match="CMA-ES state") as error:
+        search.load_state_dict({**state, "cma": cma})
+    assert "\n" not in str(error.value)
 
 
 def test_non_finite_fitness_ranks_last_and_is_never_kept():

@@ -36,7 +36,7 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
-from .cma_state import dump_search_state, load_search_state
+from .cma_state import restore_search_state, search_state
 
 ES_EPISODE_SEED_KEY = 2**31 + 2  # SeedSequence([seed, this, generation]): reset seeds
 ES_SEARCH_SEED_KEY = 2**31 + 3  # SeedSequence([seed, this]): CMA-ES's normal draws
@@ -103,7 +103,7 @@ def episode_seeds(seed: int, generation: int, episodes: int) -> list[int]:
 class NormalSource:
     """Standard normal draws for CMA-ES (its ``randn`` option, called ``randn(*shape)`` as
     ``np.random.randn``) from a generator of its own: the global numpy generator is left
-    alone, and the state is pickled with the search's."""
+    alone, and its state is saved with the search's (:mod:`.cma_state`)."""
 
     def __init__(self, seed: int) -> None:
         self.generator = np.random.RandomState(seed)
@@ -123,10 +123,20 @@ class CMASearch:
     """
 
     def __init__(self, x0: np.ndarray, sigma0: float, popsize: int, seed: int) -> None:
+        self._start = (np.array(x0, dtype=np.float64), float(sigma0), int(popsize), int(seed))
+        self.es = self._new_search()
+        self.generation = 0
+        self.best_fitness = -math.inf
+        self.best_x: np.ndarray | None = None
+        self.best_generation = 0  # 1-based: the generation that evaluated best_x (0: none)
+
+    def _new_search(self) -> Any:
+        """A search at the start, built by cma's constructor from this run's options."""
         import cma
 
+        x0, sigma0, popsize, seed = self._start
         options = {
-            "popsize": int(popsize),
+            "popsize": popsize,
             "randn": NormalSource(seed),
             "seed": float("nan"),  # cma must not seed (or draw from) numpy's global generator
             "maxiter": math.inf,
@@ -136,11 +146,7 @@ class CMASearch:
             "verb_log": 0,
             "signals_filename": "",  # no option changes read from a file in the working dir
         }
-        self.es = cma.CMAEvolutionStrategy(np.asarray(x0, dtype=np.float64), sigma0, options)
-        self.generation = 0
-        self.best_fitness = -math.inf
-        self.best_x: np.ndarray | None = None
-        self.best_generation = 0  # 1-based: the generation that evaluated best_x (0: none)
+        return cma.CMAEvolutionStrategy(x0.copy(), sigma0, options)
 
     @property
     def sigma(self) -> float:
@@ -179,11 +185,11 @@ class CMASearch:
 
     # -- state -------------------------------------------------------------------------------
     def state_dict(self) -> dict[str, Any]:
-        """Tensors and plain values (``torch.load(weights_only=True)`` reads them): the
-        pickled CMA-ES object as bytes (uint8), the best candidate and the counters."""
-        blob = dump_search_state(self.es)
+        """Tensors and plain numbers (``torch.load(weights_only=True)`` reads them): CMA-ES's
+        state as :func:`~.cma_state.search_state` reads it, the best candidate and the
+        counters. No pickle: a checkpoint is numbers only."""
         return {
-            "cma": torch.frombuffer(bytearray(blob), dtype=torch.uint8),
+            "cma": search_state(self.es),
             "generation": self.generation,
             "best_fitness": self.best_fitness,
             "best_x": None if self.best_x is None else torch.from_numpy(self.best_x.copy()),
@@ -191,18 +197,38 @@ class CMASearch:
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
-        es = load_search_state(state["cma"].numpy().tobytes(), self.es)
-        if len(es.mean) != len(self.es.mean):
+        """Continue from ``state``: a search built anew from this run's options, its numbers
+        set from ``state``; ValueError (one line) if ``state`` is not a state of this search."""
+        saved = state.get("cma")
+        if isinstance(saved, torch.Tensor):
             raise ValueError(
-                f"the saved CMA-ES state searches {len(es.mean)} parameters, this agent's V "
-                f"has {len(self.es.mean)}"
+                "the saved CMA-ES state is a pickle (an older cpg-actor's checkpoint), which is "
+                "not read: it could run code; train the run again"
             )
+        if isinstance(saved, dict) and "mean" in saved:
+            saved_n = saved["mean"].numel() if isinstance(saved["mean"], torch.Tensor) else None
+            if saved_n is not None and saved_n != len(self.es.mean):
+                raise ValueError(
+                    f"the saved CMA-ES state searches {saved_n} parameters, this agent's V "
+                    f"has {len(self.es.mean)}"
+                )
+        best = state.get("best_x")
+        numbers = [state.get(key) for key in ("generation", "best_fitness", "best_generation")]
+        if (
+            type(numbers[0]) is not int or type(numbers[2]) is not int
+            or type(numbers[1]) is not float
+            or not (best is None or isinstance(best, torch.Tensor) and best.dtype == torch.float64
+                    and tuple(best.shape) == (len(self.es.mean),))
+        ):  # fmt: skip
+            raise ValueError(
+                "the saved search's counters must be integers generation and best_generation, a "
+                "float best_fitness and best_x None or a float64 vector of V's size"
+            )
+        es = self._new_search()
+        restore_search_state(es, saved)
         self.es = es
-        self.generation = int(state["generation"])
-        self.best_fitness = float(state["best_fitness"])
-        best = state["best_x"]
-        self.best_x = None if best is None else best.numpy().astype(np.float64)
-        self.best_generation = int(state["best_generation"])
+        self.generation, self.best_fitness, self.best_generation = numbers
+        self.best_x = None if best is None else best.numpy().copy()
 
 
 # -- evaluating candidates ---------------------------------------------------------------------

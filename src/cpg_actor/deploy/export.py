@@ -314,6 +314,27 @@ def export_policy(
     return path
 
 
+def _torchscript_extra(path: Path, name: str, limit: int = 1 << 20) -> str | None:
+    """The extra file ``name`` of a TorchScript archive (``ARCHIVE/extra/NAME`` in its zip),
+    None if it has none; ValueError (one line) if the file is no TorchScript archive or the
+    extra file is over ``limit`` bytes."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as archive:
+            found = [
+                info for info in archive.infolist()
+                if info.filename.count("/") == 2 and info.filename.endswith(f"/extra/{name}")
+            ]  # fmt: skip
+            if not found:
+                return None
+            if found[0].file_size > limit:
+                raise ValueError(f"{path}: its {name} is over {limit:,} bytes")
+            return archive.read(found[0]).decode("utf-8")
+    except (zipfile.BadZipFile, UnicodeDecodeError, OSError) as error:
+        raise ValueError(f"{path} is not a TorchScript export ({type(error).__name__})") from None
+
+
 def read_metadata(path: str | os.PathLike) -> dict[str, Any]:
     """The metadata of an exported policy file (ONNX or TorchScript), JSON values decoded."""
     path = Path(path)
@@ -322,11 +343,7 @@ def read_metadata(path: str | os.PathLike) -> dict[str, Any]:
 
         raw = {p.key: p.value for p in onnx.load(str(path), load_external_data=False)
                .metadata_props}  # fmt: skip
-    else:
-        files = {TORCHSCRIPT_METADATA: ""}
-        with warnings.catch_warnings():
-            warnings.filterwarnings("ignore", r"`torch\.jit\.load`", DeprecationWarning)
-            torch.jit.load(str(path), _extra_files=files)
-        raw = json.loads(files[TORCHSCRIPT_METADATA]) if files[TORCHSCRIPT_METADATA] else {}
+    else:  # read from the archive as a zip: loading the TorchScript would unpickle its data
+        raw = json.loads(_torchscript_extra(path, TORCHSCRIPT_METADATA) or "{}")
     return {key: value if key in METADATA_TEXT_KEYS else json.loads(value)
             for key, value in raw.items()}  # fmt: skip
