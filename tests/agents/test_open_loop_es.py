@@ -108,9 +108,9 @@ def _call(module: str, name: str, *args: str) -> bytes:
 
 
 def _logger_payload(marker: str) -> bytes:
-    """cma's data logger made with NEWOBJ, its file names set by BUILD, then ADDITEMS calls
-    its ``add()``: the payload that wrote a file where the pickle said (a ``.pth`` in
-    site-packages runs code at every Python start)."""
+    """cma's data logger made with NEWOBJ, its file names set by BUILD, then its ``add()``
+    called by ADDITEMS: the opcodes of the reported payload that wrote a file where the pickle
+    said (a ``.pth`` in site-packages runs code at every Python start)."""
     logger = _global("cma.logger", "CMADataLogger") + pickle.EMPTY_TUPLE + pickle.NEWOBJ
     fields = pickle.EMPTY_DICT + pickle.MARK
     fields += _text("name_prefix") + _text(marker) + _text("file_parameters") + _text(".pth")
