@@ -64,3 +64,23 @@ def test_what_a_group_cannot_train_is_one_line(tmp_path, capsys, argv, message):
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1
     assert not run_dir.exists()
+
+
+def test_overwrite_takes_every_seeds_lock_before_it_deletes_anything(tmp_path, capsys):
+    from cpg_actor.training.run_lock import RunLock
+
+    group = tmp_path / "group"
+    argv = ["train", "--seeds", "2", "--total-steps", "16", "--run-dir", str(group), *TINY]
+    assert main(argv) == 0
+    before = {seed: sorted(p.relative_to(group) for p in (group / f"seed-{seed}").rglob("*"))
+              for seed in (0, 1)}  # fmt: skip
+    capsys.readouterr()
+    with RunLock(group / "seed-1"):  # as if another `cpg-actor train` were writing seed 1
+        assert main([*argv, "--overwrite"]) == 2
+    err = capsys.readouterr().err
+    assert "seed-1 is in use by process" in err and len(err.strip().splitlines()) == 1
+    for seed in (0, 1):  # seed 0's run is whole: nothing was deleted
+        assert sorted(p.relative_to(group) for p in (group / f"seed-{seed}").rglob("*")) == (
+            before[seed]
+        )
+    assert (group / "seed-0" / "checkpoints" / "last.pt").is_file()

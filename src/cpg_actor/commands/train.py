@@ -277,11 +277,12 @@ def _run_group(args: argparse.Namespace, locks: list[RunLock]) -> int:
         progress_interval=args.progress_interval,
     )  # fmt: skip
     try:
-        for directory in directories:
+        for directory in directories:  # every seed's lock before any seed's run is cleared
             if not _has_content(directory):
                 directory.mkdir(parents=True, exist_ok=True)
                 write_marker(directory, RUN)
             _lock(directory, locks)
+        for directory in directories:
             prepare_run_dir(directory, args.overwrite)
         for runner in group.runners:
             runner.config.save(runner.run_dir / "config.yaml")
