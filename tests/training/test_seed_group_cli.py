@@ -80,7 +80,6 @@ def test_overwrite_takes_every_seeds_lock_before_it_deletes_anything(tmp_path, c
     err = capsys.readouterr().err
     assert "seed-1 is in use by process" in err and len(err.strip().splitlines()) == 1
     for seed in (0, 1):  # seed 0's run is whole: nothing was deleted
-        assert sorted(p.relative_to(group) for p in (group / f"seed-{seed}").rglob("*")) == (
-            before[seed]
-        )
+        after = sorted(p.relative_to(group) for p in (group / f"seed-{seed}").rglob("*"))
+        assert after == before[seed]
     assert (group / "seed-0" / "checkpoints" / "last.pt").is_file()

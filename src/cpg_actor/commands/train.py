@@ -26,6 +26,7 @@ from cpg_actor.files import (
     clear_project_dir,
     marker_kind,
     refuse_link,
+    refuse_linked_folders,
     remove_stale_temporaries,
     write_marker,
 )
@@ -163,9 +164,11 @@ def _has_content(run_dir: Path) -> bool:
 
 def check_run_dir_path(run_dir: Path) -> None:
     """One clear error, before anything starts, for a ``--run-dir`` that cannot be one: a
-    file, a path through a file, or a path too long for the files written in it."""
+    file, a path through a file, a path too long for the files written in it, or a symbolic
+    link (it, or the folders train writes in it: they may lead into a user's folder)."""
     check_directory_path(run_dir, "run directory")
     check_run_dir_length(run_dir)
+    refuse_linked_folders(run_dir, run_dir / "checkpoints", run_dir / "tensorboard")
 
 
 def prepare_run_dir(run_dir: Path, overwrite: bool) -> None:
