@@ -1,9 +1,11 @@
 """What the benchmark scripts share: the provenance line, the write of their Markdown
-results, running a script with the package of another source tree, and the record of a
-training run's evaluations (the time-to-a-target benchmarks)."""
+results and the check of the files they write beside it, running a script with the package of
+another source tree, and the record of a training run's evaluations (the time-to-a-target
+benchmarks)."""
 
 from __future__ import annotations
 
+import argparse
 import datetime
 import json
 import os
@@ -27,6 +29,28 @@ def write(path: str | Path, lines: list[str]) -> None:
 
     atomic_write_text("\n".join(lines), Path(path))
     print("\n".join(lines))
+
+
+def companions(
+    parser: argparse.ArgumentParser, output: str | Path, suffixes: tuple[str, ...],
+    named: bool, overwrite: bool,
+) -> list[Path]:  # fmt: skip
+    """The files a benchmark writes beside its report ``output``: its name with each of
+    ``suffixes`` (".json", ".png"). Beside a report the user ``named`` (``--output``), a file
+    of such a name may be the user's own: one that exists is refused (``parser.error``, one
+    line, before anything runs) unless ``overwrite``. Beside the default report they are the
+    benchmark's own results (benchmarks/results) and are replaced."""
+    output = Path(output)
+    paths = [output.with_suffix(suffix) for suffix in suffixes]
+    if output in paths:
+        parser.error(f"--output {output}: the report would be its own {output.suffix} file; "
+                     "give a report name ending in .md")  # fmt: skip
+    existing = [str(path) for path in paths if path.exists() or path.is_symlink()]
+    if named and existing and not overwrite:
+        parser.error(f"--output {output}: {', '.join(existing)} exists and would be replaced "
+                     "by the file written beside the report; pass --overwrite to replace it, "
+                     "or choose another --output")  # fmt: skip
+    return paths
 
 
 def json_from_tree(src: str | Path, arguments: list[str], show_stderr: bool = False) -> dict:

@@ -12,7 +12,9 @@ deterministic evaluations the runs log (``eval/return``, ``eval/hop_height`` in
 ``metrics.jsonl``). Per agent the report
 gives each seed's final evaluation and the mean evaluation over the run (the area under the
 curve), and the difference of the two trees' means in units of its standard error (Welch):
-|t| < 2 is "within seed noise". The figure is written next to the report.
+|t| < 2 is "within seed noise". The figure is written next to the report (the same name,
+``.png``); beside a report named by ``--output``, an existing file of that name is refused
+unless ``--overwrite``.
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bench_report import companions
 from cpg_actor.config.presets import PRESETS
 from cpg_actor.machine import git_commit
 
@@ -99,8 +102,20 @@ def main() -> None:
     parser.add_argument(
         "--preset", default="paper", choices=sorted(PRESETS), help="the preset of both trees"
     )
-    parser.add_argument("--output", default=str(HERE / "results" / "learning_curves.md"))
+    default_output = str(HERE / "results" / "learning_curves.md")
+    parser.add_argument(
+        "--output",
+        default=default_output,
+        help="the report; its figure goes beside it (the same name, .png)",
+    )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace an existing figure beside a named --output",
+    )
     args = parser.parse_args()
+    (figure_path,) = companions(parser, args.output, (".png",), args.output != default_output,
+                                args.overwrite)  # fmt: skip
     trees = {"this tree": HERE.parent / "src", "reference": Path(args.reference_src).resolve()}
     commits = {tree: git_commit(src) for tree, src in trees.items()}  # the code the runs use
     curves: dict[tuple[str, str, int], list[dict]] = {}
@@ -116,7 +131,7 @@ def main() -> None:
                     print(f"{agent} {tree} seed {seed}: {s}", flush=True)
     output = Path(args.output)
     output.parent.mkdir(parents=True, exist_ok=True)
-    figure(curves, output.with_suffix(".png"))
+    figure(curves, figure_path)
     lines = [
         "# Learning curves: this tree against a reference tree",
         "",

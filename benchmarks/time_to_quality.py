@@ -49,7 +49,9 @@ run at each env count used. Runs go one at a time, each project run and search i
 process; time is training wall time (collection and update, compilation included,
 evaluations excluded). ``--resume`` goes on from a run cut off part way (its searches and
 finished (method, seed) runs are saved after each, in ``OUTPUT`` with ``.partial.json``); the
-report names the machines when a resumed run moved.
+report names the machines when a resumed run moved. Beside the report go its figure and every
+run's curve as JSON (the same name, ``.png`` and ``.json``); beside a report named by
+``--output``, an existing file of those names is refused unless ``--overwrite``.
 """
 
 from __future__ import annotations
@@ -614,7 +616,17 @@ def main(argv: list[str] | None = None) -> int:
         help="a config value for every run (env.* reach the searches and SB3's env too)",
     )
     parser.add_argument("--ceiling-steps", type=positive_int, default=50_000)
-    parser.add_argument("--output", default=OUTPUT)
+    parser.add_argument(
+        "--output",
+        default=OUTPUT,
+        help=f"the report (default {OUTPUT}); its figure and JSON go beside it "
+        "(the same name, .png and .json)",
+    )
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace an existing figure or JSON beside a named --output",
+    )
     parser.add_argument(
         "--resume",
         action="store_true",
@@ -625,7 +637,7 @@ def main(argv: list[str] | None = None) -> int:
     if not (math.isfinite(args.target_return) and math.isfinite(args.target_apex)):
         parser.error("--target-return and --target-apex must be finite numbers")
 
-    from bench_report import measured, write
+    from bench_report import companions, measured, write
     from cpg_actor.agents import get_agent_spec
     from cpg_actor.config import parse_override
     from cpg_actor.machine import cpu_model, load_average, usable_cores
@@ -640,6 +652,8 @@ def main(argv: list[str] | None = None) -> int:
     values = [parse_override(text) for text in args.overrides]
     target = Target(args.target_return, args.target_apex)
     output = Path(args.output)
+    figure_path, json_path = companions(parser, output, (".png", ".json"),
+                                        args.output != OUTPUT, args.overwrite)  # fmt: skip
     sb3 = not args.no_sb3 and importlib.util.find_spec("stable_baselines3") is not None
     sb3_note = "" if sb3 or args.no_sb3 else (
         "Stable-Baselines3 is not installed here (`pip install stable-baselines3`), so its "
@@ -730,7 +744,6 @@ def main(argv: list[str] | None = None) -> int:
             "The methods that start from the searched gait start from the packaged "
             "gait file's, charged the cost of its search rerun here."
         )
-    figure_path = output.with_suffix(".png")
     command = "python benchmarks/time_to_quality.py " + " ".join(argv)
     provenance = (f"{measured(command)} on {cpu_model()}, {usable_cores()} usable cores "
                   f"(load {load_average()} at the end), torch {torch.__version__}; each "
@@ -762,7 +775,7 @@ def main(argv: list[str] | None = None) -> int:
         "best_apex",
     )
     atomic_write_text(json.dumps({m.label: [{k: r.get(k) for k in keys} for r in results[m.label]]
-                                  for m in methods}), output.with_suffix(".json"))  # fmt: skip
+                                  for m in methods}), json_path)  # fmt: skip
     state.path.unlink(missing_ok=True)  # this benchmark's own progress file, now in the JSON
     return 0
 

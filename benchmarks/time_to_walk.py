@@ -49,7 +49,8 @@ start). Excluded from the time like every evaluation; the report gives each run'
 seconds per evaluation. Its report goes to
 ``benchmarks/results/time_to_walk_grid.md`` unless ``--output``, and its rows name the task.
 Either mode also writes every run's result (its evaluations included) as JSON beside the
-report (the same name, ``.json``), rewritten with the report after each run.
+report (the same name, ``.json``), rewritten with the report after each run; beside a report
+named by ``--output``, an existing file of that name is refused unless ``--overwrite``.
 
 The start is charged. ``cpg-actor`` starts from the robot's CPG preset, the trot, which no
 search produced: nothing to charge. ``mlp-warm`` is first fitted to that same trot by
@@ -82,6 +83,7 @@ import numpy as np
 
 from bench_report import (
     charged_warm_start,
+    companions,
     evaluation_recorder,
     json_from_tree,
     measured,
@@ -497,11 +499,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--ceiling-seconds", type=float, default=3.0,
                         help="timed seconds per ceiling measurement (default 3)")  # fmt: skip
     parser.add_argument("--output", default=None,
-                        help=f"default {OUTPUT} ({GRID_OUTPUT} with --grid)")  # fmt: skip
+                        help=f"default {OUTPUT} ({GRID_OUTPUT} with --grid); the runs' JSON "
+                        "goes beside it (the same name, .json)")  # fmt: skip
+    parser.add_argument("--overwrite", action="store_true",
+                        help="replace an existing JSON file beside a named --output")  # fmt: skip
     args = parser.parse_args(argv)
     agents, seeds = check_args(parser, args)
     default_output = GRID_OUTPUT if args.grid else OUTPUT
+    named = args.output is not None
     args.output = args.output or default_output
+    (json_path,) = companions(parser, args.output, (".json",), named, args.overwrite)
 
     from cpg_actor.machine import (
         brief_openmp_spinning,
@@ -547,7 +554,7 @@ def main(argv: list[str] | None = None) -> int:
             )
             write(args.output, report(args, runs, planned, provenance))  # after every run
             atomic_write_text(json.dumps([{"agent": a, "seed": s, **r} for a, s, r in runs])
-                              + "\n", Path(args.output).with_suffix(".json"))  # fmt: skip
+                              + "\n", json_path)  # fmt: skip
     return 0
 
 

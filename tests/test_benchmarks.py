@@ -504,3 +504,39 @@ def test_shared_device_waits_for_the_iterations_its_window_needs_on_a_slow_machi
     assert len(stamps[0]) == 1
     with pytest.raises(ValueError, match="did not finish 3 iterations"):
         shared.window_rates(stamps)
+
+
+@pytest.mark.parametrize(
+    "script, arguments, beside",
+    [
+        ("time_to_walk", ["--agents", "cpg-actor", "--seeds", "100"], (".json",)),
+        ("time_to_quality", ["--agents", "mlp", "--seeds", "1"], (".png", ".json")),
+        ("learning_curves", ["--reference-src", str(ROOT / "src")], (".png",)),
+    ],
+)
+def test_a_benchmark_replaces_no_file_beside_a_named_output_without_overwrite(
+    script, arguments, beside, tmp_path, monkeypatch, capsys
+):
+    """``--output X.md`` writes X.md and the files it documents beside it (X.json, X.png):
+    one of those that exists may be the user's, and is refused before anything runs."""
+    module = benchmark(script)
+    output = tmp_path / "mine.md"
+    for suffix in beside:
+        path = output.with_suffix(suffix)
+        path.write_text("my own")
+        monkeypatch.setattr(sys, "argv", [script, *arguments, "--output", str(output)])
+        with pytest.raises(SystemExit) as stopped:
+            module.main() if script == "learning_curves" else module.main(sys.argv[1:])
+        assert stopped.value.code == 2
+        err = capsys.readouterr().err
+        last = err.strip().splitlines()[-1]  # after argparse's usage: the one line that says
+        assert last.startswith(f"{script}: error: --output {output}: {path} exists"), err
+        assert "--overwrite" in last and "Traceback" not in err
+        assert path.read_text() == "my own" and not output.exists()
+        path.unlink()
+    # the report's own suffix for its companion: refused too
+    named = tmp_path / f"mine{beside[-1]}"
+    monkeypatch.setattr(sys, "argv", [script, *arguments, "--output", str(named)])
+    with pytest.raises(SystemExit):
+        module.main() if script == "learning_curves" else module.main(sys.argv[1:])
+    assert "give a report name ending in .md" in capsys.readouterr().err

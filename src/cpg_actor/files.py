@@ -4,6 +4,10 @@
   ``os.replace``; a write that fails says which file it was writing.
 * Links: a file the project writes in place (appends to, locks) or as a temporary is never
   written through a symbolic link: a link there is refused (one line), its target untouched.
+  Nor is a folder the project writes its outputs into (a run directory, its ``checkpoints``,
+  ``tensorboard``, ``eval`` and ``export``, a results or sweep directory and its folders):
+  a link there may lead into a folder of the user's, so it is refused (one line) before
+  anything is written (:func:`refuse_linked_folders`).
 * The marker ``.cpg-actor-run``, written when the project creates a run directory (``train``),
   a results directory (``reproduce``, a ``sweep``'s setting) or a sweep directory, names what
   made it. ``--overwrite`` deletes only in a directory carrying the marker of its kind, and
@@ -146,6 +150,19 @@ def refuse_link(path: Path) -> None:
             f"{path} is a symbolic link; cpg-actor writes its own file there, never through a "
             "link: remove the link (what it points to is left as it is)"
         )
+
+
+def refuse_linked_folders(*folders: Path) -> None:
+    """FileExistsError (one line) for the first of ``folders``, where the project writes its
+    outputs, that is a symbolic link: it writes into folders of its own, never through a link
+    into another folder (perhaps a user's). A path through a link above them is the user's
+    choice and is followed."""
+    for folder in folders:
+        if Path(folder).is_symlink():
+            raise FileExistsError(
+                f"{folder} is a symbolic link; cpg-actor writes its outputs into a folder of its "
+                "own, never through a link: remove the link (what it points to is left as it is)"
+            )
 
 
 def open_own(path: Path, mode: str) -> IO:

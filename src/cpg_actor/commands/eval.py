@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cpg_actor.files import atomic_write, atomic_write_text
+from cpg_actor.files import atomic_write, atomic_write_text, refuse_linked_folders
 from cpg_actor.plots import GAIT_WINDOW, draw_gait_diagram, save_figure
 from cpg_actor.robots.registry import all_metrics, all_simulators, get_robot
 
@@ -121,6 +121,8 @@ def run(args: argparse.Namespace) -> int:
     output = Path(args.output) if args.output else run_dir / "eval" / "traces.npz"
     if output.suffix != ".npz":
         raise ValueError(f"--output must end in .npz, got {output}")
+    if args.output is None:  # the run's own folder, never one a link there leads to
+        refuse_linked_folders(run_dir / "eval")
     if args.video_only and not args.video:
         raise ValueError("--video-only needs --video PATH")
     if args.grid_levels is not None and not args.grid:

@@ -30,6 +30,7 @@ def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import TrainConfig, check_count
     from cpg_actor.deploy import load_policy
     from cpg_actor.deploy.export import SUFFIXES, export_policy, sidecar_paths
+    from cpg_actor.files import refuse_linked_folders
 
     check_count(args.batch, "--batch", MAX_BATCH)
     run_dir = Path(args.run_dir)
@@ -42,6 +43,8 @@ def run(args: argparse.Namespace) -> int:
         )
     checkpoint = Path(args.checkpoint) if args.checkpoint else run_dir / "checkpoints" / "last.pt"
     out = Path(args.out) if args.out else run_dir / "export" / f"policy{SUFFIXES[args.format]}"
+    if args.out is None:  # the run's own folder, never one a link there leads to
+        refuse_linked_folders(run_dir / "export")
     if args.format == "onnx":
         try:
             import onnxscript  # noqa: F401  (torch.onnx.export needs it)

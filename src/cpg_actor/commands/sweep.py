@@ -76,6 +76,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import parse_steps
     from cpg_actor.experiments import plan, sweep
+    from cpg_actor.files import refuse_linked_folders
     from cpg_actor.robots.registry import get_robot
 
     variants = plan.parse_variants(args.variants)
@@ -108,6 +109,9 @@ def run(args: argparse.Namespace) -> int:
     sweep.check_metrics(metrics, get_robot(plan.resolve_config(plans[0][1], variants[0]).robot))
     if args.summary_only and args.overwrite:
         raise ValueError("--summary-only and --overwrite exclude each other")
+    refuse_linked_folders(out)  # and every setting's folders, before anything is written
+    for setting, _, _ in plans:
+        plan.refuse_linked_out(out / setting.label)
     sweep.prepare_out_dir(out, args.overwrite, args.summary_only)  # before anything is written
     tasks = []
     if args.summary_only:

@@ -26,6 +26,7 @@ from cpg_actor.files import (
     clear_project_dir,
     marker_kind,
     refuse_link,
+    refuse_linked_folders,
     remove_stale_temporaries,
     write_marker,
 )
@@ -107,7 +108,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--resume",
         action="store_true",
-        help="continue the run in --run-dir from its last checkpoint",
+        help="continue the run in --run-dir from its last checkpoint (with --seeds K: the group "
+        "of seeds in --run-dir, from their last common checkpoint)",
     )
     parser.add_argument(
         "--overwrite", action="store_true", help="replace an existing run directory"
@@ -163,9 +165,11 @@ def _has_content(run_dir: Path) -> bool:
 
 def check_run_dir_path(run_dir: Path) -> None:
     """One clear error, before anything starts, for a ``--run-dir`` that cannot be one: a
-    file, a path through a file, or a path too long for the files written in it."""
+    file, a path through a file, a path too long for the files written in it, or a symbolic
+    link (it, or the folders train writes in it: they may lead into a user's folder)."""
     check_directory_path(run_dir, "run directory")
     check_run_dir_length(run_dir)
+    refuse_linked_folders(run_dir, run_dir / "checkpoints", run_dir / "tensorboard")
 
 
 def prepare_run_dir(run_dir: Path, overwrite: bool) -> None:
@@ -236,17 +240,33 @@ def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
 
 def _run_group(args: argparse.Namespace, locks: list[RunLock]) -> int:
     """``--seeds K``: K runs of the config, seeds ``config.seed`` on, trained together by a
-    :class:`~cpg_actor.training.many_seeds.SeedGroup`; each seed's run directory is prepared
-    and locked as a single run's (an existing one refused unless ``--overwrite``)."""
-    from cpg_actor.training.many_seeds import SeedGroup, seed_dir
-
+    :class:`~cpg_actor.training.many_seeds.SeedGroup`, new (each seed's run directory prepared
+    and locked as a single run's) or resumed (``--resume``: the group in ``--run-dir``)."""
     if args.seeds < 1:
         raise ValueError(f"--seeds takes a number of seeds, at least 1; got {args.seeds}")
     if args.resume:
-        raise ValueError(
-            "--resume continues one run; a seed of a group resumes as a run of its own: "
-            "--resume --run-dir RUN_DIR/seed-S"
-        )
+        group = _resumed_group(args, locks)
+        if group is None:  # finished: nothing to continue, no error
+            return 0
+    else:
+        group = _new_group(args, locks)
+    run_dir = group.runners[0].run_dir.parent
+    code = _learn(group, lambda: (
+        f"interrupted; each seed's last checkpoint is in {run_dir}/seed-S/checkpoints; "
+        f"continue the group: --seeds {len(group.seeds)} --resume --run-dir {run_dir}"
+    ))  # fmt: skip
+    if code is None:
+        for runner in group.runners:
+            print(f"seed {runner.config.seed}: {_done_text(runner)}")
+    return code or 0
+
+
+def _new_group(args: argparse.Namespace, locks: list[RunLock]):
+    """A new group of ``--seeds`` runs from the flags, every seed's run directory prepared
+    under its lock (an existing one refused before anything is built, unless ``--overwrite``;
+    every seed's lock taken before any seed's run is cleared)."""
+    from cpg_actor.training.many_seeds import SeedGroup, seed_dir
+
     config = build_config(args)
     if _searches(config):
         raise ValueError(
@@ -277,11 +297,12 @@ def _run_group(args: argparse.Namespace, locks: list[RunLock]) -> int:
         progress_interval=args.progress_interval,
     )  # fmt: skip
     try:
-        for directory in directories:
+        for directory in directories:  # every seed's lock before any seed's run is cleared
             if not _has_content(directory):
                 directory.mkdir(parents=True, exist_ok=True)
                 write_marker(directory, RUN)
             _lock(directory, locks)
+        for directory in directories:
             prepare_run_dir(directory, args.overwrite)
         for runner in group.runners:
             runner.config.save(runner.run_dir / "config.yaml")
@@ -292,13 +313,106 @@ def _run_group(args: argparse.Namespace, locks: list[RunLock]) -> int:
           f"{len(seeds)} x {config.num_envs} envs; "
           + _start_text(config, run_dir, args).replace(
               f"run directory {run_dir}", f"runs in {run_dir}/seed-S"))  # fmt: skip
-    code = _learn(group, lambda: (
-        f"interrupted; each seed's last checkpoint is in {run_dir}/seed-S/checkpoints (each "
-        "resumes as a run of its own)"))  # fmt: skip
-    if code is None:
+    return group
+
+
+def _resumed_group(args: argparse.Namespace, locks: list[RunLock]):
+    """The group in ``--run-dir`` at its seeds' last common checkpoint, under every seed's
+    lock (cpg_actor.training.many_seeds: it continues exactly as the uninterrupted group);
+    None for a group that has finished (said so)."""
+    from cpg_actor.training.checkpoint import load_checkpoint, resume_checkpoint
+    from cpg_actor.training.many_seeds import SeedGroup, seed_dir
+
+    _check_resume_flags(args)
+    run_dir = Path(args.run_dir)
+    check_run_dir_path(run_dir)
+    found = sorted(
+        (int(path.name[len("seed-") :]), path)
+        for path in (run_dir.glob("seed-*") if run_dir.is_dir() else ())
+        if path.name[len("seed-") :].isdigit() and any(path.glob("checkpoints/*.pt"))
+    )
+    if not found:
+        raise FileNotFoundError(
+            f"{run_dir} holds no seed's run with a checkpoint (seed-S/checkpoints); nothing "
+            "to resume"
+        )
+    _, first_data, _ = resume_checkpoint(found[0][1])
+    seeds = (first_data.get("seed_group") or {}).get("seeds")
+    alone = (f"continue each seed alone: --resume --run-dir {run_dir}/seed-S (not as the "
+             "group would)")  # fmt: skip
+    if not seeds:
+        raise ValueError(
+            f"{found[0][1]}'s last checkpoint is not a seed group's (resumed alone since, or "
+            f"written before groups resumed); {alone}"
+        )
+    if len(seeds) != args.seeds:
+        raise ValueError(
+            f"{run_dir} is a group of {len(seeds)} seeds ({seeds[0]}-{seeds[-1]}); resume it "
+            f"with --seeds {len(seeds)}"
+        )
+    directories = [seed_dir(run_dir, seed) for seed in seeds]
+    for directory in directories:  # refused before anything is written
+        check_run_dir_path(directory)
+        if not any((directory / "checkpoints").glob("*.pt")):
+            raise FileNotFoundError(f"{directory} holds no checkpoint; {alone}")
+        refuse_link(directory / "metrics.jsonl")  # appended to
+    for directory in directories:  # every seed's lock before anything is written
+        _lock(directory, locks)
+    newest = []
+    for k, directory in enumerate(directories):
+        remove_stale_temporaries(directory)
+        path, data, notes = resume_checkpoint(directory)
+        for note in notes:
+            print(f"cpg-actor train: {directory}: {note}", file=sys.stderr)
+        if data.get("seed_group") != {"seeds": seeds, "index": k}:
+            raise ValueError(
+                f"{directory}'s last checkpoint ({path.name}) is not this group's (the seed was "
+                f"resumed alone since); {alone}"
+            )
+        newest.append((path, data["iteration"]))
+    common = min(iteration for _, iteration in newest)  # a kill can cut the seeds' writes
+    paths = []
+    for directory, (path, iteration) in zip(directories, newest, strict=True):
+        if iteration != common:
+            path = directory / "checkpoints" / f"iter_{common:06d}.pt"
+            if not path.is_file() or load_checkpoint(path).get("iteration") != common:
+                raise ValueError(
+                    f"{path} (the seeds' last common iteration, {common}) is missing or not "
+                    f"of that iteration; {alone}"
+                )
+        paths.append(path)
+    configs = [_resume_config(directory)[1] for directory in directories]
+    config = configs[0]
+    for seed, other in zip(seeds, configs, strict=True):
+        if other.to_dict() != {**config.to_dict(), "seed": seed}:
+            raise ValueError(f"{seed_dir(run_dir, seed)}/config.yaml differs from the first "
+                             "seed's in more than its seed: not one group")  # fmt: skip
+    if args.total_steps is not None:
+        config.total_steps = parse_steps(args.total_steps)
+    config.validate()
+    group = SeedGroup(
+        config, seeds, run_dir, tensorboard=True, progress=not args.no_progress,
+        progress_interval=args.progress_interval,
+    )  # fmt: skip
+    try:
+        group.resume(paths)
+        first = group.runners[0]
+        _check_unfinished(first, resized=args.total_steps is not None)
+        if _finished(first):
+            group.close()
+            print(f"the group in {run_dir} is finished at iteration {first.iteration} "
+                  f"({first.global_step:,} steps per seed); nothing to continue (pass a "
+                  "larger --total-steps to train it further)")  # fmt: skip
+            return None
         for runner in group.runners:
-            print(f"seed {runner.config.seed}: {_done_text(runner)}")
-    return code or 0
+            runner.config.save(runner.run_dir / "config.yaml")
+            _truncate_metrics(runner.run_dir / "metrics.jsonl", runner.iteration)
+    except BaseException:
+        group.close()
+        raise
+    print(f"resuming the group of {len(seeds)} seeds ({seeds[0]}-{seeds[-1]}) in {run_dir} at "
+          f"iteration {first.iteration} ({first.global_step:,} steps per seed)")  # fmt: skip
+    return group
 
 
 def _check_resume_flags(args: argparse.Namespace) -> None:
@@ -351,6 +465,13 @@ def _resumed_runner(args: argparse.Namespace, locks: list[RunLock]):
     try:
         runner.load_checkpoint(checkpoint)
         _check_unfinished(runner, resized=args.total_steps is not None)
+        group = getattr(runner, "resumed_out_of_group", None)
+        if group is not None and len(group["seeds"]) > 1:
+            seeds = group["seeds"]
+            print(f"note: {run_dir} is a seed of a group of {len(seeds)} seeds trained in one "
+                  "process; resumed alone it continues as a run of its own, from new "
+                  "episodes, not equal to the group continued (--seeds "
+                  f"{len(seeds)} --resume --run-dir {run_dir.parent})")  # fmt: skip
     except (ValueError, FileNotFoundError):
         runner.close()
         raise

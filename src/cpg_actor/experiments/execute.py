@@ -42,6 +42,7 @@ from cpg_actor.files import (
     clear_project_dir,
     open_own,
     refuse_link,
+    refuse_linked_folders,
 )
 from cpg_actor.machine import PARENT_ENV, git_commit
 from cpg_actor.training.run_lock import LOCK_NAME
@@ -202,6 +203,7 @@ def evaluate_stages(task: RunTask, log: Path) -> list[dict[str, Any]]:
     stages: list[dict[str, Any]] = []
     for k, (fraction, iteration, checkpoint) in enumerate(chosen):
         output = run_dir / "eval" / f"stage{k}" / "traces.npz"
+        refuse_linked_folders(run_dir / "eval", output.parent)  # the run's own folders
         entry = {
             "stage": k,
             "fraction": fraction,

@@ -16,7 +16,14 @@ from typing import Any
 
 import yaml
 
-from cpg_actor.files import MARKER, RESULTS, atomic_write_text, clear_project_dir, write_marker
+from cpg_actor.files import (
+    MARKER,
+    RESULTS,
+    atomic_write_text,
+    clear_project_dir,
+    refuse_linked_folders,
+    write_marker,
+)
 from cpg_actor.machine import usable_cores
 
 # the paper's progressive-hopping figure: 1M, 20M and 60M of 60M steps
@@ -378,6 +385,12 @@ def _extends(saved: dict[str, Any], new: dict[str, Any]) -> bool:
     )
 
 
+def refuse_linked_out(out: Path) -> None:
+    """A results directory, or a folder it writes in, that is a symbolic link is refused
+    (:func:`cpg_actor.files.refuse_linked_folders`); its run directories are train's to check."""
+    refuse_linked_folders(out, *(out / name for name in ("logs", "figures", "runs")))
+
+
 def prepare_out_dir(out: Path, settings: ReproduceSettings, overwrite: bool) -> str:
     """Create ``out`` or check that it holds the same reproduction; returns "new", "resume",
     "extend" (the same reproduction with more variants or seeds: finished runs are kept) or
@@ -387,6 +400,7 @@ def prepare_out_dir(out: Path, settings: ReproduceSettings, overwrite: bool) -> 
     (:func:`cpg_actor.files.clear_project_dir`)."""
     if out.exists() and not out.is_dir():
         raise NotADirectoryError(f"--out {out} is a file, not a directory")
+    refuse_linked_out(out)
     saved = load_settings_file(out)
     if out.exists() and any(out.iterdir()):
         if saved is None:

@@ -30,6 +30,7 @@ from cpg_actor.files import (
     atomic_write_text,
     clear_project_dir,
     marker_kind,
+    refuse_linked_folders,
     write_marker,
 )
 from cpg_actor.robots.registry import all_metrics
@@ -85,6 +86,7 @@ def prepare_out_dir(out: Path, overwrite: bool = False, summary_only: bool = Fal
     A new one is made and marked; ``summary_only`` needs a sweep's."""
     if out.exists() and not out.is_dir():
         raise NotADirectoryError(f"--out {out} is a file, not a directory")
+    refuse_linked_folders(out)  # its settings' folders: plan.prepare_out_dir
     if not (out.is_dir() and any(out.iterdir())):
         if summary_only:
             raise FileNotFoundError(f"{out} does not exist or is empty; nothing to summarise")

@@ -12,8 +12,18 @@ What differs from K separate runs: the env is reset once, with the first seed's 
 so a seed's envs start other episodes than in a run of its own; the seeds draw their action
 noise from torch's one generator in turn. The runs are as reproducible (the same seeds in the
 same order give the same numbers) but not equal, number for number, to separate runs.
-Agents with a warm start before PPO (``mlp-warm``, ``cho2019-warm``) are not supported here,
-and a group is not resumed from checkpoints (a seed's checkpoint resumes as a run of its own).
+Agents with a warm start before PPO (``mlp-warm``, ``cho2019-warm``) are not supported here.
+
+Checkpoints. Each seed's checkpoint is a run's (its networks, optimiser, normalisers, the
+episode statistics, observations and CPG states of its rows, the RNG streams, which are the
+group's, the same in every seed's) and names its group (``seed_group``: the seeds, its
+index); the first seed's also holds the whole env's state (every seed's rows: the physics,
+episode clocks and generators). The group resumed from the checkpoints of one iteration
+(:meth:`SeedGroup.resume`, ``cpg-actor train --seeds K --resume``) therefore continues
+exactly as the uninterrupted group. One seed resumed alone (``--resume --run-dir
+RUN/seed-S``) cannot: its envs were stepped by the group's env and its random numbers drawn
+from the group's generator in turn with the other seeds'; it continues as a run of its own,
+from new episodes (a group of one seed: from its episodes, as the group would).
 """
 
 from __future__ import annotations
@@ -32,6 +42,7 @@ from cpg_actor.config import TrainConfig
 from cpg_actor.device import resolve_device
 from cpg_actor.robots.common.torch_env import EnvStep, TorchVectorEnv
 from cpg_actor.robots.registry import get_robot
+from cpg_actor.training import run_checkpoint
 from cpg_actor.training.build import make_env
 from cpg_actor.training.evaluation import evaluation_env
 from cpg_actor.training.hooks import Checkpoints, Iteration
@@ -80,6 +91,18 @@ class SeedSlice:
     def close(self) -> None:
         """The group's env is closed by the group."""
 
+    def get_state(self) -> dict[str, Any]:
+        """The first seed's slice saves the whole env (every seed's rows, module docstring);
+        the others save nothing of it."""
+        return {"group_env": self.group_env.get_state()} if self.rows.start == 0 else {}
+
+    def set_state(self, state: dict[str, Any]) -> None:
+        """The whole env, from the first seed's checkpoint; nothing from another seed's."""
+        if self.rows.start == 0:
+            if "group_env" not in state:
+                raise ValueError("the first seed's checkpoint holds no state of the group's env")
+            self.group_env.set_state(state["group_env"])
+
 
 class SeedGroup:
     """K runs of ``config`` with ``seeds``, each in ``run_dir/seed-S`` (when ``run_dir`` is
@@ -117,6 +140,28 @@ class SeedGroup:
                 tensorboard=tensorboard, eval_env=eval_env, progress=progress and k == 0,
                 progress_interval=progress_interval,
             ))  # fmt: skip
+            runner = self.runners[-1]
+            runner.seed_group = {"seeds": seeds, "index": k}  # named in its checkpoints
+            runner.env.saves_state = self.env.saves_state  # the group's env saves its rows
+
+    def resume(self, checkpoints: Sequence[Path]) -> None:
+        """Continue every seed from its checkpoint of one iteration (``checkpoints[k]``, seed
+        k's; the module docstring); a ValueError if they are not this group's."""
+        if not self.env.saves_state:
+            raise ValueError("this env cannot save its episodes; a group resumes only from them")
+        iterations = set()
+        for k, (runner, path) in enumerate(zip(self.runners, checkpoints, strict=True)):
+            group = run_checkpoint.read(path, runner.config.agent).get("seed_group")
+            if group != runner.seed_group:
+                raise ValueError(
+                    f"checkpoint {path} is not seed {self.seeds[k]}'s of this group of seeds "
+                    f"{self.seeds} (it names {group or 'no group'})"
+                )
+            runner.load_checkpoint(path)
+            iterations.add(runner.iteration)
+        if len(iterations) != 1:
+            raise ValueError(f"the seeds' checkpoints are of different iterations "
+                             f"{sorted(iterations)}; a group resumes from one")  # fmt: skip
 
     def start(self) -> None:
         """Reset the group's env (with the first seed's episode seed) and every seed's
@@ -167,12 +212,14 @@ class SeedGroup:
         for runner in self.runners:
             if runner.run_dir is not None:
                 runner.run_dir.mkdir(parents=True, exist_ok=True)
-        self.start()
+        fresh = not self.runners[0].rollout.started  # not resumed (:meth:`resume`)
+        if fresh:
+            self.start()
         hooks = [[*runner.hooks, Checkpoints()] for runner in self.runners]
         try:
             for runner, own in zip(self.runners, hooks, strict=True):
                 for hook in own:
-                    hook.start(runner, True)
+                    hook.start(runner, fresh)
             while self.runners[0].iteration < self.config.num_iterations:
                 iterations = self.train_iteration()
                 for runner, own, it in zip(self.runners, hooks, iterations, strict=True):

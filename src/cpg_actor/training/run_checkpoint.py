@@ -6,7 +6,10 @@ the episodes in progress (:meth:`cpg_actor.training.rollout.Rollout.state`: MuJo
 physics state of every robot, the episode clocks, each env's random generator, the last
 observation, every env's CPG state and the episode statistics). A resumed run therefore
 continues exactly where the checkpoint was taken: it equals the uninterrupted run bit for bit
-(MuJoCo; PyBullet restores joint states but not its contact caches). Files are written
+(MuJoCo; PyBullet restores joint states but not its contact caches). A seed of a group
+(:mod:`cpg_actor.training.many_seeds`) names its group; the first seed's holds the whole env.
+One seed's checkpoint resumed as a run of its own continues from new episodes (a group of
+one: from its episodes), and says so (:attr:`Runner.resumed_out_of_group`). Files are written
 atomically (:func:`cpg_actor.training.checkpoint.atomic_save`): ``iter_<N>.pt``, then
 ``last.pt``.
 """
@@ -83,8 +86,10 @@ def restore_run_state(runner: Any, path: Path, data: dict[str, Any]) -> None:
 
 def ppo_state(runner: Runner) -> dict[str, Any]:
     """What a PPO run's checkpoint holds (the module docstring)."""
+    group = {} if runner.seed_group is None else {"seed_group": runner.seed_group}
     return {
         **run_state(runner),
+        **group,
         "reward_normalizer": runner.reward_normalizer.state_dict(),
         "optimizer": runner.ppo.optimizer.state_dict(),
         "learning_rate": runner.ppo.learning_rate,
@@ -106,6 +111,12 @@ def load_ppo_state(runner: Runner, path: Path) -> None:
     runner.rollout.episodes.load_recent(data["recent"])
     runner.env_seed = data.get("env_seed")
     episodes = data.get("episodes")
+    group = data.get("seed_group")
+    if group is not None and runner.seed_group is None:  # one seed of a group, alone
+        runner.resumed_out_of_group = group
+        whole = ((episodes or {}).get("env") or {}).get("group_env")
+        # the group's env is this seed's own only in a group of one seed
+        episodes = {**episodes, "env": whole} if len(group["seeds"]) == 1 and whole else None
     if episodes is not None and runner.env.saves_state:
         runner.rollout.restore(episodes)
     else:  # a checkpoint without episodes (an env that cannot save them): new ones

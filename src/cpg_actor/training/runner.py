@@ -110,6 +110,10 @@ class Runner:
         self.last_evaluation: dict[str, float] | None = None  # as the hooks recorded them
         self.last_row: dict[str, float] = {}
         self._resumed = False  # loaded from a checkpoint: no warm start, no "before" again
+        # the run's seed group, named in its checkpoints (cpg_actor.training.many_seeds)
+        self.seed_group: dict[str, Any] | None = None
+        # the group this run was a seed of, resumed alone from its checkpoint: not as exact
+        self.resumed_out_of_group: dict[str, Any] | None = None
 
     # -- the loop ----------------------------------------------------------------------------
     def learn(self, stop_when: Callable[[dict[str, float]], bool] | None = None) -> None:
