@@ -38,13 +38,12 @@ import tarfile
 import tempfile
 from pathlib import Path
 
-import yaml
-
 from cpg_actor.config import TrainConfig
 from cpg_actor.experiments.execute import list_checkpoints, select_stage_checkpoints
 from cpg_actor.experiments.plan import STAGE_FRACTIONS
 from cpg_actor.experiments.results import Results
 from cpg_actor.files import MARKER, SWEEP, marker_kind
+from cpg_actor.safe_yaml import read_yaml
 
 SKIPPED = {"checkpoints", "tensorboard", ".lock"}
 FILES = ("reproduce.yaml", "transfer.json", MARKER)  # the last: the project's marker
@@ -111,7 +110,7 @@ def save(out: Path, archive: Path, unfinished: bool = False, traces: bool = True
         shutil.copyfile(out / MARKER, archive / MARKER)  # the sweep's: restore remakes it
         return
     settings = out / "reproduce.yaml"
-    saved = yaml.safe_load(settings.read_text()) if settings.is_file() else {}
+    saved = read_yaml(settings) if settings.is_file() else {}
     fractions = tuple((saved or {}).get("settings", {}).get("stage_fractions") or STAGE_FRACTIONS)
     for run in (run for runs in Results.load(out).runs.values() for run in runs):
         target = archive / run.variant / f"{run.path.name}.tar.gz"

@@ -11,13 +11,15 @@ import re
 
 import torch
 
+from cpg_actor.limits import brief
+
 DEVICE_PATTERN = re.compile(r"^(auto|cpu|cuda(:\d+)?)$")
 
 
 def check_device_name(name: str) -> None:
     """ValueError unless ``name`` is cpu, cuda, cuda:N or auto."""
     if not isinstance(name, str) or not DEVICE_PATTERN.match(name):
-        raise ValueError(f"device must be cpu, cuda, cuda:N or auto, got {name!r}")
+        raise ValueError(f"device must be cpu, cuda, cuda:N or auto, got {brief(name)}")
 
 
 def resolve_device(name: str) -> torch.device:
@@ -29,12 +31,12 @@ def resolve_device(name: str) -> torch.device:
     if device.type == "cuda":
         if not torch.cuda.is_available():
             raise ValueError(
-                f"device {name!r}: torch sees no CUDA device here (torch {torch.__version__}, "
+                f"device {brief(name)}: torch sees no CUDA device here (torch {torch.__version__}, "
                 f"CUDA build {torch.version.cuda or 'none'}); use --device cpu or auto (a "
                 f"resumed run keeps the device of its config.yaml: start a new run to change it)"
             )
         if device.index is not None and device.index >= torch.cuda.device_count():
             raise ValueError(
-                f"device {name!r}: there are {torch.cuda.device_count()} CUDA device(s)"
+                f"device {brief(name)}: there are {torch.cuda.device_count()} CUDA device(s)"
             )
     return device

@@ -219,6 +219,13 @@ def describe_os_error(error: OSError) -> str:
 
 
 # -- path limits --------------------------------------------------------------------------------
+def check_path_given(value: str | None, flag: str) -> None:
+    """ValueError (one line) for a path option given as an empty string: it would name the
+    current directory, or silently stand for the option's default."""
+    if value is not None and not str(value).strip():
+        raise ValueError(f"{flag} is empty; give a path, or leave the option out for its default")
+
+
 # the longest name `train` writes under its run directory, a TensorBoard event file:
 # "tensorboard/events.out.tfevents.<10-digit time>.<host>.<pid>.<n>" (host added by the caller)
 _LONGEST_RUN_NAME = len("tensorboard/events.out.tfevents.1234567890..4194304.99")

@@ -202,7 +202,7 @@ def test_cpg_actor_trains_with_its_tuned_defaults_and_cpg_actor_paper_as_the_pap
         ({"std_floor": 1.0}, "std_floor must be in"),
         ({"convergence_bounds": (5.0, 2.0)}, "convergence_bounds must be"),
         ({"exploration": "cpg", "feedback_noise": 0.1}, "set it to 0"),
-        ({"kappa_bound": 0.0}, "kappa_bound must be > 0"),
+        ({"kappa_bound": 0.0}, "kappa_bound must be a finite number > 0"),
     ],
 )
 def test_bad_exploration_and_bound_settings_are_refused(fields, message):

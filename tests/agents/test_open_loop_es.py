@@ -533,8 +533,8 @@ def test_episodes_that_end_early_count_every_env_step_the_search_took():
         (["es.sigma0=0"], ["es.sigma0 must be a finite number > 0"]),
         (
             ["es.popsize=1", "es.episodes=0", "es.sigma0=.nan"],
-            ["es.sigma0 must be", "es.popsize must be an integer >= 2, got 1",
-             "es.episodes must be an integer >= 1, got 0"],
+            ["es.sigma0 must be", "es.popsize must be an integer from 2 to 10,000, got 1",
+             "es.episodes must be an integer from 1 to 1,000, got 0"],
         ),
         (["es.popsize=3.5"], ["es.popsize must be an integer"]),
     ],

@@ -86,7 +86,7 @@ def test_reproduce_refuses_bad_input_before_writing(tmp_path, capsys):
     assert main([*base, "--variants", "cpg-actor,nope"]) == 2
     assert "unknown variant(s) nope; available:" in capsys.readouterr().err
     assert main([*base, "--variants", "mlp", "--seeds", "0"]) == 2
-    assert "--seeds must be >= 1" in capsys.readouterr().err
+    assert "--seeds must be an integer from 1 to 10,000" in capsys.readouterr().err
     assert main(["reproduce", "--out", str(out), "--total-steps", "0", "--variants", "mlp"]) == 2
     assert "positive" in capsys.readouterr().err
     assert main([*base, "--variants", "mlp", "--set", "ppo.no_such_key=1"]) == 2

@@ -79,7 +79,7 @@ def test_update_on_several_threads_is_reproducible():
     assert_same(runs[0], runs[1])
     auto = config(1)  # minibatches of 32 samples: the update stays on torch_threads
     assert update_threads(auto) == auto.torch_threads
-    with pytest.raises(ValueError, match="update_threads must be a positive integer or null"):
+    with pytest.raises(ValueError, match=r"update_threads \(or null: automatic\) must be"):
         TrainConfig(update_threads=0).validate()
 
 

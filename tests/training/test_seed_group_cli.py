@@ -52,7 +52,7 @@ def test_a_group_never_overwrites_a_run_without_overwrite(tmp_path, capsys):
 @pytest.mark.parametrize(
     "argv, message",
     [
-        (["--seeds", "0"], "--seeds takes a number of seeds, at least 1; got 0"),
+        (["--seeds", "0"], "--seeds must be an integer from 1 to 10,000, got 0"),
         (["--seeds", "2", "--resume"], "only --total-steps may change"),
         (["--seeds", "2", "--agent", "mlp-warm"], "starts with a warm start"),
         (["--seeds", "2", "--agent", "open-loop-es"], "searched by CMA-ES"),

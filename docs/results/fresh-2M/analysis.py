@@ -24,11 +24,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from cpg_actor.experiments import family as f
 from cpg_actor.experiments import metrics as m
 from cpg_actor.files import atomic_write_text
+from cpg_actor.safe_yaml import read_yaml
 
 VARIANTS = ("cpg-actor", "cpg-actor-open-loop", "open-loop-es", "mlp", "mlp-warm",
             "cho2019-warm")  # fmt: skip
@@ -99,7 +99,7 @@ def matched_smoothness(cpg: dict[str, Any], folders: list[Path]) -> list[dict[st
     tests: list[dict[str, Any]] = []
     for strength, folder in enumerate(folders, start=1):
         summary = json.loads((folder / "summary.json").read_text())
-        overrides = yaml.safe_load((folder / "reproduce.yaml").read_text())["settings"]
+        overrides = read_yaml(folder / "reproduce.yaml")["settings"]
         alpha = next((o.replace("env.command_filter=", "alpha ") for o in
                       overrides["overrides"] or [] if o.startswith("env.command_filter=")),
                      folder.name)  # fmt: skip

@@ -17,6 +17,8 @@ from pathlib import Path
 import torch
 import yaml
 
+from cpg_actor.safe_yaml import parse_yaml, read_yaml
+
 
 def apply(config: dict, overrides: list[list[str]]) -> dict:
     for key, value in overrides:
@@ -24,7 +26,7 @@ def apply(config: dict, overrides: list[list[str]]) -> dict:
         node = config
         for part in path:
             node = node[part]
-        node[last] = yaml.safe_load(value)
+        node[last] = parse_yaml(value)
     return config
 
 
@@ -34,7 +36,7 @@ def main() -> None:
     (out / "checkpoints").mkdir(parents=True)  # refuses an existing OUT
     shutil.copy(source / "metrics.jsonl", out / "metrics.jsonl")  # resume trims what follows
     shutil.copy(source / ".cpg-actor-run", out / ".cpg-actor-run")
-    config = apply(yaml.safe_load((source / "config.yaml").read_text()), overrides)
+    config = apply(read_yaml(source / "config.yaml"), overrides)
     (out / "config.yaml").write_text(yaml.safe_dump(config, sort_keys=False))
     checkpoint = torch.load(source / "checkpoints" / f"iter_{iteration:06d}.pt", weights_only=False)
     checkpoint["config"] = apply(checkpoint["config"], overrides)

@@ -12,10 +12,18 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import torch
 from torch import Tensor, nn
+
+from cpg_actor.limits import (
+    MAX_LAYER_WEIGHTS,
+    MAX_LAYER_WIDTH,
+    MAX_LAYERS,
+    brief,
+    check_int,
+)
 
 
 @dataclass
@@ -95,36 +103,39 @@ class AgentConfig:
         if self.activation not in ACTIVATIONS:
             raise ValueError(
                 f"agent_config.activation must be one of {sorted(ACTIVATIONS)}, "
-                f"got {self.activation!r}"
+                f"got {brief(self.activation)}"
             )
         for name in ("actor_hidden", "critic_hidden"):
-            sizes = getattr(self, name)
-            if not sizes or any(not isinstance(s, int) or s < 1 for s in sizes):
-                raise ValueError(f"agent_config.{name} must be positive layer sizes, got {sizes!r}")
+            check_hidden(getattr(self, name), f"agent_config.{name}")
         for name in ("init_std", "output_gain", "xi_scale", "kappa_scale"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"agent_config.{name} must be > 0, got {getattr(self, name)!r}")
-        if not self.feedback_noise >= 0:
+            value = getattr(self, name)
+            if not 0 < value < math.inf:
+                raise ValueError(f"agent_config.{name} must be a finite number > 0, "
+                                 f"got {brief(value)}")  # fmt: skip
+        if not 0 <= self.feedback_noise < math.inf:
             raise ValueError(
-                f"agent_config.feedback_noise must be >= 0, got {self.feedback_noise!r}"
+                "agent_config.feedback_noise must be a finite number >= 0, "
+                f"got {brief(self.feedback_noise)}"
             )
         if self.exploration not in EXPLORATIONS:
             raise ValueError(
                 f"agent_config.exploration must be one of {', '.join(EXPLORATIONS)}, "
-                f"got {self.exploration!r}"
+                f"got {brief(self.exploration)}"
             )
         for name in ("feedback_std", "cpg_noise", "kappa_bound"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"agent_config.{name} must be > 0, got {getattr(self, name)!r}")
+            value = getattr(self, name)
+            if not 0 < value < math.inf:
+                raise ValueError(f"agent_config.{name} must be a finite number > 0, "
+                                 f"got {brief(value)}")  # fmt: skip
         for name in ("std_floor", "action_std_floor"):
             if not 0 <= getattr(self, name) < 1:
                 raise ValueError(f"agent_config.{name} must be in [0, 1) (a fraction of the "
-                                 f"initial std), got {getattr(self, name)!r}")  # fmt: skip
+                                 f"initial std), got {brief(getattr(self, name))}")  # fmt: skip
         low, high = (tuple(self.convergence_bounds) + (None, None))[:2]
-        if len(self.convergence_bounds) != 2 or not 0 < low < high:
+        if len(self.convergence_bounds) != 2 or not 0 < low < high < math.inf:
             raise ValueError(
                 "agent_config.convergence_bounds must be [low, high] with 0 < low < high (1/s), "
-                f"got {list(self.convergence_bounds)!r}"
+                f"got {brief(self.convergence_bounds)}"
             )
         if self.exploration == "cpg" and self.feedback_noise > 0:
             raise ValueError(
@@ -134,6 +145,22 @@ class AgentConfig:
 
 
 EXPLORATIONS = ("position", "cpg")
+
+
+def check_hidden(sizes: Any, name: str) -> None:
+    """ValueError (one line) unless ``sizes`` are hidden layer sizes within the bounds of
+    :mod:`cpg_actor.limits`: 1 to MAX_LAYERS layers of 1 to MAX_LAYER_WIDTH units, and at most
+    MAX_LAYER_WEIGHTS weights between two of them (checked before a network is built)."""
+    if not isinstance(sizes, (list, tuple)) or not 1 <= len(sizes) <= MAX_LAYERS:
+        raise ValueError(f"{name} must be 1 to {MAX_LAYERS} layer sizes, got {brief(sizes)}")
+    for size in sizes:
+        check_int(size, f"each layer size of {name}", 1, MAX_LAYER_WIDTH)
+    for first, second in zip(sizes[:-1], sizes[1:], strict=True):
+        if first * second > MAX_LAYER_WEIGHTS:
+            raise ValueError(
+                f"{name}: layers of {first:,} and {second:,} units have {first * second:,} "
+                f"weights between them, above the {MAX_LAYER_WEIGHTS:,} accepted"
+            )
 
 
 def tanh(x: Tensor) -> Tensor:

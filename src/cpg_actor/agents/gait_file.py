@@ -36,6 +36,9 @@ from typing import Any
 
 import yaml
 
+from cpg_actor.limits import brief
+from cpg_actor.safe_yaml import read_yaml
+
 GAIT_FILE = "gait.yaml"
 GAIT_FORMAT = "cpg-actor-gait"
 VECTOR_FIELDS = ("frequency", "amplitude", "convergence")
@@ -90,12 +93,7 @@ def load_gait(path: str | Path) -> dict[str, Any]:
         path = path / GAIT_FILE
     if not path.is_file():
         raise FileNotFoundError(f"gait file {path} does not exist")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as error:
-        raise ValueError(f"gait file {path} is not valid YAML: {error}") from None
-    except UnicodeDecodeError:
-        raise ValueError(f"gait file {path} is not a text file") from None
+    data = read_yaml(path, f"gait file {path}")  # bounded (cpg_actor.safe_yaml), one line
     check_gait(data, str(path))
     return data
 
@@ -105,19 +103,23 @@ def check_gait(data: Any, name: str) -> None:
     if not isinstance(data, dict):
         raise ValueError(f"gait file {name} must hold a mapping (robot, cpg_initial, ...)")
     if data.get("format", GAIT_FORMAT) != GAIT_FORMAT:
-        raise ValueError(f"gait file {name}: format {data['format']!r}, expected {GAIT_FORMAT!r}")
+        raise ValueError(
+            f"gait file {name}: format {brief(data['format'])}, expected {GAIT_FORMAT!r}"
+        )
     missing = [key for key in REQUIRED_KEYS if key not in data]
     if missing:
         raise ValueError(f"gait file {name} lacks {', '.join(missing)}")
     if not isinstance(data["robot"], str) or not data["robot"]:
-        raise ValueError(f"gait file {name}: robot must be a robot's name, got {data['robot']!r}")
+        raise ValueError(
+            f"gait file {name}: robot must be a robot's name, got {brief(data['robot'])}"
+        )
     fitness = data["fitness"]
     if isinstance(fitness, bool) or not isinstance(fitness, (int, float)):
-        raise ValueError(f"gait file {name}: fitness must be a number, got {fitness!r}")
+        raise ValueError(f"gait file {name}: fitness must be a number, got {brief(fitness)}")
     for key in ("steps", "seed"):
         value = data[key]
         if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-            raise ValueError(f"gait file {name}: {key} must be an integer >= 0, got {value!r}")
+            raise ValueError(f"gait file {name}: {key} must be an integer >= 0, got {brief(value)}")
     _check_parameters(data["cpg_initial"], name)
 
 
@@ -151,12 +153,12 @@ def _check_parameters(parameters: Any, name: str) -> None:
         for x in numbers:
             if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
                 raise ValueError(
-                    f"gait file {name}: {field} must hold finite numbers, got {value!r}"
+                    f"gait file {name}: {field} must hold finite numbers, got {brief(value)}"
                 )
         if field in POSITIVE_FIELDS and any(x <= 0 for x in numbers):
-            raise ValueError(f"gait file {name}: {field} must be > 0, got {value!r}")
+            raise ValueError(f"gait file {name}: {field} must be > 0, got {brief(value)}")
         if field in GAIN_FIELDS and any(x < 0 for x in numbers):
-            raise ValueError(f"gait file {name}: {field} must be >= 0, got {value!r}")
+            raise ValueError(f"gait file {name}: {field} must be >= 0, got {brief(value)}")
     if len(sizes) > 1 or 0 in sizes:
         raise ValueError(
             f"gait file {name}: the CPG parameters disagree on the number of oscillators "

@@ -36,6 +36,8 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
+from cpg_actor.limits import MAX_ENVS, MAX_EPISODES, MAX_POPSIZE, brief, check_int
+
 from .cma_state import restore_search_state, search_state
 
 ES_EPISODE_SEED_KEY = 2**31 + 2  # SeedSequence([seed, this, generation]): reset seeds
@@ -63,11 +65,19 @@ class ESConfig:
             or not isinstance(sigma0, (int, float))
             or not (math.isfinite(sigma0) and sigma0 > 0)
         ):
-            problems.append(f"es.sigma0 must be a finite number > 0 (in V units), got {sigma0!r}")
-        for name, least in (("popsize", 2), ("episodes", 1)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < least:
-                problems.append(f"es.{name} must be an integer >= {least}, got {value!r}")
+            problems.append(
+                f"es.sigma0 must be a finite number > 0 (in V units), got {brief(sigma0)}"
+            )
+        for name, least, high in (("popsize", 2, MAX_POPSIZE), ("episodes", 1, MAX_EPISODES)):
+            try:
+                check_int(getattr(self, name), f"es.{name}", least, high)
+            except ValueError as error:
+                problems.append(str(error))
+        if not problems and self.popsize * self.episodes > MAX_ENVS:  # an env each
+            problems.append(
+                f"es.popsize x es.episodes ({self.popsize:,} x {self.episodes:,}) envs are "
+                f"above the {MAX_ENVS:,} accepted"
+            )
         if problems:
             raise ValueError("\n".join(problems))
 

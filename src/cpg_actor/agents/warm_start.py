@@ -10,6 +10,7 @@ normalised inputs it will see when PPO starts.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -17,6 +18,13 @@ import numpy as np
 import torch
 
 from cpg_actor.agents.base import Agent
+from cpg_actor.limits import (
+    MAX_EPOCHS,
+    MAX_ROLLOUT_SAMPLES,
+    MAX_ROLLOUT_STEPS,
+    brief,
+    check_int,
+)
 
 
 class Normalizer(Protocol):
@@ -42,14 +50,19 @@ class WarmStartConfig:
     action_noise: float = 0.0
 
     def validate(self) -> None:
-        for name in ("epochs", "rollout_steps", "minibatch_size"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"warm_start.{name} must be a positive integer, got {value!r}")
-        if not self.learning_rate > 0:
-            raise ValueError(f"warm_start.learning_rate must be > 0, got {self.learning_rate!r}")
-        if not self.action_noise >= 0:
-            raise ValueError(f"warm_start.action_noise must be >= 0, got {self.action_noise!r}")
+        for name, high in (
+            ("epochs", MAX_EPOCHS),
+            ("rollout_steps", MAX_ROLLOUT_STEPS),
+            ("minibatch_size", MAX_ROLLOUT_SAMPLES),
+        ):
+            check_int(getattr(self, name), f"warm_start.{name}", 1, high)
+        rate, noise = self.learning_rate, self.action_noise
+        if not 0 < rate < math.inf:
+            raise ValueError(f"warm_start.learning_rate must be a finite number > 0, got "
+                             f"{brief(rate)}")  # fmt: skip
+        if not 0 <= noise < math.inf:
+            raise ValueError(f"warm_start.action_noise must be a finite number >= 0, got "
+                             f"{brief(noise)}")  # fmt: skip
 
 
 def collect_reference_observations(

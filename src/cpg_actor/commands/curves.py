@@ -27,6 +27,8 @@ import math
 from pathlib import Path
 from typing import Any
 
+from cpg_actor.limits import brief
+
 HELP = "draw the learning curves of several runs (grouped by agent and settings) in one figure"
 
 # config keys that do not change what a run trains: runs differing only here are one group
@@ -197,7 +199,7 @@ def run(args: argparse.Namespace) -> int:
                      if key != "global_step" and series(rows, key)[0]})  # fmt: skip
     for metric in metrics:  # before the files: a typo is not reported as an existing file
         if metric not in logged:
-            raise ValueError(f"no run logged {metric!r}; the runs logged: "
+            raise ValueError(f"no run logged {brief(metric)}; the runs logged: "
                              f"{', '.join(logged) or 'nothing'}")  # fmt: skip
     summary_path = out.with_suffix(".json")
     for path in (out, summary_path):

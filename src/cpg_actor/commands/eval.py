@@ -21,7 +21,13 @@ from pathlib import Path
 
 import numpy as np
 
-from cpg_actor.files import atomic_write, atomic_write_text, refuse_linked_folders
+from cpg_actor.files import (
+    atomic_write,
+    atomic_write_text,
+    check_path_given,
+    refuse_linked_folders,
+)
+from cpg_actor.limits import brief
 from cpg_actor.plots import GAIT_WINDOW, draw_gait_diagram, save_figure
 from cpg_actor.robots.registry import all_metrics, all_simulators, get_robot
 
@@ -110,6 +116,9 @@ def run(args: argparse.Namespace) -> int:
     from cpg_actor.training.evaluation import evaluate_policy, nominal_env
 
     check_seed(args.seed)
+    for value, flag in ((args.run_dir, "RUN_DIR"), (args.checkpoint, "--checkpoint"),
+                        (args.output, "--output"), (args.video, "--video")):  # fmt: skip
+        check_path_given(value, flag)
     run_dir = Path(args.run_dir)
     config_path = run_dir / "config.yaml"
     if not config_path.is_file():
@@ -144,7 +153,7 @@ def run(args: argparse.Namespace) -> int:
     for text in args.set:
         override = parse_override(text)
         if set(override) != {"env"}:
-            raise ValueError(f"--set {text!r}: eval overrides env fields only (env.KEY=VALUE)")
+            raise ValueError(f"--set {brief(text)}: eval overrides env fields only (env.KEY=VALUE)")
         apply_dict(config, override, "")
     if args.set:
         config.validate()

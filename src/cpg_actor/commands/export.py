@@ -30,9 +30,12 @@ def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import TrainConfig, check_count
     from cpg_actor.deploy import load_policy
     from cpg_actor.deploy.export import SUFFIXES, export_policy, sidecar_paths
-    from cpg_actor.files import refuse_linked_folders
+    from cpg_actor.files import check_path_given, refuse_linked_folders
 
     check_count(args.batch, "--batch", MAX_BATCH)
+    for value, flag in ((args.run_dir, "RUN_DIR"), (args.checkpoint, "--checkpoint"),
+                        (args.out, "--out")):  # fmt: skip
+        check_path_given(value, flag)
     run_dir = Path(args.run_dir)
     if not run_dir.is_dir():
         raise FileNotFoundError(f"run directory {run_dir} does not exist")

@@ -13,6 +13,8 @@ import argparse
 import json
 from pathlib import Path
 
+from cpg_actor.limits import brief
+
 HELP = "measure the k-step (truncated) CPG gradient against the full-trajectory one"
 
 
@@ -34,9 +36,9 @@ def parse_ks(text: str, steps: int) -> list[int]:
     try:
         ks = [int(k) for k in text.split(",") if k.strip()]
     except ValueError:
-        raise ValueError(f"--ks must be comma-separated integers, got {text!r}") from None
+        raise ValueError(f"--ks must be comma-separated integers, got {brief(text)}") from None
     if not ks or any(not 1 <= k <= steps for k in ks):
-        raise ValueError(f"--ks must be integers in [1, --steps={steps}], got {text!r}")
+        raise ValueError(f"--ks must be integers in [1, --steps={steps}], got {brief(text)}")
     return ks
 
 
@@ -104,16 +106,19 @@ def markdown(result: dict, share: float | None, title: str) -> str:
 
 def run(args: argparse.Namespace) -> int:
 
+    from cpg_actor.config import check_seed
     from cpg_actor.experiments.gradient import (
         collect_rollout,
         feedback_score_share,
         truncation_study,
     )
     from cpg_actor.files import atomic_write_text
+    from cpg_actor.limits import MAX_EPISODE_STEPS, MAX_EPISODES, check_int
     from cpg_actor.robots.common.torch_env import TorchVectorEnv
 
-    if args.envs < 1 or args.steps < 2:
-        raise ValueError(f"--envs must be >= 1 and --steps >= 2, got {args.envs}, {args.steps}")
+    check_int(args.envs, "--envs", 1, MAX_EPISODES)  # an episode each, kept for the gradient
+    check_int(args.steps, "--steps", 2, MAX_EPISODE_STEPS)
+    check_seed(args.seed)
     ks = parse_ks(args.ks, args.steps)
     out = Path(args.out) if args.out else None
     if out is not None:

@@ -99,6 +99,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import parse_steps
     from cpg_actor.experiments import execute, plan
+    from cpg_actor.limits import MAX_WORKERS, check_int
 
     settings = plan.ReproduceSettings(
         variants=plan.parse_variants(args.variants),
@@ -112,9 +113,8 @@ def run(args: argparse.Namespace) -> int:
         first_seed=args.first_seed,
         count_search_steps=getattr(args, "count_search_steps", False),
     )
-    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-    if workers < 1:
-        raise ValueError(f"--workers must be >= 1, got {workers}")
+    workers = args.workers if args.workers is not None else min(os.cpu_count() or 1, MAX_WORKERS)
+    check_int(workers, "--workers", 1, MAX_WORKERS)
     if args.ray is not None:
         execute.import_ray()  # a clear error before anything is written
     if getattr(args, "ray_results", "auto") != "auto" and args.ray is None:

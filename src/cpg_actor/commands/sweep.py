@@ -77,14 +77,14 @@ def run(args: argparse.Namespace) -> int:
     from cpg_actor.config import parse_steps
     from cpg_actor.experiments import plan, sweep
     from cpg_actor.files import refuse_linked_folders
+    from cpg_actor.limits import MAX_WORKERS, check_int
     from cpg_actor.robots.registry import get_robot
 
     variants = plan.parse_variants(args.variants)
     settings = sweep.build_settings(args.vary)
     total_steps = parse_steps(args.total_steps)
-    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-    if workers < 1:
-        raise ValueError(f"--workers must be >= 1, got {workers}")
+    workers = args.workers if args.workers is not None else min(os.cpu_count() or 1, MAX_WORKERS)
+    check_int(workers, "--workers", 1, MAX_WORKERS)
     out = Path(args.out)
     plans = []
     for setting in settings:  # validate every setting before anything is written

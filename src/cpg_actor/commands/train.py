@@ -11,6 +11,7 @@ from pathlib import Path
 from cpg_actor.commands import add_set_option
 from cpg_actor.config import (
     TrainConfig,
+    check_seed,
     compose_config,
     parse_steps,
     without_compile_if_no_compiler,
@@ -22,6 +23,7 @@ from cpg_actor.files import (
     atomic_write_text,
     check_directory_path,
     check_overwritable,
+    check_path_given,
     check_run_dir_length,
     clear_project_dir,
     marker_kind,
@@ -30,6 +32,7 @@ from cpg_actor.files import (
     remove_stale_temporaries,
     write_marker,
 )
+from cpg_actor.limits import MAX_ENVS, MAX_SEEDS, check_int
 from cpg_actor.robots.registry import ROBOTS, all_simulators, get_robot
 from cpg_actor.training.progress import evaluation_text, metrics_text
 from cpg_actor.training.run_lock import LOCK_NAME, RunLock
@@ -221,6 +224,8 @@ def _runner(config: TrainConfig, run_dir: Path, args: argparse.Namespace):
 
 def _run(args: argparse.Namespace, locks: list[RunLock]) -> int:
     """Build the run (a new one, or the one in ``--run-dir`` resumed), train it, report."""
+    check_path_given(args.run_dir, "--run-dir")
+    check_path_given(args.config, "--config")
     if getattr(args, "seeds", None) is not None:
         return _run_group(args, locks)
     if args.resume:
@@ -242,8 +247,7 @@ def _run_group(args: argparse.Namespace, locks: list[RunLock]) -> int:
     """``--seeds K``: K runs of the config, seeds ``config.seed`` on, trained together by a
     :class:`~cpg_actor.training.many_seeds.SeedGroup`, new (each seed's run directory prepared
     and locked as a single run's) or resumed (``--resume``: the group in ``--run-dir``)."""
-    if args.seeds < 1:
-        raise ValueError(f"--seeds takes a number of seeds, at least 1; got {args.seeds}")
+    check_int(args.seeds, "--seeds", 1, MAX_SEEDS)
     if args.resume:
         group = _resumed_group(args, locks)
         if group is None:  # finished: nothing to continue, no error
@@ -273,6 +277,12 @@ def _new_group(args: argparse.Namespace, locks: list[RunLock]):
             f"--seeds trains PPO agents; {config.agent} is searched by CMA-ES: one seed per "
             "process (--seed)"
         )
+    if args.seeds * config.num_envs > MAX_ENVS:  # one batched env holds them all
+        raise ValueError(
+            f"--seeds x num_envs ({args.seeds:,} x {config.num_envs:,}) envs are above the "
+            f"{MAX_ENVS:,} accepted in one process; use fewer seeds or envs"
+        )
+    check_seed(config.seed + args.seeds - 1, "--seed + --seeds - 1")
     seeds = list(range(config.seed, config.seed + args.seeds))
     run_dir = Path(
         args.run_dir

@@ -44,6 +44,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from cpg_actor.limits import brief
+
 # the fixed learning rate of what acts through the CPG (ppo.cpg_learning_rate): the paper's
 CPG_LEARNING_RATE = 3e-4
 
@@ -94,7 +96,7 @@ def check_preset(name: str) -> None:
     """ValueError unless ``name`` is a recipe (or the old name kept for saved runs)."""
     if name not in PRESETS:
         raise ValueError(
-            f"unknown preset {name!r}; the recipes are {', '.join(RECIPES)} (a robot's own: "
+            f"unknown preset {brief(name)}; the recipes are {', '.join(RECIPES)} (a robot's own: "
             "--robot NAME alone)"
         )
 
@@ -109,7 +111,7 @@ def preset_values(name: str, env_class: type | None = None) -> dict[str, Any]:
     if attribute is not None and env_class is not None:
         robot_env = getattr(env_class, attribute, None)
         if robot_env is None:
-            raise ValueError(f"preset {name!r} is a quadruped task; the robot's config "
+            raise ValueError(f"preset {brief(name)} is a quadruped task; the robot's config "
                              f"{env_class.__name__} has no {attribute} (the quadrupeds "
                              f"anymal and go1 have)")  # fmt: skip
         values["env"] = {**values.get("env", {}), **robot_env}

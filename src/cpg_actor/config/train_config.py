@@ -24,32 +24,38 @@ from cpg_actor.agents.open_loop_es import ESConfig
 from cpg_actor.agents.warm_start import WarmStartConfig
 from cpg_actor.device import check_device_name
 from cpg_actor.files import atomic_write_text
+from cpg_actor.limits import (
+    MAX_ENVS,
+    MAX_EPISODES,
+    MAX_ROLLOUT_SAMPLES,
+    MAX_SEED,
+    MAX_STEPS,
+    MAX_THREADS,
+    MAX_YAML_BYTES,
+    brief,
+    check_int,
+    shorten,
+)
 from cpg_actor.ppo.algorithm import cpp_compiler
 from cpg_actor.ppo.config import PPOConfig
 from cpg_actor.robots.plugin import Robot
 from cpg_actor.robots.registry import DEFAULT_ROBOT, ROBOTS, get_robot
 from cpg_actor.robots.spec import EnvConfig
-
-# the largest seed: torch takes seeds below 2**64, but seeds pass through int64 tensors and
-# arrays (checkpoints, env seeds), so the accepted range is that of an int64
-MAX_SEED = 2**63 - 1
+from cpg_actor.safe_yaml import YAMLRefused, parse_yaml, yaml_error_text
 
 
 def check_seed(seed: Any, name: str = "--seed") -> None:
     """ValueError unless ``seed`` is an integer from 0 to :data:`MAX_SEED`."""
     if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed <= MAX_SEED:
-        raise ValueError(f"{name} must be an integer from 0 to 2**63-1 ({MAX_SEED}), got {seed!r}")
-
-
-# episodes an evaluation runs at most (in parallel, an env each): far beyond the 4 to 5 its
-# commands run by default, small enough for the envs to fit in memory
-MAX_EPISODES = 1_000
+        raise ValueError(
+            f"{name} must be an integer from 0 to 2**63-1 ({MAX_SEED}), got {brief(seed)}"
+        )
 
 
 def check_count(value: Any, name: str, high: int) -> None:
     """ValueError unless ``value`` is an integer from 1 to ``high``."""
     if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= high:
-        raise ValueError(f"{name} must be an integer from 1 to {high:,}, got {value!r}")
+        raise ValueError(f"{name} must be an integer from 1 to {high:,}, got {brief(value)}")
 
 
 def _default_env_config() -> EnvConfig:
@@ -64,7 +70,7 @@ def check_cpg_choice(agent_config: AgentConfig, robot: Robot) -> None:
     if layout and layout not in layouts:
         raise ValueError(
             f"agent_config.cpg_layout must be one of {', '.join(layouts)} on robot "
-            f"{robot.name!r} (or empty), got {layout!r}"
+            f"{brief(robot.name)} (or empty), got {brief(layout)}"
         )
     gait, gaits = agent_config.cpg_gait, layouts[layout or next(iter(layouts))].gaits
     if gait and not gaits:
@@ -73,7 +79,7 @@ def check_cpg_choice(agent_config: AgentConfig, robot: Robot) -> None:
         )
     if gait and gait not in gaits:
         raise ValueError(
-            f"agent_config.cpg_gait must be one of {', '.join(gaits)} (or empty), got {gait!r}"
+            f"agent_config.cpg_gait must be one of {', '.join(gaits)} (or empty), got {brief(gait)}"
         )
 
 
@@ -127,43 +133,30 @@ class TrainConfig:
         from cpg_actor.config.presets import check_preset
 
         check_preset(self.preset)
-        if (
-            isinstance(self.eval_interval, bool)
-            or not isinstance(self.eval_interval, int)
-            or (self.eval_interval < 0)
+        # every count bounded (cpg_actor.limits), before anything is built
+        check_int(self.eval_interval, "eval_interval (0: no evaluation during training)", 0,
+                  MAX_STEPS)  # fmt: skip
+        for name, high in (
+            ("num_envs", MAX_ENVS),
+            ("total_steps", MAX_STEPS),
+            ("checkpoint_interval", MAX_STEPS),  # iterations: a run has fewer than steps
+            ("log_interval", MAX_STEPS),
+            ("histogram_interval", MAX_STEPS),
+            ("torch_threads", MAX_THREADS),
+            ("eval_episodes", MAX_EPISODES),
         ):
-            raise ValueError(
-                f"eval_interval must be an integer >= 0 (0: no evaluation during training), "
-                f"got {self.eval_interval!r}"
-            )
-        for name in (
-            "num_envs",
-            "total_steps",
-            "checkpoint_interval",
-            "log_interval",
-            "histogram_interval",
-            "torch_threads",
-            "eval_episodes",
-        ):
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-                raise ValueError(f"{name} must be a positive integer, got {value!r}")
+            check_int(getattr(self, name), name, 1, high)
         steps = self.search_steps
-        if isinstance(steps, bool) or not isinstance(steps, int) or not 0 <= steps:
-            raise ValueError(f"search_steps must be an integer >= 0, got {steps!r}")
+        check_int(steps, "search_steps", 0, MAX_STEPS)
         if steps >= self.total_steps:
             raise ValueError(
                 f"search_steps ({steps:,}) must be below total_steps ({self.total_steps:,}): "
                 "the start gait's search would use the whole budget"
             )
         check_seed(self.seed, "seed")
-        threads = self.update_threads
-        if threads is not None and (
-            not isinstance(threads, int) or isinstance(threads, bool) or threads < 1
-        ):
-            raise ValueError(
-                f"update_threads must be a positive integer or null (automatic), got {threads!r}"
-            )
+        for name in ("update_threads", "env_threads"):
+            if getattr(self, name) is not None:
+                check_int(getattr(self, name), f"{name} (or null: automatic)", 1, MAX_THREADS)
         if getattr(self.env, "normalized_actions", False):
             raise ValueError(
                 "env.normalized_actions is for off-the-shelf RL libraries (gymnasium.make); "
@@ -177,7 +170,9 @@ class TrainConfig:
         except ValueError:  # a config of the caller's own env (a test double, an extension)
             holds = self.robot
         if holds != self.robot:
-            raise ValueError(f"env holds the config of robot {holds!r}, not of {self.robot!r}")
+            raise ValueError(
+                f"env holds the config of robot {brief(holds)}, not of {brief(self.robot)}"
+            )
         from cpg_actor.agents import AGENTS
 
         spec = AGENTS[self.agent]
@@ -187,14 +182,26 @@ class TrainConfig:
                 if other.robots is None or self.robot in other.robots
             )  # fmt: skip
             raise ValueError(
-                f"agent {self.agent!r} is built for {', '.join(spec.robots)} only; on robot "
-                f"{self.robot!r} use one of {', '.join(usable)}"
+                f"agent {brief(self.agent)} is built for {', '.join(spec.robots)} only; on robot "
+                f"{brief(self.robot)} use one of {', '.join(usable)}"
             )
         check_device_name(self.device)
         self.agent_config.validate()
         check_cpg_choice(self.agent_config, robot)
         self.ppo.validate()
         self.warm_start.validate()
+        if self.steps_per_iteration > MAX_ROLLOUT_SAMPLES:
+            raise ValueError(
+                f"num_envs x ppo.num_steps ({self.num_envs:,} x {self.ppo.num_steps:,}) is a "
+                f"rollout of {self.steps_per_iteration:,} samples, above the "
+                f"{MAX_ROLLOUT_SAMPLES:,} accepted; use fewer envs or steps"
+            )
+        if self.num_envs * self.warm_start.rollout_steps > MAX_ROLLOUT_SAMPLES:
+            raise ValueError(
+                f"num_envs x warm_start.rollout_steps ({self.num_envs:,} x "
+                f"{self.warm_start.rollout_steps:,}) is above the {MAX_ROLLOUT_SAMPLES:,} "
+                "samples accepted; use fewer envs or steps"
+            )
         if self.steps_per_iteration < self.ppo.num_minibatches:
             raise ValueError("num_envs * ppo.num_steps must be >= ppo.num_minibatches")
         self.es.validate()
@@ -314,36 +321,27 @@ def without_compile_if_no_compiler(config: TrainConfig) -> TrainConfig:
     return config
 
 
-class _UniqueKeyLoader(yaml.SafeLoader):
-    """YAML's safe loader (no tags that build objects), refusing a key given twice in one
-    mapping (PyYAML would keep the last silently)."""
-
-    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
-        seen = set()
-        for key_node, _ in node.value:
-            key = self.construct_object(key_node, deep=True)
-            if key in seen:
-                raise yaml.constructor.ConstructorError(
-                    None, None, f"duplicate key {key!r} (give each key once)", key_node.start_mark
-                )
-            seen.add(key)
-        return super().construct_mapping(node, deep)
-
-
 def read_config_file(path: Path) -> dict[str, Any]:
-    """The mapping of config keys in a YAML file; a clear ValueError if it is not one."""
+    """The mapping of config keys in a YAML file; a clear ValueError if it is not one (read by
+    :mod:`cpg_actor.safe_yaml`: bounded in size, aliases and depth, each key once)."""
+    if Path(path).is_file() and Path(path).stat().st_size > MAX_YAML_BYTES:
+        raise ValueError(
+            f"{path} has {Path(path).stat().st_size:,} bytes, above the {MAX_YAML_BYTES:,} "
+            "accepted for a config file (a run's config.yaml has a few KB)"
+        )
     try:
-        data = yaml.load(Path(path).read_text(encoding="utf-8"), _UniqueKeyLoader) or {}
+        data = parse_yaml(Path(path).read_text(encoding="utf-8")) or {}
     except UnicodeDecodeError as error:  # a binary file: a checkpoint, an image, ...
         raise ValueError(
             f"{path} is not a YAML text file (byte {error.start} is not UTF-8 text); give a "
             "YAML file of config keys, e.g. a run's config.yaml"
         ) from None
+    except YAMLRefused as error:
+        raise ValueError(f"{path} is refused: the YAML {error}") from None
     except yaml.YAMLError as error:  # in one line: the problem and where
-        mark = getattr(error, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(error, "problem", None) or str(error)
-        raise ValueError(f"{path} is not valid YAML{where}: {problem}") from None
+        raise ValueError(f"{path} is not valid YAML{yaml_error_text(error)}") from None
+    except ValueError as error:  # an integer of too many digits, ...
+        raise ValueError(f"{path} is not valid YAML: {shorten(str(error))}") from None
     if not isinstance(data, dict):
         raise ValueError(f"{path} must hold a mapping of config keys")
     return data
@@ -384,36 +382,40 @@ def _coerce(value: Any, annotation: Any, key: str) -> Any:
                 return _coerce(value, arg, key)
             except ValueError as error:
                 errors.append(str(error))
-        raise ValueError(errors[0] if errors else f"{key}: invalid value {value!r}")
+        raise ValueError(errors[0] if errors else f"{key}: invalid value {brief(value)}")
     if annotation is Any:
         return value
     if annotation is bool:
         if isinstance(value, bool):
             return value
-        raise ValueError(f"{key} must be true or false, got {value!r}")
-    if annotation is int:
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or int(value) != value:
-            raise ValueError(f"{key} must be an integer, got {value!r}")
+        raise ValueError(f"{key} must be true or false, got {brief(value)}")
+    if annotation is int:  # (an infinite float, 1e309, has no integer: one line, no overflow)
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, (int, float))
+            or (isinstance(value, float) and not value.is_integer())
+        ):
+            raise ValueError(f"{key} must be an integer, got {brief(value)}")
         return int(value)
     if annotation is float:
         if isinstance(value, str) and _YAML11_FLOAT.fullmatch(value.strip()):
             return float(value)  # YAML 1.1 reads 1e-4 (no dot) as a string
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ValueError(f"{key} must be a number, got {value!r}")
+            raise ValueError(f"{key} must be a number, got {brief(value)}")
         return float(value)
     if annotation is str:
         if not isinstance(value, str):
-            raise ValueError(f"{key} must be a string, got {value!r}")
+            raise ValueError(f"{key} must be a string, got {brief(value)}")
         return value
     if origin in (tuple, list) or annotation in (tuple, list):
         if not isinstance(value, (list, tuple)):
-            raise ValueError(f"{key} must be a list, got {value!r}")
+            raise ValueError(f"{key} must be a list, got {brief(value)}")
         item = args[0] if args else Any
         items = [_coerce(v, item, f"{key}[{i}]") for i, v in enumerate(value)]
         return tuple(items) if (origin or annotation) is tuple else items
     if origin is dict or annotation is dict:
         if not isinstance(value, dict):
-            raise ValueError(f"{key} must be a mapping, got {value!r}")
+            raise ValueError(f"{key} must be a mapping, got {brief(value)}")
         return value
     return value
 
@@ -434,7 +436,7 @@ def apply_dict(obj: Any, data: dict[str, Any], prefix: str) -> None:
         path = f"{prefix}{key}"
         if key not in names:
             raise ValueError(
-                f"unknown config key '{path}'; valid keys here: {', '.join(sorted(names))}"
+                f"unknown config key '{shorten(path)}'; valid keys here: {', '.join(sorted(names))}"
             )
         current = getattr(obj, key)
         if dataclasses.is_dataclass(current):
@@ -465,12 +467,16 @@ def parse_override(text: str) -> dict[str, Any]:
     """``"ppo.learning_rate=1e-4"`` -> ``{"ppo": {"learning_rate": 1e-4}}`` (value read as YAML)."""
     match = _ASSIGNMENT.match(text.strip())
     if not match:
-        raise ValueError(f"--set expects KEY=VALUE with a dotted key, got {text!r}")
+        raise ValueError(f"--set expects KEY=VALUE with a dotted key, got {brief(text)}")
     key, raw = match.groups()
     try:
-        value = yaml.safe_load(raw) if raw.strip() else None
+        value = parse_yaml(raw) if raw.strip() else None
     except yaml.YAMLError:
         value = raw
+    except YAMLRefused as error:  # too large, too deep: refused, not read as a string
+        raise ValueError(f"--set {shorten(key)}: the YAML value {error}") from None
+    except ValueError as error:  # an integer of too many digits, ...
+        raise ValueError(f"--set {shorten(key)}: {shorten(str(error))}") from None
     if isinstance(value, str) and re.fullmatch(r"[-+]?\d*\.?\d+[eE][-+]?\d+", value):
         value = float(value)  # YAML 1.1 reads 1e-4 as a string
     nested: dict[str, Any] = {}
@@ -487,9 +493,6 @@ STEP_KEYS = ("total_steps",)
 _SUFFIXES = {"k": 1_000, "m": 1_000_000, "g": 1_000_000_000, "b": 1_000_000_000}
 
 
-MAX_STEPS = 10**12  # 1e30 would be accepted as a float and print rounding noise
-
-
 def parse_steps(text: str | int) -> int:
     """``"20M"`` -> 20_000_000, ``"500k"`` -> 500_000, ``"1e6"`` -> 1_000_000; must be > 0."""
     raw = str(text).strip().lower().replace("_", "")
@@ -499,12 +502,14 @@ def parse_steps(text: str | int) -> int:
         else:
             value = float(raw)
     except ValueError:
-        raise ValueError(f"invalid step count {text!r}; use e.g. 300000, 500k or 20M") from None
+        raise ValueError(
+            f"invalid step count {brief(text)}; use e.g. 300000, 500k or 20M"
+        ) from None
     if not math.isfinite(value) or value != int(value) or value <= 0:
-        raise ValueError(f"the step count must be a positive integer, got {text!r}")
+        raise ValueError(f"the step count must be a positive integer, got {brief(text)}")
     if value > MAX_STEPS:
         raise ValueError(
-            f"the step count {text!r} is above the largest accepted, {MAX_STEPS:.0e} "
+            f"the step count {brief(text)} is above the largest accepted, {MAX_STEPS:.0e} "
             "(years of training on any machine)"
         )
     return int(value)

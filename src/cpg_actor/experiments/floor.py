@@ -49,8 +49,6 @@ def floor_env_config(out: Path, settings: Any) -> Any:
     """The env the runs in ``out`` trained on (the saved config of a ``cpg-actor-open-loop``
     or ``cpg-actor`` run, else of any run: a run saved before an option existed keeps what it
     trained with), or else what ``settings`` resolve to; always with eq. 4's reward."""
-    import yaml
-
     from cpg_actor.config import TrainConfig
     from cpg_actor.experiments.plan import resolve_config
 
@@ -61,7 +59,7 @@ def floor_env_config(out: Path, settings: Any) -> Any:
         *sorted(runs.glob("*/seed*/config.yaml")),
     ]
     if paths:
-        env = TrainConfig.from_dict(yaml.safe_load(paths[0].read_text())).env
+        env = TrainConfig.load(paths[0]).env
     else:
         env = resolve_config(settings, "cpg-actor-open-loop").env
     return env.replace(hop_reward="hip-velocity")

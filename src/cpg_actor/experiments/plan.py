@@ -24,7 +24,9 @@ from cpg_actor.files import (
     refuse_linked_folders,
     write_marker,
 )
+from cpg_actor.limits import MAX_ENVS, MAX_EPISODES, MAX_SEEDS, brief, check_int
 from cpg_actor.machine import usable_cores
+from cpg_actor.safe_yaml import read_yaml
 
 # the paper's progressive-hopping figure: 1M, 20M and 60M of 60M steps
 STAGE_FRACTIONS: tuple[float, ...] = (1 / 60, 1 / 3, 1.0)
@@ -253,18 +255,16 @@ def checkpoint_interval(config) -> int:
 
 
 def validate(settings: ReproduceSettings) -> None:
-    if not isinstance(settings.seeds, int) or settings.seeds < 1:
-        raise ValueError(f"--seeds must be >= 1, got {settings.seeds}")
+    check_int(settings.seeds, "--seeds", 1, MAX_SEEDS)
     from cpg_actor.config import check_seed
 
     check_seed(settings.first_seed, "--first-seed")
     check_seed(settings.first_seed + settings.seeds - 1, "--first-seed + --seeds - 1")
     if settings.total_steps <= 0:
         raise ValueError(f"--total-steps must be > 0, got {settings.total_steps}")
-    if settings.num_envs is not None and settings.num_envs < 1:
-        raise ValueError(f"--num-envs must be >= 1, got {settings.num_envs}")
-    if settings.eval_episodes < 1:
-        raise ValueError(f"--eval-episodes must be >= 1, got {settings.eval_episodes}")
+    if settings.num_envs is not None:
+        check_int(settings.num_envs, "--num-envs", 1, MAX_ENVS)
+    check_int(settings.eval_episodes, "--eval-episodes", 1, MAX_EPISODES)
     if "agent" in _override_keys(settings.overrides) or "seed" in _override_keys(
         settings.overrides
     ):
@@ -354,7 +354,7 @@ def load_settings_file(out: Path) -> dict[str, Any] | None:
     path = out / SETTINGS_FILE
     if not path.is_file():
         return None
-    data = yaml.safe_load(path.read_text()) or {}
+    data = read_yaml(path) or {}  # bounded (cpg_actor.safe_yaml), one line
     if not isinstance(data, dict):
         raise ValueError(f"{path} is not a reproduce settings file")
     return data
@@ -414,7 +414,7 @@ def prepare_out_dir(out: Path, settings: ReproduceSettings, overwrite: bool) -> 
             return "extend"
         if not overwrite:
             differences = [
-                f"{key}: {saved.get('settings', {}).get(key)!r} -> {value!r}"
+                f"{key}: {brief(saved.get('settings', {}).get(key))} -> {brief(value)}"
                 for key, value in settings.identity().items()
                 if saved.get("settings", {}).get(key) != value
             ]

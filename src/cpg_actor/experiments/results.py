@@ -65,12 +65,13 @@ def run_robot(config: dict[str, Any]) -> Robot:
 
 def read_config(run_dir: Path) -> dict[str, Any]:
     """A run's saved ``config.yaml`` as a mapping (empty if it has none)."""
-    import yaml
+    from cpg_actor.safe_yaml import read_yaml
 
     try:
-        return yaml.safe_load((run_dir / "config.yaml").read_text()) or {}
-    except (OSError, yaml.YAMLError):
+        data = read_yaml(run_dir / "config.yaml") or {}
+    except (OSError, ValueError):  # unreadable, not YAML, beyond the YAML bounds
         return {}
+    return data if isinstance(data, dict) else {}
 
 
 def label(variant: str) -> str:

@@ -33,6 +33,7 @@ from cpg_actor.files import (
     refuse_linked_folders,
     write_marker,
 )
+from cpg_actor.limits import brief
 from cpg_actor.robots.registry import all_metrics
 
 FINAL_EVALS = 3  # the score of a run: the mean of its last FINAL_EVALS evaluations
@@ -48,18 +49,18 @@ def parse_vary(text: str) -> list[Setting]:
     """``"agent_config.init_std=0.3,3"`` -> two settings; ``"a,b=1:2,3:4"`` changes a and b
     together (a=1 b=2, then a=3 b=4)."""
     if "=" not in text:
-        raise ValueError(f"--vary expects KEY=V1,V2 or KEY1,KEY2=A1:A2,B1:B2, got {text!r}")
+        raise ValueError(f"--vary expects KEY=V1,V2 or KEY1,KEY2=A1:A2,B1:B2, got {brief(text)}")
     keys_text, values_text = text.split("=", 1)
     keys = [k.strip() for k in keys_text.split(",") if k.strip()]
     groups = [g.strip() for g in values_text.split(",") if g.strip()]
     if not keys or not groups:
-        raise ValueError(f"--vary {text!r} names no key or no value")
+        raise ValueError(f"--vary {brief(text)} names no key or no value")
     settings = []
     for group in groups:
         values = group.split(":") if len(keys) > 1 else [group]
         if len(values) != len(keys):
             raise ValueError(
-                f"--vary {text!r}: value group {group!r} has {len(values)} values for "
+                f"--vary {brief(text)}: value group {brief(group)} has {len(values)} values for "
                 f"{len(keys)} keys (separate them with ':')"
             )
         short = [k.rsplit(".", 1)[-1] for k in keys]
@@ -148,7 +149,7 @@ def check_metrics(metrics: list[str], robot: Any) -> list[str]:
     unknown = [name for name in metrics if name not in robot.metrics]
     if unknown:
         raise ValueError(f"--metrics: {', '.join(unknown)} not an episode metric of robot "
-                         f"{robot.name!r}; it has {', '.join(robot.metrics)}")  # fmt: skip
+                         f"{brief(robot.name)}; it has {', '.join(robot.metrics)}")  # fmt: skip
     return list(dict.fromkeys(metrics)) or [robot.headline_metric]
 
 

@@ -5,6 +5,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from cpg_actor.limits import (
+    MAX_EPOCHS,
+    MAX_ROLLOUT_SAMPLES,
+    MAX_ROLLOUT_STEPS,
+    brief,
+    check_int,
+)
+
 SCHEDULES = ("fixed", "linear", "adaptive")
 CPG_SCHEDULES = ("fixed", "follow")
 
@@ -88,11 +96,15 @@ class PPOConfig:
     bptt_steps: int = 1
 
     def validate(self) -> None:
-        positive_int = ("num_steps", "num_epochs", "num_minibatches", "bptt_steps")
-        for name in positive_int:
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-                raise ValueError(f"ppo.{name} must be a positive integer, got {value!r}")
+        # every count bounded (cpg_actor.limits); the rollout's samples, num_envs x num_steps,
+        # are bounded by TrainConfig.validate
+        for name, high in (
+            ("num_steps", MAX_ROLLOUT_STEPS),
+            ("num_epochs", MAX_EPOCHS),
+            ("num_minibatches", MAX_ROLLOUT_SAMPLES),
+            ("bptt_steps", MAX_ROLLOUT_STEPS),
+        ):
+            check_int(getattr(self, name), f"ppo.{name}", 1, high)
         numbers = (
             "gamma", "gae_lambda", "clip_ratio", "value_loss_coef", "entropy_coef",
             "max_grad_norm", "learning_rate", "desired_kl", "min_learning_rate",
@@ -101,34 +113,35 @@ class PPOConfig:
         for name in numbers:
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)):
-                raise ValueError(f"ppo.{name} must be a number, got {value!r}")
+                raise ValueError(f"ppo.{name} must be a number, got {brief(value)}")
             if not math.isfinite(value):
-                raise ValueError(f"ppo.{name} must be finite, got {value!r}")
+                raise ValueError(f"ppo.{name} must be finite, got {brief(value)}")
         for name in ("gamma", "gae_lambda"):
             if not 0.0 <= getattr(self, name) <= 1.0:
-                raise ValueError(f"ppo.{name} must be in [0, 1], got {getattr(self, name)!r}")
+                raise ValueError(f"ppo.{name} must be in [0, 1], got {brief(getattr(self, name))}")
         for name in ("clip_ratio", "learning_rate", "max_grad_norm", "desired_kl", "adam_eps"):
             if not getattr(self, name) > 0:
-                raise ValueError(f"ppo.{name} must be > 0, got {getattr(self, name)!r}")
+                raise ValueError(f"ppo.{name} must be > 0, got {brief(getattr(self, name))}")
         for name in ("value_loss_coef", "entropy_coef"):
             if not getattr(self, name) >= 0:
-                raise ValueError(f"ppo.{name} must be >= 0, got {getattr(self, name)!r}")
+                raise ValueError(f"ppo.{name} must be >= 0, got {brief(getattr(self, name))}")
         if self.lr_schedule not in SCHEDULES:
             raise ValueError(
-                f"ppo.lr_schedule must be one of {SCHEDULES}, got {self.lr_schedule!r}"
+                f"ppo.lr_schedule must be one of {SCHEDULES}, got {brief(self.lr_schedule)}"
             )
         if self.target_kl is not None and not self.target_kl > 0:
-            raise ValueError(f"ppo.target_kl must be > 0 or null, got {self.target_kl!r}")
+            raise ValueError(f"ppo.target_kl must be > 0 or null, got {brief(self.target_kl)}")
         rate = self.cpg_learning_rate
         if rate is not None and (
             isinstance(rate, bool) or not isinstance(rate, (int, float)) or not 0 < rate < 1
         ):
             raise ValueError(
-                f"ppo.cpg_learning_rate must be a number in (0, 1) or null, got {rate!r}"
+                f"ppo.cpg_learning_rate must be a number in (0, 1) or null, got {brief(rate)}"
             )
         if self.cpg_lr_schedule not in CPG_SCHEDULES:
             raise ValueError(
-                f"ppo.cpg_lr_schedule must be one of {CPG_SCHEDULES}, got {self.cpg_lr_schedule!r}"
+                f"ppo.cpg_lr_schedule must be one of {CPG_SCHEDULES}, "
+                f"got {brief(self.cpg_lr_schedule)}"
             )
         if self.cpg_lr_schedule == "follow" and self.cpg_learning_rate is None:
             raise ValueError(

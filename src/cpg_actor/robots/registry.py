@@ -14,6 +14,7 @@ from typing import Any
 
 import gymnasium
 
+from cpg_actor.limits import brief
 from cpg_actor.robots.anymal.plugin import ROBOT as ANYMAL
 from cpg_actor.robots.go1.plugin import ROBOT as GO1
 from cpg_actor.robots.hopper.plugin import ROBOT as HOPPER
@@ -28,7 +29,7 @@ def register_robot(robot: Robot) -> Robot:
     Gymnasium ids; ValueError if a robot of its name is registered already. A robot made
     outside the package registers on import of its module, before the run is built."""
     if robot.name in ROBOTS:
-        raise ValueError(f"a robot named {robot.name!r} is already registered")
+        raise ValueError(f"a robot named {brief(robot.name)} is already registered")
     ROBOTS[robot.name] = robot
     _register_gym_ids(robot)
     return robot
@@ -37,7 +38,7 @@ def register_robot(robot: Robot) -> Robot:
 def get_robot(name: str) -> Robot:
     """The robot called ``name``; ValueError if there is none."""
     if name not in ROBOTS:
-        raise ValueError(f"unknown robot {name!r}; available: {', '.join(ROBOTS)}")
+        raise ValueError(f"unknown robot {brief(name)}; available: {', '.join(ROBOTS)}")
     return ROBOTS[name]
 
 

@@ -7,6 +7,14 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from cpg_actor.limits import (
+    MAX_SEED,
+    MAX_TERRAIN_LEVELS,
+    MAX_TERRAIN_SAMPLES,
+    brief,
+    check_int,
+)
+
 # the kinds of tile, each a column of the grid (legged_gym's terrain types, Rudin et al. 2021),
 # named as a robot walking out of the tile's centre meets them: "rough" random heights, a
 # pyramid slope or stairs going up (the centre a pit) or down (the centre a platform)
@@ -51,25 +59,23 @@ class Terrain:
             kinds = (kinds,)
         if not (isinstance(kinds, list | tuple) and all(isinstance(k, str) for k in kinds)):
             raise ValueError(f"terrain.kinds must be a list of {', '.join(KINDS)} (or 'all'), "
-                             f"got {self.kinds!r}")  # fmt: skip
+                             f"got {brief(self.kinds)}")  # fmt: skip
         kinds = KINDS if tuple(kinds) == ("all",) else tuple(kinds)
         unknown = [k for k in kinds if k not in KINDS]
         if unknown or len(set(kinds)) != len(kinds):
-            what = f"unknown terrain kind {unknown[0]!r}" if unknown else "a repeated kind"
+            what = f"unknown terrain kind {brief(unknown[0])}" if unknown else "a repeated kind"
             raise ValueError(f"{what} in terrain.kinds; accepted: {', '.join(KINDS)} (or "
                              "'all'), each once")  # fmt: skip
         self.kinds = kinds
-        for name in ("levels", "start_level", "seed"):
-            value = getattr(self, name)
-            low = 1 if name == "levels" else 0
-            if isinstance(value, bool) or not isinstance(value, int) or value < low:
-                raise ValueError(f"terrain.{name} must be an integer >= {low}, got {value!r}")
+        check_int(self.levels, "terrain.levels", 1, MAX_TERRAIN_LEVELS)
+        check_int(self.start_level, "terrain.start_level", 0, MAX_TERRAIN_LEVELS - 1)
+        check_int(self.seed, "terrain.seed", 0, MAX_SEED)
         if self.start_level >= self.levels:
             raise ValueError(f"terrain.start_level must be a level in 0..{self.levels - 1} "
                              f"(terrain.levels={self.levels}), got {self.start_level}")  # fmt: skip
         if not isinstance(self.curriculum, bool):
             raise ValueError(f"terrain.curriculum must be true or false, got "
-                             f"{self.curriculum!r}")  # fmt: skip
+                             f"{brief(self.curriculum)}")  # fmt: skip
         for name in ("tile_size", "resolution", "border", "platform", "roughness", "slope",
                      "step_height", "step_width"):  # fmt: skip
             value = getattr(self, name)
@@ -77,15 +83,31 @@ class Terrain:
             ok = not isinstance(value, bool) and isinstance(value, int | float)
             if not (ok and math.isfinite(value) and (value > 0 if strict else value >= 0)):
                 raise ValueError(f"terrain.{name} must be a finite number "
-                                 f"{'>' if strict else '>='} 0, got {value!r}")  # fmt: skip
+                                 f"{'>' if strict else '>='} 0, got {brief(value)}")  # fmt: skip
             setattr(self, name, float(value))
         for name in ("tile_size", "border", "platform", "step_width"):
             cells = getattr(self, name) / self.resolution
+            if cells > MAX_TERRAIN_SAMPLES:  # (and too large to round, if infinite)
+                raise ValueError(
+                    f"terrain.{name} is {cells:.3g} times terrain.resolution "
+                    f"({self.resolution:g} m); at most {MAX_TERRAIN_SAMPLES:,} are accepted"
+                )
             if abs(cells - round(cells)) > 1e-6:
                 raise ValueError(
                     f"terrain.{name} must be a whole number of terrain.resolution "
                     f"({self.resolution:g} m), got {getattr(self, name):g}"
                 )
+        # the height map's samples, before it is made (cpg_actor.terrain.heights.height_map)
+        tile, border = (round(getattr(self, name) / self.resolution)
+                        for name in ("tile_size", "border"))  # fmt: skip
+        samples = (self.levels * tile + 2 * border + 1) * (len(kinds) * tile + 2 * border + 1)
+        if samples > MAX_TERRAIN_SAMPLES:
+            raise ValueError(
+                f"terrain.levels, tile_size, border and resolution ({self.levels}, "
+                f"{self.tile_size:g} m, {self.border:g} m, {self.resolution:g} m) make a height "
+                f"map of {samples:,} samples, above the {MAX_TERRAIN_SAMPLES:,} accepted; use "
+                "fewer levels, smaller tiles or a coarser resolution"
+            )
         if not 2.0 <= self.platform < self.tile_size:
             raise ValueError(f"terrain.platform must be at least 2 m (the robots start within "
                              f"1 m of its centre) and less than terrain.tile_size "
@@ -109,12 +131,12 @@ def check_terrain(config: Any) -> None:
     config.terrain = Terrain.from_value(config.terrain).validate()
     if config.terrain.active and config.sim not in SIMULATORS:
         raise ValueError(
-            f"terrain runs on {', '.join(SIMULATORS)}, got sim={config.sim!r}; give one of "
+            f"terrain runs on {', '.join(SIMULATORS)}, got sim={brief(config.sim)}; give one of "
             "them, or no terrain.kinds for flat ground"
         )
     if config.terrain.active and config.sim == "mjx" and not getattr(config, "feet_only", True):
         raise ValueError(
             f"terrain on MJX needs floor_contacts 'feet' or 'auto' (the feet alone touch the "
             f"ground; MJX collides no height field with cylinders), got "
-            f"floor_contacts={config.floor_contacts!r}"
+            f"floor_contacts={brief(config.floor_contacts)}"
         )

@@ -8,9 +8,8 @@ from typing import Any
 
 import numpy as np
 
-# control steps per episode at most: 200 times the hopper's and the quadrupeds' episodes, so
-# that a typo (1e9) is refused rather than simulated for hours
-MAX_EPISODE_STEPS = 100_000
+# control steps per episode at most: a typo (1e9) is refused rather than simulated for hours
+from cpg_actor.limits import MAX_EPISODE_STEPS, brief, shorten
 
 
 def real_actions(actions: Any, expected: str, dtype: Any = np.float64) -> np.ndarray:
@@ -21,7 +20,7 @@ def real_actions(actions: Any, expected: str, dtype: Any = np.float64) -> np.nda
         is_complex = np.iscomplexobj(raw)
         array = None if is_complex else raw.astype(dtype)
     except (TypeError, ValueError):
-        raise ValueError(f"actions must be numbers {expected}, got {actions!r}") from None
+        raise ValueError(f"actions must be numbers {expected}, got {brief(actions)}") from None
     if is_complex:
         raise ValueError(
             f"actions must be real numbers {expected}, got complex values (dtype {raw.dtype})"
@@ -39,15 +38,18 @@ def check_render_mode(render_mode: str | None, metadata: dict[str, Any]) -> None
     """ValueError unless ``render_mode`` is None or one of ``metadata["render_modes"]``."""
     if render_mode is not None and render_mode not in metadata["render_modes"]:
         raise ValueError(
-            f"render_mode must be None or one of {metadata['render_modes']}, got {render_mode!r}"
+            f"render_mode must be None or one of {metadata['render_modes']}, "
+            f"got {brief(render_mode)}"
         )
 
 
-def check_episode_steps(steps: int, given: str) -> None:
+def check_episode_steps(steps: float, given: str) -> None:
     """ValueError unless an episode of ``steps`` control steps (from ``given``, the field and
-    its value) is at most :data:`MAX_EPISODE_STEPS`."""
-    if steps > MAX_EPISODE_STEPS:
-        raise ValueError(f"{given} makes episodes of {steps:,} control steps; at most "
+    its value; a float where it is a quotient, which may be infinite) is at most
+    :data:`MAX_EPISODE_STEPS`."""
+    if not steps <= MAX_EPISODE_STEPS:
+        steps = f"{steps:,.0f}" if steps < 1e12 else f"{steps:.3g}"  # (or infinite)
+        raise ValueError(f"{given} makes episodes of {steps} control steps; at most "
                          f"{MAX_EPISODE_STEPS:,} are accepted")  # fmt: skip
 
 
@@ -56,11 +58,11 @@ def mapping_fields(cls: type, value: Any, label: str, sequences: tuple[str, ...]
     ValueError for what is not a mapping and for unknown keys, listing the valid ones. The
     fields named in ``sequences`` become tuples (YAML reads them as lists)."""
     if not isinstance(value, dict):
-        raise ValueError(f"{label} must be a mapping of its fields, got {value!r}")
+        raise ValueError(f"{label} must be a mapping of its fields, got {brief(value)}")
     names = [f.name for f in dataclasses.fields(cls)]
     unknown = sorted(str(k) for k in value if k not in names)
     if unknown:
-        raise ValueError(f"unknown {label} key(s) {', '.join(unknown)}; accepted: "
+        raise ValueError(f"unknown {label} key(s) {shorten(', '.join(unknown))}; accepted: "
                          f"{', '.join(names)}")  # fmt: skip
     values = dict(value)
     for name in sequences:

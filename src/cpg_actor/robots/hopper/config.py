@@ -10,6 +10,14 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from cpg_actor.limits import (
+    MAX_DECIMATION,
+    MAX_RENDER_SIZE,
+    MAX_SOLVER_ITERATIONS,
+    brief,
+    check_int,
+    shorten,
+)
 from cpg_actor.robots.common.checks import check_episode_steps
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 from cpg_actor.robots.hopper.backends import BACKENDS, BATCHED_ONLY
@@ -97,29 +105,30 @@ class HopperConfig:
         alpha = self.command_filter
         if isinstance(alpha, bool) or not isinstance(alpha, (int, float)) or not 0 < alpha <= 1:
             raise ValueError(
-                f"command_filter must be a number in (0, 1] (1.0: no filter), got {alpha!r}"
+                f"command_filter must be a number in (0, 1] (1.0: no filter), got {brief(alpha)}"
             )
         for name, kind in _FIELD_KINDS.items():
             value = getattr(self, name)
             if kind is str:
                 if not isinstance(value, str):
-                    raise ValueError(f"{name} must be a string, got {value!r}")
+                    raise ValueError(f"{name} must be a string, got {brief(value)}")
             elif kind is bool:
                 if not isinstance(value, bool):
-                    raise ValueError(f"{name} must be true or false, got {value!r}")
+                    raise ValueError(f"{name} must be true or false, got {brief(value)}")
             elif kind is int:
                 if isinstance(value, bool) or not isinstance(value, int):
-                    raise ValueError(f"{name} must be an integer, got {value!r}")
+                    raise ValueError(f"{name} must be an integer, got {brief(value)}")
             else:
                 if isinstance(value, bool) or not isinstance(value, (int, float)):
-                    raise ValueError(f"{name} must be a number, got {value!r}")
+                    raise ValueError(f"{name} must be a number, got {brief(value)}")
                 if not math.isfinite(value):
-                    raise ValueError(f"{name} must be finite, got {value!r}")
+                    raise ValueError(f"{name} must be finite, got {brief(value)}")
         if self.sim not in SIMULATORS:
-            raise ValueError(f"sim must be one of {', '.join(SIMULATORS)}, got {self.sim!r}")
+            raise ValueError(f"sim must be one of {', '.join(SIMULATORS)}, got {brief(self.sim)}")
         if self.actuator_law not in ACTUATOR_LAWS:
             raise ValueError(
-                f"actuator_law must be one of {', '.join(ACTUATOR_LAWS)}, got {self.actuator_law!r}"
+                f"actuator_law must be one of {', '.join(ACTUATOR_LAWS)}, "
+                f"got {brief(self.actuator_law)}"
             )
         positive = (
             "physics_dt decimation episode_steps kp torque_limit velocity_limit "
@@ -129,10 +138,18 @@ class HopperConfig:
         ).split()
         for name in positive:
             if getattr(self, name) <= 0:
-                raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
+                raise ValueError(f"{name} must be > 0, got {brief(getattr(self, name))}")
+        for name, high in (
+            ("decimation", MAX_DECIMATION),
+            ("mjx_iterations", MAX_SOLVER_ITERATIONS),
+            ("mjx_ls_iterations", MAX_SOLVER_ITERATIONS),
+            ("render_width", MAX_RENDER_SIZE),
+            ("render_height", MAX_RENDER_SIZE),
+        ):
+            check_int(getattr(self, name), name, 1, high)
         for name in ("kd", "foot_friction", "reset_noise", "reset_clearance"):
             if getattr(self, name) < 0:
-                raise ValueError(f"{name} must be >= 0, got {getattr(self, name)!r}")
+                raise ValueError(f"{name} must be >= 0, got {brief(getattr(self, name))}")
         if self.physics_dt > 0.005:
             raise ValueError(
                 f"physics_dt must be <= 0.005 s for stable contacts, got {self.physics_dt}"
@@ -144,9 +161,11 @@ class HopperConfig:
                 f"({self.torque_limit})"
             )
         if self.hop_reward not in HOP_REWARDS:
-            raise ValueError(f"hop_reward must be one of {HOP_REWARDS}, got {self.hop_reward!r}")
+            raise ValueError(
+                f"hop_reward must be one of {HOP_REWARDS}, got {brief(self.hop_reward)}"
+            )
         if not self.apex_weight >= 0:
-            raise ValueError(f"apex_weight must be >= 0, got {self.apex_weight!r}")
+            raise ValueError(f"apex_weight must be >= 0, got {brief(self.apex_weight)}")
         if self.c1 < 0:
             raise ValueError(f"c1 must be >= 0 (paper eq. 4: r1 rewards hopping), got {self.c1}")
         for name in ("c2", "c3", "c4", "c5"):
@@ -188,7 +207,7 @@ class HopperConfig:
         unknown = sorted(str(k) for k in data if k not in accepted)
         if unknown:
             raise ValueError(
-                f"unknown HopperConfig key(s): {', '.join(unknown)}; "
+                f"unknown HopperConfig key(s): {shorten(', '.join(unknown))}; "
                 f"accepted keys: {', '.join(accepted)}"
             )
         values = {}

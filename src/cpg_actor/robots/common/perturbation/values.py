@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from cpg_actor.limits import brief
 from cpg_actor.robots.common.checks import mapping_fields
 
 # the push's direction: along the hopper's rail, or in the quadruped base's heading frame
@@ -88,7 +89,7 @@ class Perturbation:
             if not (ok and value <= HIGHS[name]):
                 raise ValueError(f"perturbation.{name} must be a number with {low:g} "
                                  f"{'<' if strict else '<='} {name} <= {HIGHS[name]:g}, got "
-                                 f"{value!r}")  # fmt: skip
+                                 f"{brief(value)}")  # fmt: skip
 
         number("payload", self.payload, 0.0, False)
         if self.friction is not None:
@@ -102,14 +103,14 @@ class Perturbation:
         if self.push_direction not in (directions if self.push else PUSH_DIRECTIONS):
             raise ValueError(f"perturbation.push_direction must be one of "
                              f"{', '.join(directions)} on this robot, got "
-                             f"{self.push_direction!r}")  # fmt: skip
+                             f"{brief(self.push_direction)}")  # fmt: skip
         window = self.push_time
         if not (isinstance(window, list | tuple) and len(window) == 2
                 and all(not isinstance(t, bool) and isinstance(t, int | float)
                         and math.isfinite(t) for t in window)
                 and 0.0 <= window[0] <= window[1]):  # fmt: skip
             raise ValueError(f"perturbation.push_time must be [start, end] in s with "
-                             f"0 <= start <= end, got {window!r}")  # fmt: skip
+                             f"0 <= start <= end, got {brief(window)}")  # fmt: skip
         self.push_time = (float(window[0]), float(window[1]))
         return self
 
@@ -219,7 +220,7 @@ class Randomization:
         """Raise ValueError naming the first bad range (``randomize.NAME``); returns ``self``."""
         if self.preset not in RANDOMIZATION_PRESETS:
             raise ValueError(f"randomize.preset must be one of '', 'field' (the robot's "
-                             f"training ranges), got {self.preset!r}")  # fmt: skip
+                             f"training ranges), got {brief(self.preset)}")  # fmt: skip
         strict = ("friction", "motor_strength", "push_interval",
                   *(n for n in MODEL_TERMS if n != "joint_damping"))  # fmt: skip
         for name in (*RANDOMIZED, *TRAINING_PUSHES):
@@ -234,7 +235,7 @@ class Randomization:
             if not ok:
                 raise ValueError(f"randomize.{name} must be [low, high] with "
                                  f"0 {'<' if name in strict else '<='} low <= high <= "
-                                 f"{HIGHS[name]:g}, got {bounds!r}")  # fmt: skip
+                                 f"{HIGHS[name]:g}, got {brief(bounds)}")  # fmt: skip
             setattr(self, name, (float(bounds[0]), float(bounds[1])))
         for bound in self.latency:
             Perturbation(latency=bound).substeps(decimation)  # whole substeps
@@ -263,7 +264,7 @@ class Randomization:
         if isinstance(value, cls):
             return value
         if not isinstance(value, dict):
-            raise ValueError(f"randomize must be a mapping of its fields, got {value!r}")
+            raise ValueError(f"randomize must be a mapping of its fields, got {brief(value)}")
         names = [f.name for f in dataclasses.fields(cls)]
         unknown = sorted(str(k) for k in value if k not in names)
         if unknown:
@@ -320,4 +321,4 @@ def check_perturbations(
         not config.perturbation.nominal or config.randomize.active
     ):
         raise ValueError(f"perturbations run on {' and '.join(simulators)}; "
-                         f"sim={config.sim!r} takes none")  # fmt: skip
+                         f"sim={brief(config.sim)} takes none")  # fmt: skip

@@ -13,6 +13,15 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from cpg_actor.limits import (
+    MAX_DECIMATION,
+    MAX_EPISODE_STEPS,
+    MAX_RENDER_SIZE,
+    MAX_SOLVER_ITERATIONS,
+    brief,
+    check_int,
+    shorten,
+)
 from cpg_actor.robots.common.checks import check_episode_steps
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 from cpg_actor.robots.common.perturbation.values import RANDOMIZED, TRAINING_PUSHES
@@ -159,11 +168,11 @@ class QuadrupedConfig:
                      "fall_height", "fall_tilt"):  # fmt: skip
             value = getattr(self, name)
             if not _number(value, 0.0, strict=True):
-                raise ValueError(f"{name} must be a positive finite number, got {value!r}")
+                raise ValueError(f"{name} must be a positive finite number, got {brief(value)}")
         for name in ("foot_friction", "reset_noise"):
             value = getattr(self, name)
             if not _number(value, 0.0, strict=False):
-                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+                raise ValueError(f"{name} must be a finite number >= 0, got {brief(value)}")
         for name in ACTUATOR_FIELDS:
             value, strict = getattr(self, name), name != "kd"
             if isinstance(value, list):  # from YAML or --set
@@ -176,26 +185,29 @@ class QuadrupedConfig:
             if not ok:
                 raise ValueError(f"{name} must be a finite number {'>' if strict else '>='} 0 "
                                  f"or three of them (one per joint of a leg), got "
-                                 f"{value!r}")  # fmt: skip
+                                 f"{brief(value)}")  # fmt: skip
         if self.sim not in SIMULATORS:
             raise ValueError(f"sim must be one of {', '.join(SIMULATORS)} for the quadruped, "
-                             f"got {self.sim!r}")  # fmt: skip
+                             f"got {brief(self.sim)}")  # fmt: skip
         if self.mjx_impl not in MJX_IMPLEMENTATIONS:
             raise ValueError(f"mjx_impl must be one of {', '.join(MJX_IMPLEMENTATIONS)}, got "
-                             f"{self.mjx_impl!r}")  # fmt: skip
+                             f"{brief(self.mjx_impl)}")  # fmt: skip
         if self.floor_contacts not in FLOOR_CONTACTS:
             raise ValueError(f"floor_contacts must be one of {', '.join(FLOOR_CONTACTS)}, got "
-                             f"{self.floor_contacts!r}")  # fmt: skip
-        for name in ("decimation", "mjx_iterations", "mjx_ls_iterations", "render_width",
-                     "render_height"):  # fmt: skip
-            value = getattr(self, name)
-            if isinstance(value, bool) or not (isinstance(value, int) and value >= 1):
-                raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
-        if not (isinstance(self.decimation, int) and self.decimation >= 1):
-            raise ValueError(f"decimation must be an integer >= 1, got {self.decimation!r}")
+                             f"{brief(self.floor_contacts)}")  # fmt: skip
+        for name, high in (
+            ("decimation", MAX_DECIMATION),
+            ("mjx_iterations", MAX_SOLVER_ITERATIONS),
+            ("mjx_ls_iterations", MAX_SOLVER_ITERATIONS),
+            ("render_width", MAX_RENDER_SIZE),
+            ("render_height", MAX_RENDER_SIZE),
+        ):
+            check_int(getattr(self, name), name, 1, high)
         if self.physics_dt > 0.005:
             raise ValueError(f"physics_dt must be <= 0.005 s, got {self.physics_dt}")
-        check_episode_steps(self.episode_steps, f"episode_seconds={self.episode_seconds:g}")
+        # as a float: a tiny physics_dt makes it too large to round to an integer
+        check_episode_steps(self.episode_seconds / self.control_dt,
+                            f"episode_seconds={self.episode_seconds:g}")  # fmt: skip
         for name, unit in (("command_range", "m/s"), ("lateral_range", "m/s"),
                            ("yaw_range", "rad/s")):  # fmt: skip
             bounds = getattr(self, name)
@@ -206,31 +218,37 @@ class QuadrupedConfig:
                 and bounds[0] <= bounds[1]
             ):
                 raise ValueError(f"{name} must be [low, high] in {unit} with low <= high, got "
-                                 f"{bounds!r}")  # fmt: skip
+                                 f"{brief(bounds)}")  # fmt: skip
             setattr(self, name, tuple(bounds))  # a list from YAML or --set, as the defaults
         period = self.command_resample_seconds
-        if period is not None and not _number(period, 0.0, strict=False):
-            raise ValueError(f"command_resample_seconds must be a finite number of seconds >= 0 "
-                             f"(0 or None: one command per episode), got {period!r}")  # fmt: skip
+        if period is not None and not (
+            _number(period, 0.0, strict=False) and period / self.control_dt <= MAX_EPISODE_STEPS
+        ):
+            raise ValueError(f"command_resample_seconds must be a number of seconds >= 0, at "
+                             f"most {MAX_EPISODE_STEPS:,} control steps (0 or None: one command "
+                             f"per episode), got {brief(period)}")  # fmt: skip
         share = self.standing_share
         if not (_number(share, 0.0, strict=False) and share <= 1.0):
             raise ValueError(f"standing_share must be a number in [0, 1] (the share of zero "
-                             f"commands), got {share!r}")  # fmt: skip
+                             f"commands), got {brief(share)}")  # fmt: skip
         if not isinstance(self.reward_scales, dict):
             raise ValueError(f"reward_scales must be a mapping of term to scale, got "
-                             f"{self.reward_scales!r}")  # fmt: skip
+                             f"{brief(self.reward_scales)}")  # fmt: skip
         unknown = set(self.reward_scales) - set(default_scales())
         if unknown:
             raise ValueError(
-                f"unknown reward terms {sorted(unknown)}; accepted: {sorted(default_scales())}"
+                f"unknown reward terms {brief(sorted(map(str, unknown)))}; accepted: "
+                f"{sorted(default_scales())}"
             )
         for term, scale in self.reward_scales.items():
             if isinstance(scale, bool) or not (isinstance(scale, int | float)
                                                and math.isfinite(scale)):  # fmt: skip
-                raise ValueError(f"reward_scales.{term} must be a finite number, got {scale!r}")
+                raise ValueError(
+                    f"reward_scales.{shorten(term)} must be a finite number, got {brief(scale)}"
+                )
         if self.actuator_law not in ("dc-motor", "coast"):
             raise ValueError(f"actuator_law must be 'dc-motor' or 'coast', got "
-                             f"{self.actuator_law!r}")  # fmt: skip
+                             f"{brief(self.actuator_law)}")  # fmt: skip
         check_perturbations(
             self,
             PUSH_DIRECTIONS,
@@ -279,10 +297,13 @@ class QuadrupedConfig:
         unknown = set(values) - names
         if unknown:
             raise ValueError(
-                f"unknown {cls.__name__} fields {sorted(unknown)}; accepted: {sorted(names)}"
+                f"unknown {cls.__name__} fields {brief(sorted(map(str, unknown)))}; accepted: "
+                f"{sorted(names)}"
             )
         given = values.get("reward_scales", {})
         if not isinstance(given, dict):
-            raise ValueError(f"reward_scales must be a mapping of term to scale, got {given!r}")
+            raise ValueError(
+                f"reward_scales must be a mapping of term to scale, got {brief(given)}"
+            )
         scales = {**cls().reward_scales, **given}  # the class's defaults for the others
         return cls(**{**values, "reward_scales": scales}).validate()
