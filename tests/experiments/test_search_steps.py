@@ -24,7 +24,7 @@ def test_a_run_that_counts_its_search_trains_the_rest_and_counts_from_the_search
     runner.close()
 
 
-@pytest.mark.parametrize(("steps", "message"), [(-1, ">= 0"), (48, "below total_steps")])
+@pytest.mark.parametrize(("steps", "message"), [(-1, "from 0 to"), (48, "below total_steps")])
 def test_bad_search_steps_are_refused(steps, message):
     config = tiny_config("cpg-actor", iterations=3)
     config.search_steps = steps
