@@ -82,7 +82,11 @@ PLAYGROUND: dict[str, Any] = {
     "privileged_observation": True,  # the critic's privileged_state (locomotion_params)
     # noise_config (level 1): uniform, x + U(-1, 1) x scale
     "observation_noise": {
-        "joint_pos": 0.03, "joint_vel": 1.5, "gyro": 0.2, "gravity": 0.05, "lin_vel": 0.1,
+        "joint_pos": 0.03,
+        "joint_vel": 1.5,
+        "gyro": 0.2,
+        "gravity": 0.05,
+        "lin_vel": 0.1,
     },  # fmt: skip
     # command_config: a, the commands' amplitudes (uniform in [-a, a]); b, the probability
     # that a resampled entry is not zeroed; sample_command keeps an entry with probability

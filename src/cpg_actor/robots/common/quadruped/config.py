@@ -339,8 +339,10 @@ def check_recipe_options(config: QuadrupedConfig) -> None:
         if not isinstance(getattr(config, name), bool):
             raise ValueError(f"{name} must be true or false, got {getattr(config, name)!r}")
     noise = config.observation_noise
-    if not isinstance(noise, dict) or set(noise) - set(NOISE_GROUPS) or not all(
-        _number(w, 0.0, strict=False) for w in noise.values()
+    if (
+        not isinstance(noise, dict)
+        or set(noise) - set(NOISE_GROUPS)
+        or not all(_number(w, 0.0, strict=False) for w in noise.values())
     ):
         raise ValueError(f"observation_noise must map some of {', '.join(NOISE_GROUPS)} to "
                          f"half-widths >= 0, got {noise!r}")  # fmt: skip
@@ -372,8 +374,10 @@ def check_recipe_options(config: QuadrupedConfig) -> None:
         raise ValueError(f"command_interval must be one of {', '.join(COMMAND_INTERVALS)}, got "
                          f"{config.command_interval!r}")  # fmt: skip
     if config.command_interval == "exponential" and not config.command_resample_seconds:
-        raise ValueError("command_interval 'exponential' needs command_resample_seconds > 0 "
-                         "(the mean time between resamplings)")
+        raise ValueError(
+            "command_interval 'exponential' needs command_resample_seconds > 0 "
+            "(the mean time between resamplings)"
+        )
     if config.sim == "mjx":
         nominal = type(config)()
         given = [name for name in RECIPE_OPTIONS
