@@ -154,11 +154,11 @@ def test_the_recipe_is_the_go1s_and_the_mlps_alone():
         Go1Config(command_nonzero=(0.5, 2.0, 0.5)).validate()
 
 
-def recipe_env(num_envs: int):
-    robot = get_robot("go1")
-    config = Go1Config.from_dict({k: v for k, v in Go1Config.PLAYGROUND.items()
-                                  if k != "randomize"})  # fmt: skip
-    return robot.make(num_envs, config, 1)
+def recipe_env(num_envs: int, **changes):
+    """The Go1's env under the recipe (without its randomisation), ``changes`` made."""
+    values = {k: v for k, v in Go1Config.PLAYGROUND.items() if k != "randomize"}
+    config = Go1Config.from_dict({**values, **changes})
+    return get_robot("go1").make(num_envs, config, 1)
 
 
 def test_actions_are_the_home_pose_plus_half_a_radian_at_most():
@@ -330,3 +330,28 @@ def test_a_tiny_training_run_of_the_variant_completes(tmp_path):
     assert (run / "checkpoints" / "last.pt").exists()
     rows = [json.loads(line) for line in (run / "metrics.jsonl").read_text().splitlines()]
     assert rows and all(math.isfinite(v) for v in rows[-1].values() if isinstance(v, float))
+
+
+def test_a_saved_state_resumes_the_recipes_env_exactly():
+    """The command clock, the feet's swing peaks and the noise's generators are in the state:
+    the steps after set_state are the steps after get_state."""
+    env = recipe_env(3, command_resample_seconds=0.1)  # a new command every few steps
+    try:
+        env.reset(seed=102)
+        rng = np.random.default_rng(1)
+        low, high = env.single_action_space.low, env.single_action_space.high
+        actions = [
+            rng.uniform(low, high, (3, 12)) * 0.2 + 0.8 * (low + high) / 2 for _ in range(60)
+        ]
+        for action in actions[:20]:
+            env.step(action)
+        state = env.get_state()
+        commands = env.command.copy()
+        first = [env.step(action)[:2] for action in actions[20:]]
+        assert not np.array_equal(commands, env.command)  # drawn again meanwhile
+        env.set_state(state)
+        again = [env.step(action)[:2] for action in actions[20:]]
+        for (obs, reward), (obs2, reward2) in zip(first, again, strict=True):
+            assert np.array_equal(obs, obs2) and np.array_equal(reward, reward2)
+    finally:
+        env.close()
