@@ -164,7 +164,7 @@ def run_config(spec: RunSpec):
     ``mlp-field``, the field's MLP recipe: its agent with its settings, before ``--set``);
     evaluated every ``eval_interval`` env steps, rounded to whole iterations (at least one)."""
     from cpg_actor.config import compose_config
-    from cpg_actor.experiments.plan import variant_agent
+    from cpg_actor.experiments.plan import variant_agent, variant_preset
 
     agent, variant_overrides = variant_agent(spec.agent)
     values = {
@@ -173,7 +173,8 @@ def run_config(spec: RunSpec):
         **SETTINGS.get(spec.agent, {}),
     }  # fmt: skip
     overrides = [*variant_overrides, *spec.overrides]
-    config = compose_config("omni" if spec.grid else None, None, values, overrides)
+    preset = variant_preset(spec.agent, "omni" if spec.grid else None)
+    config = compose_config(preset, None, values, overrides)
     config.eval_interval = max(1, round(spec.eval_interval / config.steps_per_iteration))
     config.validate()
     return config

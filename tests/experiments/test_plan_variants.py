@@ -3,7 +3,7 @@
 import pytest
 
 from cpg_actor.config import compose_config
-from cpg_actor.experiments.plan import VARIANTS, variant_agent
+from cpg_actor.experiments.plan import VARIANT_RECIPES, VARIANTS, variant_agent, variant_preset
 
 
 @pytest.mark.parametrize("variant", sorted(VARIANTS))
@@ -14,8 +14,11 @@ def test_each_variant_is_its_agent_with_its_settings(variant):
     values = {"agent": agent}
     if variant.endswith("-field"):  # the field's recipe is the quadrupeds'
         preset, values["robot"] = "omni", "go1"
+    if variant in VARIANT_RECIPES:  # a recipe of its own (the Go1's Playground recipe)
+        preset, values["robot"] = variant_preset(variant, "paper"), "go1"
     config = compose_config(preset, values=values, overrides=overrides)
     assert config.agent == agent
+    assert config.preset == variant_preset(variant, preset)
     if variant.endswith("-randomized"):
         assert config.env.randomize.active
     if variant == "cpg-actor-follow":

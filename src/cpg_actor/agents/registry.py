@@ -20,6 +20,7 @@ from cpg_actor.agents.cpg_actor import CPGActorAgent
 from cpg_actor.agents.mlp import MLPAgent
 from cpg_actor.agents.warm_start import warm_start_mlp
 from cpg_actor.robots.plugin import Robot, load
+from cpg_actor.tasks.velocity import actor_entries
 
 
 def env_shapes(env: Any) -> tuple[int, np.ndarray]:
@@ -122,8 +123,11 @@ def get_agent_spec(name: str) -> AgentSpec:
 
 
 def build_mlp(config: AgentConfig, env: Any, robot: Robot | None = None) -> Agent:
-    """Actor MLP on desired joint positions, centred on the robot's nominal pose."""
-    return MLPAgent(*env_shapes(env), config, env.robot.nominal_pose)
+    """Actor MLP on desired joint positions, centred on the robot's nominal pose; its actor
+    reads the observation's entries but the privileged ones (the critic's alone, an env's
+    ``privileged_observation``)."""
+    actor_obs = actor_entries(env.robot.observation_names)
+    return MLPAgent(*env_shapes(env), config, env.robot.nominal_pose, actor_obs)
 
 
 def build_cpg_actor(config: AgentConfig, env: Any, robot: Robot, feedback: bool = True) -> Agent:

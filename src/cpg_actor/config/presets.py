@@ -34,6 +34,16 @@ follow when none is given (``Robot.recipe``: the hopper ``paper``, the quadruped
   along its foot's commanded planar velocity). A robot without ``OMNI_COMMANDS`` (the hopper)
   has no such task: ValueError.
 
+* ``playground``: MuJoCo Playground's Go1 joystick recipe as its source runs it (the
+  ``playground`` package 0.2.0, Go1JoystickFlatTerrain, trained by rsl_rl): the env's values
+  are the robot's ``PLAYGROUND`` (the Go1's: ``robots/go1/playground.py``, each with its
+  source: PD 35 / 0.5, actions home + 0.5 a, the reward's terms and scales clipped at 0, the
+  base's linear velocity and uniform noise in the observation, a privileged critic, the
+  command process); the PPO's are rsl_rl's recipe from ``config/locomotion_params.py``
+  (:data:`PLAYGROUND`). For the ``mlp`` agent (its privileged critic: ``env.privileged_
+  observation``); ``docs/go1.md``, "MuJoCo Playground's recipe". A robot without
+  ``PLAYGROUND``: ValueError.
+
 ``anymal`` is the name ANYmal B's recipe had when presets named robots, kept so that saved runs
 (``preset: anymal``) and their commands keep their values: ``robot: anymal``, ``throughput``
 and the CPG-Actor's settings for every agent (one oscillator per leg, action noise 0.1, feedback
@@ -63,11 +73,49 @@ THROUGHPUT: dict[str, Any] = {
     },
 }
 
-# the recipes a user picks (--preset); PRESETS adds the old name kept for saved runs
-RECIPES = ("paper", "throughput", "gpu", "omni")
 # a recipe's key naming a class attribute of the robot's env config whose values are the
 # recipe's env values on that robot (its own command ranges)
 ROBOT_ENV = "robot_env"
+
+# rsl_rl's PPO as MuJoCo Playground 0.2.0 runs it on Go1JoystickFlatTerrain
+# (config/locomotion_params.py, rsl_rl_config; learning/train_rsl_rl.py). Departures, forced
+# by a CPU: 256 envs (its script's default: 4,096), so 6,144 samples per iteration in
+# minibatches of 1,536; and by this codebase: the advantages normalised per minibatch (rsl_rl:
+# over the whole batch), the actor's last layer initialised small (the mean starts at the
+# home pose; rsl_rl: PyTorch's default init)
+PLAYGROUND: dict[str, Any] = {
+    "num_envs": 256,
+    "eval_interval": 10,
+    "agent_config": {
+        "actor_hidden": [512, 256, 128],  # actor_hidden_dims
+        "critic_hidden": [512, 256, 128],  # critic_hidden_dims
+        "activation": "elu",
+        "init_std": 1.0,  # init_noise_std, in units of the action (0.5 rad: action_scale)
+        "action_std_floor": 0.0,  # none in rsl_rl
+    },
+    "ppo": {
+        "num_steps": 24,  # num_steps_per_env
+        "num_epochs": 5,  # num_learning_epochs
+        "num_minibatches": 4,  # num_mini_batches
+        "learning_rate": 3e-4,  # Go1JoystickFlatTerrain: 3e-4, schedule fixed
+        "lr_schedule": "fixed",
+        "entropy_coef": 0.001,  # entropy_coef (its Brax recipe: 0.01)
+        "gamma": 0.99,
+        "gae_lambda": 0.95,  # lam
+        "clip_ratio": 0.2,  # clip_param
+        "clip_value_loss": True,  # use_clipped_value_loss
+        "value_loss_coef": 1.0,
+        "max_grad_norm": 1.0,
+        "normalize_observations": True,  # empirical_normalization (actor's and critic's)
+        "normalize_rewards": False,  # rsl_rl scales no reward
+        "adam_eps": 1e-8,  # torch's Adam default, as rsl_rl builds it
+        "compile": True,
+    },
+    ROBOT_ENV: "PLAYGROUND",
+}
+
+# the recipes a user picks (--preset); PRESETS adds the old name kept for saved runs
+RECIPES = ("paper", "throughput", "gpu", "omni", "playground")
 
 PRESETS: dict[str, dict[str, Any]] = {
     "paper": {"ppo": {"compile": True}},
@@ -84,6 +132,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         ROBOT_ENV: "OMNI_COMMANDS",
         "agent_config": {"cpg_planar_steps": True},
     },
+    "playground": PLAYGROUND,
     "anymal": {  # ANYmal B's recipe under its old name, for saved runs (above)
         **THROUGHPUT,
         "robot": "anymal",
@@ -111,8 +160,10 @@ def preset_values(name: str, env_class: type | None = None) -> dict[str, Any]:
     if attribute is not None and env_class is not None:
         robot_env = getattr(env_class, attribute, None)
         if robot_env is None:
+            owners = {"OMNI_COMMANDS": "the quadrupeds anymal and go1",
+                      "PLAYGROUND": "the go1"}.get(attribute, "other robots")  # fmt: skip
             raise ValueError(f"preset {brief(name)} is a quadruped task; the robot's config "
-                             f"{env_class.__name__} has no {attribute} (the quadrupeds "
-                             f"anymal and go1 have)")  # fmt: skip
+                             f"{env_class.__name__} has no {attribute} ({owners} "
+                             f"have)")  # fmt: skip
         values["env"] = {**values.get("env", {}), **robot_env}
     return values

@@ -185,6 +185,11 @@ class TrainConfig:
                 f"agent {brief(self.agent)} is built for {', '.join(spec.robots)} only; on robot "
                 f"{brief(self.robot)} use one of {', '.join(usable)}"
             )
+        if getattr(self.env, "privileged_observation", False) and self.agent != "mlp":
+            raise ValueError(
+                f"env.privileged_observation: the mlp agent alone keeps the privileged entries "
+                f"from its actor (its critic's alone), not {self.agent!r}; set it false"
+            )
         check_device_name(self.device)
         self.agent_config.validate()
         check_cpg_choice(self.agent_config, robot)

@@ -154,6 +154,12 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
     plugin = get_robot(config.robot)
     mjcf = plugin.mjcf(env)  # the model the policy trained on: its joints, sites, sensors
     sources = named_sources(mjcf, [dict(source) for source in plugin.observation_sources()])
+    if len(sources) != len(robot.observation_names):  # the recipe's options add entries
+        raise ValueError(
+            f"the policy observes {len(robot.observation_names)} entries, of which the robot's "
+            f"deploy interface describes {len(sources)}: a run with env.observe_lin_vel or "
+            "env.privileged_observation (the playground recipe) cannot be exported yet"
+        )
     values: dict[str, Any] = {
         "cpg_actor_version": __version__,
         "robot": config.robot,

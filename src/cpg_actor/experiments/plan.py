@@ -108,7 +108,21 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     # randomised training with the hopper's ranges (docs/robustness.md; the payload is in kg)
     "cpg-actor-randomized": ("cpg-actor", HOPPER_RANDOMIZE),
     "mlp-randomized": ("mlp", HOPPER_RANDOMIZE),
+    # MuJoCo Playground's Go1 joystick recipe as its source runs it, env and PPO alike: its
+    # recipe (VARIANT_RECIPES) holds every setting (docs/go1.md, "MuJoCo Playground's recipe").
+    # mlp-field, beside it, is the field's network and PPO weights on this project's task
+    "mlp-playground": ("mlp", ()),
 }
+
+# Variants that are a recipe of their own (cpg-actor train --preset): it replaces the
+# reproduction's --preset for their runs (a recipe that sets the task as well as the agent)
+VARIANT_RECIPES: dict[str, str] = {"mlp-playground": "playground"}
+
+
+def variant_preset(variant: str, preset: str | None) -> str | None:
+    """The recipe a variant's runs start from: its own (:data:`VARIANT_RECIPES`), else
+    ``preset`` (the reproduction's)."""
+    return VARIANT_RECIPES.get(variant, preset)
 
 
 def variant_agent(variant: str) -> tuple[str, tuple[str, ...]]:
@@ -215,14 +229,15 @@ def resolve_config(settings: ReproduceSettings, variant: str, seed: int = 0):
     if settings.sim is not None:
         values["env"] = {"sim": settings.sim}
     overrides = run_overrides(variant, settings.overrides)
-    config = compose_config(preset=settings.preset, values=values, overrides=overrides)
+    preset = variant_preset(variant, settings.preset)
+    config = compose_config(preset=preset, values=values, overrides=overrides)
     from cpg_actor.agents import get_agent_spec
 
     if settings.count_search_steps and get_agent_spec(config.agent).uses_start_gait:
         steps = search_steps(config.agent_config.start_gait, get_robot(config.robot))
         if steps:
             values["search_steps"] = steps
-            config = compose_config(preset=settings.preset, values=values, overrides=overrides)
+            config = compose_config(preset=preset, values=values, overrides=overrides)
     return without_compile_if_no_compiler(config)
 
 
@@ -302,8 +317,9 @@ def build_tasks(settings: ReproduceSettings, out: Path, workers: int) -> list[Ru
         for seed in settings.seed_range:
             run_dir = out / "runs" / variant / f"seed{seed}"
             args = ["--agent", variant_agent(variant)[0], "--seed", str(seed)]
-            if settings.preset is not None:
-                args += ["--preset", settings.preset]
+            preset = variant_preset(variant, settings.preset)
+            if preset is not None:
+                args += ["--preset", preset]
             args += ["--total-steps", str(settings.total_steps), "--run-dir", str(run_dir)]
             if settings.num_envs is not None:
                 args += ["--num-envs", str(settings.num_envs)]

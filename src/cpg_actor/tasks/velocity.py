@@ -7,10 +7,15 @@ Observation (:func:`observation_names`, legged_gym's without the base linear vel
 real robot does not measure): base angular velocity in the base frame (rad/s), gravity
 projected into the base frame (unit vector), the command (forward, lateral m/s, yaw rad/s),
 joint positions minus the nominal pose (rad), joint velocities (rad/s), the last action minus
-the nominal pose (rad).
+the nominal pose (rad); with ``observe_lin_vel`` (MuJoCo Playground's recipe) the base's linear
+velocity in the base frame (m/s) after them, and with ``privileged_observation`` the critic's
+privileged entries after those (:func:`privileged_names`; the actor does not see them).
 
-Reward: each term of :func:`reward_terms` times its scale (the env config's ``reward_scales``)
-times the control step, summed (legged_gym's convention: the scales are per second).
+Reward: each term of :func:`reward_terms` and :func:`field_terms` times its scale (the env
+config's ``reward_scales``; a term it does not name is not paid) times the control step, summed
+(legged_gym's convention: the scales are per second), then clipped below at
+``reward_clip_min`` where that is set (MuJoCo Playground's and legged_gym's
+``only_positive_rewards``: 0, so that ending an episode early never pays).
 
 A control step of the task (:func:`step`) is written once: the physics of each simulator hands
 it a :class:`Reading`, the task carries an :class:`Episode` from step to step, and it returns
@@ -28,9 +33,12 @@ import numpy as np
 from cpg_actor.robots.common.array_namespace import namespace
 
 
-def observation_names(joint_names: Sequence[str]) -> tuple[str, ...]:
-    """The observation's entries, in order, for a robot with ``joint_names``."""
-    return (
+def observation_names(
+    joint_names: Sequence[str], lin_vel: bool = False, privileged: bool = False
+) -> tuple[str, ...]:
+    """The observation's entries, in order, for a robot with ``joint_names``; ``lin_vel``: the
+    base's linear velocity after them, ``privileged``: the critic's entries after those."""
+    names = (
         *(f"base_ang_vel_{a}" for a in "xyz"),
         *(f"projected_gravity_{a}" for a in "xyz"),
         "command_vx", "command_vy", "command_yaw",
@@ -38,6 +46,43 @@ def observation_names(joint_names: Sequence[str]) -> tuple[str, ...]:
         *(f"{j}_vel" for j in joint_names),
         *(f"{j}_last_action" for j in joint_names),
     )  # fmt: skip
+    if lin_vel:
+        names = (*names, *LIN_VEL_NAMES)
+    if privileged:
+        names = (*names, *privileged_names(joint_names))
+    return names
+
+
+LIN_VEL_NAMES = tuple(f"base_lin_vel_{a}" for a in "xyz")
+PRIVILEGED_PREFIX = "privileged_"  # the critic's entries: the actor does not see them
+
+
+def privileged_names(joint_names: Sequence[str]) -> tuple[str, ...]:
+    """The critic's privileged entries (MuJoCo Playground's Go1 joystick ``privileged_state``
+    beside the actor's noisy one): the noise-free gyro, gravity, linear velocity, joint
+    positions (minus the nominal pose) and velocities, the joint torques, the feet's contact
+    flags, horizontal speeds (world frame) and air times."""
+    p = PRIVILEGED_PREFIX
+    return (
+        *(f"{p}base_ang_vel_{a}" for a in "xyz"),
+        *(f"{p}projected_gravity_{a}" for a in "xyz"),
+        *(f"{p}base_lin_vel_{a}" for a in "xyz"),
+        *(f"{p}{j}_pos" for j in joint_names),
+        *(f"{p}{j}_vel" for j in joint_names),
+        *(f"{p}{j}_torque" for j in joint_names),
+        *(f"{p}foot{k}_contact" for k in range(4)),
+        *(f"{p}foot{k}_speed_{a}" for k in range(4) for a in "xy"),
+        *(f"{p}foot{k}_air_time" for k in range(4)),
+    )  # fmt: skip
+
+
+def actor_entries(names: Sequence[str]) -> int:
+    """How many leading entries of an observation named ``names`` the actor sees: all but the
+    privileged ones, which come last."""
+    count = sum(1 for name in names if not name.startswith(PRIVILEGED_PREFIX))
+    if any(name.startswith(PRIVILEGED_PREFIX) for name in names[:count]):
+        raise ValueError("the privileged observation entries must come last")
+    return count
 
 
 def observation_sources(nominal_pose: Sequence[float]) -> tuple[dict, ...]:
@@ -63,6 +108,43 @@ def sensor_noise(num_joints: int) -> np.ndarray:
     j = num_joints
     return np.concatenate([np.full(3, 0.2), np.full(3, 0.05), np.zeros(3), np.full(j, 0.01),
                            np.full(j, 1.5), np.zeros(j)])  # fmt: skip
+
+
+NOISE_GROUPS = ("gyro", "gravity", "joint_pos", "joint_vel", "lin_vel")  # observation_noise's
+
+
+def noise_half_widths(widths: dict, num_joints: int, lin_vel: bool) -> np.ndarray:
+    """Per entry of the actor's observation (the privileged entries carry none), the half-width
+    of the uniform noise added at every step (MuJoCo Playground's ``noise_config``:
+    ``x + U(-1, 1) w``): ``widths`` maps each of :data:`NOISE_GROUPS` to ``w`` (absent: 0); the
+    command and the last action carry none."""
+    j = num_joints
+    w = {name: float(widths.get(name, 0.0)) for name in NOISE_GROUPS}
+    parts = [np.full(3, w["gyro"]), np.full(3, w["gravity"]), np.zeros(3),
+             np.full(j, w["joint_pos"]), np.full(j, w["joint_vel"]), np.zeros(j)]  # fmt: skip
+    if lin_vel:
+        parts.append(np.full(3, w["lin_vel"]))
+    return np.concatenate(parts)
+
+
+def uniform_noise(unit_draws, half_widths):
+    """``unit_draws`` (N, D) uniform in [-1, 1) scaled to ``half_widths`` (D,): the noise
+    :func:`noise_half_widths` describes."""
+    return unit_draws * half_widths
+
+
+def rotate_to_world(quat, vectors):
+    """(N, 3): ``vectors`` (N, 3) given in the base frame, in the world frame, by the base
+    quaternion (w, x, y z): ``R v``."""
+    xp = namespace(quat)
+    w, x, y, z = (quat[:, i] for i in range(4))
+    vx, vy, vz = (vectors[:, i] for i in range(3))
+    rows = (
+        (1 - 2 * (y * y + z * z)) * vx + 2 * (x * y - w * z) * vy + 2 * (x * z + w * y) * vz,
+        2 * (x * y + w * z) * vx + (1 - 2 * (x * x + z * z)) * vy + 2 * (y * z - w * x) * vz,
+        2 * (x * z - w * y) * vx + 2 * (y * z + w * x) * vy + (1 - 2 * (x * x + y * y)) * vz,
+    )
+    return xp.stack(rows, axis=1)
 
 
 def projected_gravity(quat: np.ndarray) -> np.ndarray:
@@ -124,6 +206,80 @@ def reward_terms(
     }
 
 
+STILL = 0.01  # MuJoCo Playground's zero command: |(vx, vy, yaw)| below this
+
+
+def field_terms(
+    quat, lin_vel, ang_vel, command, joint_pos, joint_vel, torque, terminated, feet_z,
+    feet_speed, contact, touchdown, air_time, swing_peak, nominal, pose_weights, joint_range,
+    max_foot_height: float, air_time_target: float,
+) -> dict[str, np.ndarray]:  # fmt: skip
+    """MuJoCo Playground's Go1 joystick terms (``go1/joystick.py``, version 0.2.0) that
+    :func:`reward_terms` does not hold as Playground defines them, (N,) each, unscaled.
+
+    ``quat`` the base's (w, x, y, z); ``lin_vel``, ``ang_vel`` in the base frame;
+    ``joint_pos`` and ``nominal`` (J,) rad, ``pose_weights`` (J,); ``joint_range`` a pair of
+    (J,) soft limits (rad) or None (no limit term: 0); ``feet_z`` (N, 4) m, ``feet_speed``
+    (N, 4, 2) their horizontal velocity (world, m/s); ``contact`` and ``touchdown`` (N, 4)
+    bool, a touchdown a foot in contact after time in the air; ``air_time`` (N, 4) s of the
+    feet's time in the air this step included; ``swing_peak`` (N, 4) m the highest each foot
+    rose since it last touched the ground. A command counts as zero below :data:`STILL`.
+    """
+    xp = namespace(lin_vel)
+    moving = xp.sqrt(xp.sum(command**2, 1)) > STILL
+    offset = joint_pos - nominal
+    world_vel, world_rate = rotate_to_world(quat, lin_vel), rotate_to_world(quat, ang_vel)
+    speed_sq = xp.sum(feet_speed**2, -1)  # (N, 4)
+    if joint_range is None:
+        beyond = xp.zeros_like(joint_pos)
+    else:
+        low, high = joint_range
+        beyond = xp.maximum(low - joint_pos, 0.0) + xp.maximum(joint_pos - high, 0.0)
+    return {
+        "lin_vel_z_world": world_vel[:, 2] ** 2,  # v_z^2, world frame
+        "ang_vel_xy_world": xp.sum(world_rate[:, :2] ** 2, 1),  # w_x^2 + w_y^2, world frame
+        "torque_norms": xp.sqrt(xp.sum(torque**2, 1)) + xp.sum(xp.abs(torque), 1),
+        "energy": xp.sum(xp.abs(joint_vel) * xp.abs(torque), 1),  # W, |qdot| |tau| summed
+        "pose": xp.exp(-xp.sum(offset**2 * pose_weights, 1)),
+        "stand_still": xp.sum(xp.abs(offset), 1) * ~moving,
+        "termination": terminated.astype(lin_vel.dtype),
+        "dof_pos_limits": xp.sum(beyond, 1),  # rad beyond the soft limits
+        "feet_slip_commanded": xp.sum(speed_sq * contact, 1) * moving,
+        "feet_clearance": xp.sum(xp.abs(feet_z - max_foot_height) * speed_sq**0.25, 1),
+        "feet_height": xp.sum((swing_peak / max_foot_height - 1.0) ** 2 * touchdown, 1) * moving,
+        "feet_air_time_commanded": xp.sum((air_time - air_time_target) * touchdown, 1) * moving,
+    }
+
+
+# every reward term a config may scale: reward_terms' and field_terms'
+TERMS = (
+    "tracking_lin_vel", "tracking_ang_vel", "lin_vel_z", "ang_vel_xy", "orientation",
+    "base_height", "torques", "joint_acc", "action_rate", "feet_air_time", "feet_slip",
+    "lin_vel_z_world", "ang_vel_xy_world", "torque_norms", "energy", "pose", "stand_still",
+    "termination", "dof_pos_limits", "feet_slip_commanded", "feet_clearance", "feet_height",
+    "feet_air_time_commanded",
+)  # fmt: skip
+
+
+def privileged_observation(ang_vel, gravity, lin_vel, joint_offset, joint_vel, torque, contact,
+                           feet_speed, air_time):  # fmt: skip
+    """(N, len(privileged_names)) the critic's entries, noise-free, in the order of
+    :func:`privileged_names`."""
+    xp = namespace(ang_vel)
+    n = ang_vel.shape[0]
+    return xp.concatenate(
+        [ang_vel, gravity, lin_vel, joint_offset, joint_vel, torque,
+         contact.astype(ang_vel.dtype), feet_speed.reshape(n, 8), air_time], axis=1,
+    )  # fmt: skip
+
+
+def clip_reward(reward, low):
+    """The step's reward clipped below at ``low`` (None: as it is)."""
+    if low is None:
+        return reward
+    return namespace(reward).maximum(reward, low)
+
+
 def lin_vel_error(lin_vel, command):
     """(N,) m/s: how far the base's horizontal velocity is from the commanded one,
     ``|v_xy - command_xy|``, both in the base frame (the frame the command is given in, as
@@ -181,6 +337,7 @@ class Episode(NamedTuple):
     # (N, 3) sum of (v_x, v_y, w_z) - command: its mean is the tracking's offset, the gait's
     # sway within a stride averaged out
     velocity_offset_sum: Any
+    swing_peak: Any  # (N, 4) m: the highest each foot rose since it last touched the ground
 
 
 class Reading(NamedTuple):
@@ -219,6 +376,7 @@ def new_episode(command, joints, start_x, feet_xy) -> Episode:
         start_x=start_x, slip_sum=zero, planted_steps=count, feet_xy=feet_xy,
         lin_vel_error_sum=zero, yaw_rate_error_sum=zero, contact_steps=count,
         path_length=zero, velocity_offset_sum=xp.zeros_like(command),
+        swing_peak=xp.zeros((n, 4), dtype=joints.dtype),
     )  # fmt: skip
 
 
@@ -247,16 +405,21 @@ def resample(episode: Episode, obs, command, due) -> tuple[Episode, Any]:
     return episode._replace(command=command), rows(due, shown, obs)
 
 
-def observe(qpos, qvel, ang_vel, command, last_action, nominal):
-    """:func:`observation` of the state after a step (non-finite entries 0)."""
+def observe(qpos, qvel, ang_vel, command, last_action, nominal, lin_vel=None, privileged=None):
+    """:func:`observation` of the state after a step (non-finite entries 0), with the base's
+    linear velocity ``lin_vel`` (N, 3) and the critic's ``privileged`` entries
+    (:func:`privileged_observation`) after it where given."""
     xp = namespace(qpos)
     obs = observation(ang_vel, projected_gravity(qpos[:, 3:7]), command, qpos[:, 7:],
                       qvel[:, 6:], last_action, nominal)  # fmt: skip
+    extra = [part.astype(obs.dtype) for part in (lin_vel, privileged) if part is not None]
+    if extra:
+        obs = xp.concatenate([obs, *extra], axis=1)
     return xp.nan_to_num(obs, nan=0.0, posinf=0.0, neginf=0.0)
 
 
 def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radius: float,
-         weight: float) -> tuple[Episode, dict]:  # fmt: skip
+         weight: float, joint_range=None) -> tuple[Episode, dict]:  # fmt: skip
     """One control step of the task: ``(episode, outputs)``, the episode after the step (not
     yet restarted where it ended) and ``obs`` (the step's last observation), ``reward``,
     ``reward_terms`` (scaled), ``terminated``, ``truncated``, ``episode_metrics`` (NaN for
@@ -265,9 +428,12 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
     ``measured_velocity``, ``joint_torque`` (N, J, N m) and ``foot_position`` (N, 4, 3, the
     feet in the world, m): the physical metrics' inputs).
 
-    ``config``: the env's (scales, sigma, fall limits, steps); ``desired`` (N, J) the positions
-    the step tracked; ``nominal`` (J,) the nominal pose; ``weight`` m g (N), the cost of
-    transport's."""
+    ``config``: the env's (scales, sigma, fall limits, steps, the recipe's options: the
+    observation's linear velocity and privileged entries, the action scale of the action
+    rate, the reward's clip); ``desired`` (N, J) the positions the step tracked; ``nominal``
+    (J,) the nominal pose; ``weight`` m g (N), the cost of transport's; ``joint_range`` the
+    soft joint limits of the ``dof_pos_limits`` term, a pair of (J,) arrays (None: no such
+    term is paid)."""
     xp = namespace(reading.qpos)
     dt, unstable = config.control_dt, reading.unstable
     qpos, qvel, lin_vel, ang_vel, feet = (reading.qpos, reading.qvel, reading.lin_vel,
@@ -283,14 +449,26 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
     air_time = episode.air_time + dt
     moving = xp.linalg.norm(episode.command[:, :2], axis=1) > MOVING
     air_paid = xp.sum((air_time - 0.5) * touchdown, axis=1) * moving
+    # the action rate in the action's own units where actions are nominal + scale x a
+    unit = config.action_scale or 1.0
     terms = reward_terms(
-        lin_vel, ang_vel, gravity, height, episode.command, reading.torque, joint_acc, desired,
-        episode.last_action, air_paid, slip, config.tracking_sigma, config.base_height_target,
+        lin_vel, ang_vel, gravity, height, episode.command, reading.torque, joint_acc,
+        desired / unit, episode.last_action / unit, air_paid, slip, config.tracking_sigma,
+        config.base_height_target,
     )  # fmt: skip
-    scaled = {name: xp.where(unstable, 0.0, value * config.reward_scales[name] * dt)
-              for name, value in terms.items()}  # fmt: skip
     terminated = (fallen(height, gravity, config.fall_height, config.fall_tilt)
                   | reading.base_touch | unstable)  # fmt: skip
+    feet_speed = (feet[:, :, :2] - episode.feet_xy) / dt  # world frame, over the step
+    swing_peak = xp.maximum(episode.swing_peak, feet[:, :, 2])
+    if set(config.reward_scales) - set(terms):  # a field term is scaled: compute them
+        terms.update(field_terms(
+            qpos[:, 3:7], lin_vel, ang_vel, episode.command, qpos[:, 7:], joint_vel,
+            reading.torque, terminated, feet[:, :, 2], feet_speed, contact, touchdown, air_time,
+            swing_peak, nominal, xp.asarray(config.leg_pose_weights * 4), joint_range,
+            config.max_foot_height, config.air_time_target,
+        ))  # fmt: skip
+    scaled = {name: xp.where(unstable, 0.0, value * config.reward_scales[name] * dt)
+              for name, value in terms.items() if name in config.reward_scales}  # fmt: skip
     after = Episode(
         command=episode.command, last_action=desired, joint_vel_before=joint_vel,
         elapsed=episode.elapsed + 1, air_time=xp.where(contact, 0.0, air_time),
@@ -305,13 +483,20 @@ def step(config, episode: Episode, reading: Reading, desired, nominal, foot_radi
         path_length=episode.path_length + xp.sqrt(xp.sum(lin_vel[:, :2] ** 2, axis=1)) * dt,
         velocity_offset_sum=episode.velocity_offset_sum + xp.concatenate(
             [lin_vel[:, :2], ang_vel[:, 2:]], axis=1) - episode.command,
+        swing_peak=xp.where(contact, 0.0, swing_peak),
     )  # fmt: skip
     truncated = (after.elapsed >= config.episode_steps) & ~terminated
     done = terminated | truncated
-    obs = observe(qpos, qvel, ang_vel, episode.command, desired, nominal)
+    privileged = None
+    if config.privileged_observation:
+        privileged = privileged_observation(ang_vel, gravity, lin_vel, qpos[:, 7:] - nominal,
+                                            joint_vel, reading.torque, contact, feet_speed,
+                                            air_time)  # fmt: skip
+    obs = observe(qpos, qvel, ang_vel, episode.command, desired, nominal,
+                  lin_vel if config.observe_lin_vel else None, privileged)  # fmt: skip
     outputs = {
         "obs": xp.where(unstable[:, None], xp.zeros_like(obs), obs),
-        "reward": sum(scaled.values()),
+        "reward": clip_reward(sum(scaled.values()), config.reward_clip_min),
         "reward_terms": scaled,
         "terminated": terminated,
         "truncated": truncated,

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig, default_scales
 from cpg_actor.robots.go1 import description as robot
+from cpg_actor.robots.go1.playground import PLAYGROUND
 
 
 def _go1_scales() -> dict[str, float]:
@@ -79,3 +80,6 @@ class Go1Config(QuadrupedConfig):
         "push_interval": (5.0, 10.0),
     }
     body = "unitree-go1"
+    # MuJoCo Playground's Go1 joystick recipe, its env values (--preset playground;
+    # robots/go1/playground.py gives each its source and the departures)
+    PLAYGROUND = PLAYGROUND

@@ -25,6 +25,7 @@ from cpg_actor.limits import (
 from cpg_actor.robots.common.checks import check_episode_steps
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 from cpg_actor.robots.common.perturbation.values import RANDOMIZED, TRAINING_PUSHES
+from cpg_actor.tasks.velocity import NOISE_GROUPS, TERMS
 from cpg_actor.terrain.config import Terrain, check_terrain
 
 
@@ -128,6 +129,38 @@ class QuadrupedConfig:
     randomize: Randomization = field(default_factory=Randomization)  # randomised training
     # rough ground (cpg_actor.terrain; docs/quadruped.md, "Terrain"): flat by default
     terrain: Terrain = field(default_factory=Terrain)
+    # -- options of other recipes (MuJoCo Playground's: the playground preset, docs/go1.md);
+    # each off by default, each MuJoCo's only (not the MJX env's) --------------------------
+    # the reward of a step clipped below at this (Playground: 0, legged_gym's
+    # only_positive_rewards: ending an episode never pays); None: not clipped
+    reward_clip_min: float | None = None
+    # the actions are nominal + action_scale x a with a in [-1, 1] (Playground: 0.5): the
+    # action space is the nominal pose +- action_scale rad (within the action limits) and the
+    # action rate is measured in a's units; 0: the robot's action limits, the rate in rad
+    action_scale: float = 0.0
+    observe_lin_vel: bool = False  # the base's linear velocity (base frame) in the observation
+    # the critic's privileged entries after the actor's (task.privileged_names): an agent with
+    # agent_config.privileged_critic feeds them to its critic alone
+    privileged_observation: bool = False
+    # uniform noise x + U(-w, w) on the actor's observation at every step, w per group
+    # (task.NOISE_GROUPS: gyro, gravity, joint_pos, joint_vel, lin_vel); empty: none
+    observation_noise: dict[str, float] = field(default_factory=dict)
+    # the field terms' numbers (task.field_terms): the pose term's weight on each joint of a
+    # leg (abduction, hip, knee), the feet_height term's target swing height (m), the
+    # feet_air_time_commanded term's air time (s) and the soft joint limits of
+    # dof_pos_limits (this fraction of each joint's range bounds, as Playground scales them)
+    leg_pose_weights: tuple[float, float, float] = (1.0, 1.0, 0.1)
+    max_foot_height: float = 0.1
+    air_time_target: float = 0.1
+    soft_joint_limit_factor: float = 0.95
+    # Playground's command process: at a resampling each of (vx, vy, yaw) is kept with
+    # probability command_hold, else drawn again uniform in its range and kept nonzero with
+    # its probability in command_nonzero (None: the standing_share rule, no hold); with
+    # command_interval "exponential" the time to the next resampling is exponential with
+    # mean command_resample_seconds ("fixed": every command_resample_seconds)
+    command_nonzero: tuple[float, float, float] | None = None
+    command_hold: float = 0.0
+    command_interval: str = "fixed"
 
     @property
     def control_dt(self) -> float:
@@ -234,11 +267,11 @@ class QuadrupedConfig:
         if not isinstance(self.reward_scales, dict):
             raise ValueError(f"reward_scales must be a mapping of term to scale, got "
                              f"{brief(self.reward_scales)}")  # fmt: skip
-        unknown = set(self.reward_scales) - set(default_scales())
+        unknown = set(self.reward_scales) - set(TERMS)
         if unknown:
             raise ValueError(
                 f"unknown reward terms {brief(sorted(map(str, unknown)))}; accepted: "
-                f"{sorted(default_scales())}"
+                f"{sorted(TERMS)}"
             )
         for term, scale in self.reward_scales.items():
             if isinstance(scale, bool) or not (isinstance(scale, int | float)
@@ -257,6 +290,7 @@ class QuadrupedConfig:
             robot=self.body,
         )
         check_terrain(self)
+        check_recipe_options(self)
         return self
 
     # the mass the robot moves, kg (ANYmal B's: robots/anymal/description.py TOTAL_MASS), which
@@ -307,3 +341,70 @@ class QuadrupedConfig:
             )
         scales = {**cls().reward_scales, **given}  # the class's defaults for the others
         return cls(**{**values, "reward_scales": scales}).validate()
+
+
+RECIPE_OPTIONS = ("reward_clip_min", "action_scale", "observe_lin_vel", "privileged_observation",
+                  "observation_noise", "command_nonzero", "command_hold",
+                  "command_interval")  # fmt: skip
+COMMAND_INTERVALS = ("fixed", "exponential")
+
+
+def check_recipe_options(config: QuadrupedConfig) -> None:
+    """ValueError naming the first bad option of another recipe (``QuadrupedConfig``'s
+    "options of other recipes"); they are MuJoCo's only."""
+    clip = config.reward_clip_min
+    if clip is not None and (isinstance(clip, bool) or not _number(clip, -math.inf, True)):
+        raise ValueError(f"reward_clip_min must be a finite number or null, got {brief(clip)}")
+    if not _number(config.action_scale, 0.0, strict=False):
+        raise ValueError(f"action_scale must be a finite number >= 0 (rad; 0: the action "
+                         f"limits), got {brief(config.action_scale)}")  # fmt: skip
+    for name in ("observe_lin_vel", "privileged_observation"):
+        if not isinstance(getattr(config, name), bool):
+            raise ValueError(f"{name} must be true or false, got {brief(getattr(config, name))}")
+    noise = config.observation_noise
+    if (
+        not isinstance(noise, dict)
+        or set(noise) - set(NOISE_GROUPS)
+        or not all(_number(w, 0.0, strict=False) for w in noise.values())
+    ):
+        raise ValueError(f"observation_noise must map some of {', '.join(NOISE_GROUPS)} to "
+                         f"half-widths >= 0, got {brief(noise)}")  # fmt: skip
+    if isinstance(config.leg_pose_weights, list):
+        config.leg_pose_weights = tuple(config.leg_pose_weights)
+    weights = config.leg_pose_weights
+    if not (isinstance(weights, tuple) and len(weights) == 3
+            and all(_number(w, 0.0, strict=False) for w in weights)):  # fmt: skip
+        raise ValueError(f"leg_pose_weights must be three numbers >= 0 (abduction, hip, knee), "
+                         f"got {brief(weights)}")  # fmt: skip
+    for name in ("max_foot_height", "air_time_target"):
+        if not _number(getattr(config, name), 0.0, strict=True):
+            raise ValueError(f"{name} must be a positive finite number, got "
+                             f"{brief(getattr(config, name))}")  # fmt: skip
+    factor = config.soft_joint_limit_factor
+    if not (_number(factor, 0.0, strict=True) and factor <= 1.0):
+        raise ValueError(f"soft_joint_limit_factor must be in (0, 1], got {brief(factor)}")
+    if isinstance(config.command_nonzero, list):
+        config.command_nonzero = tuple(config.command_nonzero)
+    nonzero = config.command_nonzero
+    if nonzero is not None and not (isinstance(nonzero, tuple) and len(nonzero) == 3 and all(
+            _number(b, 0.0, strict=False) and b <= 1.0 for b in nonzero)):  # fmt: skip
+        raise ValueError(f"command_nonzero must be three probabilities (vx, vy, yaw) or null, "
+                         f"got {brief(nonzero)}")  # fmt: skip
+    hold = config.command_hold
+    if not (_number(hold, 0.0, strict=False) and hold <= 1.0):
+        raise ValueError(f"command_hold must be a probability in [0, 1], got {brief(hold)}")
+    if config.command_interval not in COMMAND_INTERVALS:
+        raise ValueError(f"command_interval must be one of {', '.join(COMMAND_INTERVALS)}, got "
+                         f"{brief(config.command_interval)}")  # fmt: skip
+    if config.command_interval == "exponential" and not config.command_resample_seconds:
+        raise ValueError(
+            "command_interval 'exponential' needs command_resample_seconds > 0 "
+            "(the mean time between resamplings)"
+        )
+    if config.sim == "mjx":
+        nominal = type(config)()
+        given = [name for name in RECIPE_OPTIONS
+                 if getattr(config, name) != getattr(nominal, name)]  # fmt: skip
+        if given:
+            raise ValueError(f"{', '.join(given)}: MuJoCo's only; the MJX env does not "
+                             f"implement them (use sim='mujoco')")  # fmt: skip

@@ -84,7 +84,8 @@ from cpg_actor.tasks import velocity as task
 SAVED_FIELDS = tuple(name for name in task.Episode._fields if name != "feet_xy")
 # zero in states saved before they existed
 ADDED_FIELDS = ("slip_sum", "planted_steps", "lin_vel_error_sum", "yaw_rate_error_sum",
-                "contact_steps", "path_length", "velocity_offset_sum")  # fmt: skip
+                "contact_steps", "path_length", "velocity_offset_sum", "swing_peak")  # fmt: skip
+SHAPES = {"velocity_offset_sum": (3,), "swing_peak": (4,)}  # per env, of the added fields
 COUNTS = ("planted_steps", "contact_steps")  # the integer ones
 
 
@@ -136,6 +137,47 @@ def draw_command(rng: np.random.Generator, config: QuadrupedConfig) -> np.ndarra
     if config.standing_share > 0 and rng.uniform() < config.standing_share:
         command[:] = 0.0
     return command
+
+
+def hold_command(previous, fresh, hold, nonzero):
+    """MuJoCo Playground's command resampling (``go1/joystick.py``, ``sample_command``) given
+    its draws: each entry of ``previous`` (3,) is kept where ``hold`` (3, bool), else it
+    becomes ``fresh`` (uniform in its range) where ``nonzero`` (3, bool), else 0."""
+    return np.where(hold, previous, np.where(nonzero, fresh, 0.0))
+
+
+def resample_command(rng: np.random.Generator, previous: np.ndarray,
+                     config: QuadrupedConfig) -> np.ndarray:  # fmt: skip
+    """A command drawn again within an episode: :func:`draw_command`, or with
+    ``command_nonzero`` Playground's process (:func:`hold_command`)."""
+    if config.command_nonzero is None:
+        return draw_command(rng, config)
+    low, high = np.array([config.command_range, config.lateral_range, config.yaw_range]).T
+    fresh = rng.uniform(low, high)
+    hold = rng.uniform(size=3) < config.command_hold
+    nonzero = rng.uniform(size=3) < np.asarray(config.command_nonzero)
+    return hold_command(previous, fresh, hold, nonzero)
+
+
+def steps_to_next_command(rng: np.random.Generator, config: QuadrupedConfig) -> int:
+    """Control steps until the next resampling: ``resample_steps``, or with ``command_interval``
+    "exponential" an exponential time of mean ``command_resample_seconds`` (Playground's),
+    at least one step."""
+    if config.command_interval != "exponential":
+        return config.resample_steps
+    seconds = rng.exponential(config.command_resample_seconds)
+    return max(1, round(seconds / config.control_dt))
+
+
+def action_bounds(quadruped: QuadrupedModel, config: QuadrupedConfig):
+    """``(low, high)`` (J,) of the actions (rad): the robot's action limits, within the
+    nominal pose +- ``action_scale`` where that is set."""
+    low, high = quadruped.low, quadruped.high
+    if config.action_scale:
+        nominal = np.asarray(quadruped.nominal_pose)
+        low = np.maximum(low, nominal - config.action_scale)
+        high = np.minimum(high, nominal + config.action_scale)
+    return low, high
 
 
 def model_terms(model: mujoco.MjModel, quadruped: QuadrupedModel, perturbation) -> None:
@@ -195,27 +237,35 @@ def init_spaces(
         )
     env.config = config
     env.num_envs = num_envs
-    n_obs, n_act = len(quadruped.observation_names), len(quadruped.joint_names)
+    names = observation_names(quadruped, config)
+    n_obs, n_act = len(names), len(quadruped.joint_names)
     env.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (n_obs,), np.float32)
     if config.normalized_actions:
         env.single_action_space = gym.spaces.Box(-1.0, 1.0, (n_act,), np.float32)
     else:
-        low, high = quadruped.low.astype(np.float32), quadruped.high.astype(np.float32)
+        low, high = (bound.astype(np.float32) for bound in action_bounds(quadruped, config))
         env.single_action_space = gym.spaces.Box(low, high)
     env.observation_space = gym.vector.utils.batch_space(env.single_observation_space, num_envs)
     env.action_space = gym.vector.utils.batch_space(env.single_action_space, num_envs)
     env.robot = robot_spec(quadruped, config)
 
 
+def observation_names(quadruped: QuadrupedModel, config: QuadrupedConfig) -> tuple[str, ...]:
+    """The observation's entries under ``config`` (the recipe's options add some)."""
+    return task.observation_names(quadruped.joint_names, config.observe_lin_vel,
+                                  config.privileged_observation)  # fmt: skip
+
+
 def robot_spec(quadruped: QuadrupedModel, config: QuadrupedConfig) -> RobotSpec:
+    low, high = action_bounds(quadruped, config)
     return RobotSpec(
         name=quadruped.name,
         joint_names=quadruped.joint_names,
         nominal_pose=quadruped.nominal_pose,
-        action_low=tuple(quadruped.low),
-        action_high=tuple(quadruped.high),
+        action_low=tuple(low),
+        action_high=tuple(high),
         control_dt=config.control_dt,
-        observation_names=quadruped.observation_names,
+        observation_names=observation_names(quadruped, config),
         drive_observation="command_vx",  # the commanded forward speed (m/s) drives the CPG
         command_observations=("command_vx", "command_vy", "command_yaw"),  # planar steps'
     )
@@ -252,7 +302,14 @@ class QuadrupedVectorEnv(VectorEnv):
         init_spaces(self, num_envs, config, max_episode_steps, sim="mujoco")
         config, quadruped = self.config, self.quadruped
         self.model = load_model(quadruped, config)
-        self._low, self._high = quadruped.low, quadruped.high
+        self._low, self._high = action_bounds(quadruped, config)
+        # the soft joint limits of the dof_pos_limits term (the MJCF's ranges, scaled)
+        ranges = np.array([self.model.joint(name).range for name in quadruped.joint_names])
+        self._soft_range = tuple(ranges.T * config.soft_joint_limit_factor)
+        # the recipe's uniform observation noise: its half-width per actor entry
+        self._noise = task.noise_half_widths(config.observation_noise, len(quadruped.joint_names),
+                                             config.observe_lin_vel)  # fmt: skip
+        self._next_draw = np.zeros(num_envs, dtype=np.int64)  # the step of each next command
         self._nominal = np.asarray(quadruped.nominal_pose)
         threads = default_threads(num_envs) if num_threads is None else int(num_threads)
         self.num_threads = max(1, min(threads, num_envs))
@@ -329,6 +386,8 @@ class QuadrupedVectorEnv(VectorEnv):
             noise = rng.uniform(-self.config.reset_noise, self.config.reset_noise, 12)
             joints[i] = np.clip(self._nominal + noise, self._low, self._high)
             command[i] = draw_command(rng, self.config)
+            if self.config.command_interval == "exponential":
+                self._next_draw[i] = steps_to_next_command(rng, self.config)
             data = self._data
             mujoco.mj_resetData(self.model, data)
             data.qpos[7:] = joints[i]
@@ -394,12 +453,33 @@ class QuadrupedVectorEnv(VectorEnv):
         return self._sensor("feet").reshape(-1, 4, 3)
 
     def _observe(self, index=None) -> np.ndarray:
-        """The observation as the sensors read it (a perturbation's noise on rows ``index``,
-        default all)."""
-        episode = self.episode
+        """The observation of robots at rest as the sensors read it (a perturbation's noise on
+        rows ``index``, default all; the recipe's noise on those rows too)."""
+        episode, config = self.episode, self.config
+        lin_vel, privileged = self._sensor("velocimeter"), None
+        if config.privileged_observation:  # at rest: no torque, feet planted
+            gyro, n = self._sensor("gyro"), self.num_envs
+            joints = self.qpos[:, 7:]
+            privileged = task.privileged_observation(
+                gyro, task.projected_gravity(self.qpos[:, 3:7]), lin_vel, joints - self._nominal,
+                self.qvel[:, 6:], np.zeros_like(joints), episode.in_contact, np.zeros((n, 4, 2)),
+                np.zeros((n, 4)))  # fmt: skip
         obs = task.observe(self.qpos, self.qvel, self._sensor("gyro"), episode.command,
-                           episode.last_action, self._nominal)  # fmt: skip
-        return self.draws.observe(obs, index)
+                           episode.last_action, self._nominal,
+                           lin_vel if config.observe_lin_vel else None, privileged)  # fmt: skip
+        return self._recipe_noise(self.draws.observe(obs, index), index)
+
+    def _recipe_noise(self, obs: np.ndarray, index=None) -> np.ndarray:
+        """``obs`` with the recipe's uniform noise (``observation_noise``) on the actor's entries
+        of rows ``index`` (default all), each row's from its env's generator, in place."""
+        if not self._noise.any():
+            return obs
+        rows = range(self.num_envs) if index is None else np.atleast_1d(index)
+        width = len(self._noise)
+        for i in rows:
+            draws = self._rngs[i].uniform(-1.0, 1.0, width)
+            obs[i, :width] += task.uniform_noise(draws, self._noise).astype(obs.dtype)
+        return obs
 
     def _control_with_push(self, control: np.ndarray, pushed: np.ndarray) -> tuple[np.ndarray, int]:
         """``control`` and its ``mujoco.rollout`` spec, with the perturbation's push on the
@@ -461,15 +541,22 @@ class QuadrupedVectorEnv(VectorEnv):
         weight = (self.quadruped.total_mass + self._payload) * self.quadruped.gravity
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):  # blown up: masked
             self.episode, out = task.step(cfg, self.episode, reading, desired, self._nominal,
-                                          self.quadruped.foot_radius, weight)  # fmt: skip
+                                          self.quadruped.foot_radius, weight,
+                                          self._soft_range)  # fmt: skip
         done = out["terminated"] | out["truncated"]
         if cfg.resample_steps:  # a new command where one is due (the next step runs under it)
-            due = (self.episode.elapsed % cfg.resample_steps == 0) & ~done
+            elapsed = self.episode.elapsed
+            if cfg.command_interval == "exponential":
+                due = (elapsed >= self._next_draw) & ~done
+            else:
+                due = (elapsed % cfg.resample_steps == 0) & ~done
             command = self.episode.command.copy()
             for i in np.flatnonzero(due):
-                command[i] = draw_command(self._rngs[i], cfg)
+                command[i] = resample_command(self._rngs[i], command[i], cfg)
+                if cfg.command_interval == "exponential":
+                    self._next_draw[i] = elapsed[i] + steps_to_next_command(self._rngs[i], cfg)
             self.episode, out["obs"] = task.resample(self.episode, out["obs"], command, due)
-        final_obs = self.draws.observe(out["obs"])
+        final_obs = self._recipe_noise(self.draws.observe(out["obs"]))
         obs = final_obs.copy()
         if self.ground is not None:  # the curriculum, before the next episodes start
             out["episode_metrics"]["terrain_level"] = self.ground.end_episodes(
@@ -497,6 +584,8 @@ class QuadrupedVectorEnv(VectorEnv):
         if self._needs_reset:
             raise RuntimeError("call reset() before get_state()")
         arrays = {"physics": self._state, "sensors": self._sensors[:, -1]}
+        if self.config.command_interval == "exponential":
+            arrays["next_draw"] = self._next_draw
         arrays.update({name: getattr(self.episode, name) for name in SAVED_FIELDS})
         extra = {}  # a perturbation's commands on their way, push steps and generators
         if self.delay is not None:
@@ -529,11 +618,12 @@ class QuadrupedVectorEnv(VectorEnv):
         for name in SAVED_FIELDS:
             if name not in state and name in ADDED_FIELDS:
                 dtype = np.int64 if name in COUNTS else np.float64
-                shape = (self.num_envs, 3) if name == "velocity_offset_sum" else self.num_envs
-                fields[name] = np.zeros(shape, dtype=dtype)
+                fields[name] = np.zeros((self.num_envs, *SHAPES.get(name, ())), dtype=dtype)
                 continue
             fields[name] = np.array(state[name])
         self.episode = task.Episode(**fields, feet_xy=self._feet()[:, :, :2].copy())
+        if "next_draw" in state:
+            np.copyto(self._next_draw, np.asarray(state["next_draw"]))
         self._rngs = []
         for saved in state["rngs"]:
             rng = np.random.default_rng()
