@@ -637,7 +637,12 @@ def main(argv: list[str] | None = None) -> int:
             get_agent_spec(agent)
         except (KeyError, ValueError):
             parser.error(f"--agents: unknown agent {agent!r} (e.g. {', '.join(AGENTS)})")
-    values = [parse_override(text) for text in args.overrides]
+    try:  # --set read and checked as `cpg-actor train --set`, before anything runs
+        values = [parse_override(text) for text in args.overrides]
+        for agent in agents:
+            run_config(agent, args.preset, 0, values, args.budget)
+    except (ValueError, FileNotFoundError) as error:
+        parser.error(f"the runs' config (with --set): {error}")
     target = Target(args.target_return, args.target_apex)
     output = Path(args.output)
     sb3 = not args.no_sb3 and importlib.util.find_spec("stable_baselines3") is not None

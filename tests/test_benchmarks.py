@@ -504,3 +504,22 @@ def test_shared_device_waits_for_the_iterations_its_window_needs_on_a_slow_machi
     assert len(stamps[0]) == 1
     with pytest.raises(ValueError, match="did not finish 3 iterations"):
         shared.window_rates(stamps)
+
+
+@pytest.mark.parametrize("script", ["time_to_walk", "time_to_quality"])
+def test_the_time_benchmarks_refuse_a_bad_set_in_one_line_before_any_run(script, tmp_path, capsys):
+    """--set is read and checked as `cpg-actor train --set` reads it: an unknown key, a text
+    without `=`, a value of the wrong type, each one line naming it, nothing written."""
+    main = benchmark(script).main
+    output = tmp_path / "report.md"
+    for text, message in (("nokey=1", "unknown config key 'nokey'"),
+                          ("garbage", "--set expects KEY=VALUE"),
+                          ("ppo.learning_rate=abc", "ppo.learning_rate must be a number"),
+                          ("num_envs=many", "num_envs must be an integer")):  # fmt: skip
+        with pytest.raises(SystemExit) as exit_:
+            main(["--set", text, "--output", str(output)])
+        assert exit_.value.code == 2
+        error = capsys.readouterr().err
+        assert message in error and "Traceback" not in error, error
+        assert ": error: " in error.splitlines()[-1] and message in error.splitlines()[-1]
+    assert not any(tmp_path.iterdir())
