@@ -93,9 +93,10 @@ def read_json(path: Path, what: str = "", kind: type | None = dict,
     the type its top level must have (None: any)."""
     data = parse_json(read_text(path, what), path, what, nulls_as_nan)
     if kind is not None and not isinstance(data, kind):
-        expected = {dict: "an object", list: "a list"}.get(kind, kind.__name__)
-        raise InputError(f"{path} holds {type(data).__name__} JSON, not {expected}"
-                         + (f" ({what})" if what else ""))  # fmt: skip
+        names = {dict: "an object", list: "a list", str: "a string"}
+        found = next((names[k] for k in names if isinstance(data, k)), type(data).__name__)
+        raise InputError(f"{path} holds {found}, not the JSON {names.get(kind, kind.__name__)} "
+                         "expected" + (f" ({what})" if what else ""))  # fmt: skip
     return data
 
 
