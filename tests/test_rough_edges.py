@@ -346,3 +346,14 @@ def test_a_metrics_line_cut_short_by_an_interrupted_run_is_left_out(tmp_path, ca
     figure = tmp_path / "curves.png"
     assert main(["curves", str(run_dir), "--out", str(figure), "--metric", "charts/SPS"]) == 0
     assert figure.is_file()
+
+
+def test_resuming_over_a_metrics_line_that_is_not_an_object_is_one_line(tmp_path, capsys, trained):
+    run_dir = copy_of(trained, tmp_path)
+    metrics = run_dir / "metrics.jsonl"
+    metrics.write_bytes(metrics.read_bytes() + b"5\n")
+    before = metrics.read_bytes()
+    argv = ["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "32", "--no-progress"]
+    assert main(argv) == 2
+    assert "not a row of metrics (a JSON object)" in one_line(capsys)
+    assert metrics.read_bytes() == before  # nothing appended to the damaged log
