@@ -649,7 +649,12 @@ def main(argv: list[str] | None = None) -> int:
             get_agent_spec(agent)
         except (KeyError, ValueError):
             parser.error(f"--agents: unknown agent {agent!r} (e.g. {', '.join(AGENTS)})")
-    values = [parse_override(text) for text in args.overrides]
+    try:  # --set read and checked as `cpg-actor train --set`, before anything runs
+        values = [parse_override(text) for text in args.overrides]
+        for agent in agents:
+            run_config(agent, args.preset, 0, values, args.budget)
+    except (ValueError, FileNotFoundError) as error:
+        parser.error(f"the runs' config (with --set): {error}")
     target = Target(args.target_return, args.target_apex)
     output = Path(args.output)
     figure_path, json_path = companions(parser, output, (".png", ".json"),

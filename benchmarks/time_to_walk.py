@@ -610,6 +610,15 @@ def check_args(parser: argparse.ArgumentParser, args) -> tuple[list[str], list[i
             ROBOTS[args.robot].config_class().replace(episode_seconds=args.grid_episode_seconds)
         except ValueError as error:
             parser.error(f"--grid-episode-seconds {args.grid_episode_seconds:g}: {error}")
+    for agent in agents:  # --set read and checked as `cpg-actor train --set`, before any run
+        spec = RunSpec(args.robot, agent, seeds[0], args.max_steps, args.eval_interval,
+                       args.eval_episodes, args.max_speed_error, args.overrides,
+                       args.ceiling_seconds, args.grid,
+                       args.grid_episode_seconds or GRID_EPISODE_SECONDS)  # fmt: skip
+        try:
+            run_config(spec)
+        except (ValueError, FileNotFoundError) as error:
+            parser.error(f"the {agent} runs' config (with --set): {error}")
     return agents, seeds
 
 

@@ -55,6 +55,15 @@ import onnxruntime as ort  # noqa: E402
 
 TEXT_KEYS = ("cpg_actor_version", "robot", "robot_model", "agent", "simulator", "mjcf_file",
              "nonfinite_observations", "state_usage")  # fmt: skip
+# what this example reads of the metadata (``model_interface`` only for --mjcf)
+NEEDED_KEYS = ("agent", "robot_model", "mjcf_file", "observation_names", "observation_sources",
+               "initial_state", "joint_names", "default_joint_positions", "action_low",
+               "action_high", "actuator", "decimation", "control_dt", "env_config")  # fmt: skip
+# the most physics substeps one control step may take on another model's timestep: legged
+# robots' models step 0.5 to 5 ms under a 10 to 50 ms control period (a few to 100 substeps);
+# 10,000 is far beyond any of them and still ends (a 20 ms period at 2 us), where a
+# mistyped timestep (1e-9 s) would step 20 million times per action and never finish
+MAX_SUBSTEPS = 10_000
 
 
 def read_metadata(session: ort.InferenceSession, path: Path) -> dict:
@@ -66,6 +75,21 @@ def read_metadata(session: ort.InferenceSession, path: Path) -> dict:
         raise ValueError(f"{path}: its metadata is not cpg-actor's ({error})") from None
     if not {"mjcf_file", "observation_names"} <= set(meta):
         raise ValueError(f"{path} has no cpg-actor metadata; export it with cpg-actor export")
+    missing = [key for key in NEEDED_KEYS if key not in meta]
+    if missing:
+        raise ValueError(f"{path}: its metadata lacks {', '.join(missing)}; export it again "
+                         "with cpg-actor export")  # fmt: skip
+    joints = meta["joint_names"]
+    if not (isinstance(joints, list) and joints and all(isinstance(j, str) for j in joints)):
+        raise ValueError(f"{path}: its metadata's joint_names is not a list of joint names")
+    for key in ("default_joint_positions", "action_low", "action_high"):
+        if np.shape(meta[key]) != (len(joints),):
+            raise ValueError(f"{path}: its metadata's {key} is not one number per joint "
+                             f"({len(joints)} joints)")  # fmt: skip
+    control_dt = meta["control_dt"]
+    if not (isinstance(control_dt, int | float) and 0 < control_dt < float("inf")):
+        raise ValueError(f"{path}: its metadata's control_dt {control_dt!r} is not a positive "
+                         "number of seconds")  # fmt: skip
     return meta
 
 
@@ -223,7 +247,14 @@ def other_model(meta: dict, mjcf: Path) -> mujoco.MjModel:
 
 
 def substeps(timestep: float, control_dt: float, mjcf: Path) -> int:
-    """Physics steps per control step at ``timestep``; ValueError unless a whole number."""
+    """Physics steps per control step at ``timestep``; ValueError unless a whole number, and
+    at most :data:`MAX_SUBSTEPS`."""
+    if not 0 < timestep < float("inf"):
+        raise ValueError(f"{mjcf}: timestep {timestep} s is not a positive number of seconds")
+    if control_dt / timestep > MAX_SUBSTEPS + 0.5:
+        raise ValueError(f"{mjcf}: timestep {timestep} s takes more than {MAX_SUBSTEPS:,} "
+                         f"substeps per control period of {control_dt} s; give a timestep "
+                         f"of at least {control_dt / MAX_SUBSTEPS:g} s")  # fmt: skip
     n = round(control_dt / timestep)
     if n < 1 or abs(n * timestep - control_dt) > 1e-9:
         raise ValueError(f"{mjcf}: timestep {timestep} s does not divide the policy's control "
@@ -257,6 +288,53 @@ def located(model: mujoco.MjModel, entry: dict) -> dict:
     return entry
 
 
+def check_model(model: mujoco.MjModel, meta: dict, mjcf: Path, other: bool) -> None:
+    """ValueError, in one line, where ``model`` is not what the policy drives and reads: its
+    joints hinges (one angle each: the action and the observation's joint entries are
+    angles), the other joints and the sensors the observation names; in the policy's own
+    model (its actuators on), a position actuator on each joint and its torque sensor; for
+    the velocity task, the base's and feet's sensors the reward reads."""
+    joints = {model.joint(j).name: j for j in range(model.njnt)}
+    sensors = {model.sensor(i).name for i in range(model.nsensor)}
+    missing = [name for name in meta["joint_names"] if name not in joints]
+    if missing:
+        raise ValueError(f"{mjcf} lacks the policy's joints {', '.join(missing)}")
+    kinds = ("free", "ball", "slide", "hinge")  # mjtJoint's values, in order
+    wrong = [f"{name} ({kinds[int(model.jnt_type[joints[name]])]})"
+             for name in meta["joint_names"]
+             if model.jnt_type[joints[name]] != mujoco.mjtJoint.mjJNT_HINGE]  # fmt: skip
+    if wrong:
+        raise ValueError(f"{mjcf}: the policy's joints must be hinges; {', '.join(wrong)} "
+                         f"{'is' if len(wrong) == 1 else 'are'} not")  # fmt: skip
+    for entry in meta["observation_sources"]:
+        free = other and entry["source"] == "projected_gravity"  # the one free joint, found
+        if entry.get("joint") and entry["joint"] not in joints and not free:
+            raise ValueError(f"{mjcf} lacks the joint {entry['joint']!r} the observation's "
+                             f"{entry['name']!r} reads")  # fmt: skip
+        if entry["source"] == "sensor" and entry["sensor"] not in sensors:
+            raise ValueError(f"{mjcf} lacks the sensor {entry['sensor']!r} the observation's "
+                             f"{entry['name']!r} reads")  # fmt: skip
+    if not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_ACTUATION.value:
+        actuated = {int(model.actuator_trnid[a, 0]): model.actuator(a).name
+                    for a in range(model.nu)
+                    if model.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT}  # fmt: skip
+        for name in meta["joint_names"]:
+            if actuated.get(joints[name]) != name:
+                raise ValueError(f"{mjcf} has no actuator {name!r} on the joint {name!r} (the "
+                                 "policy's own model has one per joint)")  # fmt: skip
+            if f"{name}_torque" not in sensors:
+                raise ValueError(f"{mjcf} lacks the sensor '{name}_torque' (the policy's own "
+                                 "model has one per joint)")  # fmt: skip
+    if meta["robot_model"] != "anymal-hopper":
+        needed = ["base_lin_vel", "base_ang_vel", "base_touch"]
+        lacking = [name for name in needed if name not in sensors]
+        if not any(name.endswith("_foot_pos") for name in sensors):
+            lacking.append("LEG_foot_pos")
+        if lacking:
+            raise ValueError(f"{mjcf} lacks the sensors {', '.join(lacking)} the velocity "
+                             "task's reward reads")  # fmt: skip
+
+
 class Simulation:
     """The robot of the MJCF, stepped as the project's MuJoCo env steps it."""
 
@@ -275,6 +353,7 @@ class Simulation:
             raise ValueError(f"{mjcf}: timestep {self.model.opt.timestep} s x "
                              f"{self.decimation} is not the control period "
                              f"{meta['control_dt']} s")  # fmt: skip
+        check_model(self.model, meta, mjcf, other)
         joints = [self.model.joint(name) for name in meta["joint_names"]]
         self.qpos_index = np.array([j.qposadr[0] for j in joints])
         self.dof_index = np.array([j.dofadr[0] for j in joints])

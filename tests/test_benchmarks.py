@@ -540,3 +540,22 @@ def test_a_benchmark_replaces_no_file_beside_a_named_output_without_overwrite(
     with pytest.raises(SystemExit):
         module.main() if script == "learning_curves" else module.main(sys.argv[1:])
     assert "give a report name ending in .md" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("script", ["time_to_walk", "time_to_quality"])
+def test_the_time_benchmarks_refuse_a_bad_set_in_one_line_before_any_run(script, tmp_path, capsys):
+    """--set is read and checked as `cpg-actor train --set` reads it: an unknown key, a text
+    without `=`, a value of the wrong type, each one line naming it, nothing written."""
+    main = benchmark(script).main
+    output = tmp_path / "report.md"
+    for text, message in (("nokey=1", "unknown config key 'nokey'"),
+                          ("garbage", "--set expects KEY=VALUE"),
+                          ("ppo.learning_rate=abc", "ppo.learning_rate must be a number"),
+                          ("num_envs=many", "num_envs must be an integer")):  # fmt: skip
+        with pytest.raises(SystemExit) as exit_:
+            main(["--set", text, "--output", str(output)])
+        assert exit_.value.code == 2
+        error = capsys.readouterr().err
+        assert message in error and "Traceback" not in error, error
+        assert ": error: " in error.splitlines()[-1] and message in error.splitlines()[-1]
+    assert not any(tmp_path.iterdir())

@@ -100,7 +100,8 @@ def test_the_time_to_quality_analysis_orders_the_methods(tmp_path, cpg_hit):
     (tmp_path / "search_budgets.json.gz").write_bytes(b"not gzip")
     done = run(RESULTS / "time-to-quality" / "analysis.py", str(tmp_path))
     assert done.returncode != 0 and "Traceback" not in done.stderr
-    assert "search_budgets.json(.gz): not the benchmark's JSON" in done.stderr
+    assert "search_budgets.json.gz is not a whole gzip file" in done.stderr
+    assert len(done.stderr.splitlines()) == 1
 
 
 def fake_grid(error: float, falls: float = 0.0) -> dict:
@@ -337,3 +338,86 @@ def test_the_rough_ground_figure_draws_the_curricula_and_the_level(tmp_path):
     shutil.rmtree(out / "grid")
     done = run(script, str(out), str(figure))
     assert done.returncode != 0 and "no ROLE/seedS/grid.json with 'all level 4' rows" in done.stderr
+
+
+def go1_folder(out: Path) -> Path:
+    """A go1-omni folder the analysis reads (3 seeds per variant and the start)."""
+    for variant, error in {"cpg-actor": 0.05, "mlp-field": 0.2, "mlp-warm-field": 0.21,
+                           "start": 0.15}.items():  # fmt: skip
+        for i, seed in enumerate((20, 21, 22)):
+            folder = out / "grid" / variant / f"seed{seed}"
+            folder.mkdir(parents=True)
+            (folder / "grid.json").write_text(json_text(fake_grid(error + 0.005 * i)))
+    return out
+
+
+def test_each_analysis_refuses_a_missing_or_damaged_input_in_one_line(tmp_path):
+    """A file missing, not text, not JSON, of another shape or lacking a key, a corrupt
+    archive, a damaged line of a run's metrics: one line naming it, exit status 2, never a
+    traceback (`cpg_actor.inputs`, shared by the analyses)."""
+    out = go1_folder(tmp_path / "go1-omni")
+    grid = out / "grid" / "cpg-actor" / "seed20" / "grid.json"
+    walk = tmp_path / "time_to_walk_grid.json"
+    good = json.loads(grid.read_text())
+    summary = tmp_path / "summary.json"
+    levels = tmp_path / "trio" / "runs" / "mlp" / "seed0" / "metrics.jsonl"
+    levels.parent.mkdir(parents=True)
+    quality = tmp_path / "quality"
+    quality.mkdir()
+    omni, rough = RESULTS / "go1-omni" / "analysis.py", RESULTS / "go1-rough" / "analysis.py"
+    cases = [  # (script, arguments, the file damaged, its bytes, what the line says)
+        (omni, [out], grid, b"{oops", "grid.json is not JSON (line 1, column 2"),
+        (omni, [out], grid, b"\xff\xfe", "grid.json is not text (byte 0 is not UTF-8)"),
+        (omni, [out], grid, b"[]", "grid.json holds a list, not the JSON an object expected"),
+        (omni, [out], grid, json.dumps({"rows": good["rows"]}).encode(),
+         "grid.json: no 'means' where it is read"),
+        (omni, [out], grid, json.dumps({**good, "means": {"flat": [1]}}).encode(),
+         "its inputs are not the files it reads, or are damaged (TypeError"),
+        (omni, [out, "--time-to-walk", walk], None, None,
+         "time_to_walk_grid.json does not exist"),
+        (omni, [out, "--time-to-walk", walk], walk, b"[{", "time_to_walk_grid.json is not JSON"),
+        (omni, [out, "--time-to-walk", walk], walk, json.dumps([{"seed": 1}]).encode(),
+         "time_to_walk_grid.json: no 'agent' where it is read"),
+        (RESULTS / "go1-omni" / "figure.py", [out, tmp_path / "f.png"], grid, b"{}",
+         "grid.json: no 'rows' where it is read"),
+        (RESULTS / "go1-rough" / "figure.py", [out, tmp_path / "f.png"], grid, b"{oops",
+         "grid.json is not JSON"),
+        (rough, [out, "--variants", "cpg-actor-omni,mlp-field"], grid, b"{oops",
+         "grid.json is not JSON"),
+        (RESULTS / "fresh-20M" / "analysis.py", [summary], summary, b"{oops",
+         "summary.json is not JSON"),
+        (RESULTS / "fresh-20M" / "analysis.py", [summary], summary, b"{}",
+         "summary.json: no 'variants' where it is read"),
+        (RESULTS / "fresh-2M" / "analysis.py", [tmp_path], summary, b"\x89PNG",
+         "summary.json is not text"),
+        (RESULTS / "time-to-quality" / "analysis.py", [quality],
+         quality / "time_to_quality.json", json.dumps({"`cpg-actor`": [{"seed": 1}]}).encode(),
+         "time_to_quality.json: no 'hit' where it is read"),
+        (RESULTS / "time-to-quality" / "analysis.py", [quality],
+         quality / "time_to_quality.json.gz", gzip.compress(b"{}" * 100)[:20],
+         "time_to_quality.json.gz is not a whole gzip file"),
+        (RESULTS / "decisive-2M" / "targets.py", [summary], summary, b"[1",
+         "summary.json is not JSON"),
+        (RESULTS / "randomized-2M" / "targets.py", [summary], summary, b"{}",
+         "summary.json: no 'runs' where it is read"),
+        (RESULTS / "robustness-go1-2M" / "compare.py", [tmp_path / "none.json"], None, None,
+         "none.json does not exist"),
+        (RESULTS / "trio-20M" / "progress.py", [tmp_path / "trio"], levels,
+         b'{"global_step": 1, "eval/return": 2}\ngarbage\n{"global_step": 2}\n',
+         "metrics.jsonl, line 2: not JSON"),
+    ]  # fmt: skip
+    for script, args, path, data, message in cases:
+        kept = path.read_bytes() if path is not None and path.exists() else None
+        if path is not None:
+            path.write_bytes(data)
+        try:
+            done = run(script, *map(str, args))
+        finally:
+            if path is not None and kept is not None:
+                path.write_bytes(kept)
+            elif path is not None:
+                path.unlink()
+        assert done.returncode == 2, (script, message, done.stderr)
+        assert len(done.stderr.splitlines()) == 1, (script, message, done.stderr)
+        assert message in done.stderr, (script, message, done.stderr)
+        assert not (out / "analysis.json").exists()

@@ -96,3 +96,23 @@ def test_the_committed_page_is_what_the_script_prints(rejudge):
         "docs/results/REJUDGED.md is stale: PYTHONPATH=src python docs/results/rejudge.py "
         "> docs/results/REJUDGED.md"
     )
+
+
+def test_a_damaged_committed_file_is_one_line_naming_it(rejudge, tmp_path, monkeypatch, capsys):
+    """The script reads the results folders' committed files: one damaged (an edit gone
+    wrong, a merge marker) is one line naming it, not a traceback."""
+    from cpg_actor.inputs import run_script
+
+    results = tmp_path / "results"
+    for folder in {*rejudge.REPRODUCTIONS, *rejudge.SUITES, rejudge.GO1_SUITE, "decisive-2M"}:
+        for path in (ROOT / "docs" / "results" / folder).glob("*.json"):
+            (results / folder).mkdir(parents=True, exist_ok=True)
+            (results / folder / path.name).write_bytes(path.read_bytes())
+    monkeypatch.setattr(rejudge, "RESULTS", results)
+    summary = results / "repro-2M" / "summary.json"
+    for damage, message in ((b"<<<<<<< HEAD\n", "summary.json is not JSON (line 1"),
+                            (b"{}", "summary.json: no 'variants' where it is read")):  # fmt: skip
+        summary.write_bytes(damage)
+        assert run_script(rejudge.main, "rejudge.py") == 2
+        err = capsys.readouterr().err
+        assert len(err.splitlines()) == 1 and message in err, err

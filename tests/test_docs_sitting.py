@@ -4,7 +4,10 @@ evaluations need; nothing that exists is overwritten."""
 
 import importlib.util
 import json
+import os
 import shutil
+import subprocess
+import sys
 import tarfile
 from pathlib import Path
 
@@ -14,6 +17,13 @@ import yaml
 from cpg_actor.experiments.execute import MARKER, trained_iteration
 
 SCRIPT = Path(__file__).resolve().parents[1] / "docs" / "results" / "sitting.py"
+
+
+def run_script(*args) -> subprocess.CompletedProcess:
+    """The script as a reader runs it, with this checkout's package."""
+    env = {**os.environ, "PYTHONPATH": str(SCRIPT.parents[2] / "src")}
+    return subprocess.run([sys.executable, str(SCRIPT), *map(str, args)], capture_output=True,
+                          text=True, env=env)  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -141,3 +151,93 @@ def test_without_traces_a_finished_run_travels_without_its_stage_traces(sitting,
     assert full - light == {"eval/stage0/traces.npz", "eval/stage0/traces.png"}
     assert {"eval/stages.json", "metrics.jsonl", MARKER} <= light
     assert stage.joinpath("traces.npz").is_file()  # the run itself keeps them
+
+
+def _archive(path: Path, members: list[tuple[str, bytes | None, str | None]]) -> Path:
+    """A tar.gz of ``(name, data, link)`` members: a file (data), a folder (neither) or a
+    symbolic link (link)."""
+    import io
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with tarfile.open(path, "w:gz") as tar:
+        for name, data, link in members:
+            info = tarfile.TarInfo(name)
+            if link is not None:
+                info.type, info.linkname = tarfile.SYMTYPE, link
+            elif data is None:
+                info.type = tarfile.DIRTYPE
+            else:
+                info.size = len(data)
+            tar.addfile(info, io.BytesIO(data) if data is not None else None)
+    return path
+
+
+def test_a_damaged_archive_is_refused_in_one_line_and_leaves_no_folder_behind(sitting, tmp_path):
+    good = _archive(tmp_path / "good.tar.gz", [("config.yaml", b"agent: mlp\n", None)])
+    damaged = {
+        "truncated gzip": good.read_bytes()[: len(good.read_bytes()) // 2],
+        "not a tar": b"hello, not an archive\n",
+    }
+    crafted = {
+        "outside": [("config.yaml", b"x", None), ("../../escaped.txt", b"x", None)],
+        "absolute": [(str(tmp_path / "absolute.txt"), b"x", None)],
+        "a link": [("config.yaml", b"x", None), ("link", None, "/etc/passwd")],
+        "a relative link": [("link", None, "config.yaml")],
+    }
+    cases = {**damaged, **crafted}
+    for number, case in enumerate(cases):
+        archive = tmp_path / f"archive{number}"
+        packed = archive / "mlp" / "seed0.tar.gz"
+        if case in damaged:
+            packed.parent.mkdir(parents=True)
+            packed.write_bytes(damaged[case])
+        else:
+            _archive(packed, crafted[case])
+        out = tmp_path / f"out{number}"
+        (out / "runs" / "mlp" / "seed1").mkdir(parents=True)  # the user's, kept
+        (out / "notes.txt").write_text("mine\n")
+        with pytest.raises(ValueError, match=r"seed0.tar.gz"):
+            sitting.restore(archive, out)
+        assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")) == [
+            "notes.txt",
+            "runs",
+            "runs/mlp",
+            "runs/mlp/seed1",
+        ], case  # no .restore-XXXX folder, nothing unpacked; the user's folders kept
+        fresh = tmp_path / f"fresh{number}"  # the folders made for it are removed too
+        done = run_script("restore", archive, fresh)
+        assert done.returncode != 0 and len(done.stderr.splitlines()) == 1, (case, done.stderr)
+        assert done.stderr.startswith("sitting.py restore: error: "), done.stderr
+        assert not fresh.exists(), case
+    assert not (tmp_path / "escaped.txt").exists() and not (tmp_path / "absolute.txt").exists()
+
+
+def test_save_and_restore_refuse_bad_folders_and_files_in_one_line(sitting, trained, tmp_path):
+    (tmp_path / "a file").write_text("mine\n")
+    out = tmp_path / "out"
+    shutil.copytree(trained, out / "runs" / "mlp" / "seed0")
+    cases = [
+        (("save", tmp_path / "missing", tmp_path / "archive"), "is not a folder"),
+        (("save", tmp_path / "a file", tmp_path / "archive"), "is not a folder"),
+        (("save", tmp_path, tmp_path / "archive"), "neither runs/ nor reproduce.yaml"),
+        (("save", out, tmp_path / "a file"), "is a file"),
+        (("save", out, tmp_path / "a file" / "archive"), "is a file"),
+        (("restore", tmp_path / "missing", tmp_path / "again"), "is not a folder"),
+    ]
+    for args, message in cases:
+        done = run_script(*args)
+        assert done.returncode != 0 and len(done.stderr.splitlines()) == 1, (args, done.stderr)
+        assert message in done.stderr, (args, done.stderr)
+    assert not (tmp_path / "archive").exists() and not (tmp_path / "again").exists()
+    assert (tmp_path / "a file").read_text() == "mine\n"
+
+    (out / "reproduce.yaml").write_text("settings: [\n")
+    with pytest.raises(ValueError, match="reproduce.yaml is not the reproduce.yaml"):
+        sitting.save(out, tmp_path / "archive")
+    (out / "reproduce.yaml").unlink()
+    partial = tmp_path / "archive" / "mlp" / "seed0.partial.tar.gz"
+    partial.parent.mkdir(parents=True)
+    partial.write_bytes(b"not an archive")  # a damaged partial archive: kept, refused
+    with pytest.raises(ValueError, match="seed0.partial.tar.gz is damaged"):
+        sitting.save(out, tmp_path / "archive", unfinished=True)
+    assert partial.read_bytes() == b"not an archive"

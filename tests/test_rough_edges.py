@@ -307,3 +307,53 @@ def test_a_gif_of_an_evaluation_renders_only_the_frames_it_keeps(tmp_path, monke
     Env.rendered = 0
     record_video(Policy(), config, tmp_path / "walk.mp4", seed=0, overwrite=False)
     assert Env.rendered == 61
+
+
+# -- a damaged file of a run -------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("name", "damage", "message"),
+    [
+        ("metrics.jsonl", b"garbage{\n", "metrics.jsonl, line {n}: not JSON"),
+        ("metrics.jsonl", b"5\n", "metrics.jsonl, line {n}: not a JSON object"),
+        ("metrics.jsonl", b"[1, 2]\n", "metrics.jsonl, line {n}: not a JSON object"),
+        ("metrics.jsonl", b"\xff\xfe{}\n", "metrics.jsonl is not text"),
+        ("config.yaml", None, "config.yaml holds no config keys"),
+    ],
+)
+def test_a_damaged_metrics_file_or_emptied_config_is_one_line(
+    tmp_path, capsys, trained, name, damage, message
+):
+    """eval (its learning-curve figure), export and curves read a run's files: a damaged line
+    of metrics.jsonl is named by its number; an emptied config.yaml is not read as defaults."""
+    run_dir = copy_of(trained, tmp_path)
+    path = run_dir / name
+    message = message.format(n=len(path.read_bytes().splitlines()) + 1)  # the damaged line
+    path.write_bytes(b"" if damage is None else path.read_bytes() + damage)
+    commands = [["eval", str(run_dir), "--episodes", "1"], ["curves", str(run_dir), "--out",
+                str(tmp_path / "curves.png"), "--metric", "charts/SPS"]]  # fmt: skip
+    if name == "config.yaml":
+        commands.append(["export", str(run_dir), "--format", "torchscript"])
+    for argv in commands:
+        assert main(argv) == 2, argv
+        assert message in one_line(capsys), argv
+    assert not (tmp_path / "curves.png").exists()
+
+
+def test_a_metrics_line_cut_short_by_an_interrupted_run_is_left_out(tmp_path, capsys, trained):
+    run_dir = copy_of(trained, tmp_path)
+    with open(run_dir / "metrics.jsonl", "ab") as handle:
+        handle.write(b'{"iteration": 2, "global_st')  # no end: a write cut off
+    figure = tmp_path / "curves.png"
+    assert main(["curves", str(run_dir), "--out", str(figure), "--metric", "charts/SPS"]) == 0
+    assert figure.is_file()
+
+
+def test_resuming_over_a_metrics_line_that_is_not_an_object_is_one_line(tmp_path, capsys, trained):
+    run_dir = copy_of(trained, tmp_path)
+    metrics = run_dir / "metrics.jsonl"
+    metrics.write_bytes(metrics.read_bytes() + b"5\n")
+    before = metrics.read_bytes()
+    argv = ["train", "--run-dir", str(run_dir), "--resume", "--total-steps", "32", "--no-progress"]
+    assert main(argv) == 2
+    assert "not a row of metrics (a JSON object)" in one_line(capsys)
+    assert metrics.read_bytes() == before  # nothing appended to the damaged log

@@ -26,7 +26,6 @@ folder did not store makes its claim "not tested" (said in the text).
 
 from __future__ import annotations
 
-import json
 import re
 import sys
 from collections.abc import Callable, Sequence
@@ -37,6 +36,7 @@ import numpy as np
 
 from cpg_actor.experiments import metrics as m
 from cpg_actor.experiments import report
+from cpg_actor.inputs import read_json, run_script
 from cpg_actor.robustness.summary import retention_scores, verdicts
 
 RESULTS = Path(__file__).resolve().parent
@@ -65,7 +65,7 @@ class Stored(dict):
 
 
 def read(folder: str, name: str) -> dict[str, Any]:
-    return json.loads((RESULTS / folder / name).read_text(encoding="utf-8"))
+    return read_json(RESULTS / folder / name, "a results folder's committed file")
 
 
 def cell(text: str) -> str:
@@ -396,4 +396,4 @@ def main() -> str:
 
 if __name__ == "__main__":
     np.seterr(all="ignore")
-    sys.stdout.write(main())
+    sys.exit(run_script(lambda: sys.stdout.write(main()), "rejudge.py"))  # a bad file: one line

@@ -34,20 +34,24 @@ from __future__ import annotations
 import argparse
 import os
 import shutil
+import sys
 import tarfile
 import tempfile
+import zlib
 from pathlib import Path
 
 from cpg_actor.config import TrainConfig
 from cpg_actor.experiments.execute import list_checkpoints, select_stage_checkpoints
 from cpg_actor.experiments.plan import STAGE_FRACTIONS
 from cpg_actor.experiments.results import Results
-from cpg_actor.files import MARKER, SWEEP, marker_kind
+from cpg_actor.files import MARKER, SWEEP, describe_os_error, marker_kind
 from cpg_actor.safe_yaml import read_yaml
 
 SKIPPED = {"checkpoints", "tensorboard", ".lock"}
 FILES = ("reproduce.yaml", "transfer.json", MARKER)  # the last: the project's marker
 PARTIAL = ".partial.tar.gz"
+# what reading a damaged archive raises: a truncated gzip stream, a file that is no tar
+DAMAGED = (tarfile.TarError, EOFError, zlib.error, OSError)
 
 
 def kept_checkpoints(run_dir: Path, fractions: tuple[float, ...]) -> list[Path]:
@@ -66,11 +70,58 @@ def kept_checkpoints(run_dir: Path, fractions: tuple[float, ...]) -> list[Path]:
 
 
 def archived_iteration(partial: Path) -> int:
-    """The newest checkpoint's iteration in a partial archive (-1: none)."""
-    with tarfile.open(partial) as tar:
-        numbers = [int(name[len("checkpoints/iter_"):-3]) for name in tar.getnames()
-                   if name.startswith("checkpoints/iter_") and name.endswith(".pt")]  # fmt: skip
+    """The newest checkpoint's iteration in a partial archive (-1: none); ValueError for a
+    damaged one."""
+    try:
+        with tarfile.open(partial) as tar:
+            names = tar.getnames()
+    except DAMAGED as error:
+        raise ValueError(f"{partial} is damaged ({reason(error)}); move it away to save the "
+                         "run again") from None  # fmt: skip
+    numbers = [int(digits) for name in names if name.startswith("checkpoints/iter_")
+               and (digits := name[len("checkpoints/iter_"):-3]).isdigit()]  # fmt: skip
     return max(numbers, default=-1)
+
+
+def reason(error: BaseException) -> str:
+    """An error's first line, or its type's name where it has no text."""
+    if isinstance(error, tarfile.ReadError) and "could not be opened" in str(error):
+        return "not a tar or tar.gz file"  # tarfile's message lists each method it tried
+    return (str(error).strip() or type(error).__name__).splitlines()[0]
+
+
+def check_members(tar: tarfile.TarFile, path: Path) -> None:
+    """ValueError unless every member of ``tar`` is a file or a folder inside the run
+    directory it unpacks to, as :func:`_pack` writes them (no link, device, absolute path or
+    ``..``)."""
+    for member in tar.getmembers():
+        name = member.name
+        if not (member.isfile() or member.isdir()):
+            raise ValueError(f"{path}: its member {name!r} is not a file or a folder (a link "
+                             "or a device); not a run archive of this script")  # fmt: skip
+        if name.startswith(("/", "\\")) or ".." in Path(name).parts:
+            raise ValueError(f"{path}: its member {name!r} lies outside the run directory; "
+                             "not a run archive of this script")  # fmt: skip
+
+
+def unpack(path: Path, run_dir: Path) -> None:
+    """Unpack the archive ``path`` into the new ``run_dir`` through a temporary folder of this
+    script's beside it; ValueError for a damaged archive, that folder removed."""
+    tmp = Path(tempfile.mkdtemp(dir=run_dir.parent, prefix=".restore-"))
+    try:
+        tmp.chmod(0o755)  # mkdtemp makes it private; a run directory is not
+        with tarfile.open(path) as tar:
+            check_members(tar, path)
+            tar.extractall(tmp, filter="data")
+        tmp.rename(run_dir)
+    except DAMAGED as error:
+        if isinstance(error, OSError) and error.errno is not None:
+            raise  # the disk's (full, unwritable), not the archive's: main says it in one line
+        raise ValueError(f"{path} is damaged or not a run archive ({reason(error)}); "
+                         "nothing restored from it") from None  # fmt: skip
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp)  # this script's own folder, left only where unpacking failed
 
 
 def _without_traces(info: tarfile.TarInfo) -> tarfile.TarInfo | None:
@@ -102,16 +153,28 @@ def sweep_settings(directory: Path) -> list[Path]:
     return sorted(p for p in directory.iterdir() if (p / "reproduce.yaml").is_file())
 
 
+def check_folders(source: Path, what: str, target: Path) -> None:
+    """ValueError, before anything is written, unless ``source`` is a folder and ``target``
+    is a folder or does not exist yet."""
+    if not source.is_dir():
+        raise ValueError(f"{source} is not a folder; give {what}")
+    for path in (target, *target.parents):
+        if path.exists() and not path.is_dir():
+            raise ValueError(f"{target} is not a folder ({path} is a file); give a folder")
+
+
 def save(out: Path, archive: Path, unfinished: bool = False, traces: bool = True) -> None:
+    check_folders(out, "a reproduction's or a sweep's OUT folder", archive)
     if marker_kind(out) == SWEEP:
         for setting in sweep_settings(out):
             save(setting, archive / setting.name, unfinished, traces)
         archive.mkdir(parents=True, exist_ok=True)
         shutil.copyfile(out / MARKER, archive / MARKER)  # the sweep's: restore remakes it
         return
-    settings = out / "reproduce.yaml"
-    saved = read_yaml(settings) if settings.is_file() else {}
-    fractions = tuple((saved or {}).get("settings", {}).get("stage_fractions") or STAGE_FRACTIONS)
+    if not (out / "runs").is_dir() and not (out / "reproduce.yaml").is_file():
+        raise ValueError(f"{out} has neither runs/ nor reproduce.yaml: not a reproduction's "
+                         "OUT (cpg-actor reproduce) nor a sweep's")  # fmt: skip
+    fractions = stage_fractions(out / "reproduce.yaml")
     for run in (run for runs in Results.load(out).runs.values() for run in runs):
         target = archive / run.variant / f"{run.path.name}.tar.gz"
         partial = archive / run.variant / f"{run.path.name}{PARTIAL}"
@@ -135,7 +198,22 @@ def save(out: Path, archive: Path, unfinished: bool = False, traces: bool = True
             shutil.copyfile(out / name, archive / name)
 
 
+def stage_fractions(settings: Path) -> tuple[float, ...]:
+    """The stage fractions of a reproduction's ``reproduce.yaml`` (the default without one);
+    ValueError for one that is not the file ``cpg-actor reproduce`` writes."""
+    if not settings.is_file():
+        return STAGE_FRACTIONS
+    try:
+        saved = read_yaml(settings) or {}
+        fractions = saved.get("settings", {}).get("stage_fractions") or STAGE_FRACTIONS
+        return tuple(float(f) for f in fractions)
+    except (AttributeError, TypeError, ValueError) as error:
+        raise ValueError(f"{settings} is not the reproduce.yaml cpg-actor reproduce writes "
+                         f"({reason(error)})") from None  # fmt: skip
+
+
 def restore(archive: Path, out: Path) -> None:
+    check_folders(archive, "an ARCHIVE folder that sitting.py save wrote", out)
     if marker_kind(archive) == SWEEP:
         for setting in sweep_settings(archive):
             restore(setting, out / setting.name)
@@ -149,12 +227,15 @@ def restore(archive: Path, out: Path) -> None:
         if run_dir.exists():
             print(f"kept {run_dir} (exists)")
             continue
+        made = [p for p in run_dir.parents[:3] if not p.exists()]  # VARIANT, runs, OUT
         run_dir.parent.mkdir(parents=True, exist_ok=True)
-        tmp = Path(tempfile.mkdtemp(dir=run_dir.parent, prefix=".restore-"))
-        tmp.chmod(0o755)  # mkdtemp makes it private; a run directory is not
-        with tarfile.open(path) as tar:
-            tar.extractall(tmp, filter="data")
-        tmp.rename(run_dir)
+        try:
+            unpack(path, run_dir)
+        except ValueError:
+            for folder in made:  # the empty folders made for it, this script's own
+                if folder.is_dir() and not any(folder.iterdir()):
+                    folder.rmdir()
+            raise
         print(f"restored {run_dir}" + (" (unfinished: the same command resumes it)"
                                         if path.name.endswith(PARTIAL) else ""))  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
@@ -173,7 +254,12 @@ if __name__ == "__main__":
     parser.add_argument("--without-traces", action="store_true",
                         help="save: without the stage evaluations' traces and figures")  # fmt: skip
     args = parser.parse_args()
-    if args.action == "save":
-        save(args.source, args.target, args.unfinished, traces=not args.without_traces)
-    else:
-        restore(args.source, args.target)
+    try:
+        if args.action == "save":
+            save(args.source, args.target, args.unfinished, traces=not args.without_traces)
+        else:
+            restore(args.source, args.target)
+    except ValueError as error:  # a damaged or foreign input: one line
+        sys.exit(f"sitting.py {args.action}: error: {error}")
+    except OSError as error:  # an unwritable or full disk
+        sys.exit(f"sitting.py {args.action}: error: {describe_os_error(error)}")

@@ -160,3 +160,61 @@ def test_the_example_takes_a_run_or_export_directory_and_refuses_a_damaged_file(
         assert example["main"]([str(path)]) == 2
         err = capsys.readouterr().err
         assert message in err and len(err.splitlines()) == 1, err
+
+
+def test_the_example_refuses_a_model_or_metadata_it_cannot_run_in_one_line(tmp_path, capsys):
+    import onnx
+
+    example = runpy.run_path(str(EXAMPLE))
+
+    def refused(*args: str) -> str:
+        assert example["main"]([*args, "--steps", "2"]) == 2
+        err = capsys.readouterr().err
+        assert len(err.splitlines()) == 1, err
+        return err
+
+    _, quadruped = exported_run(tmp_path / "anymal", "mlp", "anymal")
+    _, hopper = exported_run(tmp_path / "hopper", "mlp", "hopper")
+    own = quadruped.with_name("policy.onnx.robot.xml").read_text()
+    hopper_xml = hopper.with_name("policy.onnx.robot.xml").read_text()
+
+    def model(name: str, text: str) -> str:
+        (tmp_path / name).write_text(text)
+        return str(tmp_path / name)
+
+    # another model's timestep: none, or so fine a control step would never end
+    for timestep, message in (
+        ("0", "is not a positive number of seconds"),
+        ("1e-9", "takes more than 10,000 substeps per control period"),
+    ):
+        text = own.replace('timestep="0.002"', f'timestep="{timestep}"')
+        assert text != own
+        assert message in refused(str(quadruped), "--mjcf", model(f"t{timestep}.xml", text))
+    # the policy's joints by name, of another type
+    knee = '<joint name="LF_KFE" type="hinge" axis="0 1 0" range="-1.7 0.1"/>'
+    assert knee in own
+    for kind, joint in (("slide", knee.replace("hinge", "slide")),
+                        ("ball", '<joint name="LF_KFE" type="ball"/>')):  # fmt: skip
+        err = refused(str(quadruped), "--mjcf", model(f"{kind}.xml", own.replace(knee, joint)))
+        assert f"must be hinges; LF_KFE ({kind}) is not" in err
+    err = refused(str(hopper), "--mjcf", model("h.xml", hopper_xml.replace(
+        'name="HFE" type="hinge"', 'name="HFE" type="slide"')))  # fmt: skip
+    assert "HFE (slide) is not" in err
+    # the policy's own model: an actuator on each of its joints, the joints it observes
+    moved = hopper_xml.replace('<dcmotor name="HFE" joint="HFE"', '<dcmotor name="HFE" joint="KFE"')
+    assert "no actuator 'HFE' on the joint 'HFE'" in refused(str(hopper), "--mjcf",
+                                                             model("a.xml", moved))  # fmt: skip
+    no_rail = "\n".join(line for line in hopper_xml.splitlines() if 'name="rail"' not in line)
+    assert "lacks the joint 'rail' the observation's 'hip_height' reads" in refused(
+        str(hopper), "--mjcf", model("r.xml", no_rail)
+    )
+    # metadata without the joints
+    bare = tmp_path / "export" / "policy.onnx"
+    bare.parent.mkdir()
+    onnx_model = onnx.load(quadruped)
+    kept = [p for p in onnx_model.metadata_props if p.key != "joint_names"]
+    del onnx_model.metadata_props[:]
+    onnx_model.metadata_props.extend(kept)
+    onnx.save(onnx_model, bare)
+    bare.with_name("policy.onnx.robot.xml").write_text(own)
+    assert "its metadata lacks joint_names" in refused(str(bare))

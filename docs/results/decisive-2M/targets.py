@@ -9,14 +9,16 @@ bootstrap CIs over the 5 report seeds (`cpg_actor.experiments.metrics`).
 
 from __future__ import annotations
 
-import json
 import sys
 
 from cpg_actor.experiments import metrics as m
+from cpg_actor.inputs import read_json, run_script
+
+SUMMARY = "the summary.json cpg-actor reproduce writes"
 
 
 def main(path: str) -> None:
-    seeds = {name: row["per_seed"] for name, row in json.load(open(path))["variants"].items()}
+    seeds = {name: row["per_seed"] for name, row in read_json(path, SUMMARY)["variants"].items()}
     cpg, mlp, cho, es = (seeds[v] for v in ("cpg-actor", "mlp", "cho2019-warm", "open-loop-es"))
     rows = []
 
@@ -55,4 +57,6 @@ def main(path: str) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    if len(sys.argv) != 2:
+        sys.exit(f"usage: python {sys.argv[0]} SUMMARY.json")
+    sys.exit(run_script(lambda: main(sys.argv[1]), "decisive-2M/targets.py"))

@@ -25,6 +25,7 @@ import numpy as np
 from cpg_actor.experiments import family as f
 from cpg_actor.experiments import metrics as m
 from cpg_actor.files import atomic_write_text
+from cpg_actor.inputs import InputError, read_json, run_script
 
 HERE = Path(__file__).resolve().parent
 AT_2M = HERE.parent / "fresh-2M" / "summary.json"
@@ -172,12 +173,14 @@ def main() -> None:
     if not args.summary.is_file():
         sys.exit(f"{args.summary}: no such file; give the summary.json that "
                  "`cpg-actor reproduce` (or `cpg-actor figures`) writes")  # fmt: skip
-    summary = json.loads(args.summary.read_text())
+    summary = read_json(args.summary, "the summary.json cpg-actor reproduce writes")
     try:
         result = analyse(summary)
+    except InputError:
+        raise  # it names the file itself
     except ValueError as error:
         sys.exit(f"{args.summary}: {error}")
-    at_2m = json.loads(AT_2M.read_text()) if AT_2M.is_file() else None
+    at_2m = read_json(AT_2M) if AT_2M.is_file() else None
     report(result, summary, at_2m)
     if args.figure:
         figure(result["data"], args.figure)
@@ -185,4 +188,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main, "fresh-20M/analysis.py"))  # a missing or damaged input: one line

@@ -28,7 +28,7 @@ import numpy as np
 from cpg_actor.experiments import family as f
 from cpg_actor.experiments import metrics as m
 from cpg_actor.files import atomic_write_text
-from cpg_actor.safe_yaml import read_yaml
+from cpg_actor.inputs import load_npz, read_json, read_yaml, run_script
 
 VARIANTS = ("cpg-actor", "cpg-actor-open-loop", "open-loop-es", "mlp", "mlp-warm",
             "cho2019-warm")  # fmt: skip
@@ -59,6 +59,9 @@ def latency_retention(suite: dict[str, Any], variant: str) -> list[float]:
                            ["levels"]])) for run in rows]  # fmt: skip
 
 
+SUMMARY = "the summary.json cpg-actor reproduce writes"
+
+
 def minimum(name: str, other: list[float]) -> float:
     """The smallest difference that counts, on the scale the test uses."""
     if METRICS[name][2]:
@@ -83,12 +86,12 @@ def start_values(out: Path, evaluate: bool) -> dict[str, list[float]]:
                             "--checkpoint", str(run / "checkpoints" / "iter_000000.pt"),
                             "--episodes", "5", "--output", str(traces)],
                            check=True, stdout=subprocess.DEVNULL)  # fmt: skip
-        stages = json.loads((run / "eval" / "stages.json").read_text())
+        stages = read_json(run / "eval" / "stages.json", "cpg-actor reproduce's stages", list)
         end = run / stages[-1]["traces"]
         for side, path in (("start", traces), ("end", end)):
-            with np.load(path) as data:
-                values[f"{side}_return"].append(float(np.mean(data["episode_return"])))
-                values[f"{side}_apex"].append(float(np.mean(data["physical_hop_apex"])))
+            data = load_npz(path, "cpg-actor eval's traces")
+            values[f"{side}_return"].append(float(np.mean(data["episode_return"])))
+            values[f"{side}_apex"].append(float(np.mean(data["physical_hop_apex"])))
         values["seeds"].append(int(run.name.removeprefix("seed")))
     return values
 
@@ -98,8 +101,8 @@ def matched_smoothness(cpg: dict[str, Any], folders: list[Path]) -> list[dict[st
     names: Welch, two-sided, the difference oriented so that > 0 favours the filtered MLP."""
     tests: list[dict[str, Any]] = []
     for strength, folder in enumerate(folders, start=1):
-        summary = json.loads((folder / "summary.json").read_text())
-        overrides = read_yaml(folder / "reproduce.yaml")["settings"]
+        summary = read_json(folder / "summary.json", SUMMARY)
+        overrides = read_yaml(folder / "reproduce.yaml", "cpg-actor reproduce's")["settings"]
         alpha = next((o.replace("env.command_filter=", "alpha ") for o in
                       overrides["overrides"] or [] if o.startswith("env.command_filter=")),
                      folder.name)  # fmt: skip
@@ -192,8 +195,9 @@ def main() -> None:
     )
     parser.add_argument("--figure", type=Path, help="also draw the per-seed values (PNG)")
     args = parser.parse_args()
-    summary = json.loads((args.out / "summary.json").read_text())
-    suite = json.loads((args.out / "robustness" / "robustness.json").read_text())
+    summary = read_json(args.out / "summary.json", SUMMARY)
+    suite = read_json(args.out / "robustness" / "robustness.json",
+                      "the robustness.json cpg-actor robustness writes")  # fmt: skip
 
     data = {name: {v: (per_seed(summary, v, key) if key else latency_retention(suite, v))
                    for v in VARIANTS} for name, (key, _, _) in METRICS.items()}  # fmt: skip
@@ -286,4 +290,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main, "fresh-2M/analysis.py"))  # a missing or damaged input: one line

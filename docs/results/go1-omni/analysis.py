@@ -27,9 +27,10 @@ import numpy as np
 from cpg_actor.experiments import family as f
 from cpg_actor.experiments import metrics as m
 from cpg_actor.files import atomic_write_text
-from cpg_actor.robustness import protocol
+from cpg_actor.inputs import parse_json, read_json, read_text, run_script
 
 VARIANTS = ("cpg-actor", "mlp-field", "mlp-warm-field")
+GRID_FILE = "cpg-actor eval --grid's output"  # what a grid.json is, for a message
 START = "start"  # the CPG-Actor's checkpoint before its first update
 # name: grid key; every one lower is better, tested on its logarithm
 METRICS = {
@@ -59,9 +60,10 @@ def grid_of(out: Path, variant: str) -> list[dict[str, Any]]:
     if len(folders) < 2:
         sys.exit(f"{out / 'grid' / variant}: 2 or more seedS/grid.json needed, found "
                  f"{len(folders)} (`cpg-actor eval RUN --grid`, as PROTOCOL.md says)")  # fmt: skip
-    return [{"seed": int(p.name.removeprefix("seed")),
-             **protocol.read_json((p / "grid.json").read_text())}
-            for p in folders]  # fmt: skip
+    grids = [read_json(p / "grid.json", GRID_FILE, nulls_as_nan=True) for p in folders]
+    for grid, p in zip(grids, folders, strict=True):
+        grid.setdefault("seed", int(p.name.removeprefix("seed")))
+    return grids
 
 
 def same_seeds(grids: dict[str, list[dict[str, Any]]]) -> list[int]:
@@ -89,11 +91,11 @@ def other_model(out: Path, variant: str) -> dict[str, Any]:
     JSON block; empty where it has not run."""
     found = {}
     for path in sorted((out / "other" / variant).glob("seed*.md")):
-        text = path.read_text()
+        text = read_text(path, "benchmarks/other_model.py's report")
         if "```json\n" not in text:
             sys.exit(f"{path}: no JSON block (not a report of benchmarks/other_model.py)")
         block = text.split("```json\n", 1)[1].split("\n```", 1)[0]
-        found[int(path.stem.removeprefix("seed"))] = json.loads(block)
+        found[int(path.stem.removeprefix("seed"))] = parse_json(block, path, "its JSON block")
     return found
 
 
@@ -176,7 +178,8 @@ def time_to_walk(paths: list[Path]) -> dict[str, Any] | None:
     log 5 (Welch, the CPG-Actor's times scaled by 5; counted when Holm p < 0.05 and above)."""
     if not paths:
         return None
-    runs = [run for path in paths for run in json.loads(path.read_text())]
+    runs = [run for path in paths
+            for run in read_json(path, "benchmarks/time_to_walk.py's JSON", kind=list)]  # fmt: skip
     times = {a: {"seeds": [r["seed"] for r in runs if r["agent"] == a],
                  "wall": [walk_time(r, "wall") for r in runs if r["agent"] == a],
                  "steps": [walk_time(r, "steps") for r in runs if r["agent"] == a],
@@ -303,4 +306,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main, "go1-omni/analysis.py"))  # a missing or damaged input: one line

@@ -16,8 +16,9 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from analysis import START, TARGETS, VARIANTS  # this folder's analysis: its names and targets
+from analysis import GRID_FILE, START, TARGETS, VARIANTS  # this folder's analysis: names, targets
 
+from cpg_actor.inputs import read_json, run_script
 from cpg_actor.plots import save_figure
 from cpg_actor.robustness import protocol
 
@@ -36,7 +37,7 @@ def flat_rows(folder: Path) -> dict[str, list[dict[str, dict]]]:
     for variant in ORDER:
         seeds = sorted((folder / "grid" / variant).glob("seed*/grid.json"))
         found[variant] = [
-            {row["command"]: row for row in protocol.read_json(p.read_text())["rows"]
+            {row["command"]: row for row in read_json(p, GRID_FILE, nulls_as_nan=True)["rows"]
              if row["terrain"] == "flat" and not row["check"]}
             for p in seeds
         ]  # fmt: skip
@@ -93,4 +94,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main, "go1-omni/figure.py"))  # a missing or damaged input: one line

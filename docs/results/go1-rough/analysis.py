@@ -27,9 +27,10 @@ import numpy as np
 from cpg_actor.experiments import family as f
 from cpg_actor.experiments import metrics as m
 from cpg_actor.files import atomic_write_text
-from cpg_actor.robustness import protocol
+from cpg_actor.inputs import read_json, read_jsonl, run_script
 
 ROLES = ("cpg-actor", "mlp-field")
+GRID_FILE = "cpg-actor eval --grid's output"  # what a grid.json is, for a message
 START = "start"  # the CPG-Actor's checkpoint before its first update
 LEVEL = 4  # the middle of levels 0-9
 ROUGH = f"all level {LEVEL}"  # the grid's name for that ground (every kind, the curriculum off)
@@ -65,7 +66,7 @@ def grids_of(out: Path, role: str) -> dict[int, dict[str, Any]]:
     """Per seed, the grid of ``role``; SystemExit naming what is missing."""
     grids = {}
     for folder in seed_folders(out / "grid" / role, "/grid.json"):
-        grid = protocol.read_json((folder / "grid.json").read_text())
+        grid = read_json(folder / "grid.json", GRID_FILE, nulls_as_nan=True)
         if ROUGH not in grid["means"] or "flat" not in grid["means"]:
             sys.exit(f"{folder / 'grid.json'}: needs the grounds flat and {ROUGH!r}, has "
                      f"{sorted(grid['means'])} (`--grid --grid-levels {LEVEL}`)")  # fmt: skip
@@ -88,7 +89,7 @@ def read_curricula(
             sys.exit(f"{out}: neither runs/VARIANT/seedS/metrics.jsonl nor {CURRICULA} "
                      "(PROTOCOL.md says how to make them)")  # fmt: skip
         try:
-            kept = json.loads(path.read_text())
+            kept = read_json(path)
             missing = [v for v in variants if v not in kept]
         except (ValueError, TypeError):
             sys.exit(f"{path}: not the terrain levels this analysis keeps (a JSON object of "
@@ -100,8 +101,7 @@ def read_curricula(
     for variant in variants:
         curricula[variant] = {}
         for folder in seed_folders(out / "runs" / variant, "/metrics.jsonl"):
-            lines = (folder / "metrics.jsonl").read_text().splitlines()
-            rows = [json.loads(line) for line in lines if line.strip()]
+            rows = read_jsonl(folder / "metrics.jsonl", "the metrics cpg-actor train logs")
             levels = [[r.get("global_step"), r["charts/terrain_level"]] for r in rows
                       if isinstance(r.get("charts/terrain_level"), int | float)]  # fmt: skip
             if not levels:
@@ -282,4 +282,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main, "go1-rough/analysis.py"))  # a missing or damaged input: one line

@@ -17,8 +17,18 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from analysis import ERROR_TARGET, FALL_TARGET, LEVEL, ROLES, ROUGH, START, read_curricula
+from analysis import (  # this folder's analysis: its names, targets and reader
+    ERROR_TARGET,
+    FALL_TARGET,
+    GRID_FILE,
+    LEVEL,
+    ROLES,
+    ROUGH,
+    START,
+    read_curricula,
+)
 
+from cpg_actor.inputs import read_json, run_script
 from cpg_actor.plots import save_figure
 from cpg_actor.robustness import protocol
 
@@ -37,7 +47,7 @@ def level_rows(folder: Path) -> dict[str, list[dict[str, dict]]]:
     for role in ORDER:
         seeds = sorted((folder / "grid" / role).glob("seed*/grid.json"))
         found[role] = [
-            {row["command"]: row for row in protocol.read_json(p.read_text())["rows"]
+            {row["command"]: row for row in read_json(p, GRID_FILE, nulls_as_nan=True)["rows"]
              if row["terrain"] == ROUGH and not row["check"]}
             for p in seeds
         ]  # fmt: skip
@@ -113,4 +123,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main, "go1-rough/figure.py"))  # a missing or damaged input: one line

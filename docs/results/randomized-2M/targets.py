@@ -16,10 +16,10 @@ Prints two tables (Markdown):
 
 from __future__ import annotations
 
-import json
 import sys
 
 from cpg_actor.experiments import metrics as m
+from cpg_actor.inputs import read_json, run_script
 
 TARGET = 0.8
 MIDDLE = (1, 2)  # indices of the 2nd and 3rd of the suite's 4 levels
@@ -50,7 +50,7 @@ def hop_retention(runs: list[dict], name: str, index: int) -> list[float]:
 
 
 def main(path: str) -> None:
-    data = json.load(open(path))
+    data = read_json(path, "the robustness.json cpg-actor robustness writes")
     by_variant: dict[str, list[dict]] = {}
     for run in data["runs"]:
         by_variant.setdefault(run["variant"], []).append(run)
@@ -80,4 +80,6 @@ def main(path: str) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    if len(sys.argv) != 2:
+        sys.exit(f"usage: python {sys.argv[0]} ROBUSTNESS.json")
+    sys.exit(run_script(lambda: main(sys.argv[1]), "randomized-2M/targets.py"))

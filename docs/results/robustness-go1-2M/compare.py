@@ -12,12 +12,12 @@ minimum effect of retention).
 
 from __future__ import annotations
 
-import json
 import sys
 
 import numpy as np
 
 from cpg_actor.experiments.metrics import decide, verdict_more_robust
+from cpg_actor.inputs import read_json, run_script
 from cpg_actor.robustness.summary import retention_scores
 
 VARIANTS = ("cpg-actor", "untrained")
@@ -35,7 +35,7 @@ def mean_over_seeds(runs: list[dict], variant: str, name: str | None, index: int
 
 
 def main(path: str) -> None:
-    data = json.load(open(path))
+    data = read_json(path, "the robustness.json cpg-actor robustness writes")
     runs = data["runs"]
     header = " | ".join(f"`{v}`: speed error, fell" for v in VARIANTS)
     print(f"| perturbation | level | {header} |")
@@ -62,4 +62,6 @@ def main(path: str) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1])
+    if len(sys.argv) != 2:
+        sys.exit(f"usage: python {sys.argv[0]} ROBUSTNESS.json")
+    sys.exit(run_script(lambda: main(sys.argv[1]), "robustness-go1-2M/compare.py"))

@@ -11,8 +11,6 @@ search-budget sweep (9 tests), each family Holm-corrected.
 from __future__ import annotations
 
 import argparse
-import gzip
-import json
 import math
 import sys
 from pathlib import Path
@@ -22,6 +20,8 @@ import numpy as np
 
 from cpg_actor.experiments import family as f
 from cpg_actor.experiments import metrics as m
+from cpg_actor.inputs import read_json as read_file
+from cpg_actor.inputs import run_script
 
 CPG = "`cpg-actor`"
 SWEPT = ("`cpg-actor`", "`mlp-warm`", "`cho2019-warm`")
@@ -87,16 +87,9 @@ def sweep_tests(runs: dict[str, list[dict[str, Any]]], budgets: list[str]) -> li
 def read_json(folder: Path, name: str) -> Any:
     """``NAME.json`` as the benchmark writes it, or ``NAME.json.gz`` as it is committed (the
     docs' size budget); None when neither is there."""
-    plain = folder / f"{name}.json"
-    packed = folder / f"{name}.json.gz"
-    try:
-        if plain.is_file():
-            return json.loads(plain.read_text())
-        if packed.is_file():
-            return json.loads(gzip.decompress(packed.read_bytes()))
-    except (OSError, ValueError) as error:  # a bad gzip is an OSError, bad JSON a ValueError
-        sys.exit(f"{folder / name}.json(.gz): not the benchmark's JSON ({error}); "
-                 "benchmarks/time_to_quality.py writes it")  # fmt: skip
+    for path in (folder / f"{name}.json", folder / f"{name}.json.gz"):
+        if path.is_file():
+            return read_file(path, "benchmarks/time_to_quality.py's JSON")
     return None
 
 
@@ -152,4 +145,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main, "time-to-quality/analysis.py"))  # a bad input: one line

@@ -13,16 +13,19 @@ git history; its README says how to restore them into ``results/trio-20M``).
 from __future__ import annotations
 
 import argparse
-import json
+import sys
 from pathlib import Path
 
 from cpg_actor.config.train_config import parse_steps
 from cpg_actor.experiments.metrics import final_return, peak_return
+from cpg_actor.inputs import InputError, read_jsonl, run_script
 
 
 def evaluations(run: Path) -> tuple[list[float], list[float]]:
-    rows = [json.loads(line) for line in (run / "metrics.jsonl").open()]
+    rows = read_jsonl(run / "metrics.jsonl", "a run's metrics, as cpg-actor train logs them")
     rows = [r for r in rows if r.get("eval/return") is not None]
+    if not rows:
+        raise InputError(f"{run / 'metrics.jsonl'}: no evaluation logged yet (eval/return)")
     return [r["global_step"] for r in rows], [r["eval/return"] for r in rows]
 
 
@@ -70,4 +73,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(run_script(main, "trio-20M/progress.py"))  # a missing or damaged input: one line

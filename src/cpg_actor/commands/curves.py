@@ -81,12 +81,13 @@ def load_run(run: Path) -> tuple[dict[str, Any], list[dict]]:
     """The config (as a nested mapping) of a run directory and the rows of its
     ``metrics.jsonl``."""
     from cpg_actor.config import TrainConfig
+    from cpg_actor.inputs import read_jsonl
 
     config, metrics = run / "config.yaml", run / "metrics.jsonl"
     for path in (config, metrics):
         if not path.is_file():
             raise FileNotFoundError(f"{path} does not exist; is {run} a training run directory?")
-    rows = [json.loads(line) for line in metrics.read_text().splitlines() if line.strip()]
+    rows = read_jsonl(metrics, "the metrics cpg-actor train logs")
     return TrainConfig.load(config).to_dict(), rows
 
 

@@ -343,11 +343,11 @@ def plot_training_curves(
 ) -> list[Path]:
     """The run's learning curves from ``metrics.jsonl`` (:func:`training_curves_figure`);
     nothing where the run has no metrics file."""
-    import json
+    from cpg_actor.inputs import read_jsonl
 
     if not metrics.is_file():
         return []
-    rows = [json.loads(line) for line in metrics.read_text().splitlines() if line.strip()]
+    rows = read_jsonl(metrics, "the metrics cpg-actor train logs")
     names = [str(name) for name in metric_names]
     fig = training_curves_figure(rows, names, title or metrics.parent.name)
     save_figure(fig, path, dpi=120)

@@ -742,6 +742,11 @@ def _truncate_metrics(path: Path, iteration: int) -> None:
             print(f"cpg-actor train: {path}: its last row is cut off (a run killed while "
                   "writing it); dropped", file=sys.stderr)  # fmt: skip
             break
+        if not isinstance(row, dict):  # a cut-off row starts with "{": never parses as this
+            raise ValueError(
+                f"{path}, line {number}: not a row of metrics (a JSON object); resuming would "
+                "append to a damaged log: repair or remove that line"
+            )
         if row.get("iteration", 0) <= iteration:
             kept.append(line)
     if len(kept) != len(lines):

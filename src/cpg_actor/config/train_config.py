@@ -238,7 +238,13 @@ class TrainConfig:
 
     @classmethod
     def load(cls, path: Path) -> TrainConfig:
-        return cls.from_dict(read_config_file(path))
+        """A run's saved config; ValueError for a file that holds none (an emptied
+        config.yaml would otherwise read as every default)."""
+        data = read_config_file(path)
+        if not data:
+            raise ValueError(f"{path} holds no config keys; a run's config.yaml holds those "
+                             "cpg-actor train wrote (damaged or emptied?)")  # fmt: skip
+        return cls.from_dict(data)
 
 
 def _has_floor_contacts(data: dict[str, Any]) -> bool:
