@@ -209,6 +209,8 @@ class CMASearch:
     def load_state_dict(self, state: dict[str, Any]) -> None:
         """Continue from ``state``: a search built anew from this run's options, its numbers
         set from ``state``; ValueError (one line) if ``state`` is not a state of this search."""
+        if not isinstance(state, dict):
+            raise ValueError(f"the saved search state is a {type(state).__name__}, not a dict")
         saved = state.get("cma")
         if isinstance(saved, torch.Tensor):
             raise ValueError(

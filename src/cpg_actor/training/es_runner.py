@@ -301,13 +301,21 @@ class ESRunner:
         """Continue the search from ``path`` (the agent, CMA-ES, the best candidate, counters,
         RNG streams). To act with the agent, see :func:`cpg_actor.deploy.load_policy`."""
         data = run_checkpoint.read(path, self.config.agent)
-        if "es" not in data:
+        state = data.get("es")
+        if not isinstance(state, dict):
             raise ValueError(f"checkpoint {path} holds no search state")
+        start, best_step = state.get("start_vector"), state.get("best_step")
+        if type(best_step) is not int or not (
+            isinstance(start, torch.Tensor) and start.shape == self.start_vector.shape
+        ):
+            raise ValueError(
+                f"checkpoint {path}: its search state needs an integer best_step and a "
+                f"start_vector of V's {self.start_vector.numel()} values"
+            )
         run_checkpoint.restore_run_state(self, path, data)
-        state = data["es"]
         self.search.load_state_dict(state)
-        self.best_step = int(state["best_step"])
-        self.start_vector = state["start_vector"].to(self.device).clone()
+        self.best_step = best_step
+        self.start_vector = start.to(self.device, self.start_vector.dtype).clone()
         self._resumed = True
 
     def close(self) -> None:
