@@ -9,7 +9,31 @@ from typing import Any
 import numpy as np
 
 # control steps per episode at most: a typo (1e9) is refused rather than simulated for hours
-from cpg_actor.limits import MAX_EPISODE_STEPS, brief, shorten
+from cpg_actor.limits import (
+    MAX_DECIMATION,
+    MAX_EPISODE_STEPS,
+    MAX_RENDER_SIZE,
+    MAX_SOLVER_ITERATIONS,
+    brief,
+    check_int,
+    shorten,
+)
+
+# a simulation's counts every robot's config has, and their upper bounds
+SIMULATION_COUNTS = (
+    ("decimation", MAX_DECIMATION),
+    ("mjx_iterations", MAX_SOLVER_ITERATIONS),
+    ("mjx_ls_iterations", MAX_SOLVER_ITERATIONS),
+    ("render_width", MAX_RENDER_SIZE),
+    ("render_height", MAX_RENDER_SIZE),
+)
+
+
+def check_simulation_counts(config: Any) -> None:
+    """ValueError (one line) for the first of :data:`SIMULATION_COUNTS` that is not an
+    integer from 1 to its bound."""
+    for name, high in SIMULATION_COUNTS:
+        check_int(getattr(config, name), name, 1, high)
 
 
 def real_actions(actions: Any, expected: str, dtype: Any = np.float64) -> np.ndarray:

@@ -11,14 +11,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from cpg_actor.limits import (
-    MAX_DECIMATION,
-    MAX_RENDER_SIZE,
-    MAX_SOLVER_ITERATIONS,
     brief,
-    check_int,
     shorten,
 )
-from cpg_actor.robots.common.checks import check_episode_steps
+from cpg_actor.robots.common.checks import check_episode_steps, check_simulation_counts
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 from cpg_actor.robots.hopper.backends import BACKENDS, BATCHED_ONLY
 
@@ -139,14 +135,7 @@ class HopperConfig:
         for name in positive:
             if getattr(self, name) <= 0:
                 raise ValueError(f"{name} must be > 0, got {brief(getattr(self, name))}")
-        for name, high in (
-            ("decimation", MAX_DECIMATION),
-            ("mjx_iterations", MAX_SOLVER_ITERATIONS),
-            ("mjx_ls_iterations", MAX_SOLVER_ITERATIONS),
-            ("render_width", MAX_RENDER_SIZE),
-            ("render_height", MAX_RENDER_SIZE),
-        ):
-            check_int(getattr(self, name), name, 1, high)
+        check_simulation_counts(self)
         for name in ("kd", "foot_friction", "reset_noise", "reset_clearance"):
             if getattr(self, name) < 0:
                 raise ValueError(f"{name} must be >= 0, got {brief(getattr(self, name))}")

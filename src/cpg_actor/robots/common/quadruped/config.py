@@ -14,15 +14,11 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from cpg_actor.limits import (
-    MAX_DECIMATION,
     MAX_EPISODE_STEPS,
-    MAX_RENDER_SIZE,
-    MAX_SOLVER_ITERATIONS,
     brief,
-    check_int,
     shorten,
 )
-from cpg_actor.robots.common.checks import check_episode_steps
+from cpg_actor.robots.common.checks import check_episode_steps, check_simulation_counts
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 from cpg_actor.robots.common.perturbation.values import RANDOMIZED, TRAINING_PUSHES
 from cpg_actor.tasks.velocity import NOISE_GROUPS, TERMS
@@ -228,14 +224,7 @@ class QuadrupedConfig:
         if self.floor_contacts not in FLOOR_CONTACTS:
             raise ValueError(f"floor_contacts must be one of {', '.join(FLOOR_CONTACTS)}, got "
                              f"{brief(self.floor_contacts)}")  # fmt: skip
-        for name, high in (
-            ("decimation", MAX_DECIMATION),
-            ("mjx_iterations", MAX_SOLVER_ITERATIONS),
-            ("mjx_ls_iterations", MAX_SOLVER_ITERATIONS),
-            ("render_width", MAX_RENDER_SIZE),
-            ("render_height", MAX_RENDER_SIZE),
-        ):
-            check_int(getattr(self, name), name, 1, high)
+        check_simulation_counts(self)
         if self.physics_dt > 0.005:
             raise ValueError(f"physics_dt must be <= 0.005 s, got {self.physics_dt}")
         # as a float: a tiny physics_dt makes it too large to round to an integer
