@@ -19,6 +19,7 @@ PACKAGE = Path(cpg_actor.__file__).parent
 # -> its layer (0: shared utilities)
 LAYERS = {
     "errors": 0, "files": 0, "machine": 0, "device": 0, "host_reads": 0,
+    "limits": 0, "safe_yaml": 0, "inputs": 0,  # bounds, bounded YAML, reading study inputs
     "cpg": 1,  # knows no robot
     "robots.spec": 2, "robots.plugin": 2, "robots.common": 2,  # what robots share; no robot
     "tasks": 3,  # a task (command, reward, observation); knows no robot
