@@ -657,8 +657,6 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"the runs' config (with --set): {error}")
     target = Target(args.target_return, args.target_apex)
     output = Path(args.output)
-    figure_path, json_path = companions(parser, output, (".png", ".json"),
-                                        args.output != OUTPUT, args.overwrite)  # fmt: skip
     sb3 = not args.no_sb3 and importlib.util.find_spec("stable_baselines3") is not None
     sb3_note = "" if sb3 or args.no_sb3 else (
         "Stable-Baselines3 is not installed here (`pip install stable-baselines3`), so its "
@@ -701,6 +699,10 @@ def main(argv: list[str] | None = None) -> int:
     elif state.path.exists():
         parser.error(f"{state.path} holds an earlier run's progress: add --resume to go on "
                      "from it, or delete it to start over")  # fmt: skip
+    # after the progress's checks (a --resume with nothing to go on from says that first),
+    # before any run
+    figure_path, json_path = companions(parser, output, (".png", ".json"),
+                                        args.output != OUTPUT, args.overwrite)  # fmt: skip
     with tempfile.TemporaryDirectory(prefix="time_to_quality_") as directory:
         for budget in sorted({m.search_budget for m in methods if m.agent in searched},
                              key=lambda b: b or 0):  # fmt: skip
