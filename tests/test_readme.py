@@ -25,3 +25,10 @@ def test_load_policy_is_imported_where_the_readme_shows_it():
     assert "load_policy(" in text and "`from cpg_actor import load_policy`" in text
     assert text.index("`from cpg_actor import load_policy`") < text.index("load_policy(")
     assert cpg_actor.load_policy is load_policy  # what the README's import gives
+
+
+def test_readme_is_a_first_page():
+    """At most 170 lines, none over 400 characters: findings go to docs/results/."""
+    lines = README.read_text(encoding="utf-8").splitlines()
+    assert len(lines) <= 170
+    assert [n for n, line in enumerate(lines, 1) if len(line) > 400] == []
