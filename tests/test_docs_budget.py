@@ -80,3 +80,33 @@ def test_in_a_checkout_only_tracked_files_count(tmp_path):
     subprocess.run(["git", "init", "-q", str(tmp_path)], check=True)
     subprocess.run(["git", "-C", str(tmp_path), "add", "docs/page.md"], check=True)
     assert [f.name for f in docs_files(tmp_path)] == ["page.md"]
+
+
+LARGE_MB = 1.0  # a tracked file over this is run data, but for the figures listed
+LARGE_ALLOWED = {"docs/img/anymal.gif"}  # the README's picture
+
+
+def tracked_files(root: Path) -> list[Path] | None:
+    """Every file git tracks in the checkout at ``root``; None outside a checkout."""
+    if not shutil.which("git"):
+        return None
+    top = _git(root, "rev-parse", "--show-toplevel")
+    if top.returncode != 0 or Path(top.stdout.strip()).resolve() != root.resolve():
+        return None
+    files = [root / n for n in _git(root, "ls-files", "-z").stdout.split("\0") if n]
+    return [f for f in files if f.is_file() and not f.is_symlink()]
+
+
+def test_no_run_data_is_tracked_anywhere():
+    """No run archive, checkpoint or trace anywhere in the tree git tracks, and
+    no file over 1 MB but the README's figures: every clone carries what is committed."""
+    files = tracked_files(ROOT)
+    if files is None:
+        pytest.skip("not a git checkout: nothing is tracked")
+    archives = [str(f.relative_to(ROOT)) for f in run_files(files) if f.name != "metrics.jsonl"]
+    large = [
+        f"{f.relative_to(ROOT)} ({size_mb([f]):.1f} MB)"
+        for f in files
+        if size_mb([f]) > LARGE_MB and str(f.relative_to(ROOT)) not in LARGE_ALLOWED
+    ]
+    assert archives == [] and large == [], (archives, large)

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-FOLDERS = ("src", "benchmarks", "examples", "docs", "tests", "sittings")
+FOLDERS = ("src", "benchmarks", "examples", "docs", "tests")
 
 # module.attribute that read a pickle (or run code from a file) whatever their arguments
 FORBIDDEN = {
