@@ -59,6 +59,9 @@ class AgentSpec:
     # what trains it: "ppo" (cpg_actor.training.runner.Runner) or "es", the open-loop CMA-ES search
     # (cpg_actor.training.es_runner.ESRunner)
     trainer: str = "ppo"
+    # its actor leaves out the observation's privileged entries, its critic reads them (an
+    # env's ``privileged_observation``, an asymmetric actor-critic)
+    privileged_critic: bool = False
 
     def wrap(self, env: Any, agent_config: AgentConfig, robot: Robot) -> Any:
         """The env this agent acts on: the robot's ``env``, wrapped if the agent declares it
@@ -140,6 +143,7 @@ register_agent(
         "mlp",
         "classic actor-critic: MLP actor on desired joint positions",
         build_mlp,
+        privileged_critic=True,
     )
 )
 register_agent(

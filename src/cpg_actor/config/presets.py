@@ -160,10 +160,8 @@ def preset_values(name: str, env_class: type | None = None) -> dict[str, Any]:
     if attribute is not None and env_class is not None:
         robot_env = getattr(env_class, attribute, None)
         if robot_env is None:
-            owners = {"OMNI_COMMANDS": "the quadrupeds anymal and go1",
-                      "PLAYGROUND": "the go1"}.get(attribute, "other robots")  # fmt: skip
-            raise ValueError(f"preset {brief(name)} is a quadruped task; the robot's config "
-                             f"{env_class.__name__} has no {attribute} ({owners} "
-                             f"have)")  # fmt: skip
+            raise ValueError(f"preset {brief(name)} is a task this robot does not define: its "
+                             f"config {env_class.__name__} has no {attribute} (a robot whose "
+                             f"config has one runs it)")  # fmt: skip
         values["env"] = {**values.get("env", {}), **robot_env}
     return values

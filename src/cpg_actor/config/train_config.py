@@ -185,10 +185,12 @@ class TrainConfig:
                 f"agent {brief(self.agent)} is built for {', '.join(spec.robots)} only; on robot "
                 f"{brief(self.robot)} use one of {', '.join(usable)}"
             )
-        if getattr(self.env, "privileged_observation", False) and self.agent != "mlp":
+        if getattr(self.env, "privileged_observation", False) and not spec.privileged_critic:
+            takers = sorted(name for name, other in AGENTS.items() if other.privileged_critic)
             raise ValueError(
-                f"env.privileged_observation: the mlp agent alone keeps the privileged entries "
-                f"from its actor (its critic's alone), not {self.agent!r}; set it false"
+                f"env.privileged_observation: agent {brief(self.agent)} has no privileged "
+                f"critic (its actor would read those entries); agents that have one: "
+                f"{', '.join(takers)}; or set it false"
             )
         check_device_name(self.device)
         self.agent_config.validate()

@@ -109,7 +109,7 @@ def test_the_omni_recipe_takes_the_robots_own_commands_and_planar_steps():
     assert config.agent_config.cpg_planar_steps and config.agent_config.cpg_layout == "leg"
     assert (config.num_envs, config.ppo.lr_schedule) == (256, "adaptive")
     assert compose_config(values={"robot": "go1"}).env.lateral_range == (0.0, 0.0)
-    with pytest.raises(ValueError, match="preset 'omni' is a quadruped task"):
+    with pytest.raises(ValueError, match="preset 'omni' is a task this robot does not define"):
         compose_config(preset="omni", values={"robot": "hopper"})
 
 
