@@ -5,6 +5,13 @@ import pytest
 from cpg_actor.config import compose_config
 from cpg_actor.experiments.plan import VARIANT_RECIPES, VARIANTS, variant_agent, variant_preset
 
+# the robot each variant with a recipe of its own runs on (the one whose config defines it)
+RECIPE_ROBOTS = {"mlp-playground": "go1", "mlp-legged-gym": "anymal"}
+
+
+def test_each_recipe_variant_names_its_robot():
+    assert set(RECIPE_ROBOTS) == set(VARIANT_RECIPES)
+
 
 @pytest.mark.parametrize("variant", sorted(VARIANTS))
 def test_each_variant_is_its_agent_with_its_settings(variant):
@@ -14,8 +21,8 @@ def test_each_variant_is_its_agent_with_its_settings(variant):
     values = {"agent": agent}
     if variant.endswith("-field"):  # the field's recipe is the quadrupeds'
         preset, values["robot"] = "omni", "go1"
-    if variant in VARIANT_RECIPES:  # a recipe of its own (the Go1's Playground recipe)
-        preset, values["robot"] = variant_preset(variant, "paper"), "go1"
+    if variant in VARIANT_RECIPES:  # a recipe of its own, on the robot that defines it
+        preset, values["robot"] = variant_preset(variant, "paper"), RECIPE_ROBOTS[variant]
     config = compose_config(preset, values=values, overrides=overrides)
     assert config.agent == agent
     assert config.preset == variant_preset(variant, preset)

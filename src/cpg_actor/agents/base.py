@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from fnmatch import fnmatchcase
 from typing import Any, NamedTuple
 
 import torch
@@ -98,6 +99,12 @@ class AgentConfig:
     output_bound: bool = False
     kappa_bound: float = 0.2  # rad
     convergence_bounds: tuple[float, float] = (2.0, 100.0)  # 1/s
+    # fixed factors on the observation's entries before the actor and the critic read them,
+    # by entry-name pattern (fnmatch: "base_ang_vel_*"; the first pattern an entry matches
+    # gives its factor, 1 where none does): rsl_rl v1's input, legged_gym's scaled
+    # observation, where no running normalisation is (the legged_gym recipe). The agents
+    # whose spec says so (AgentSpec.observation_scales: the MLP's) take it; empty: none
+    observation_scales: dict = field(default_factory=dict)
 
     def validate(self) -> None:
         if self.activation not in ACTIVATIONS:
@@ -137,6 +144,13 @@ class AgentConfig:
                 "agent_config.convergence_bounds must be [low, high] with 0 < low < high (1/s), "
                 f"got {brief(self.convergence_bounds)}"
             )
+        scales = self.observation_scales
+        if not isinstance(scales, dict) or not all(
+            isinstance(k, str) and not isinstance(v, bool) and isinstance(v, int | float)
+            and 0 < v < math.inf for k, v in scales.items()
+        ):  # fmt: skip
+            raise ValueError(f"agent_config.observation_scales must map observation-name "
+                             f"patterns to finite factors > 0, got {brief(scales)}")  # fmt: skip
         if self.exploration == "cpg" and self.feedback_noise > 0:
             raise ValueError(
                 "agent_config.feedback_noise samples the feedback under position noise; with "
@@ -161,6 +175,13 @@ def check_hidden(sizes: Any, name: str) -> None:
                 f"{name}: layers of {first:,} and {second:,} units have {first * second:,} "
                 f"weights between them, above the {MAX_LAYER_WEIGHTS:,} accepted"
             )
+
+
+def observation_scale(names: Sequence[str], scales: dict[str, float]) -> list[float]:
+    """Each observation entry's factor (``agent_config.observation_scales``): that of the first
+    pattern (fnmatch, case-sensitive) its name matches, 1 where none does."""
+    return [next((float(f) for pattern, f in scales.items() if fnmatchcase(name, pattern)), 1.0)
+            for name in names]  # fmt: skip
 
 
 def tanh(x: Tensor) -> Tensor:

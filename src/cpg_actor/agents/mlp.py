@@ -20,7 +20,9 @@ class MLPAgent(Agent):
 
     ``actor_obs``: the actor reads the first ``actor_obs`` entries of the observation and the
     critic all of them (an asymmetric actor-critic: the entries after them are privileged,
-    MuJoCo Playground's ``privileged_state``); None: both read all.
+    MuJoCo Playground's ``privileged_state``); None: both read all. ``input_scale``: a fixed
+    factor per observation entry, applied before the actor and the critic read it
+    (``agent_config.observation_scales``: legged_gym's scaled observation); None: none.
     """
 
     state_shape = (0,)
@@ -32,6 +34,7 @@ class MLPAgent(Agent):
         config: AgentConfig,
         nominal_pose: Sequence[float],
         actor_obs: int | None = None,
+        input_scale: Sequence[float] | None = None,
     ) -> None:
         super().__init__(obs_dim, action_scale, config)
         if actor_obs is not None and not 1 <= actor_obs <= obs_dim:
@@ -44,6 +47,21 @@ class MLPAgent(Agent):
             config.output_gain,
         )
         self.register_buffer("nominal_pose", torch.as_tensor(nominal_pose, dtype=torch.float32))
+        scale = None
+        if input_scale is not None:
+            scale = torch.as_tensor(input_scale, dtype=torch.float32)
+            if scale.shape != (obs_dim,):
+                raise ValueError(f"input_scale needs {obs_dim} entries (the observation's), got "
+                                 f"{tuple(scale.shape)}")  # fmt: skip
+        # not in the state dict (checkpoints stay as they were): the config rebuilds it
+        self.register_buffer("input_scale", scale, persistent=False)
+
+    def scaled(self, obs: Tensor) -> Tensor:
+        """The networks' input: ``obs`` times :attr:`input_scale` where there is one."""
+        return obs if self.input_scale is None else obs * self.input_scale
+
+    def value(self, obs: Tensor, state: Tensor) -> Tensor:
+        return super().value(self.scaled(obs), state)
 
     def log_histograms(self) -> dict[str, Tensor]:
         last = self.actor_mlp[-1]
@@ -53,5 +71,6 @@ class MLPAgent(Agent):
         }
 
     def actor(self, obs: Tensor, state: Tensor) -> ActorOutput:
-        mean = self.nominal_pose + self.action_scale * self.actor_mlp(obs[:, : self.actor_obs])
+        inputs = self.scaled(obs)[:, : self.actor_obs]
+        mean = self.nominal_pose + self.action_scale * self.actor_mlp(inputs)
         return ActorOutput(mean, self.std(obs.shape[0]), state, {})

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from cpg_actor.agents.base import Agent, AgentConfig
+from cpg_actor.agents.base import Agent, AgentConfig, observation_scale
 from cpg_actor.agents.cpg_actor import CPGActorAgent
 from cpg_actor.agents.mlp import MLPAgent
 from cpg_actor.agents.warm_start import warm_start_mlp
@@ -62,6 +62,8 @@ class AgentSpec:
     # its actor leaves out the observation's privileged entries, its critic reads them (an
     # env's ``privileged_observation``, an asymmetric actor-critic)
     privileged_critic: bool = False
+    # its networks read the observation scaled by agent_config.observation_scales
+    observation_scales: bool = False
 
     def wrap(self, env: Any, agent_config: AgentConfig, robot: Robot) -> Any:
         """The env this agent acts on: the robot's ``env``, wrapped if the agent declares it
@@ -128,9 +130,12 @@ def get_agent_spec(name: str) -> AgentSpec:
 def build_mlp(config: AgentConfig, env: Any, robot: Robot | None = None) -> Agent:
     """Actor MLP on desired joint positions, centred on the robot's nominal pose; its actor
     reads the observation's entries but the privileged ones (the critic's alone, an env's
-    ``privileged_observation``)."""
-    actor_obs = actor_entries(env.robot.observation_names)
-    return MLPAgent(*env_shapes(env), config, env.robot.nominal_pose, actor_obs)
+    ``privileged_observation``), each scaled by ``config.observation_scales`` where given."""
+    names = env.robot.observation_names
+    scale = observation_scale(names, config.observation_scales) if config.observation_scales \
+        else None  # fmt: skip
+    return MLPAgent(*env_shapes(env), config, env.robot.nominal_pose, actor_entries(names),
+                    scale)  # fmt: skip
 
 
 def build_cpg_actor(config: AgentConfig, env: Any, robot: Robot, feedback: bool = True) -> Agent:
@@ -144,6 +149,7 @@ register_agent(
         "classic actor-critic: MLP actor on desired joint positions",
         build_mlp,
         privileged_critic=True,
+        observation_scales=True,
     )
 )
 register_agent(
@@ -153,6 +159,7 @@ register_agent(
         build_mlp,
         warm_start=warm_start_mlp,
         uses_start_gait=True,
+        observation_scales=True,
     )
 )
 register_agent(

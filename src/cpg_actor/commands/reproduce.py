@@ -44,7 +44,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         choices=sorted(PRESETS),
         help="every run's `cpg-actor train --preset` (default paper; gpu: 4,096 MJX envs); a "
-        "variant with a recipe of its own keeps it (mlp-playground: playground)",
+        "variant with a recipe of its own keeps it (mlp-playground: playground, "
+        "mlp-legged-gym: legged_gym)",
     )
     add_set_option(
         parser, "training config override for every run (repeatable), as in `cpg-actor train`"

@@ -44,6 +44,16 @@ follow when none is given (``Robot.recipe``: the hopper ``paper``, the quadruped
   observation``); ``docs/go1.md``, "MuJoCo Playground's recipe". A robot without
   ``PLAYGROUND``: ValueError.
 
+* ``legged_gym``: legged_gym's ANYmal B recipe as its source runs it (leggedrobotics/
+  legged_gym, ``AnymalBRoughCfg`` on flat ground, trained by rsl_rl v1.0.2): the env's values
+  are the robot's ``LEGGED_GYM`` (ANYmal B's: ``robots/anymal/legged_gym.py``, each with its
+  source: PD 80 / 2, actions default + 0.5 a, 5 ms x 4, the reward's scales clipped at 0, the
+  base's linear velocity and uniform noise in the observation, the heading command, the
+  start, the randomisation); the PPO's are rsl_rl's as legged_gym runs ANYmal
+  (:data:`LEGGED_GYM`), its scaled, unnormalised observation included
+  (``agent_config.observation_scales``). For the ``mlp`` agents; ``docs/quadruped.md``,
+  "legged_gym's recipe". A robot without ``LEGGED_GYM`` (the Go1, the hopper): ValueError.
+
 ``anymal`` is the name ANYmal B's recipe had when presets named robots, kept so that saved runs
 (``preset: anymal``) and their commands keep their values: ``robot: anymal``, ``throughput``
 and the CPG-Actor's settings for every agent (one oscillator per leg, action noise 0.1, feedback
@@ -55,6 +65,7 @@ from __future__ import annotations
 from typing import Any
 
 from cpg_actor.limits import brief
+from cpg_actor.robots.anymal.legged_gym import OBSERVATION_SCALES as ANYMAL_OBSERVATION_SCALES
 
 # the fixed learning rate of what acts through the CPG (ppo.cpg_learning_rate): the paper's
 CPG_LEARNING_RATE = 3e-4
@@ -114,8 +125,55 @@ PLAYGROUND: dict[str, Any] = {
     ROBOT_ENV: "PLAYGROUND",
 }
 
+# rsl_rl's PPO (v1.0.2, the version legged_gym's README pins: algorithms/ppo.py, modules/
+# actor_critic.py, runners/on_policy_runner.py) as legged_gym runs ANYmal B (LeggedRobotCfgPPO,
+# which AnymalCRoughCfgPPO and AnymalBRoughCfgPPO keep). Departures, forced by a CPU: 256 envs
+# (its default: 4,096), so 6,144 samples per iteration in minibatches of 1,536; and by this
+# codebase: the advantages normalised per minibatch (rsl_rl: over the whole batch), the
+# networks initialised orthogonally, the actor's last layer small (the mean starts at the
+# default pose; rsl_rl: PyTorch's default init), the action noise a trained log-std (rsl_rl:
+# the std itself), time-outs bootstrapped from the last observation's value (rsl_rl: reward
+# + gamma V(s) of the step's own observation), every env starting at step 0 (legged_gym's
+# train.py: init_at_random_ep_len), the observation not clipped (legged_gym: at +-100, which
+# its scaled entries do not reach)
+LEGGED_GYM: dict[str, Any] = {
+    "num_envs": 256,
+    "eval_interval": 10,
+    "agent_config": {
+        "actor_hidden": [512, 256, 128],  # policy.actor_hidden_dims
+        "critic_hidden": [512, 256, 128],  # policy.critic_hidden_dims
+        "activation": "elu",
+        "init_std": 1.0,  # init_noise_std, in units of a (0.5 rad: env.action_scale)
+        "action_std_floor": 0.0,  # none in rsl_rl
+        # normalization.obs_scales (robots/anymal/legged_gym.py): rsl_rl v1 normalises nothing
+        "observation_scales": ANYMAL_OBSERVATION_SCALES,
+    },
+    "ppo": {
+        "num_steps": 24,  # runner.num_steps_per_env
+        "num_epochs": 5,  # algorithm.num_learning_epochs
+        "num_minibatches": 4,  # algorithm.num_mini_batches
+        "learning_rate": 1e-3,  # algorithm.learning_rate
+        "lr_schedule": "adaptive",  # algorithm.schedule
+        "desired_kl": 0.01,  # algorithm.desired_kl
+        "min_learning_rate": 1e-5,  # PPO.update: max(1e-5, lr / 1.5)
+        "max_learning_rate": 1e-2,  # PPO.update: min(1e-2, lr * 1.5)
+        "entropy_coef": 0.01,  # algorithm.entropy_coef
+        "gamma": 0.99,
+        "gae_lambda": 0.95,  # algorithm.lam
+        "clip_ratio": 0.2,  # algorithm.clip_param
+        "clip_value_loss": True,  # algorithm.use_clipped_value_loss
+        "value_loss_coef": 1.0,
+        "max_grad_norm": 1.0,
+        "normalize_observations": False,  # no normaliser in rsl_rl v1: the env's scales
+        "normalize_rewards": False,  # rsl_rl scales no reward
+        "adam_eps": 1e-8,  # torch's Adam default, as rsl_rl builds it
+        "compile": True,
+    },
+    ROBOT_ENV: "LEGGED_GYM",
+}
+
 # the recipes a user picks (--preset); PRESETS adds the old name kept for saved runs
-RECIPES = ("paper", "throughput", "gpu", "omni", "playground")
+RECIPES = ("paper", "throughput", "gpu", "omni", "playground", "legged_gym")
 
 PRESETS: dict[str, dict[str, Any]] = {
     "paper": {"ppo": {"compile": True}},
@@ -133,6 +191,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "agent_config": {"cpg_planar_steps": True},
     },
     "playground": PLAYGROUND,
+    "legged_gym": LEGGED_GYM,
     "anymal": {  # ANYmal B's recipe under its old name, for saved runs (above)
         **THROUGHPUT,
         "robot": "anymal",

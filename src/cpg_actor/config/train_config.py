@@ -192,6 +192,12 @@ class TrainConfig:
                 f"critic (its actor would read those entries); agents that have one: "
                 f"{', '.join(takers)}; or set it false"
             )
+        if self.agent_config.observation_scales and not spec.observation_scales:
+            takers = sorted(name for name, other in AGENTS.items() if other.observation_scales)
+            raise ValueError(
+                f"agent_config.observation_scales: agent {brief(self.agent)} does not scale "
+                f"its observation; agents that do: {', '.join(takers)}; or leave it empty"
+            )
         check_device_name(self.device)
         self.agent_config.validate()
         check_cpg_choice(self.agent_config, robot)

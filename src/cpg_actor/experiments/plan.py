@@ -112,11 +112,17 @@ VARIANTS: dict[str, tuple[str, tuple[str, ...]]] = {
     # recipe (VARIANT_RECIPES) holds every setting (docs/go1.md, "MuJoCo Playground's recipe").
     # mlp-field, beside it, is the field's network and PPO weights on this project's task
     "mlp-playground": ("mlp", ()),
+    # legged_gym's ANYmal B recipe as its source runs it (rsl_rl v1.0.2), env and PPO alike,
+    # on flat ground (docs/quadruped.md, "legged_gym's recipe"); --set robot=anymal
+    "mlp-legged-gym": ("mlp", ()),
 }
 
 # Variants that are a recipe of their own (cpg-actor train --preset): it replaces the
 # reproduction's --preset for their runs (a recipe that sets the task as well as the agent)
-VARIANT_RECIPES: dict[str, str] = {"mlp-playground": "playground"}
+VARIANT_RECIPES: dict[str, str] = {
+    "mlp-playground": "playground",
+    "mlp-legged-gym": "legged_gym",
+}
 
 
 def variant_preset(variant: str, preset: str | None) -> str | None:

@@ -280,6 +280,23 @@ def clip_reward(reward, low):
     return namespace(reward).maximum(reward, low)
 
 
+def base_yaw(quat):
+    """(N,) rad: the heading of the base's x axis in the world's plane, from its quaternion
+    (w, x, y, z), in (-pi, pi]."""
+    xp = namespace(quat)
+    w, x, y, z = (quat[:, i] for i in range(4))
+    return xp.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def heading_yaw_rate(quat, heading, gain: float, low: float, high: float):
+    """(N,) rad/s: legged_gym's heading command, the yaw rate that turns the base toward
+    ``heading`` (N,) rad, ``gain`` x (heading - yaw) wrapped to [-pi, pi), clipped to
+    [``low``, ``high``]."""
+    xp = namespace(quat)
+    error = (heading - base_yaw(quat) + xp.pi) % (2 * xp.pi) - xp.pi
+    return xp.clip(gain * error, low, high)
+
+
 def lin_vel_error(lin_vel, command):
     """(N,) m/s: how far the base's horizontal velocity is from the commanded one,
     ``|v_xy - command_xy|``, both in the base frame (the frame the command is given in, as

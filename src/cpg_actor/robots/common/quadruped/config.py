@@ -18,6 +18,7 @@ from cpg_actor.limits import (
     brief,
     shorten,
 )
+from cpg_actor.robots.anymal.legged_gym import LEGGED_GYM
 from cpg_actor.robots.common.checks import check_episode_steps, check_simulation_counts
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 from cpg_actor.robots.common.perturbation.values import RANDOMIZED, TRAINING_PUSHES
@@ -157,6 +158,20 @@ class QuadrupedConfig:
     command_nonzero: tuple[float, float, float] | None = None
     command_hold: float = 0.0
     command_interval: str = "fixed"
+    # -- legged_gym's (the legged_gym preset, docs/quadruped.md); each off by default, each
+    # MuJoCo's only ------------------------------------------------------------------------
+    # its heading command (> 0): at each draw a heading uniform in heading_range (rad, the
+    # world's yaw) is drawn instead of the yaw rate, and after every step the yaw-rate command
+    # is heading_gain x (heading - the base's yaw, wrapped to +-pi) clipped to yaw_range
+    heading_gain: float = 0.0
+    heading_range: tuple[float, float] = (-math.pi, math.pi)
+    # a drawn (vx, vy) of norm at most this (m/s) is zeroed: standing still (legged_gym: 0.2)
+    min_command_speed: float = 0.0
+    # the start: each joint at its nominal angle times U(low, high) (legged_gym: (0.5, 1.5);
+    # None: not scaled), then the reset_noise; each of the base's six velocities (linear m/s,
+    # angular rad/s) uniform in +-reset_base_velocity (0: at rest)
+    reset_joint_scale: tuple[float, float] | None = None
+    reset_base_velocity: float = 0.0
 
     @property
     def control_dt(self) -> float:
@@ -302,6 +317,9 @@ class QuadrupedConfig:
     # the body these numbers are for (its QuadrupedModel's name): a subclass for another body
     # names its own, one that changes only numbers (a variant of the robot) keeps it
     body = "anymal-b"
+    # legged_gym's ANYmal B recipe, its env values (--preset legged_gym; robots/anymal/
+    # legged_gym.py gives each its source and the departures); a body without it sets None
+    LEGGED_GYM: ClassVar[dict[str, Any] | None] = LEGGED_GYM
 
     @classmethod
     def perturbation_table(cls):
@@ -333,8 +351,9 @@ class QuadrupedConfig:
 
 
 RECIPE_OPTIONS = ("reward_clip_min", "action_scale", "observe_lin_vel", "privileged_observation",
-                  "observation_noise", "command_nonzero", "command_hold",
-                  "command_interval")  # fmt: skip
+                  "observation_noise", "command_nonzero", "command_hold", "command_interval",
+                  "heading_gain", "min_command_speed", "reset_joint_scale",
+                  "reset_base_velocity")  # fmt: skip
 COMMAND_INTERVALS = ("fixed", "exponential")
 
 
@@ -390,6 +409,7 @@ def check_recipe_options(config: QuadrupedConfig) -> None:
             "command_interval 'exponential' needs command_resample_seconds > 0 "
             "(the mean time between resamplings)"
         )
+    check_legged_gym_options(config)
     if config.sim == "mjx":
         nominal = type(config)()
         given = [name for name in RECIPE_OPTIONS
@@ -397,3 +417,26 @@ def check_recipe_options(config: QuadrupedConfig) -> None:
         if given:
             raise ValueError(f"{', '.join(given)}: MuJoCo's only; the MJX env does not "
                              f"implement them (use sim='mujoco')")  # fmt: skip
+
+
+def check_legged_gym_options(config: QuadrupedConfig) -> None:
+    """ValueError naming the first bad option of legged_gym's recipe (``heading_gain``,
+    ``heading_range``, ``min_command_speed``, ``reset_joint_scale``,
+    ``reset_base_velocity``)."""
+    for name in ("heading_gain", "min_command_speed", "reset_base_velocity"):
+        if not _number(getattr(config, name), 0.0, strict=False):
+            raise ValueError(f"{name} must be a finite number >= 0, got "
+                             f"{brief(getattr(config, name))}")  # fmt: skip
+    for name in ("heading_range", "reset_joint_scale"):
+        bounds = getattr(config, name)
+        if bounds is None and name == "reset_joint_scale":
+            continue
+        low = -math.inf if name == "heading_range" else 0.0
+        if not (isinstance(bounds, list | tuple) and len(bounds) == 2
+                and all(_number(b, low, strict=False) for b in bounds)
+                and bounds[0] <= bounds[1]):  # fmt: skip
+            what = "rad" if name == "heading_range" else "factors >= 0"
+            raise ValueError(f"{name} must be [low, high] ({what}) with low <= high"
+                             f"{' or null' if name == 'reset_joint_scale' else ''}, got "
+                             f"{brief(bounds)}")  # fmt: skip
+        setattr(config, name, (float(bounds[0]), float(bounds[1])))

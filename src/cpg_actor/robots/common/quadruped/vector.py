@@ -12,9 +12,12 @@ rad; in [-1, 1] with ``normalized_actions``), clipped to the joint ranges.
 
 Per episode: a forward-speed command uniform in ``command_range`` (lateral and yaw speed
 commands uniform in ``lateral_range`` and ``yaw_range``, 0 by default; zero with probability
-``standing_share``), drawn again every ``command_resample_seconds`` where that is not 0 (the
-observation after the step that draws it carries the new one), a start
-in the nominal pose with uniform joint noise, the feet on the ground, at rest (on rough
+``standing_share``; under legged_gym's heading command, ``heading_gain``, a heading instead
+of the yaw rate, which follows it after every step), drawn again every
+``command_resample_seconds`` where that is not 0 (the observation after the step that draws
+it carries the new one), a start in the nominal pose (scaled per joint with
+``reset_joint_scale``) with uniform joint noise, the feet on the ground, at rest (the base's
+velocities uniform with ``reset_base_velocity``) (on rough
 ground, ``config.terrain``: on the env's tile, heights read over the ground and a curriculum
 over its levels, :mod:`cpg_actor.robots.common.quadruped.ground`). An episode ends
 when the base falls (``task.fallen``) or touches the ground (terminated), or after
@@ -126,17 +129,31 @@ def floor_feet_only(model: mujoco.MjModel, legs) -> None:
 
 def draw_command(rng: np.random.Generator, config: QuadrupedConfig) -> np.ndarray:
     """One command (3,): forward and lateral speed (m/s), yaw rate (rad/s), each uniform in its
-    range, or zero with probability ``standing_share``. Only the draws a config needs are
-    taken (the lateral and yaw ones where the range is not a point, the standing one where
-    the share is not 0), so that the forward task's random streams stay as they were."""
+    range, or zero with probability ``standing_share``; under a heading command
+    (``heading_gain``) the yaw rate is 0, not drawn (the env sets it from the heading,
+    :func:`draw_heading`), and a (vx, vy) of norm at most ``min_command_speed`` is zeroed
+    (legged_gym's). Only the draws a config needs are taken (the lateral and yaw ones where
+    the range is not a point, the standing one where the share is not 0), so that the
+    forward task's random streams stay as they were."""
     command = np.zeros(3)
     command[0] = rng.uniform(*config.command_range)
-    for column, name in ((1, "lateral_range"), (2, "yaw_range")):
+    names = ((1, "lateral_range"),) if config.heading_gain else ((1, "lateral_range"),
+                                                                 (2, "yaw_range"))  # fmt: skip
+    for column, name in names:
         low, high = getattr(config, name)
         command[column] = rng.uniform(low, high) if high > low else low
+    if config.min_command_speed and np.hypot(*command[:2]) <= config.min_command_speed:
+        command[:2] = 0.0
     if config.standing_share > 0 and rng.uniform() < config.standing_share:
         command[:] = 0.0
     return command
+
+
+def draw_heading(rng: np.random.Generator, config: QuadrupedConfig) -> float:
+    """The heading (rad) a heading command turns the base to, uniform in ``heading_range``,
+    drawn after each command's :func:`draw_command`."""
+    low, high = config.heading_range
+    return float(rng.uniform(low, high)) if high > low else low
 
 
 def hold_command(previous, fresh, hold, nonzero):
@@ -310,6 +327,7 @@ class QuadrupedVectorEnv(VectorEnv):
         self._noise = task.noise_half_widths(config.observation_noise, len(quadruped.joint_names),
                                              config.observe_lin_vel)  # fmt: skip
         self._next_draw = np.zeros(num_envs, dtype=np.int64)  # the step of each next command
+        self._heading = np.zeros(num_envs)  # each env's heading target (config.heading_gain)
         self._nominal = np.asarray(quadruped.nominal_pose)
         threads = default_threads(num_envs) if num_threads is None else int(num_threads)
         self.num_threads = max(1, min(threads, num_envs))
@@ -381,13 +399,19 @@ class QuadrupedVectorEnv(VectorEnv):
         bookkeeping."""
         index = np.flatnonzero(done)
         command, joints = np.zeros((self.num_envs, 3)), np.zeros((self.num_envs, 12))
+        cfg = self.config
         for i in index:
             rng = self._rngs[i]
-            noise = rng.uniform(-self.config.reset_noise, self.config.reset_noise, 12)
-            joints[i] = np.clip(self._nominal + noise, self._low, self._high)
-            command[i] = draw_command(rng, self.config)
-            if self.config.command_interval == "exponential":
-                self._next_draw[i] = steps_to_next_command(rng, self.config)
+            noise = rng.uniform(-cfg.reset_noise, cfg.reset_noise, 12)
+            pose = self._nominal
+            if cfg.reset_joint_scale is not None:  # legged_gym's nominal x U(0.5, 1.5)
+                pose = pose * rng.uniform(*cfg.reset_joint_scale, 12)
+            joints[i] = np.clip(pose + noise, self._low, self._high)
+            command[i] = draw_command(rng, cfg)
+            if cfg.heading_gain:
+                self._heading[i] = draw_heading(rng, cfg)
+            if cfg.command_interval == "exponential":
+                self._next_draw[i] = steps_to_next_command(rng, cfg)
             data = self._data
             mujoco.mj_resetData(self.model, data)
             data.qpos[7:] = joints[i]
@@ -397,7 +421,12 @@ class QuadrupedVectorEnv(VectorEnv):
                 mujoco.mj_kinematics(self.model, data)
                 lowest = min(data.site(f"{leg}_foot").xpos[2] for leg in self.quadruped.legs)
                 data.qpos[2] += self.quadruped.foot_radius - lowest  # feet on the ground
+            if cfg.reset_base_velocity:  # linear (world) and angular: the base starts level
+                speed = cfg.reset_base_velocity
+                data.qvel[:6] = rng.uniform(-speed, speed, 6)
             mujoco.mj_getState(self.model, data, self._state[i], STATE_SPEC)
+        if cfg.heading_gain:  # the yaw rate toward each new heading, from the start's yaw
+            command[index, 2] = self._heading_yaw_rate(index)
         self._refresh_sensors(index)
         fresh = task.new_episode(command, joints, self.qpos[:, 0].copy(),
                                  self._feet()[:, :, :2].copy())  # fmt: skip
@@ -407,6 +436,12 @@ class QuadrupedVectorEnv(VectorEnv):
             self._perturb(index)
         if self.delay is not None:  # the drives hold the start pose until the first command
             self.delay.reset(index, joints[index])
+
+    def _heading_yaw_rate(self, index=slice(None)) -> np.ndarray:
+        """The heading command's yaw rate of the envs ``index`` now (``config.heading_gain``)."""
+        cfg = self.config
+        return task.heading_yaw_rate(self.qpos[index, 3:7], self._heading[index],
+                                     cfg.heading_gain, *cfg.yaw_range)  # fmt: skip
 
     def _perturb(self, index: np.ndarray) -> None:
         """The envs ``index`` simulated under their episode perturbations (randomised
@@ -553,9 +588,15 @@ class QuadrupedVectorEnv(VectorEnv):
             command = self.episode.command.copy()
             for i in np.flatnonzero(due):
                 command[i] = resample_command(self._rngs[i], command[i], cfg)
+                if cfg.heading_gain:
+                    self._heading[i] = draw_heading(self._rngs[i], cfg)
                 if cfg.command_interval == "exponential":
                     self._next_draw[i] = elapsed[i] + steps_to_next_command(self._rngs[i], cfg)
             self.episode, out["obs"] = task.resample(self.episode, out["obs"], command, due)
+        if cfg.heading_gain:  # the yaw rate toward each heading, from the yaw the step reached
+            command = self.episode.command.copy()
+            command[:, 2] = self._heading_yaw_rate()
+            self.episode, out["obs"] = task.resample(self.episode, out["obs"], command, ~done)
         final_obs = self._recipe_noise(self.draws.observe(out["obs"]))
         obs = final_obs.copy()
         if self.ground is not None:  # the curriculum, before the next episodes start
@@ -586,6 +627,8 @@ class QuadrupedVectorEnv(VectorEnv):
         arrays = {"physics": self._state, "sensors": self._sensors[:, -1]}
         if self.config.command_interval == "exponential":
             arrays["next_draw"] = self._next_draw
+        if self.config.heading_gain:
+            arrays["heading"] = self._heading
         arrays.update({name: getattr(self.episode, name) for name in SAVED_FIELDS})
         extra = {}  # a perturbation's commands on their way, push steps and generators
         if self.delay is not None:
@@ -624,6 +667,8 @@ class QuadrupedVectorEnv(VectorEnv):
         self.episode = task.Episode(**fields, feet_xy=self._feet()[:, :, :2].copy())
         if "next_draw" in state:
             np.copyto(self._next_draw, np.asarray(state["next_draw"]))
+        if "heading" in state:
+            np.copyto(self._heading, np.asarray(state["heading"]))
         self._rngs = []
         for saved in state["rngs"]:
             rng = np.random.default_rng()
