@@ -27,6 +27,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -52,11 +53,16 @@ def train(
 
 
 def welch_t(a: list[float], b: list[float]) -> float:
-    """(mean a - mean b) / its standard error; nan with fewer than 2 values a side."""
+    """Welch's t (scipy's): (mean a - mean b) / its standard error; nan with fewer than 2
+    values a side or no spread at all."""
+    from scipy import stats
+
     if len(a) < 2 or len(b) < 2:
         return math.nan
-    se = math.sqrt(np.var(a, ddof=1) / len(a) + np.var(b, ddof=1) / len(b))
-    return (np.mean(a) - np.mean(b)) / se if se > 0 else math.nan
+    with warnings.catch_warnings():  # identical values: no spread, nan below
+        warnings.simplefilter("ignore", RuntimeWarning)
+        t = float(stats.ttest_ind(a, b, equal_var=False).statistic)
+    return t if math.isfinite(t) else math.nan
 
 
 def summary(evals: list[dict]) -> dict[str, float]:

@@ -61,12 +61,32 @@ import math
 import os
 import sys
 import tempfile
-import time
 from pathlib import Path
-from types import SimpleNamespace
 from typing import NamedTuple
 
 import numpy as np
+
+from time_to_target import (
+    RunSpec,
+    answer,
+    censored_median_wall,
+    compose,  # noqa: F401 (the tests read this benchmark's runs' config here)
+    evaluation_recorder,
+    first_at_target,
+    from_tree,
+    gait_difference,
+    hopper_ceiling,
+    in_fresh_process,
+    over_seeds,
+    recorded_search,
+    run_config,
+    sb3_history,
+    search_result,
+    split,
+    start_gait_file,
+    to_target,
+    train,
+)
 
 # The project's imports are in the functions: a run with --one-run imports the package of the
 # tree its PYTHONPATH names, which may be older than this script.
@@ -79,110 +99,51 @@ EVAL_EPISODES = 5
 # height of 0.45 m, whatever its return (None: no return condition), next to mlp's time to its
 # own best hop height. An agent with a step budget and no threshold trains to its budget and
 # is measured to its best hop height.
-THRESHOLDS: dict[str, tuple[float | None, float]] = {"cpg-actor": (None, 0.45)}
+THRESHOLDS: dict[str, tuple[float | None, float] | None] = {"cpg-actor": (None, 0.45)}
 BUDGETS = {"mlp": 500_000, "cpg-actor": 500_000}
 NEAR_BEST = 0.95  # "near its best": the first evaluation at this share of the best hop height
 
 
-def reached(evaluation: dict[str, float], threshold: tuple[float | None, float] | None) -> bool:
-    """The evaluation meets ``threshold`` (return or None, hop height); never without one."""
+def point(steps: int, wall: float, evaluation: dict[str, float]) -> dict:
+    """An evaluation at ``steps`` env steps and ``wall`` s of training: its mean return and
+    hop height."""
+    return {"steps": steps, "wall": wall, "return": evaluation["eval/return"],
+            "hop": evaluation["eval/hop_height"]}  # fmt: skip
+
+
+def reached(entry: dict, threshold: tuple[float | None, float] | None) -> bool:
+    """The evaluation (a :func:`point`) meets ``threshold`` (return or None, hop height);
+    never without one."""
     if threshold is None:
         return False
     ret, hop = threshold
-    high_enough = evaluation["eval/hop_height"] >= hop
-    return high_enough and (ret is None or evaluation["eval/return"] >= ret)
-
-
-class RunSpec(NamedTuple):
-    """One project run: ``agent`` trained with ``preset``, then each of ``values`` (nested
-    config mappings), from ``seed`` until ``threshold`` (return or None, hop height) or
-    ``budget`` env steps; with no threshold, to the budget. JSON-able as a dict, for a run in
-    a fresh process."""
-
-    agent: str
-    preset: str
-    seed: int
-    values: list[dict]
-    budget: int
-    threshold: tuple[float | None, float] | None
-
-
-def from_tree(module: str, name: str):
-    """``name`` from ``cpg_actor.<module>``, or from its flat path in a tree from before the
-    package's folders (``training.runner`` was ``runner``, ``config.presets`` ``presets``)."""
-    import importlib
-
-    try:
-        return getattr(importlib.import_module(f"cpg_actor.{module}"), name)
-    except ImportError:
-        flat = module.rsplit(".", 1)[-1]
-        return getattr(importlib.import_module(f"cpg_actor.{flat}"), name)
-
-
-def compose(agent: str, preset: str, values: list[dict]):
-    """The run's :class:`TrainConfig` as ``cpg-actor train`` composes it: the agent's tuned
-    settings on the robot (trees without per-agent defaults have none), the preset, then
-    ``values``."""
-    from cpg_actor.config import TrainConfig, apply_dict
-
-    preset_values = from_tree("config.presets", "preset_values")
-
-    def composed(defaults: dict) -> TrainConfig:
-        config = TrainConfig()
-        config.agent = agent
-        apply_dict(config, defaults, prefix="")
-        apply_dict(config, preset_values(preset), prefix="")
-        for mapping in values:
-            apply_dict(config, mapping, prefix="")
-        return config
-
-    config = composed({})  # which robot: its defaults for the agent come first
-    return composed(agent_defaults(agent, config.robot))
-
-
-def agent_defaults(agent: str, robot: str) -> dict:
-    """The agent's tuned settings on ``robot``: ``Robot.agent_defaults`` in trees with robot
-    plug-ins, ``AgentSpec.defaults[robot]`` in the trees before them, else none."""
-    from cpg_actor.agents import get_agent_spec
-
-    try:
-        from cpg_actor.robots.registry import ROBOTS
-    except ImportError:  # a tree from before the robot registry
-        ROBOTS = {}
-    if robot in ROBOTS and hasattr(ROBOTS[robot], "agent_defaults"):
-        return dict(ROBOTS[robot].agent_defaults.get(agent, {}))
-    return dict(getattr(get_agent_spec(agent), "defaults", {}).get(robot, {}))
+    return entry["hop"] >= hop and (ret is None or entry["return"] >= ret)
 
 
 def project_run(spec: RunSpec) -> dict:
-    """One run of the package on ``sys.path`` (any tree since the learning issue). Every
-    evaluation is recorded, the one before the first iteration too (an agent that starts
-    from a searched gait may hop before any PPO step; it is recorded at 0 s)."""
-    agent, preset, seed, values, budget, threshold = spec
-    Runner = from_tree("training.runner", "Runner")
+    """One run of the package on ``sys.path`` (any tree since the learning issue), its
+    ``target`` the threshold (return or None, hop height; None: none, to the budget), at which
+    it stops. Every evaluation is recorded, the one before the first iteration too (an agent
+    that starts from a searched gait may hop before any PPO step; it is recorded at 0 s)."""
+    threshold = spec.target
+    config = run_config(spec.agent, spec.preset, spec.seed, spec.values, spec.budget,
+                        EVAL_EVERY, EVAL_EPISODES)  # fmt: skip
 
-    config = compose(agent, preset, values)
-    config.agent, config.seed, config.total_steps = agent, seed, budget
-    config.eval_interval = max(1, round(EVAL_EVERY / config.steps_per_iteration))
-    config.eval_episodes = EVAL_EPISODES
+    def met(evaluation: dict[str, float]) -> bool:
+        return reached(point(0, 0.0, evaluation), threshold)
+
     try:
         from cpg_actor.training.hooks import Hook  # noqa: F401 (a tree with the loop's hooks)
     except ImportError:  # a tree before the loop's hooks
-        history: list[tuple[int, float, float, float]] = []
+        Runner = from_tree("training.runner", "Runner")
+        history: list[dict] = []
 
         def record(evaluation: dict[str, float]) -> None:
-            history.append(
-                (
-                    runner.global_step,
-                    runner.train_wall,
-                    evaluation["eval/return"],
-                    evaluation["eval/hop_height"],
-                )
-            )
+            history.append(point(runner.global_step, runner.train_wall, evaluation))
 
         def stop(evaluation: dict[str, float]) -> bool:
             record(evaluation)
-            return any(reached(evaluation_of(h), threshold) for h in history)
+            return any(reached(h, threshold) for h in history)
 
         runner = Runner(config, run_dir=None, tensorboard=False)
         first_evaluation = getattr(runner, "log_evaluation", None)  # the agent before training
@@ -199,21 +160,9 @@ def project_run(spec: RunSpec) -> dict:
         finally:
             runner.close()
         return summarize(history, threshold)
-    from bench_report import evaluation_recorder
-
-    recorder = evaluation_recorder(lambda evaluation: reached(evaluation, threshold))
-    runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder])
-    try:
-        runner.learn()
-    finally:
-        runner.close()
-    recorded = [(step, wall, e["eval/return"], e["eval/hop_height"])
-                for step, wall, e in recorder.history]  # fmt: skip
-    return summarize(recorded, threshold)
-
-
-def evaluation_of(entry: tuple[int, float, float, float]) -> dict[str, float]:
-    return {"eval/return": entry[2], "eval/hop_height": entry[3]}
+    recorder = evaluation_recorder(met)
+    train(config, recorder)
+    return summarize([point(s, w, e) for s, w, e in recorder.history], threshold)
 
 
 class SearchSpec(NamedTuple):
@@ -228,24 +177,6 @@ class SearchSpec(NamedTuple):
     directory: str
 
 
-def start_gait_file(agent: str, preset: str, values: list[dict]) -> Path | None:
-    """The gait file a run starts from (``agent_config.start_gait``: the packaged gait for
-    "search", else the path); None for an agent that starts from no gait."""
-    from cpg_actor.agents import get_agent_spec
-
-    config = compose(agent, preset, values)
-    start = getattr(config.agent_config, "start_gait", "")  # trees before the start gaits
-    if not start or not getattr(get_agent_spec(agent), "uses_start_gait", False):
-        return None
-    if start != "search":
-        return Path(start).resolve()
-    from cpg_actor.agents.start_gait import packaged_gait_path
-    from cpg_actor.robots.registry import get_robot
-
-    robot = get_robot(config.robot)
-    return packaged_gait_path(robot.start_gait, robot.name)
-
-
 def search_runs(spec: SearchSpec) -> dict:
     """The open-loop search behind each distinct start gait of ``spec.runs``, rerun as the
     gait file records it (``cpg-actor train --agent open-loop-es --seed SEED --total-steps
@@ -253,9 +184,6 @@ def search_runs(spec: SearchSpec) -> dict:
     the search's env steps and wall time (generations, evaluations excluded), the gait it
     found (written to ``spec.directory``, the start of those runs), its deterministic
     evaluation, and how far it is from the file's gait (0.0: the same gait)."""
-    env_values: dict = {}  # --set env.KEY=VALUE: the search runs on the runs' physics
-    for mapping in spec.values:
-        env_values.update(mapping.get("env", {}))
     searches: dict[str, dict] = {}
     by_file: dict[Path, dict] = {}
     for agent, preset in spec.runs:
@@ -267,18 +195,8 @@ def search_runs(spec: SearchSpec) -> dict:
             from cpg_actor.config import compose_config
             from cpg_actor.training.es_runner import ESRunner
 
-            gait = load_gait(source)
-            budget = spec.budget or int(gait.get("steps_searched", gait["steps"]))
-            flags = {
-                "agent": gait.get("agent", "open-loop-es"),
-                "robot": gait["robot"],
-                "seed": gait["seed"],
-                "total_steps": budget,
-                "es": {"episodes": gait.get("episodes", 1)},
-            }
-            if env_values:
-                flags["env"] = env_values
-            config = compose_config(None, None, flags)
+            gait, search = recorded_search(source, spec.budget, spec.values)
+            config = compose_config(None, None, search)
             config.eval_interval = 0  # evaluated once, after the search
             config.eval_episodes = EVAL_EPISODES
             runner = ESRunner(config, run_dir=None, tensorboard=False)
@@ -289,36 +207,15 @@ def search_runs(spec: SearchSpec) -> dict:
             finally:
                 runner.close()
             path = write_gait(Path(spec.directory) / f"gait_{len(by_file)}.yaml", found)
+            difference = gait_difference(load_gait(path)["cpg_initial"], gait["cpg_initial"])
             by_file[source] = {
-                "source": str(source),
-                "agent": config.agent,
-                "seed": config.seed,
-                "budget": budget,
-                "steps": runner.global_step,
-                "wall": runner.train_wall,
+                **search_result(source, config, runner, path, difference),
                 "fitness": found["fitness"],
                 "return": evaluation["eval/return"],
                 "hop": evaluation["eval/hop_height"],
-                "gait": str(path),
-                "difference": gait_difference(load_gait(path)["cpg_initial"], gait["cpg_initial"]),
             }
         searches[f"{agent} {preset}"] = by_file[source]
     return searches
-
-
-def gait_difference(found: dict, packaged: dict) -> float:
-    """The largest relative difference between two gaits' parameters (0.0: the same gait;
-    inf where they do not have the same fields or shapes)."""
-    if set(found) != set(packaged):
-        return math.inf
-    largest = 0.0
-    for key in found:
-        a, b = np.asarray(found[key], dtype=float), np.asarray(packaged[key], dtype=float)
-        if a.shape != b.shape:
-            return math.inf
-        scale = np.maximum(np.abs(b), 1e-12)
-        largest = max(largest, float(np.max(np.abs(a - b) / scale, initial=0.0)))
-    return largest
 
 
 def parse_targets(texts: list[str], option: str, form: str, parse) -> dict:
@@ -391,180 +288,74 @@ def agent_targets(
     return budgets, {agent: thresholds.get(agent) for agent in agents}
 
 
-def tree_run(src: Path, spec: RunSpec) -> dict:
-    """:func:`project_run` in a fresh process with the package in ``src``."""
-    from bench_report import json_from_tree
-
-    return json_from_tree(src, [__file__, "--one-run", json.dumps(spec._asdict())])
-
-
-def tree_search(src: Path, spec: SearchSpec) -> dict:
-    """:func:`search_runs` in a fresh process with the package in ``src``."""
-    from bench_report import json_from_tree
-
-    return json_from_tree(src, [__file__, "--one-search", json.dumps(spec._asdict())])
-
-
-class SB3Policy:
-    """An SB3 model behind the :class:`cpg_actor.training.policy.Policy` calls
-    :func:`evaluate` makes."""
-
-    def __init__(self, model, low: np.ndarray, high: np.ndarray) -> None:
-        self.model, self.low, self.high = model, low, high
-
-    def reset(self, num_envs: int) -> None:
-        pass
-
-    def act(self, obs: np.ndarray, deterministic: bool = True):
-        import torch
-
-        from cpg_actor.training.policy import PolicyStep
-
-        action, _ = self.model.predict(np.asarray(obs), deterministic=True)  # in [-1, 1]
-        desired = self.low + (np.asarray(action) + 1.0) * (self.high - self.low) / 2.0
-        agent = SimpleNamespace(extras={})
-        return PolicyStep(desired.astype(np.float32), torch.as_tensor(obs), torch.zeros(0), agent)
-
-
 def sb3_run(
     seed: int, values: list[dict], budget: int, threshold: tuple[float | None, float] | None
 ) -> dict:
+    """SB3's PPO with its defaults on one env, evaluated as the project's runs; it stops at
+    the threshold."""
     import gymnasium as gym
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.callbacks import BaseCallback
 
-    from cpg_actor.robots.hopper.config import HopperConfig
     from cpg_actor.robots.hopper.plugin import ENV_ID
-    from cpg_actor.robots.hopper.vector import HopperVectorEnv
-    from cpg_actor.training.evaluation import evaluate
-    from cpg_actor.training.seeding import EVAL_SEED_KEY, derived_seed
+    from time_to_target import env_values
 
-    env_values = {}  # --set env.KEY=VALUE reaches SB3's env too
-    for mapping in values:
-        env_values.update(mapping.get("env", {}))
-    env = gym.wrappers.RescaleAction(gym.make(ENV_ID, **env_values), -1.0, 1.0)
-    eval_env = HopperVectorEnv(EVAL_EPISODES, HopperConfig(**env_values))
-    low, high = env.unwrapped.action_space.low, env.unwrapped.action_space.high
-    history: list[tuple[int, float, float, float]] = []
-    clock = {"start": 0.0, "eval": 0.0}
+    physics = env_values(values)  # --set env.KEY=VALUE reaches SB3's env too
+    env = gym.wrappers.RescaleAction(gym.make(ENV_ID, **physics), -1.0, 1.0)
 
-    class Evaluate(BaseCallback):
-        """Evaluates before training, every ``EVAL_EVERY`` steps and at the end, as the
-        project's runs; stops at the threshold."""
+    def numbers(result: dict) -> dict:
+        return {"return": float(result["episode_return"].mean()),
+                "hop": float(result["hop_height"].mean())}  # fmt: skip
 
-        def _on_training_start(self) -> None:
-            clock["start"] = time.perf_counter()
-            self.evaluate_now()
-
-        def _on_step(self) -> bool:
-            if self.num_timesteps % EVAL_EVERY:
-                return True
-            return not self.evaluate_now()
-
-        def _on_training_end(self) -> None:
-            if history[-1][0] != self.num_timesteps:  # the budget's end between evaluations
-                self.evaluate_now()
-
-        def evaluate_now(self) -> bool:
-            """Evaluate; True if the threshold is met."""
-            start = time.perf_counter()
-            result = evaluate(
-                SB3Policy(self.model, low, high),
-                eval_env,
-                seed=derived_seed(seed, EVAL_SEED_KEY),
-                control_dt=0.01,
-                max_steps=500,
-                traces=False,
-            )
-            clock["eval"] += time.perf_counter() - start
-            wall = time.perf_counter() - clock["start"] - clock["eval"]
-            ret, hop = float(result["episode_return"].mean()), float(result["hop_height"].mean())
-            history.append((self.num_timesteps, wall, ret, hop))
-            return reached({"eval/return": ret, "eval/hop_height": hop}, threshold)
-
-    model = PPO("MlpPolicy", env, seed=seed, device="cpu", verbose=0)
-    try:
-        model.learn(total_timesteps=budget, callback=Evaluate())
-    finally:
-        env.close()
-        eval_env.close()
+    history = sb3_history(env, seed, budget, physics, EVAL_EVERY, EVAL_EPISODES, numbers,
+                          lambda entry: reached(entry, threshold))  # fmt: skip
     return summarize(history, threshold)
 
 
-def summarize(history: list, threshold: tuple[float | None, float] | None) -> dict:
-    """A run's result from its evaluations ``(step, wall, return, hop)``: ``reached``, and
-    ``steps``, ``wall``, ``return``, ``hop`` of the first evaluation that met ``threshold``
-    (else the end of the run, with the best return and its hop); ``best``: the first
-    evaluation at the run's best hop height; ``near_best``: the first at ``NEAR_BEST`` of it;
-    ``history``: every evaluation."""
-    result: dict = {"history": [list(h) for h in history], "best": None, "near_best": None}
-    hops = [h for h in history if math.isfinite(h[3])]
+def summarize(history: list[dict], threshold: tuple[float | None, float] | None) -> dict:
+    """A run's result from its evaluations (:func:`point`): ``reached``, and ``steps``,
+    ``wall``, ``return``, ``hop`` of the first evaluation that met ``threshold`` (else the
+    end of the run, with the best return and its hop); ``best``: the first evaluation at the
+    run's best hop height; ``near_best``: the first at ``NEAR_BEST`` of it; ``history``:
+    every evaluation."""
+    result: dict = {"history": history, "best": None, "near_best": None}
+    hops = [h for h in history if math.isfinite(h["hop"])]
     if hops:
-        best = max(hops, key=lambda h: h[3])  # the first of equal maxima
-        near = next(h for h in hops if h[3] >= NEAR_BEST * best[3])
-        result["best"] = {"steps": best[0], "wall": best[1], "return": best[2], "hop": best[3]}
-        result["near_best"] = {"steps": near[0], "wall": near[1], "hop": near[3]}
+        best = max(hops, key=lambda h: h["hop"])  # the first of equal maxima
+        near = next(h for h in hops if h["hop"] >= NEAR_BEST * best["hop"])
+        result["best"] = {k: best[k] for k in ("steps", "wall", "return", "hop")}
+        result["near_best"] = {k: near[k] for k in ("steps", "wall", "hop")}
+    result.update(to_target(history, lambda h: reached(h, threshold)))
     hit = first_reaching(history, threshold)
-    if hit is not None:
-        result.update(reached=True, steps=hit[0], wall=hit[1], hop=hit[3])
-        result["return"] = hit[2]
-        return result
-    best_return = max(history, key=lambda h: h[2]) if history else (0, math.nan, math.nan, math.nan)
-    last = history[-1] if history else best_return
-    result.update(reached=False, steps=last[0], wall=last[1], hop=best_return[3])
-    result["return"] = best_return[2]
+    if hit is None:  # the best return, and its hop
+        nothing = {"return": math.nan, "hop": math.nan}
+        hit = max(history, key=lambda h: h["return"]) if history else nothing
+    result.update({"hop": hit["hop"], "return": hit["return"]})
     return result
 
 
-def first_reaching(history: list, threshold: tuple[float | None, float] | None):
-    """The first evaluation ``(step, wall, return, hop)`` that met ``threshold``, or None."""
-    return next((h for h in history if reached(evaluation_of(h), threshold)), None)
+def first_reaching(history: list[dict], threshold: tuple[float | None, float] | None):
+    """The first evaluation (:func:`point`) that met ``threshold``, or None."""
+    return first_at_target(history, lambda h: reached(h, threshold))
 
 
-def ceiling(num_envs: int, budget: int = 50_000) -> float:
-    """``mujoco.rollout``'s control steps per second for ``num_envs`` robots, best of 2 blocks
-    of ``budget`` control steps."""
-    sys.path.insert(0, str(Path(__file__).parent))
-    from env_throughput import bench_size
-
-    return bench_size("mujoco", num_envs, repeats=2, budget=budget)["rollout"]
+def show_steps(steps: float) -> str:
+    return f"{steps / 1000:.0f}k"
 
 
-def total_steps(run: dict) -> float:
-    """Env steps to the run's end point: its start gait's search and its own."""
-    return run["steps"] + run.get("search_steps", 0)
-
-
-def total_wall(run: dict) -> float:
-    """Wall time to the run's end point: its start gait's search and its own training."""
-    return run["wall"] + run.get("search_wall", 0.0)
-
-
-def split(total: float, search: float, unit: str) -> str:
-    """``total`` as "search + own = total" where a search was charged."""
-
-    def show(value: float) -> str:
-        return f"{value / 1000:.0f}k" if unit == "k" else f"{value:.0f} s"
-
-    if not search:
-        return show(total)
-    return f"{show(search)} + {show(total - search)} = **{show(total)}**"
+def show_wall(wall: float) -> str:
+    return f"{wall:.0f} s"
 
 
 def fmt_runs(runs: list[dict]) -> tuple[str, str, str]:
     """(seeds that reached the threshold, median env steps, median wall time), the search
     charged (the same for every seed) shown as "search + PPO = total"."""
-    hits = [r for r in runs if r["reached"]]
+    hits, steps, wall = over_seeds(runs)
     if not hits:
         return f"0/{len(runs)}", "not reached", "-"
-    search_steps = hits[0].get("search_steps", 0)
-    search_wall = hits[0].get("search_wall", 0.0)
-    steps = float(np.median([total_steps(r) for r in hits]))
-    wall = float(np.median([total_wall(r) for r in hits]))
+    first = next(r for r in runs if r["reached"])
     return (
-        f"{len(hits)}/{len(runs)}",
-        split(steps, search_steps, "k"),
-        split(wall, search_wall, "s"),
+        f"{hits}/{len(runs)}",
+        split(steps, first.get("start_steps", 0), show_steps),
+        split(wall, first.get("start_wall", 0.0), show_wall),
     )
 
 
@@ -574,35 +365,12 @@ def fmt_hop(runs: list[dict]) -> str:
     return f"{np.median(hops):.3f} m" if hops else "-"
 
 
-def one_run(text: str) -> int:
-    """``--one-run``: a :func:`project_run` from its JSON spec; prints its result as JSON."""
-    spec = RunSpec(**json.loads(text))
-    threshold = None if spec.threshold is None else tuple(spec.threshold)
-    print(json.dumps(project_run(spec._replace(threshold=threshold))))
-    return 0
-
-
-def one_search(text: str) -> int:
-    """``--one-search``: :func:`search_runs` from its JSON spec; prints the result as JSON."""
-    spec = SearchSpec(**json.loads(text))
-    print(json.dumps(search_runs(spec._replace(runs=[tuple(r) for r in spec.runs]))))
-    return 0
-
-
 def wall_ratio(reference: list[dict], ours: list[dict]) -> str:
     """Median wall time to the threshold over all seeds, reference / this tree. A seed that
     did not reach it counts as reaching it after its budget's time (a lower bound), so a
     median over such seeds is marked ">=" and a ratio with only its numerator so is too."""
-
-    def median(runs: list[dict]) -> tuple[float, bool]:  # (seconds, a lower bound only)
-        mid = float(np.median([total_wall(r) if r["reached"] else math.inf for r in runs]))
-        if math.isfinite(mid):
-            return mid, False
-        bounds = [total_wall(r) for r in runs]
-        return float(np.median(bounds)), True
-
-    theirs, theirs_bound = median(reference)
-    mine, mine_bound = median(ours)
+    theirs, theirs_bound = censored_median_wall(reference)
+    mine, mine_bound = censored_median_wall(ours)
     if mine_bound:
         return f"this tree's median seed did not reach it ({mine:.0f} s or more); no ratio"
     sign = ">= " if theirs_bound else ""
@@ -618,10 +386,9 @@ def describe(threshold: tuple[float | None, float] | None) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    if argv[:1] == ["--one-run"]:
-        return one_run(argv[1])
-    if argv[:1] == ["--one-search"]:
-        return one_search(argv[1])
+    if answer(argv, {"--one-run": (RunSpec, project_run),
+                     "--one-search": (SearchSpec, search_runs)}):  # fmt: skip
+        return 0
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seeds", type=int, default=3)
     parser.add_argument("--agents", default="mlp,cpg-actor")
@@ -727,7 +494,7 @@ def main(argv: list[str] | None = None) -> int:
                 directory = Path(gait_dir) / tree.replace(" ", "_")
                 directory.mkdir()
                 spec = SearchSpec(pairs, tree_values[tree], args.search_budget, str(directory))
-                found = tree_search(src, spec)
+                found = in_fresh_process(__file__, "--one-search", spec, src)
             for agent, preset in pairs:
                 searches[agent, preset, tree] = found.get(f"{agent} {preset}")
                 if searches[agent, preset, tree] is not None:
@@ -747,10 +514,10 @@ def main(argv: list[str] | None = None) -> int:
                     run_spec = RunSpec(
                         agent, preset, seed, run_values, budgets[agent], thresholds[agent]
                     )
-                    run = tree_run(trees[tree], run_spec)
+                    run = in_fresh_process(__file__, "--one-run", run_spec, trees[tree])
                 run["stolen"] = stolen_share(cpu_start, cpu_times())  # a neighbour's load
                 if search is not None:
-                    run["search_steps"], run["search_wall"] = search["steps"], search["wall"]
+                    run["start_steps"], run["start_wall"] = search["steps"], search["wall"]
                 results[label].append(run)
                 brief = {k: v for k, v in run.items() if k != "history"}
                 print(f"seed {seed} {label}: {brief}", flush=True)
@@ -758,7 +525,7 @@ def main(argv: list[str] | None = None) -> int:
         TrainConfig().num_envs if p == "paper" else preset_values(p).get("num_envs", 16)
         for p in presets
     }
-    ceilings = {n: ceiling(n, args.ceiling_steps) for n in sorted(sizes)}
+    ceilings = {n: hopper_ceiling(n, args.ceiling_steps) for n in sorted(sizes)}
     command = (
         f"python benchmarks/time_to_hop.py --seeds {args.seeds} --agents {args.agents} "
         f"--presets {args.presets}"
@@ -923,7 +690,7 @@ def report(
                 hits = [first_reaching(r["history"], goal) for r in runs]
                 hits = [h for h in hits if h is not None]
                 cells.append(
-                    f"{len(hits)}/{len(runs)}, {np.median([h[1] for h in hits]):.0f} s"
+                    f"{len(hits)}/{len(runs)}, {np.median([h['wall'] for h in hits]):.0f} s"
                     if hits
                     else f"0/{len(runs)}"
                 )

@@ -44,9 +44,9 @@ not installed) runs PPO ``MlpPolicy`` with its defaults on the registered env
 ``cpg_actor/AnymalHopper-v0`` (actions rescaled to [-1, 1], no VecNormalize): once with its
 default single env, once with ``make_vec_env`` and the project run's ``num_envs`` (its
 defaults otherwise: ``n_steps`` 2,048 per env), with the same budget, target and evaluation.
-The physics ceiling (``mujoco.rollout``, :func:`time_to_hop.ceiling`) is measured in the same
-run at each env count used. Runs go one at a time, each project run and search in a fresh
-process; time is training wall time (collection and update, compilation included,
+The physics ceiling (``mujoco.rollout``, :func:`time_to_target.hopper_ceiling`) is measured in
+the same run at each env count used. Runs go one at a time, each project run and search in a
+fresh process; time is training wall time (collection and update, compilation included,
 evaluations excluded). ``--resume`` goes on from a run cut off part way (its searches and
 finished (method, seed) runs are saved after each, in ``OUTPUT`` with ``.partial.json``); the
 report names the machines when a resumed run moved. Beside the report go its figure and every
@@ -63,7 +63,6 @@ import math
 import os
 import sys
 import tempfile
-import time
 from pathlib import Path
 from typing import NamedTuple
 
@@ -71,6 +70,19 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
+import time_to_target as shared  # noqa: E402 (benchmarks/ on the path first)
+from time_to_target import (  # noqa: E402
+    RunSpec,
+    charged,
+    evaluation_recorder,
+    gait_difference,
+    median_or_none,
+    over_seeds,
+    recorded_search,
+    sb3_history,
+    search_result,
+)
+
 OUTPUT = "benchmarks/results/time_to_quality.md"
 
 AGENTS = ("cpg-actor", "mlp", "mlp-warm", "cho2019-warm", "open-loop-es")
@@ -96,14 +108,6 @@ class Target(NamedTuple):
         return f"return >= {self.ret:g} and hop apex >= {self.apex:g} m"
 
 
-def charged(history: list[dict], start_steps: int, start_wall: float) -> list[dict]:
-    """``history`` (evaluations: ``steps``, ``wall`` of the method's own training, ``return``,
-    ``apex``, ...) with its start's env steps and wall time added to each: what the method
-    cost by then."""
-    return [{**h, "steps": h["steps"] + start_steps, "wall": h["wall"] + start_wall}
-            for h in history]  # fmt: skip
-
-
 def best_so_far(history: list[dict]) -> list[dict]:
     """At each evaluation, the best return and the best hop apex of the evaluations up to it
     (each its own maximum; NaN values skipped), with its ``steps`` and ``wall``."""
@@ -123,42 +127,13 @@ def best_so_far(history: list[dict]) -> list[dict]:
 def first_at_target(history: list[dict], target: Target) -> dict | None:
     """The first evaluation that met ``target`` (both thresholds in the same evaluation; a
     best return in one and a best apex in another do not count), or None."""
-    return next((h for h in history if target.met(h)), None)
-
-
-def median_or_none(values: list[float]) -> float | None:
-    return float(np.median(values)) if values else None
+    return shared.first_at_target(history, target.met)
 
 
 # -- one project run, one search (fresh processes) ---------------------------------------------
-class RunSpec(NamedTuple):
-    """One project run: ``agent`` with ``preset`` and ``values`` (nested config mappings)
-    from ``seed`` for ``budget`` env steps of its own, from the gait file ``start_gait`` (or
-    its config's start); it stops at ``target`` if ``stop`` (else trains its whole budget).
-    JSON-able, for a fresh process."""
-
-    agent: str
-    preset: str
-    seed: int
-    values: list[dict]
-    budget: int
-    start_gait: str | None
-    target: list[float]
-    stop: bool
-
-
 def run_config(agent: str, preset: str, seed: int, values: list[dict], budget: int):
     """The run's config as ``cpg-actor train`` composes it, with the benchmark's evaluation."""
-    from cpg_actor.agents.open_loop_es import generation_steps
-    from time_to_hop import compose
-
-    config = compose(agent, preset, values)
-    config.agent, config.seed, config.total_steps = agent, seed, budget
-    per_iteration = (generation_steps(config) if agent == "open-loop-es"
-                     else config.steps_per_iteration)  # fmt: skip
-    config.eval_interval = max(1, round(EVAL_EVERY / per_iteration))
-    config.eval_episodes = EVAL_EPISODES
-    return config
+    return shared.run_config(agent, preset, seed, values, budget, EVAL_EVERY, EVAL_EPISODES)
 
 
 def point(steps: int, wall: float, evaluation: dict[str, float]) -> dict:
@@ -173,38 +148,20 @@ def train(config, stop) -> tuple[list[dict], dict, object]:
     """Train ``config`` in this process with every evaluation recorded (hop apex included)
     and its warm start timed; ``(history, warm start's {"steps", "wall"}, runner)`` (the
     runner closed)."""
-    from bench_report import charged_warm_start, evaluation_recorder
-    from cpg_actor.agents import get_agent_spec
-
-    recorder = evaluation_recorder(stop)
-    warm = {"steps": 0, "wall": 0.0}
-    if get_agent_spec(config.agent).trainer == "es":
-        from cpg_actor.training.es_runner import ESRunner
-
-        runner = ESRunner(config, run_dir=None, tensorboard=False)
-        runner.hooks.append(recorder)
-    else:
-        from cpg_actor.training.runner import Runner
-
-        runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder])
-        warm = charged_warm_start(runner, config)
     from cpg_actor.experiments.physical import episode_metrics
 
-    runner.evaluation.traced_metrics = episode_metrics  # eval/hop_apex from the traces
-    try:
-        runner.learn()
-    finally:
-        runner.close()
+    def traced(runner) -> None:  # eval/hop_apex from the evaluations' traces
+        runner.evaluation.traced_metrics = episode_metrics
+
+    recorder = evaluation_recorder(stop)
+    warm, runner = shared.train(config, recorder, setup=traced)
     return [point(s, w, e) for s, w, e in recorder.history], warm, runner
 
 
 def project_run(spec: RunSpec) -> dict:
-    """One run: ``history`` (every evaluation), its warm start (``warm_steps``,
-    ``warm_wall``) and ``num_envs``."""
-    values = list(spec.values)
-    if spec.start_gait is not None:  # the gait this benchmark's search found
-        values.append({"agent_config": {"start_gait": spec.start_gait}})
-    config = run_config(spec.agent, spec.preset, spec.seed, values, spec.budget)
+    """One run (its ``target``: a :class:`Target`'s values): ``history`` (every evaluation),
+    its warm start (``warm_steps``, ``warm_wall``) and ``num_envs``."""
+    config = run_config(spec.agent, spec.preset, spec.seed, spec.values, spec.budget)
     target = Target(*spec.target)
     history, warm, _ = train(
         config, (lambda e: target.met(point(0, 0.0, e))) if spec.stop else None
@@ -229,36 +186,22 @@ def search_run(spec: SearchSpec) -> dict:
     """The search rerun as the gait file records it: its env steps and wall time, its
     evaluations, the gait it found (written to ``spec.path``) and how far that is from the
     file's (0.0: the same gait)."""
-    from cpg_actor.agents.gait_file import load_gait, write_gait
-    from time_to_hop import gait_difference, start_gait_file
+    from cpg_actor.agents.gait_file import write_gait
 
-    source = start_gait_file(spec.agent, spec.preset, spec.values)
-    gait = load_gait(source)
-    budget = spec.budget or int(gait.get("steps_searched", gait["steps"]))
-    env_values: dict = {}  # --set env.KEY=VALUE: the search runs on the runs' physics
-    for mapping in spec.values:
-        env_values.update(mapping.get("env", {}))
-    values = [{"robot": gait["robot"], "es": {"episodes": gait.get("episodes", 1)}}]
-    if env_values:
-        values.append({"env": env_values})
-    agent = gait.get("agent", "open-loop-es")
-    config = run_config(agent, spec.preset, int(gait["seed"]), values, budget)
+    source = shared.start_gait_file(spec.agent, spec.preset, spec.values)
+    gait, search = recorded_search(source, spec.budget, spec.values)  # on the runs' physics
+    values = [{key: search[key] for key in ("robot", "es", "env") if key in search}]
+    config = run_config(search["agent"], spec.preset, search["seed"], values,
+                        search["total_steps"])  # fmt: skip
     history, _, runner = train(config, None)
     found = runner.gait()
     write_gait(spec.path, found)
-    return {
-        "source": str(source), "agent": agent, "seed": int(gait["seed"]), "budget": budget,
-        "steps": runner.global_step, "wall": runner.train_wall, "history": history,
-        "gait": spec.path,
-        "difference": gait_difference(found["cpg_initial"], gait["cpg_initial"]),
-    }  # fmt: skip
+    difference = gait_difference(found["cpg_initial"], gait["cpg_initial"])
+    return {**search_result(source, config, runner, spec.path, difference), "history": history}
 
 
 def in_fresh_process(flag: str, spec: NamedTuple) -> dict:
-    from bench_report import json_from_tree
-
-    arguments = [__file__, flag, json.dumps(spec._asdict())]
-    return json_from_tree(HERE.parent / "src", arguments, show_stderr=True)
+    return shared.in_fresh_process(__file__, flag, spec, show_stderr=True)
 
 
 # -- SB3 ----------------------------------------------------------------------------------------
@@ -267,67 +210,24 @@ def sb3_run(seed: int, num_envs: int, values: list[dict], budget: int, target: T
     """SB3's PPO with its defaults on ``num_envs`` envs (``make_vec_env``), evaluated as the
     project's runs (the same evaluation, hop apex from its traces)."""
     import gymnasium as gym
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.env_util import make_vec_env
 
     from cpg_actor.experiments.physical import episode_metrics
-    from cpg_actor.robots.hopper.config import HopperConfig
     from cpg_actor.robots.hopper.plugin import ENV_ID
-    from cpg_actor.robots.hopper.vector import HopperVectorEnv
-    from cpg_actor.training.evaluation import evaluate, finite_mean
-    from cpg_actor.training.seeding import EVAL_SEED_KEY, derived_seed
-    from time_to_hop import SB3Policy
+    from cpg_actor.training.evaluation import finite_mean
 
-    env_values: dict = {}  # --set env.KEY=VALUE reaches SB3's env too
-    for mapping in values:
-        env_values.update(mapping.get("env", {}))
-    env = make_vec_env(ENV_ID, n_envs=num_envs, seed=seed, env_kwargs=env_values,
+    physics = shared.env_values(values)  # --set env.KEY=VALUE reaches SB3's env too
+    env = make_vec_env(ENV_ID, n_envs=num_envs, seed=seed, env_kwargs=physics,
                        wrapper_class=gym.wrappers.RescaleAction,
                        wrapper_kwargs={"min_action": -1.0, "max_action": 1.0})  # fmt: skip
-    eval_config = HopperConfig(**env_values)
-    eval_env = HopperVectorEnv(EVAL_EPISODES, eval_config)
-    space = gym.make(ENV_ID, **env_values).unwrapped.action_space
-    low, high = space.low, space.high
-    history: list[dict] = []
-    clock = {"start": 0.0, "eval": 0.0, "last": -1}
 
-    class Evaluate(BaseCallback):
-        def _on_training_start(self) -> None:
-            clock["start"] = time.perf_counter()
-            self.evaluate_now()
+    def numbers(result: dict) -> dict:
+        apex = episode_metrics(result).get("hop_apex", np.array([math.nan]))
+        return {"return": float(result["episode_return"].mean()), "apex": finite_mean(apex),
+                "hop": finite_mean(result["hop_height"])}  # fmt: skip
 
-        def _on_step(self) -> bool:
-            if self.num_timesteps - clock["last"] < EVAL_EVERY:
-                return True
-            return not (self.evaluate_now() and stop)
-
-        def _on_training_end(self) -> None:
-            if clock["last"] != self.num_timesteps:
-                self.evaluate_now()
-
-        def evaluate_now(self) -> bool:
-            begin = time.perf_counter()
-            result = evaluate(SB3Policy(self.model, low, high), eval_env,
-                              seed=derived_seed(seed, EVAL_SEED_KEY),
-                              control_dt=float(eval_config.control_dt),
-                              max_steps=eval_config.episode_steps, traces=True)  # fmt: skip
-            apex = episode_metrics(result).get("hop_apex", np.array([math.nan]))
-            clock["eval"] += time.perf_counter() - begin
-            clock["last"] = self.num_timesteps
-            wall = time.perf_counter() - clock["start"] - clock["eval"]
-            history.append({"steps": int(self.num_timesteps), "wall": wall,
-                            "return": float(result["episode_return"].mean()),
-                            "apex": finite_mean(apex),
-                            "hop": finite_mean(result["hop_height"])})  # fmt: skip
-            return target.met(history[-1])
-
-    model = PPO("MlpPolicy", env, seed=seed, device="cpu", verbose=0)
-    try:
-        model.learn(total_timesteps=budget, callback=Evaluate())
-    finally:
-        env.close()
-        eval_env.close()
+    history = sb3_history(env, seed, budget, physics, EVAL_EVERY, EVAL_EPISODES, numbers,
+                          target.met, stop, traces=True)  # fmt: skip
     return {"history": history, "warm_steps": 0, "warm_wall": 0.0, "num_envs": num_envs}
 
 
@@ -351,8 +251,8 @@ def summarize(run: dict, search: dict | None, target: Target) -> dict:
     start_wall = run["warm_wall"] + (search["wall"] if search else 0.0)
     curve = charged(run["history"], start_steps, start_wall)
     best = best_so_far(curve)
-    return {**run, "start_steps": start_steps, "start_wall": start_wall, "curve": curve,
-            "hit": first_at_target(curve, target),
+    return {**run, **shared.to_target(run["history"], target.met), "start_steps": start_steps,
+            "start_wall": start_wall, "curve": curve, "hit": first_at_target(curve, target),
             "best_return": best[-1]["return"] if best else math.nan,
             "best_apex": best[-1]["apex"] if best else math.nan}  # fmt: skip
 
@@ -412,19 +312,17 @@ def kilo(steps: float) -> str:
 
 
 def method_row(method: Method, runs: list[dict]) -> str:
-    hits = [r["hit"] for r in runs if r["hit"] is not None]
+    hits, steps, wall = over_seeds(runs)  # the start charged
     start_steps = median_or_none([r["start_steps"] for r in runs]) or 0
     start_wall = median_or_none([r["start_wall"] for r in runs]) or 0.0
     start = f"{kilo(start_steps)}, {start_wall:.0f} s" if start_steps else "none"
-    steps = median_or_none([h["steps"] for h in hits])
-    wall = median_or_none([h["wall"] for h in hits])
     per_seed = "; ".join(
         f"{kilo(r['hit']['steps'])}, {r['hit']['wall']:.0f} s" if r["hit"] is not None
         else f"not in {kilo(r['curve'][-1]['steps'] if r['curve'] else 0)}"
         for r in runs
     )  # fmt: skip
     cells = [
-        method.label, str(method.num_envs), start, f"{len(hits)}/{len(runs)}",
+        method.label, str(method.num_envs), start, f"{hits}/{len(runs)}",
         "-" if steps is None else f"**{kilo(steps)}**",
         "-" if wall is None else f"**{wall:.0f} s**",
         f"{np.nanmedian([r['best_return'] for r in runs]):.0f}",
@@ -561,11 +459,8 @@ def budgets_list(text: str) -> list[int]:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    if argv[:1] == ["--one-run"]:
-        print(json.dumps(project_run(RunSpec(**json.loads(argv[1])))))
-        return 0
-    if argv[:1] == ["--one-search"]:
-        print(json.dumps(search_run(SearchSpec(**json.loads(argv[1])))))
+    if shared.answer(argv, {"--one-run": (RunSpec, project_run),
+                            "--one-search": (SearchSpec, search_run)}):  # fmt: skip
         return 0
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--seeds", type=positive_int, default=3)
@@ -641,7 +536,7 @@ def main(argv: list[str] | None = None) -> int:
     from cpg_actor.agents import get_agent_spec
     from cpg_actor.config import parse_override
     from cpg_actor.machine import cpu_model, load_average, usable_cores
-    from time_to_hop import ceiling, start_gait_file
+    from time_to_target import hopper_ceiling, start_gait_file
 
     agents = args.agents.split(",")
     for agent in agents:
@@ -725,10 +620,10 @@ def main(argv: list[str] | None = None) -> int:
                     run = sb3_run(seed, method.num_envs, values, args.budget, target,
                                   args.stop_at_target)  # fmt: skip
                 else:
-                    start = None
-                    if search is not None and args.start == "found":
-                        start = search["gait"]
-                    spec = RunSpec(method.agent, args.preset, seed, values, args.budget, start,
+                    run_values = list(values)
+                    if search is not None and args.start == "found":  # the gait it found
+                        run_values.append({"agent_config": {"start_gait": search["gait"]}})
+                    spec = RunSpec(method.agent, args.preset, seed, run_values, args.budget,
                                    list(target), args.stop_at_target)  # fmt: skip
                     run = in_fresh_process("--one-run", spec)
                 results[method.label].append({**summarize(run, search, target), "seed": seed,
@@ -740,7 +635,8 @@ def main(argv: list[str] | None = None) -> int:
                     f"{'at target ' + str(hit) if hit else 'target not reached'}",
                     flush=True,
                 )
-    ceilings = {n: ceiling(n, args.ceiling_steps) for n in sorted({m.num_envs for m in methods})}
+    sizes = sorted({m.num_envs for m in methods})
+    ceilings = {n: hopper_ceiling(n, args.ceiling_steps) for n in sizes}
     if args.start == "found":
         start_note = (
             "The methods that start from the searched gait start from the gait the "

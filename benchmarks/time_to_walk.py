@@ -76,23 +76,25 @@ import json
 import math
 import os
 import sys
-from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
-from bench_report import (
-    charged_warm_start,
-    companions,
-    evaluation_recorder,
-    json_from_tree,
-    measured,
-    write,
-)
+from bench_report import companions, measured, write
 from cpg_actor.files import atomic_write_text
 from cpg_actor.training.hooks import Hook
+from time_to_target import (
+    answer,
+    evaluate_every,
+    evaluation_recorder,
+    in_fresh_process,
+    split,
+    to_target,
+    total_steps,
+    total_wall,
+    train,
+)
 
-HERE = Path(__file__).resolve().parent
 OUTPUT = "benchmarks/results/time_to_walk.md"
 AGENTS = ("cpg-actor", "mlp-warm", "mlp")
 GRID_OUTPUT = "benchmarks/results/time_to_walk_grid.md"
@@ -175,7 +177,7 @@ def run_config(spec: RunSpec):
     overrides = [*variant_overrides, *spec.overrides]
     preset = variant_preset(spec.agent, "omni" if spec.grid else None)
     config = compose_config(preset, None, values, overrides)
-    config.eval_interval = max(1, round(spec.eval_interval / config.steps_per_iteration))
+    evaluate_every(config, spec.eval_interval)
     config.validate()
     return config
 
@@ -197,7 +199,6 @@ def project_run(spec: RunSpec) -> dict:
     """One run in this process: the ceiling, the training with every evaluation recorded and
     the start timed, the ceiling again; :func:`summarize`'d."""
     from cpg_actor.robots.registry import get_robot
-    from cpg_actor.training.runner import Runner
 
     config = run_config(spec)
     if config.agent_config.start_gait:
@@ -216,21 +217,19 @@ def project_run(spec: RunSpec) -> dict:
     before, threads = ceiling(config, robot, spec.ceiling_seconds)
 
     def met(evaluation: dict[str, float]) -> bool:  # each evaluation, also to the log
-        print(f"{spec.agent} seed {spec.seed}: {runner.global_step:,} steps, "
-              f"{runner.train_wall:.0f} s, {spec.mode} error {evaluation[error]:.3f} "
-              f"m/s, fell {evaluation['eval/fell']:.0%}", file=sys.stderr, flush=True)  # fmt: skip
+        steps, wall, _ = recorder.history[-1]  # this evaluation's
+        print(f"{spec.agent} seed {spec.seed}: {steps:,} steps, {wall:.0f} s, {spec.mode} "
+              f"error {evaluation[error]:.3f} m/s, fell {evaluation['eval/fell']:.0%}",
+              file=sys.stderr, flush=True)  # fmt: skip
         return reached(evaluation, spec.max_speed_error, error)
+
+    def evaluated_on_grid(runner) -> None:
+        runner.evaluation.evaluator = grid
 
     recorder = evaluation_recorder(met)
     stopped = StopOnSignal()
-    runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder, stopped])
-    runner.evaluation.evaluator = grid
-    start = charged_warm_start(runner, config)  # mlp-warm's cloning
-    try:
-        runner.learn()
-        trained_steps, train_wall = runner.global_step, runner.train_wall
-    finally:
-        runner.close()
+    start, runner = train(config, recorder, [stopped], evaluated_on_grid)  # start: mlp-warm's
+    trained_steps, train_wall = runner.global_step, runner.train_wall
     after, _ = ceiling(config, robot, spec.ceiling_seconds)
     history = [{"steps": step, "wall": wall, **{k: e[k] for k in KEPT if k in e}}
                for step, wall, e in recorder.history]  # fmt: skip
@@ -276,8 +275,6 @@ def summarize(history: list[dict], max_speed_error: float, start_steps: int = 0,
     ``start_steps`` and ``start_wall``, charged on top; ``first`` (before any update),
     ``best`` (the lowest error of those with no fall) and ``lowest`` (the lowest error,
     falls or not) evaluations, the first of equals, None for none; ``history``."""
-    hit = next((h for h in history if reached(h, max_speed_error, error)), None)
-    end = hit if hit is not None else (history[-1] if history else {"steps": 0, "wall": 0.0})
     finite = [h for h in history if math.isfinite(h[error])]
     standing = [h for h in finite if h["eval/fell"] == 0]  # no episode fell
 
@@ -285,9 +282,7 @@ def summarize(history: list[dict], max_speed_error: float, start_steps: int = 0,
         return min(entries, key=lambda h: h[error]) if entries else None
 
     return {
-        "reached": hit is not None,
-        "steps": end["steps"],
-        "wall": end["wall"],
+        **to_target(history, lambda h: reached(h, max_speed_error, error)),
         "start_steps": start_steps,
         "start_wall": start_wall,
         "first": history[0] if history else None,
@@ -295,35 +290,6 @@ def summarize(history: list[dict], max_speed_error: float, start_steps: int = 0,
         "lowest": lowest(finite),
         "history": history,
     }
-
-
-def total_steps(run: dict) -> int:
-    """Env steps to the run's end point (the target, else its end): its start's and its own."""
-    return run["start_steps"] + run["steps"]
-
-
-def total_wall(run: dict) -> float:
-    """Wall time to the run's end point: its start's and its own training's."""
-    return run["start_wall"] + run["wall"]
-
-
-def tree_run(spec: RunSpec) -> dict:
-    """:func:`project_run` in a fresh process with this tree's package."""
-    arguments = [__file__, "--one-run", json.dumps(spec._asdict())]
-    return json_from_tree(HERE.parent / "src", arguments, show_stderr=True)
-
-
-def one_run(text: str) -> int:
-    """``--one-run``: a :func:`project_run` from its JSON spec; prints its result as JSON."""
-    print(json.dumps(project_run(RunSpec(**json.loads(text)))))
-    return 0
-
-
-def split(total: float, start: float, show) -> str:
-    """``total`` as "start + PPO = total" where a start was charged."""
-    if not start:
-        return show(total)
-    return f"{show(start)} + {show(total - start)} = **{show(total)}**"
 
 
 def kilo(steps: float) -> str:
@@ -470,8 +436,8 @@ def target_text(args, run: dict | None) -> tuple[str, str]:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
-    if argv[:1] == ["--one-run"]:
-        return one_run(argv[1])
+    if answer(argv, {"--one-run": (RunSpec, project_run)}):
+        return 0
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--robot", default="go1", help="a quadruped (default go1)")
     parser.add_argument(
@@ -543,7 +509,7 @@ def main(argv: list[str] | None = None) -> int:
                            args.ceiling_seconds, args.grid,
                            args.grid_episode_seconds or GRID_EPISODE_SECONDS)  # fmt: skip
             cpu_start = cpu_times()
-            run = tree_run(spec)
+            run = in_fresh_process(__file__, "--one-run", spec, show_stderr=True)
             run["stolen"] = stolen_share(cpu_start, cpu_times())  # a neighbour's load
             run["machine"] = cpu_model()  # the clock its times were read on
             runs.append((agent, seed, run))

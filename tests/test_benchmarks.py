@@ -116,8 +116,10 @@ MARKS = {
 
 
 def test_every_script_is_run_here():
-    """A new benchmark script gets its smallest run in RUNS (bench_report.py is their module)."""
-    scripts = {path.name for path in BENCHMARKS.glob("*.py")} - {"bench_report.py"}
+    """A new benchmark script gets its smallest run in RUNS (bench_report.py and
+    time_to_target.py are their modules)."""
+    modules = {"bench_report.py", "time_to_target.py"}
+    scripts = {path.name for path in BENCHMARKS.glob("*.py")} - modules
     assert scripts == {name.split()[0] for name in RUNS}
 
 
@@ -243,7 +245,7 @@ def test_time_to_walk_says_not_reached_and_ends_at_the_cap():
 
 
 def test_the_evaluation_recorder_stops_after_the_first_evaluation_at_the_target():
-    recorder = benchmark("bench_report").evaluation_recorder(lambda e: e["x"] <= 1)
+    recorder = benchmark("time_to_target").evaluation_recorder(lambda e: e["x"] <= 1)
     runner = SimpleNamespace(last_evaluation={"x": 3}, global_step=0, train_wall=0.0)
     recorder.start(runner, True)
     stops = []
@@ -255,12 +257,68 @@ def test_the_evaluation_recorder_stops_after_the_first_evaluation_at_the_target(
     assert stops == [False, False, False, True, True]
     assert [(s, w, e["x"]) for s, w, e in recorder.history] == [
         (0, 0.0, 3), (20, 2.0, 2), (40, 4.0, 1), (50, 5.0, 0)]  # fmt: skip
-    first = benchmark("bench_report").evaluation_recorder(lambda e: e["x"] <= 1)
+    first = benchmark("time_to_target").evaluation_recorder(lambda e: e["x"] <= 1)
     runner.last_evaluation = {"x": 0}  # at the target before training: stop at once
     first.start(runner, True)
     it = SimpleNamespace(evaluation=None, stop=False)
     first.iteration(runner, it)
     assert it.stop
+
+
+def test_the_time_to_a_target_is_the_first_evaluation_at_it_else_the_runs_end(capsys):
+    """time_to_target: a run's time is its first evaluation at the target, its start charged
+    on top; a run that never got there is censored at its last evaluation. Over seeds: the
+    medians of the seeds that reached it, and the median wall time with the censored seeds
+    counted as later than their whole run (a lower bound where that median is one of them)."""
+    shared = benchmark("time_to_target")
+
+    def met(entry: dict) -> bool:
+        return entry["x"] <= 1
+
+    history = [{"steps": 0, "wall": 0.0, "x": 3}, {"steps": 100, "wall": 1.5, "x": 1},
+               {"steps": 200, "wall": 3.0, "x": 0}]  # fmt: skip
+    assert shared.first_at_target(history, met) is history[1]
+    assert shared.to_target(history, met) == {"reached": True, "steps": 100, "wall": 1.5}
+    never = [history[0], {"steps": 300, "wall": 4.0, "x": 2}]
+    assert shared.first_at_target(never, met) is None
+    assert shared.to_target(never, met) == {"reached": False, "steps": 300, "wall": 4.0}
+    assert shared.to_target([], met) == {"reached": False, "steps": 0, "wall": 0.0}
+    assert shared.charged(history, 1000, 10.0)[1] == {"steps": 1100, "wall": 11.5, "x": 1}
+    start = {"start_steps": 1000, "start_wall": 10.0}
+    runs = [{**shared.to_target(history, met), **start},  # 1,100 steps, 11.5 s
+            {"reached": True, "steps": 300, "wall": 2.5, **start},  # 1,300 steps, 12.5 s
+            {**shared.to_target(never, met), **start}]  # censored: 1,300 steps, 14 s  # fmt: skip
+    assert (shared.total_steps(runs[2]), shared.total_wall(runs[2])) == (1300, 14.0)
+    assert shared.total_steps({"steps": 5, "wall": 1.0}) == 5  # nothing charged
+    assert shared.over_seeds(runs) == (2, 1200.0, 12.0)
+    assert shared.over_seeds(runs[2:]) == (0, None, None)
+    assert shared.censored_median_wall(runs) == (12.5, False)
+    assert shared.censored_median_wall(runs[1:]) == (13.25, True)  # 12.5 s and >= 14 s
+    assert shared.split(1300, 1000, str) == "1000 + 300 = **1300**"
+    assert shared.split(300, 0, str) == "300"
+    # a run's spec travels to a fresh process as JSON, its result comes back as JSON
+    twice = {"--one-run": (dict, lambda given: {"twice": 2 * given["x"]})}
+    assert not shared.answer(["--seeds", "3"], twice)
+    assert shared.answer(["--one-run", json.dumps({"x": 2})], twice)
+    assert json.loads(capsys.readouterr().out) == {"twice": 4}
+
+
+def test_time_to_hop_censors_a_run_below_the_threshold_at_its_end_with_its_best_return():
+    hop = benchmark("time_to_hop")
+    evaluations = [(0, 0.0, 300.0, 0.30), (100, 1.0, 700.0, 0.44), (200, 2.0, 600.0, 0.46),
+                   (300, 3.0, 650.0, 0.40)]  # fmt: skip
+    history = [hop.point(s, w, {"eval/return": r, "eval/hop_height": h})
+               for s, w, r, h in evaluations]  # fmt: skip
+    run = hop.summarize(history, (None, 0.45))
+    assert run["reached"] and (run["steps"], run["wall"], run["hop"]) == (200, 2.0, 0.46)
+    assert run["best"]["steps"] == 200 and run["near_best"]["steps"] == 100  # 0.44 >= 0.437
+    missed = hop.summarize(history, (800.0, 0.45))
+    assert not missed["reached"] and (missed["steps"], missed["wall"]) == (300, 3.0)
+    assert (missed["return"], missed["hop"]) == (700.0, 0.44)  # the best return and its hop
+    assert hop.fmt_runs([missed]) == ("0/1", "not reached", "-")
+    run["start_steps"], run["start_wall"] = 1000, 10.0
+    assert hop.fmt_runs([run, missed]) == ("1/2", "1k + 0k = **1k**", "10 s + 2 s = **12 s**")
+    assert hop.wall_ratio([missed, missed], [run, run]) == ">= 3 s / 12 s = **>= 0.25x**"
 
 
 def test_time_to_walk_trains_as_a_run_without_its_evaluations():
@@ -277,7 +335,7 @@ def test_time_to_walk_trains_as_a_run_without_its_evaluations():
     parameters = []
     for evaluated in (True, False):
         config = walk.run_config(spec)
-        recorder = benchmark("bench_report").evaluation_recorder()
+        recorder = benchmark("time_to_target").evaluation_recorder()
         if not evaluated:
             config.eval_interval = 0
         runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder])
@@ -366,7 +424,7 @@ def test_time_to_walk_grid_trains_as_a_run_without_its_evaluations():
     for evaluated in (True, False):
         config = walk.run_config(spec)
         assert config.preset == "omni" and config.env.lateral_range != (0.0, 0.0)
-        recorder = benchmark("bench_report").evaluation_recorder()
+        recorder = benchmark("time_to_target").evaluation_recorder()
         if not evaluated:
             config.eval_interval = 0
         runner = Runner(config, run_dir=None, tensorboard=False, hooks=[recorder])

@@ -40,11 +40,6 @@ NOT_TRAINING = frozenset({
 })  # fmt: skip
 SHOWN_DIFFERENCES = 2  # config differences named in a legend label; more are counted
 
-# Student t's 0.975 quantile for 1..30 degrees of freedom (the 95% band of a mean)
-T_975 = (12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179,
-         2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064,
-         2.060, 2.056, 2.052, 2.048, 2.045, 2.042)  # fmt: skip
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("runs", nargs="+", help="run directories written by `cpg-actor train`")
@@ -156,26 +151,18 @@ def group_labels(configs: dict[tuple, dict[str, Any]]) -> dict[tuple, str]:
     }
 
 
-def t_quantile(df: int) -> float:
-    """Student t's 0.975 quantile with ``df`` degrees of freedom (a table to 30, then the
-    Cornish-Fisher expansion around the normal's 1.96)."""
-    if df <= len(T_975):
-        return T_975[df - 1]
-    z = 1.959964
-    return z + (z**3 + z) / (4 * df) + (5 * z**5 + 16 * z**3 + 3 * z) / (96 * df**2)
-
-
 def mean_band(curves: list[tuple[list[int], list[float]]]):
     """``(steps, mean, half width of the 95% band)`` at the steps where every curve has a value
-    (``None`` if there is none)."""
+    (``None`` if there is none); the band: Student t's 0.975 quantile over the curves."""
     import numpy as np
+    from scipy import stats
 
     common = sorted(set.intersection(*(set(steps) for steps, _ in curves)))
     if not common:
         return None
     table = np.array([[dict(zip(s, v, strict=True))[step] for step in common] for s, v in curves])
     n = len(curves)
-    half = t_quantile(n - 1) * table.std(axis=0, ddof=1) / math.sqrt(n)
+    half = stats.t.ppf(0.975, n - 1) * table.std(axis=0, ddof=1) / math.sqrt(n)
     return np.array(common), table.mean(axis=0), half
 
 
