@@ -23,6 +23,12 @@ PyTorch policy rounds float32 differently from ONNX Runtime, which moves a legge
 return a little (``docs/training.md``, "Export"). On a real robot, ``Simulation`` is the
 robot's driver and the reward goes; the loop stays as it is.
 
+A run of the field's recipes (``--preset playground`` on the Go1, ``legged_gym`` on ANYmal B)
+runs as well: its observation ends with the base's linear velocity, read from the MJCF's
+velocimeter (on a robot a state estimator's, the metadata's ``on_robot``). This example
+writes out the project's own velocity task, not those recipes' starts, commands and clipped
+rewards, so for such a run the printed return is not ``cpg-actor eval``'s.
+
 Another model of the robot (``--mjcf OTHER.xml``, a quadruped's policy): its joints are found
 by name (one line naming those it lacks), its actuators switched off and the metadata's
 actuator law applied as joint torques at every substep of its own timestep; the sites, sensors

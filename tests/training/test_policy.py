@@ -58,7 +58,7 @@ def test_policy_errors_say_what_is_wrong(trained, tmp_path):
     with pytest.raises(RuntimeError, match="reset"):
         policy.act(np.zeros((1, 8), dtype=np.float32))
     policy.reset(2)
-    with pytest.raises(ValueError, match=r"shape \(2, obs_dim\)"):
+    with pytest.raises(ValueError, match=r"shape \(2, 8\), got \(3, 8\)"):
         policy.act(np.zeros((3, 8), dtype=np.float32))
     with pytest.raises(FileNotFoundError, match="does not exist"):
         load_policy(tmp_path / "nothing.pt")

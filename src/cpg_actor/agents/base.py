@@ -288,6 +288,9 @@ class Agent(nn.Module):
         if not bool((scale > 0).all()) or not bool(torch.isfinite(scale).all()):
             raise ValueError(f"action_scale must be positive and finite, got {scale.tolist()}")
         self.obs_dim = obs_dim
+        # the leading observation entries the actor reads: all here; fewer where the entries
+        # after them are the critic's alone (the MLP's privileged critic)
+        self.actor_obs = obs_dim
         self.action_dim = int(scale.shape[0])
         # entries of a sampled ActStep.action: the env's action first, then any other random
         # choice the agent makes and the storage keeps (the CPG-Actor's noisy feedback)
@@ -337,7 +340,9 @@ class Agent(nn.Module):
         return self.critic(features).squeeze(-1)
 
     def act(self, obs: Tensor, state: Tensor, deterministic: bool = False) -> ActStep:
-        """Sample (or take the mean) action for a batch; no gradients needed by callers."""
+        """Sample (or take the mean) action for a batch; no gradients needed by callers.
+        ``obs``: ``(B, obs_dim)``, or the actor's entries alone ``(B, actor_obs)`` (a robot's
+        observation, without the critic's privileged entries: the value is then NaN)."""
         out = self.actor(obs, state)
         if deterministic:
             action = out.mean
@@ -345,9 +350,11 @@ class Agent(nn.Module):
             with torch.no_grad():
                 action = gaussian_sample(out.mean.expand(out.std.shape), out.std)
         log_prob = gaussian_log_prob(action, out.mean, out.std).sum(-1)
-        return ActStep(
-            action, log_prob, self.value(obs, state), out.mean, out.std, out.next_state, out.extras
-        )
+        if obs.shape[-1] == self.obs_dim:
+            value = self.value(obs, state)
+        else:  # the critic's entries are not there
+            value = torch.full_like(log_prob, float("nan"))
+        return ActStep(action, log_prob, value, out.mean, out.std, out.next_state, out.extras)
 
     def replay_state(self, obs: Tensor, state: Tensor, sample: Tensor) -> Tensor:
         """The state after the step from ``(obs, state)`` that drew ``sample`` (a stored

@@ -20,9 +20,11 @@ class MLPAgent(Agent):
 
     ``actor_obs``: the actor reads the first ``actor_obs`` entries of the observation and the
     critic all of them (an asymmetric actor-critic: the entries after them are privileged,
-    MuJoCo Playground's ``privileged_state``); None: both read all. ``input_scale``: a fixed
-    factor per observation entry, applied before the actor and the critic read it
-    (``agent_config.observation_scales``: legged_gym's scaled observation); None: none.
+    MuJoCo Playground's ``privileged_state``); None: both read all. The actor takes either
+    the whole observation or its first ``actor_obs`` entries alone (a deployed robot's).
+    ``input_scale``: a fixed factor per observation entry, applied before the actor and the
+    critic read it (``agent_config.observation_scales``: legged_gym's scaled observation);
+    None: none.
     """
 
     state_shape = (0,)
@@ -71,6 +73,8 @@ class MLPAgent(Agent):
         }
 
     def actor(self, obs: Tensor, state: Tensor) -> ActorOutput:
-        inputs = self.scaled(obs)[:, : self.actor_obs]
+        inputs = obs[:, : self.actor_obs]  # the whole observation or the actor's entries
+        if self.input_scale is not None:
+            inputs = inputs * self.input_scale[: self.actor_obs]
         mean = self.nominal_pose + self.action_scale * self.actor_mlp(inputs)
         return ActorOutput(mean, self.std(obs.shape[0]), state, {})

@@ -60,7 +60,8 @@ class AgentSpec:
     # (cpg_actor.training.es_runner.ESRunner)
     trainer: str = "ppo"
     # its actor leaves out the observation's privileged entries, its critic reads them (an
-    # env's ``privileged_observation``, an asymmetric actor-critic)
+    # env's ``privileged_observation``, an asymmetric actor-critic): the MLP's builder
+    # (``mlp``, ``mlp-warm``, whose cloning fits that actor on the actor's entries alone)
     privileged_critic: bool = False
     # its networks read the observation scaled by agent_config.observation_scales
     observation_scales: bool = False
@@ -159,6 +160,7 @@ register_agent(
         build_mlp,
         warm_start=warm_start_mlp,
         uses_start_gait=True,
+        privileged_critic=True,
         observation_scales=True,
     )
 )

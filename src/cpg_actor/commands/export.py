@@ -64,7 +64,7 @@ def run(args: argparse.Namespace) -> int:
     where = "metadata_props" if args.format == "onnx" else "extra file metadata.json"
     print(
         f"exported {policy.config.agent} ({args.format}) to {path}: inputs observation "
-        f"({args.batch}, {policy.normalizer.mean.shape[0]}) and state ({args.batch}, "
+        f"({args.batch}, {policy.actor_obs_dim}) and state ({args.batch}, "
         f"{', '.join(map(str, state))}), outputs action and next_state; metadata (joints, "
         f"control period, observation layout, actuator law) in its {where}; initial state in "
         f"{sidecars['initial_state'].name}, the robot's MJCF in {sidecars['mjcf'].name}"

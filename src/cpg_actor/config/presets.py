@@ -40,9 +40,9 @@ follow when none is given (``Robot.recipe``: the hopper ``paper``, the quadruped
   source: PD 35 / 0.5, actions home + 0.5 a, the reward's terms and scales clipped at 0, the
   base's linear velocity and uniform noise in the observation, a privileged critic, the
   command process); the PPO's are rsl_rl's recipe from ``config/locomotion_params.py``
-  (:data:`PLAYGROUND`). For the ``mlp`` agent (its privileged critic: ``env.privileged_
-  observation``); ``docs/go1.md``, "MuJoCo Playground's recipe". A robot without
-  ``PLAYGROUND``: ValueError.
+  (:data:`PLAYGROUND`). For the ``mlp`` agents (``mlp``, ``mlp-warm``: their privileged
+  critic, ``env.privileged_observation``); ``docs/go1.md``, "MuJoCo Playground's recipe". A
+  robot without ``PLAYGROUND``: ValueError.
 
 * ``legged_gym``: legged_gym's ANYmal B recipe as its source runs it (leggedrobotics/
   legged_gym, ``AnymalBRoughCfg`` on flat ground, trained by rsl_rl v1.0.2): the env's values

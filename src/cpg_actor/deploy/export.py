@@ -5,14 +5,18 @@ The exported function is the deterministic control step of
 
     (observation, state) -> (action, next_state)
 
-* ``observation``: ``(B, obs_dim)`` float32, the env's raw observation (for the hopper, in the
-  order of ``cpg_actor.robots.hopper.task.OBS_NAMES``: measured HFE, KFE positions (rad)
-  and velocities (rad/s), the desired positions being tracked (rad), hip height (m), hip
-  velocity (m/s)); the observation normaliser is inside. A non-finite entry (NaN, +-inf) is
-  replaced by the normaliser's mean (0 where the run does not normalise) before anything else,
-  so the policy acts as if that sensor read its average; the action stays finite. A deployment
-  should not rely on it: it should refuse a non-finite observation before the call (as
-  ``examples/deploy_onnx.py`` does), the model's replacement being the fallback.
+* ``observation``: ``(B, obs_dim)`` float32, the raw observation the actor reads (for the
+  hopper, in the order of ``cpg_actor.robots.hopper.task.OBS_NAMES``: measured HFE, KFE
+  positions (rad) and velocities (rad/s), the desired positions being tracked (rad), hip
+  height (m), hip velocity (m/s)): the env's, less the critic's privileged entries where the
+  run has them (``env.privileged_observation``: ``Policy.actor_obs_dim`` entries). Every
+  transform of it is inside: the observation normaliser and the agent's fixed observation
+  scales (``agent_config.observation_scales``), both described in the metadata; feed it raw.
+  A non-finite entry (NaN, +-inf) is replaced by the normaliser's mean (0 where the run does
+  not normalise) before anything else, so the policy acts as if that sensor read its
+  average; the action stays finite. A deployment should not rely on it: it should refuse a
+  non-finite observation before the call (as ``examples/deploy_onnx.py`` does), the model's
+  replacement being the fallback.
 * ``state``: ``(B, *state_shape)`` float32, the agent's recurrent state: for the CPG-Actor the
   CPG state ``(B, 5, N)`` (rows: phase theta, theta_dot, amplitude r, r_dot, r_ddot; columns:
   oscillators; on a robot with a drive, the quadruped, a sixth row: the drive d, set from the
@@ -82,6 +86,8 @@ OBSERVATION_SOURCES = {
     "the env's reset value before the first",
     "command": "the episode's velocity command (forward, lateral m/s, yaw rad/s)",
 }
+# an entry read from the simulation that a robot has no sensor for carries "on_robot": what
+# stands for it there (the base's linear velocity: a state estimator's)
 NONFINITE_OBSERVATIONS = (
     "replaced inside the model by observation_normalization.mean (0 when not normalising): a "
     "fallback; refuse non-finite observations before the call (examples/deploy_onnx.py does)"
@@ -98,10 +104,11 @@ class ControlStep(nn.Module):
         super().__init__()
         # a frozen copy: the exported step needs no gradients (outputs without requires_grad)
         self.agent = copy.deepcopy(policy.agent).requires_grad_(False)
-        normalizer = policy.normalizer
+        normalizer, size = policy.normalizer, policy.actor_obs_dim  # the actor's entries
         self.normalize = policy.normalize_observations
-        self.register_buffer("mean", normalizer.mean.to(torch.float32))
-        self.register_buffer("std", torch.sqrt(normalizer.var + normalizer.epsilon).float())
+        self.register_buffer("mean", normalizer.mean[:size].to(torch.float32))
+        std = torch.sqrt(normalizer.var[:size] + normalizer.epsilon)
+        self.register_buffer("std", std.float())
         # what a non-finite entry becomes: the mean, normalised to 0
         fill = self.mean if self.normalize else torch.zeros_like(self.mean)
         self.register_buffer("fill", fill.clone())
@@ -137,6 +144,7 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
     :func:`cpg_actor.deploy.load_policy`, which knows its run and robot), key -> string
     (``docs/training.md``, "Export", has the table)."""
     from cpg_actor import __version__
+    from cpg_actor.agents.base import observation_scale
     from cpg_actor.deploy.interface import model_interface, named_sources
     from cpg_actor.robots.common.actuator import Actuator
     from cpg_actor.robots.registry import get_robot
@@ -148,17 +156,22 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
         )
     env = config.env
     actuator = Actuator.from_config(env)
-    normalizer = policy.normalizer
-    std = torch.sqrt(normalizer.var + normalizer.epsilon)
+    normalizer, size = policy.normalizer, policy.actor_obs_dim
+    names = list(robot.observation_names[:size])  # the actor's: no privileged entries
+    std = torch.sqrt(normalizer.var[:size] + normalizer.epsilon)
+    factors = [1.0] * size  # the agent's fixed scales, as configured (inside: in float32)
+    if getattr(policy.agent, "input_scale", None) is not None:
+        factors = observation_scale(names, config.agent_config.observation_scales)
     state = initial_state(policy, batch)
     plugin = get_robot(config.robot)
     mjcf = plugin.mjcf(env)  # the model the policy trained on: its joints, sites, sensors
-    sources = named_sources(mjcf, [dict(source) for source in plugin.observation_sources()])
-    if len(sources) != len(robot.observation_names):  # the recipe's options add entries
+    sources = named_sources(mjcf, [dict(source) for source in plugin.observation_sources(env)])
+    if len(sources) != size:  # an env option the robot's deploy interface does not know
+        first = f", from {names[len(sources)]} on" if len(sources) < size else ""
         raise ValueError(
-            f"the policy observes {len(robot.observation_names)} entries, of which the robot's "
-            f"deploy interface describes {len(sources)}: a run with env.observe_lin_vel or "
-            "env.privileged_observation (the playground recipe) cannot be exported yet"
+            f"the policy's actor reads {size} observation entries and the {config.robot} "
+            f"robot's deploy interface (observation_sources) describes {len(sources)}{first}: "
+            "this run cannot be exported"
         )
     values: dict[str, Any] = {
         "cpg_actor_version": __version__,
@@ -176,17 +189,17 @@ def export_metadata(policy: Policy, batch: int = 1, mjcf_file: str = "") -> dict
         "control_dt": float(robot.control_dt),
         "physics_dt": float(env.physics_dt),
         "decimation": int(env.decimation),
-        "observation_names": list(robot.observation_names),
+        "observation_names": names,
         "observation_sources": [
-            {"name": name, **source}
-            for name, source in zip(robot.observation_names, sources, strict=True)
+            {"name": name, **source} for name, source in zip(names, sources, strict=True)
         ],  # fmt: skip
         "observation_normalization": {
             "inside": bool(policy.normalize_observations),
-            "mean": normalizer.mean.double().cpu().tolist(),
+            "mean": normalizer.mean[:size].double().cpu().tolist(),
             "std": std.double().cpu().tolist(),
             "clip": float(normalizer.clip),
         },
+        "observation_scales": {"inside": True, "factors": factors},
         "nonfinite_observations": NONFINITE_OBSERVATIONS,
         "drive_observation": robot.drive_observation,
         "state_shape": list(state.shape),
@@ -274,7 +287,7 @@ def export_policy(
     metadata = export_metadata(policy, batch, sidecars["mjcf"].name)
     mjcf = get_robot(policy.config.robot).mjcf(policy.config.env)
     module = ControlStep(policy).cpu().eval()  # exported for the CPU, wherever it trained
-    obs_dim = int(policy.normalizer.mean.shape[0])
+    obs_dim = policy.actor_obs_dim  # the actor's observation: no privileged entries
     example = (torch.zeros(batch, obs_dim), torch.as_tensor(initial_state(policy, batch)))
     path.parent.mkdir(parents=True, exist_ok=True)
     temporary = {target: new_temporary(target) for target in (path, *sidecars.values())}

@@ -47,8 +47,17 @@ class RunningNormalizer(nn.Module):
 
     def forward(self, x: Tensor) -> Tensor:
         """Normalise ``x`` (any leading shape); does not update the statistics."""
-        std = torch.sqrt(self.var + self.epsilon)
-        y = (x.to(torch.float64) - self.mean) / std
+        return self._normalized(x, self.mean, self.var)
+
+    def leading(self, x: Tensor) -> Tensor:
+        """Normalise ``x``, the first ``x.shape[-1]`` entries of an observation (an actor's
+        without the critic's privileged entries), as :meth:`forward` does in the whole."""
+        size = x.shape[-1]
+        return self._normalized(x, self.mean[:size], self.var[:size])
+
+    def _normalized(self, x: Tensor, mean: Tensor, var: Tensor) -> Tensor:
+        std = torch.sqrt(var + self.epsilon)
+        y = (x.to(torch.float64) - mean) / std
         return y.clamp(-self.clip, self.clip).to(x.dtype)
 
 

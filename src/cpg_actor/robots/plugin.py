@@ -101,10 +101,11 @@ class Robot:
     metrics: dict[str, MetricInfo]  # its envs' episode metrics, the headline first
     gym_ids: tuple[GymId, ...]
     # for a policy deployed outside the project (cpg_actor.deploy.export): the MJCF of the model
-    # its MuJoCo env simulates under a config, and where each observation entry comes from in
-    # that model's data (one mapping per entry; cpg_actor.deploy.export.OBSERVATION_SOURCES)
+    # its MuJoCo env simulates under a config, and where each entry of the actor's observation
+    # comes from in that model's data under a config (one mapping per entry, the critic's
+    # privileged entries left out; cpg_actor.deploy.export.OBSERVATION_SOURCES)
     mjcf: Callable[[Any], str]
-    observation_sources: Callable[[], tuple[dict[str, Any], ...]]
+    observation_sources: Callable[[Any], tuple[dict[str, Any], ...]]
     # each shipped simulator file and the text its description generates
     # (`python -m cpg_actor.robots` rewrites them)
     assets: Callable[[], dict[Path, str]]

@@ -85,12 +85,22 @@ def actor_entries(names: Sequence[str]) -> int:
     return count
 
 
-def observation_sources(nominal_pose: Sequence[float]) -> tuple[dict, ...]:
-    """Where each observation entry comes from in the MuJoCo model's data
+# what stands for the base's linear velocity on a real robot, where no sensor measures it
+LIN_VEL_ON_ROBOT = (
+    "no sensor measures it on a robot: a state estimator's estimate of the base's linear "
+    "velocity in the base frame (m/s), from the IMU and the legs' kinematics, as legged_gym's "
+    "and MuJoCo Playground's deployments use"
+)
+
+
+def observation_sources(nominal_pose: Sequence[float], lin_vel: bool = False) -> tuple[dict, ...]:
+    """Where each entry of the actor's observation comes from in the MuJoCo model's data
     (:data:`cpg_actor.deploy.export.OBSERVATION_SOURCES`): qpos 0-6 and qvel 0-5 are the free
-    base's, the joints follow in joint order."""
+    base's, the joints follow in joint order; ``lin_vel``: the base's linear velocity after
+    them (the base frame's velocimeter, each entry with ``on_robot``: :data:`LIN_VEL_ON_ROBOT`).
+    The critic's privileged entries have none: the actor does not read them."""
     nominal = [float(p) for p in nominal_pose]
-    return (
+    sources = (
         *({"source": "sensor", "sensor": "base_ang_vel", "index": i} for i in range(3)),
         *({"source": "projected_gravity", "quaternion": 3, "index": i} for i in range(3)),
         *({"source": "command", "index": i} for i in range(3)),
@@ -98,6 +108,10 @@ def observation_sources(nominal_pose: Sequence[float]) -> tuple[dict, ...]:
         *({"source": "qvel", "index": 6 + j} for j in range(len(nominal))),
         *({"source": "desired", "index": j, "offset": 0.0 - p} for j, p in enumerate(nominal)),
     )  # fmt: skip
+    if lin_vel:
+        sources = (*sources, *({"source": "sensor", "sensor": "base_lin_vel", "index": i,
+                                "on_robot": LIN_VEL_ON_ROBOT} for i in range(3)))  # fmt: skip
+    return sources
 
 
 def sensor_noise(num_joints: int) -> np.ndarray:

@@ -7,6 +7,11 @@ sampling and the normaliser updating), the evaluation during training, ``cpg-act
 video and anything that deploys a trained agent use this same step, so they cannot drift apart.
 When episodes end, :meth:`end_episodes` restarts those envs' states.
 
+Where the critic reads privileged entries the actor does not (an env's
+``privileged_observation``, MuJoCo Playground's recipe), :meth:`act` also takes the actor's
+entries alone (:attr:`Policy.actor_obs_dim`), the observation a robot measures: the action is
+the same, the value NaN.
+
 :func:`cpg_actor.deploy.load_policy` builds one from a run directory or a checkpoint, with no
 trainer, env or optimiser.
 """
@@ -68,6 +73,17 @@ class Policy:
         return self.agent.log_std.device
 
     @property
+    def obs_dim(self) -> int:
+        """The env's observation entries (the critic's privileged ones included)."""
+        return int(self.normalizer.mean.shape[0])
+
+    @property
+    def actor_obs_dim(self) -> int:
+        """The leading observation entries the actor reads (:attr:`obs_dim` but the critic's
+        privileged entries): :meth:`act` takes an observation of either size."""
+        return int(getattr(self.agent, "actor_obs", self.obs_dim))
+
+    @property
     def num_envs(self) -> int:
         if self.state is None:
             raise RuntimeError("call Policy.reset(num_envs) first")
@@ -101,12 +117,15 @@ class Policy:
         return self._bounds_on[1], self._bounds_on[2]
 
     def normalize(self, obs: Tensor, update: bool = False) -> Tensor:
-        """The agent's input; ``update`` first merges ``obs`` into the running statistics."""
+        """The agent's input; ``update`` first merges ``obs`` into the running statistics.
+        An observation of the actor's entries alone is normalised by their statistics."""
         if not self.normalize_observations:
             return obs
         if update:
             self.normalizer.update(obs)
-        return self.normalizer(obs)
+        if obs.shape[-1] == self.obs_dim:
+            return self.normalizer(obs)
+        return self.normalizer.leading(obs)
 
     def compile(self) -> None:
         """``torch.compile`` the training step (:meth:`act` with ``deterministic=False`` and
@@ -148,6 +167,9 @@ class Policy:
         tensor_action: bool = False,
     ) -> PolicyStep:
         """One control step for every env: ``obs`` (N, obs_dim) -> clipped action (N, A).
+        ``obs`` may also be the actor's entries alone, (N, :attr:`actor_obs_dim`) (a robot's
+        observation, without the critic's privileged entries): the same action, the value
+        (``PolicyStep.agent.value``) NaN; not with ``update_normalizer``.
 
         ``deterministic``: the Gaussian's mean (evaluation, deployment); False samples from
         it (training). ``tensor_action``: the action stays a tensor on the policy's device
@@ -160,10 +182,13 @@ class Policy:
             obs_t = obs.to(self.device, torch.float32)
         else:
             obs_t = torch.as_tensor(np.asarray(obs, dtype=np.float32), device=self.device)
-        if obs_t.dim() != 2 or obs_t.shape[0] != self.num_envs:
-            raise ValueError(
-                f"obs must have shape ({self.num_envs}, obs_dim), got {tuple(obs_t.shape)}"
-            )
+        widths = sorted({self.obs_dim, self.actor_obs_dim})
+        if obs_t.dim() != 2 or obs_t.shape[0] != self.num_envs or obs_t.shape[1] not in widths:
+            shapes = " or ".join(f"({self.num_envs}, {width})" for width in widths)
+            raise ValueError(f"obs must have shape {shapes}, got {tuple(obs_t.shape)}")
+        if update_normalizer and obs_t.shape[1] != self.obs_dim:
+            raise ValueError(f"update_normalizer needs the whole observation ({self.obs_dim} "
+                             f"entries), got the actor's {obs_t.shape[1]}")  # fmt: skip
         training = not deterministic and update_normalizer
         compiled = self._compiled_step if training else None
         step_fn = compiled if compiled is not None else self._step

@@ -332,6 +332,31 @@ def test_a_tiny_training_run_of_the_variant_completes(tmp_path):
     assert rows and all(math.isfinite(v) for v in rows[-1].values() if isinstance(v, float))
 
 
+def test_mlp_warm_trains_on_the_recipe_its_actor_without_the_privileged_entries(tmp_path):
+    """mlp-warm (the MLP cloned from the CPG's trot, then PPO) has the MLP's privileged critic:
+    the cloning and PPO run on the recipe, and its actor reads the actor's entries alone."""
+    from cpg_actor.cli import main
+    from cpg_actor.config import compose_config
+    from cpg_actor.deploy import load_policy
+
+    run = tmp_path / "run"
+    code = main(["train", "--robot", "go1", "--agent", "mlp-warm", "--preset", "playground",
+                 "--total-steps", "192", "--num-envs", "4", "--seed", "100",
+                 "--run-dir", str(run), "--no-progress", "--set", "ppo.compile=false",
+                 "--set", "eval_interval=0", "--set", "env.episode_seconds=1.0",
+                 "--set", "warm_start.epochs=2",
+                 "--set", "warm_start.rollout_steps=20"])  # fmt: skip
+    assert code in (0, None)
+    losses = json.loads((run / "warm_start.json").read_text())["loss"]
+    assert len(losses) == 2 and all(math.isfinite(v) for v in losses)
+    policy = load_policy(run)
+    names = policy.robot.observation_names
+    assert policy.actor_obs_dim == task.actor_entries(names) < policy.obs_dim
+    assert policy.agent.actor_mlp[0].in_features == policy.actor_obs_dim
+    with pytest.raises(ValueError, match="agents that have one: mlp, mlp-warm"):
+        compose_config("playground", values={"robot": "go1", "agent": "cpg-actor"})
+
+
 def test_a_saved_state_resumes_the_recipes_env_exactly():
     """The command clock, the feet's swing peaks and the noise's generators are in the state:
     the steps after set_state are the steps after get_state."""

@@ -34,7 +34,7 @@ def mjcf(config: Any) -> str:
     return simulated_mjcf(mjcf_text, config)
 
 
-def observation_sources() -> tuple[dict[str, Any], ...]:
+def observation_sources(config: Any = None) -> tuple[dict[str, Any], ...]:
     from cpg_actor.robots.hopper.task import OBS_SOURCES
 
     return OBS_SOURCES

@@ -81,5 +81,7 @@ class QuadrupedModel:
     def observation_names(self) -> tuple[str, ...]:
         return task.observation_names(self.joint_names)  # the velocity task's, 45 entries
 
-    def observation_sources(self) -> tuple[dict[str, Any], ...]:
-        return task.observation_sources(self.nominal_pose)
+    def observation_sources(self, lin_vel: bool = False) -> tuple[dict[str, Any], ...]:
+        """Where the actor's observation entries come from (``lin_vel``: the env's
+        ``observe_lin_vel``)."""
+        return task.observation_sources(self.nominal_pose, lin_vel)

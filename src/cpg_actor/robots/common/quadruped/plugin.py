@@ -85,8 +85,9 @@ def _simulated_mjcf(mjcf: str, config: Any) -> str:
     return simulated_mjcf(load(f"{mjcf}:mjcf_text"), config)
 
 
-def _observation_sources(vector_env: str) -> tuple[dict[str, Any], ...]:
-    return load(vector_env).quadruped.observation_sources()
+def _observation_sources(vector_env: str, config: Any) -> tuple[dict[str, Any], ...]:
+    lin_vel = bool(getattr(config, "observe_lin_vel", False))
+    return load(vector_env).quadruped.observation_sources(lin_vel)
 
 
 def _assets(mjcf: str) -> dict[Path, str]:
