@@ -60,8 +60,9 @@ RUNS = {
                                        "ppo.compile=false", "--eval-set",
                                        "env.episode_seconds=0.2"], "--output"),
     "quadruped_throughput.py": (["--envs", "2", "--seconds", "0.2"], "--output"),
-    "quadruped_train_throughput.py": (["--robot", "go1", "--iterations", "1", "--num-envs", "2",
-                                       "--no-compile"], "--output"),
+    "quadruped_train_throughput.py": (["--case", "go1/playground/mlp", "go1/-/cpg-actor",
+                                       "--iterations", "1", "--num-envs", "2", "--no-compile"],
+                                      "--output"),
     # REPRODUCTION: a tiny trained reproduction the test makes (its runs' episodes 250 steps)
     "robustness_suite.py": (["REPRODUCTION", "--variants", "mlp", "--seeds", "1", "--episodes",
                              "1"], "--output"),

@@ -42,12 +42,18 @@ TORQUE_SPEC = mujoco.mjtState.mjSTATE_QFRC_APPLIED.value  # joint torques (actua
 PUSH_SPEC = mujoco.mjtState.mjSTATE_XFRC_APPLIED.value  # forces on bodies (a perturbation's push)
 
 
-def add_mass(model: mujoco.MjModel, body: str, mass: float) -> None:
+def add_mass(model: mujoco.MjModel, body: str, mass: float,
+             scratch: mujoco.MjData | None = None) -> None:  # fmt: skip
     """``mass`` kg added to ``body`` of ``model`` at its centre of mass (a point mass there
     leaves its inertia about the centre as it is), and the model's derived constants
-    recomputed, as compiling it with that mass would (:func:`mujoco.mj_setConst`)."""
+    recomputed, as compiling it with that mass would (:func:`mujoco.mj_setConst`), in
+    ``scratch`` (an MjData of the model's sizes, reset first; None: a new one)."""
     model.body_mass[model.body(body).id] += mass
-    mujoco.mj_setConst(model, mujoco.MjData(model))
+    if scratch is None:
+        scratch = mujoco.MjData(model)
+    else:  # as a new MjData starts
+        mujoco.mj_resetData(model, scratch)
+    mujoco.mj_setConst(model, scratch)
 
 
 def gl_backend() -> str:

@@ -92,6 +92,30 @@ SHAPES = {"velocity_offset_sum": (3,), "swing_peak": (4,)}  # per env, of the ad
 COUNTS = ("planted_steps", "contact_steps")  # the integer ones
 
 
+# the robot's models as compiled from its MJCF, by (MJCF generator, actuator, torque control),
+# with a scratch MjData of their sizes: randomised training loads a model per episode, and
+# copying a compiled one is much cheaper than generating and compiling the MJCF again; the
+# copy holds the same numbers (tests/training/test_same_numbers.py)
+_COMPILED: dict[tuple, tuple[mujoco.MjModel, mujoco.MjData]] = {}
+_KEPT = 4  # compiled models kept (randomised motor strengths make a new one per episode)
+
+
+def compiled_model(quadruped: QuadrupedModel, actuator: Actuator | None,
+                   torque_control: bool) -> tuple[mujoco.MjModel, mujoco.MjData]:  # fmt: skip
+    """A copy of the robot's model compiled from its MJCF with ``actuator`` (plain motors
+    with ``torque_control``), and a scratch MjData of its sizes (shared: for computing its
+    constants, never for stepping)."""
+    key = (quadruped.mjcf_text, repr(actuator), torque_control)
+    if key not in _COMPILED:
+        model = mujoco.MjModel.from_xml_string(
+            quadruped.mjcf_text(actuator, torque_control=torque_control))  # fmt: skip
+        if len(_COMPILED) >= _KEPT:
+            _COMPILED.pop(next(iter(_COMPILED)))
+        _COMPILED[key] = (model, mujoco.MjData(model))
+    model, scratch = _COMPILED[key]
+    return copy.copy(model), scratch
+
+
 def load_model(quadruped: QuadrupedModel, config: QuadrupedConfig,
                torque_control: bool = False) -> mujoco.MjModel:  # fmt: skip
     """The robot's MjModel under ``config``: its actuators (plain motors with
@@ -99,11 +123,12 @@ def load_model(quadruped: QuadrupedModel, config: QuadrupedConfig,
     strength, ground friction and payload (on the base)."""
     perturbation = config.perturbation
     actuator = None if torque_control else perturbation.actuator(Actuator.from_config(config))
-    text = quadruped.mjcf_text(actuator, torque_control=torque_control)
+    scratch = None
     if config.terrain.active:  # the ground a height field (docs/quadruped.md, "Terrain")
+        text = quadruped.mjcf_text(actuator, torque_control=torque_control)
         model = terrain_model(text, config.terrain)
     else:
-        model = mujoco.MjModel.from_xml_string(text)
+        model, scratch = compiled_model(quadruped, actuator, torque_control)
     model.opt.timestep = config.physics_dt
     friction = perturbation.ground_friction(config.foot_friction)
     for leg in quadruped.legs:
@@ -112,7 +137,7 @@ def load_model(quadruped: QuadrupedModel, config: QuadrupedConfig,
     if config.feet_only:
         floor_feet_only(model, quadruped.legs)
     if perturbation.payload:
-        add_mass(model, quadruped.base_body, perturbation.payload)
+        add_mass(model, quadruped.base_body, perturbation.payload, scratch)
     if not perturbation.model_nominal:  # the joints' and the contact's (randomised training)
         model_terms(model, quadruped, perturbation)
     return model
@@ -326,6 +351,7 @@ class QuadrupedVectorEnv(VectorEnv):
         # the recipe's uniform observation noise: its half-width per actor entry
         self._noise = task.noise_half_widths(config.observation_noise, len(quadruped.joint_names),
                                              config.observe_lin_vel)  # fmt: skip
+        self._unit_draws = np.empty((num_envs, len(self._noise)))  # its draws, per env
         self._next_draw = np.zeros(num_envs, dtype=np.int64)  # the step of each next command
         self._heading = np.zeros(num_envs)  # each env's heading target (config.heading_gain)
         self._nominal = np.asarray(quadruped.nominal_pose)
@@ -509,11 +535,20 @@ class QuadrupedVectorEnv(VectorEnv):
         of rows ``index`` (default all), each row's from its env's generator, in place."""
         if not self._noise.any():
             return obs
-        rows = range(self.num_envs) if index is None else np.atleast_1d(index)
+        rows = np.arange(self.num_envs) if index is None else np.atleast_1d(index)
         width = len(self._noise)
-        for i in rows:
-            draws = self._rngs[i].uniform(-1.0, 1.0, width)
-            obs[i, :width] += task.uniform_noise(draws, self._noise).astype(obs.dtype)
+        # each row's draws from its env's generator, the arithmetic on all rows at once:
+        # uniform(-1, 1) is -1 + 2 u of the same u, exactly (2 u and the sum round nothing)
+        draws = self._unit_draws[: len(rows)]
+        for k, i in enumerate(rows):
+            self._rngs[i].random(out=draws[k])
+        np.multiply(draws, 2.0, out=draws)
+        np.subtract(draws, 1.0, out=draws)
+        noise = task.uniform_noise(draws, self._noise).astype(obs.dtype)
+        if index is None:
+            obs[:, :width] += noise
+        else:
+            obs[rows, :width] += noise
         return obs
 
     def _control_with_push(self, control: np.ndarray, pushed: np.ndarray) -> tuple[np.ndarray, int]:
