@@ -8,7 +8,12 @@ and the folders of one layer import each other one way only (no cycle).
 The longest dotted prefix in ``LAYERS`` decides a module's layer, so a robot's subfolder can sit
 above its robot: the hopper's own commands (``robots.hopper.commands``) and Cho et al.'s
 agents (``robots.hopper.agents``) sit at the layer of what they plug into, and generic code
-reaches them only through the robot's registry entry (its ``Robot`` names them by string)."""
+reaches them only through the robot's registry entry (its ``Robot`` names them by string).
+
+The studies (``cpg_actor_studies``, the analyses of ``docs/results``) sit above the library: it
+never imports them, and they import its public API (``cpg_actor.api``, ``docs/api.md``); each
+other library module they still import is named in ``INTERNAL_USES`` with its count. The
+library's function-level and relative imports are counted and may not grow."""
 
 import ast
 from pathlib import Path
