@@ -33,8 +33,8 @@ import time
 from pathlib import Path
 
 from bench_report import measured, write
-from cpg_actor.experiments.plan import thread_shares
 from cpg_actor.machine import cpu_model, load_average, usable_cores
+from cpg_actor_studies.reproduction.plan import thread_shares
 
 PAPER_BUDGET = 5 * 5 * 20_000_000  # control steps: 5 variants x 5 seeds x 20M
 POLL_S = 0.25

@@ -15,7 +15,7 @@ item 4), add ``--search-budgets 50000,150000,496000``.
 The target. One evaluation (:class:`cpg_actor.training.evaluation.TrainingEvaluation`, the
 trainer's own: the mean action, ``EVAL_EPISODES`` episodes on envs of their own, the run's
 evaluation seed) meets it when its mean return is >= ``--target-return`` and its mean hop apex
-is >= ``--target-apex``. The hop apex is :func:`cpg_actor.experiments.physical.hop_apex` (the
+is >= ``--target-apex``. The hop apex is :func:`cpg_actor.metrics.physical.hop_apex` (the
 median over an episode's flights, after the start-up, of the highest hip height above
 standing), not the episode's highest hip height: the training-time evaluation gives it when
 asked (``TrainingEvaluation.traced_metrics``: the episodes are traced, which costs each evaluation
@@ -148,7 +148,7 @@ def train(config, stop) -> tuple[list[dict], dict, object]:
     """Train ``config`` in this process with every evaluation recorded (hop apex included)
     and its warm start timed; ``(history, warm start's {"steps", "wall"}, runner)`` (the
     runner closed)."""
-    from cpg_actor.experiments.physical import episode_metrics
+    from cpg_actor.metrics.physical import episode_metrics
 
     def traced(runner) -> None:  # eval/hop_apex from the evaluations' traces
         runner.evaluation.traced_metrics = episode_metrics
@@ -212,7 +212,7 @@ def sb3_run(seed: int, num_envs: int, values: list[dict], budget: int, target: T
     import gymnasium as gym
     from stable_baselines3.common.env_util import make_vec_env
 
-    from cpg_actor.experiments.physical import episode_metrics
+    from cpg_actor.metrics.physical import episode_metrics
     from cpg_actor.robots.hopper.plugin import ENV_ID
     from cpg_actor.training.evaluation import finite_mean
 
@@ -390,7 +390,7 @@ def report(methods: list[Method], results: dict[str, list[dict]], searches: dict
         "",
         f"Target: one evaluation with mean **{target.describe()}** (the mean over "
         f"{EVAL_EPISODES} deterministic episodes of the trainer's own evaluation; the hop apex "
-        "is `experiments/physical.py`'s `hop_apex` from the evaluation's traces, not the "
+        "is `cpg_actor/metrics/physical.py`'s `hop_apex` from the evaluation's traces, not the "
         "episode's highest hip height). Evaluated before the first update and every "
         f"{EVAL_EVERY:,} env steps; each method trains {args.budget:,} env steps of its own"
         + (" or stops at the target" if args.stop_at_target else "")

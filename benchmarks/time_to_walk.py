@@ -166,7 +166,7 @@ def run_config(spec: RunSpec):
     ``mlp-field``, the field's MLP recipe: its agent with its settings, before ``--set``);
     evaluated every ``eval_interval`` env steps, rounded to whole iterations (at least one)."""
     from cpg_actor.config import compose_config
-    from cpg_actor.experiments.plan import variant_agent, variant_preset
+    from cpg_actor_studies.reproduction.plan import variant_agent, variant_preset
 
     agent, variant_overrides = variant_agent(spec.agent)
     values = {
@@ -548,7 +548,7 @@ def check_args(parser: argparse.ArgumentParser, args) -> tuple[list[str], list[i
     quadrupeds = sorted(name for name, r in ROBOTS.items() if "speed_error" in r.metrics)
     if args.robot not in quadrupeds:
         parser.error(f"--robot {args.robot}: not a quadruped; one of {', '.join(quadrupeds)}")
-    from cpg_actor.experiments.plan import VARIANTS, variant_agent
+    from cpg_actor_studies.reproduction.plan import VARIANTS, variant_agent
 
     agents = [a.strip() for a in args.agents.split(",") if a.strip()]
     ppo = sorted(name for name in REGISTERED if REGISTERED[name].trainer == "ppo")

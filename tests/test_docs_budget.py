@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from cpg_actor.experiments.execute import MARKER as REPRODUCE_RUN
 from cpg_actor.files import MARKER
+from cpg_actor_studies.reproduction.execute import MARKER as REPRODUCE_RUN
 
 ROOT = Path(__file__).resolve().parents[1]
 BUDGET_MB = 15

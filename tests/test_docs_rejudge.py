@@ -8,9 +8,10 @@ from pathlib import Path
 
 import pytest
 
-from cpg_actor.experiments import metrics as m
-from cpg_actor.experiments import report
+from cpg_actor import statistics as st
 from cpg_actor.robustness.summary import retention_scores, verdicts
+from cpg_actor.robustness.verdicts import verdict_more_robust
+from cpg_actor_studies.hopper_paper.comparisons import judge_comparisons
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "docs" / "results" / "rejudge.py"
@@ -38,21 +39,21 @@ def test_holm_turns_the_stored_friction_verdict_into_not_supported(suite):
     survives the correction."""
     runs, names = suite["runs"], suite["perturbations"]
     cpg, mlp = (retention_scores(runs, v, "friction") for v in ("cpg-actor", "mlp"))
-    assert m.bootstrap_difference(cpg, mlp).low > 0
-    ((alone, _),) = m.decide([m.verdict_more_robust(cpg, mlp)])
-    assert alone == m.SUPPORTED
+    assert st.bootstrap_difference(cpg, mlp).low > 0
+    ((alone, _),) = st.decide([verdict_more_robust(cpg, mlp)])
+    assert alone == st.SUPPORTED
     rows = {row["perturbation"]: row for row in verdicts(runs, names)}
     assert rows["friction"]["family"] == 7
-    assert rows["friction"]["p"] < m.ALPHA <= rows["friction"]["p_holm"]
-    assert rows["friction"]["verdict"] == m.NOT_SUPPORTED
-    assert rows["latency"]["verdict"] == m.SUPPORTED
+    assert rows["friction"]["p"] < st.ALPHA <= rows["friction"]["p_holm"]
+    assert rows["friction"]["verdict"] == st.NOT_SUPPORTED
+    assert rows["latency"]["verdict"] == st.SUPPORTED
     assert "family of 7 tests" in rows["latency"]["why"]
 
 
 def test_a_target_is_met_missed_or_not_resolved_by_its_holm_p_and_minimum(rejudge):
     def verdict(difference, p, minimum=0.0, family=(0.5,)):
-        test = m.Test("t", "x", difference, p, minimum)
-        test.adjusted = m.holm([p, *family])[0]
+        test = st.Test("t", "x", difference, p, minimum)
+        test.adjusted = st.holm([p, *family])[0]
         return rejudge.target_verdict(test)
 
     assert verdict(1.0, 0.001) == rejudge.MET
@@ -64,10 +65,10 @@ def test_a_target_is_met_missed_or_not_resolved_by_its_holm_p_and_minimum(rejudg
 
 
 def test_the_old_rule_is_the_whole_ci_on_the_targets_side(rejudge):
-    assert rejudge.ci_verdict(m.Interval(1.0, 0.9, 1.1), 0.8) == rejudge.MET
-    assert rejudge.ci_verdict(m.Interval(0.7, 0.6, 0.79), 0.8) == rejudge.MISSED
-    assert rejudge.ci_verdict(m.Interval(0.8, 0.7, 0.9), 0.8) == rejudge.NOT_RESOLVED
-    assert rejudge.ci_verdict(m.Interval(12, 10, 14), 15.0, sign=-1) == rejudge.MET
+    assert rejudge.ci_verdict(st.Interval(1.0, 0.9, 1.1), 0.8) == rejudge.MET
+    assert rejudge.ci_verdict(st.Interval(0.7, 0.6, 0.79), 0.8) == rejudge.MISSED
+    assert rejudge.ci_verdict(st.Interval(0.8, 0.7, 0.9), 0.8) == rejudge.NOT_RESOLVED
+    assert rejudge.ci_verdict(st.Interval(12, 10, 14), 15.0, sign=-1) == rejudge.MET
 
 
 def test_comparisons_are_judged_on_the_pairs_given():
@@ -76,11 +77,11 @@ def test_comparisons_are_judged_on_the_pairs_given():
     seeds = {v: {"final_return": list(rng.normal(mean, 5, 5)),
                  "final_hop_height_logged": list(rng.normal(0.5, 0.01, 5))}
              for v, mean in (("a", 900), ("b", 600), ("c", 600))}  # fmt: skip
-    rows = report.judge_comparisons(seeds, [("a", "b", "a vs b"), ("x", "b", "not run")])
+    rows = judge_comparisons(seeds, [("a", "b", "a vs b"), ("x", "b", "not run")])
     assert [(r["first"], r["second"]) for r in rows] == [("a", "b")]
     assert rows[0]["family"] == 2 and rows[0]["return_better"] == "a"
     assert rows[0]["hop_better"] == "not resolved"
-    assert len(report.judge_comparisons(seeds, [("a", "b", ""), ("a", "c", "")])) == 2
+    assert len(judge_comparisons(seeds, [("a", "b", ""), ("a", "c", "")])) == 2
 
 
 def test_a_key_a_folder_did_not_store_is_not_tested(rejudge):
@@ -88,7 +89,7 @@ def test_a_key_a_folder_did_not_store_is_not_tested(rejudge):
     rejudge.Stored.missing = set()
     assert stored["hop_height_at_1M"] == [] and stored["final_return"] == [1.0, 2.0, 3.0]
     assert rejudge.Stored.missing == {"hop_height_at_1M"}
-    assert m.too_few_seeds({"cpg-actor": stored["velocity_p99"]}).fixed == m.NOT_TESTED
+    assert st.too_few_seeds({"cpg-actor": stored["velocity_p99"]}).fixed == st.NOT_TESTED
 
 
 def test_the_committed_page_is_what_the_script_prints(rejudge):

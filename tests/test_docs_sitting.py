@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from cpg_actor.experiments.execute import MARKER, trained_iteration
+from cpg_actor_studies.reproduction.execute import MARKER, trained_iteration
 
 SCRIPT = Path(__file__).resolve().parents[1] / "docs" / "results" / "sitting.py"
 
@@ -91,9 +91,9 @@ def test_an_unfinished_run_is_carried_with_the_checkpoints_it_needs(sitting, tra
 
 
 def test_a_sweep_is_carried_setting_by_setting_and_its_command_goes_on(sitting, trained, tmp_path):
-    from cpg_actor.experiments import sweep
     from cpg_actor.files import MARKER as PROJECT_MARKER
     from cpg_actor.files import RESULTS, SWEEP, marker_kind, write_marker
+    from cpg_actor_studies import sweep
 
     out = tmp_path / "sweep"
     out.mkdir()

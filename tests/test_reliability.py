@@ -96,7 +96,7 @@ def test_overwrite_clears_only_a_marked_run_holding_nothing_foreign(tmp_path, ca
 
 
 def test_a_results_directory_is_cleared_only_of_what_reproduce_wrote(tmp_path):
-    from cpg_actor.experiments.plan import ReproduceSettings, prepare_out_dir
+    from cpg_actor_studies.reproduction.plan import ReproduceSettings, prepare_out_dir
 
     out = tmp_path / "out"
     settings = ReproduceSettings(variants=["mlp"], seeds=1, total_steps=1000)

@@ -187,7 +187,7 @@ def test_a_full_disk_under_tensorboard_is_one_line_naming_its_folder(tmp_path):
 PARENT = """
 import sys
 from pathlib import Path
-from cpg_actor.experiments import execute
+from cpg_actor_studies.reproduction import execute
 
 # a run as reproduce and sweep start one, long enough to outlive its parent
 execute._cli(["train", "--run-dir", sys.argv[1], "--total-steps", "100M", "--num-envs", "2",

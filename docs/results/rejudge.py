@@ -3,14 +3,14 @@ per-seed numbers stored in this folder (no training, no traces).
 
     PYTHONPATH=src python docs/results/rejudge.py > docs/results/REJUDGED.md
 
-The statistics are the library's (`cpg_actor.experiments.metrics`, docs/reproduction.md,
+The statistics are the library's (`cpg_actor.statistics`, docs/reproduction.md,
 "Claim verdicts"): Welch's t-test between variants (two-sided), one-sample t-tests against a
 fixed number, one-sided t-tests for a band; Holm's correction over each report's family; a
 minimum effect per metric (`metrics.MINIMUM_EFFECT`). Per folder:
 
 * a reproduction (`summary.json` with `claims`): the paper's claims judged again by
-  `report.judge_claims` (one family), the comparisons the stored report made by
-  `report.judge_comparisons` on the same pairs (one family), the open-loop grid floor by the
+  `judge_claims` (one family), the comparisons the stored report made by
+  `judge_comparisons` on the same pairs (one family), the open-loop grid floor by the
   report's own lines;
 * a robustness suite (`robustness.json`): "more robust" per perturbation by
   `robustness.summary.verdicts` (the suite's claims over all its perturbations, one family);
@@ -34,10 +34,14 @@ from typing import Any
 
 import numpy as np
 
-from cpg_actor.experiments import metrics as m
-from cpg_actor.experiments import report
+from cpg_actor.api import statistics as st
 from cpg_actor.inputs import read_json, run_script
 from cpg_actor.robustness.summary import retention_scores, verdicts
+from cpg_actor.robustness.verdicts import verdict_more_robust
+from cpg_actor_studies.hopper_paper import report
+from cpg_actor_studies.hopper_paper.claims import judge_claims
+from cpg_actor_studies.hopper_paper.comparisons import judge_comparisons
+from cpg_actor_studies.hopper_paper.floor import load_floor
 
 RESULTS = Path(__file__).resolve().parent
 # the reproductions whose reports state verdicts, in the order of docs/results/README.md
@@ -90,7 +94,7 @@ def reproduction(folder: str) -> tuple[list[str], list[tuple[str, ...]]]:
     Stored.missing = set()
     seeds = {v: Stored(row["per_seed"]) for v, row in summary["variants"].items()}
     rewards = {v: row.get("reward") for v, row in summary["variants"].items()}
-    claims = report.judge_claims(seeds, rewards, summary["total_steps"])
+    claims = judge_claims(seeds, rewards, summary["total_steps"])
     changed = []
     lines = [f"## {folder}", "",
              f"[`{folder}/`]({folder}/README.md): {summary['total_steps']:,} steps, variants "
@@ -109,10 +113,10 @@ def reproduction(folder: str) -> tuple[list[str], list[tuple[str, ...]]]:
     stored = summary.get("comparisons") or []
     if stored:
         pairs = [(row["first"], row["second"], row["question"]) for row in stored]
-        rows = report.judge_comparisons(seeds, pairs)
+        rows = judge_comparisons(seeds, pairs)
         lines += ["", f"Comparisons (the stored report's {len(pairs)} pairs, return and hop "
                   f"height: one family of {rows[0]['family']} Welch's t-tests, Holm; minimum "
-                  f"effect {m.MINIMUM_EFFECT['return']}'s mean):", "",
+                  f"effect {st.MINIMUM_EFFECT['return']}'s mean):", "",
                   "| first - second | metric | difference [95 % CI] | old | new | p / Holm p |",
                   "| --- | --- | --- | --- | --- | --- |"]  # fmt: skip
         for old, new in zip(stored, rows, strict=True):
@@ -127,7 +131,7 @@ def reproduction(folder: str) -> tuple[list[str], list[tuple[str, ...]]]:
                     changed.append((folder, f"better {name}: `{new['first']}` vs "
                                     f"`{new['second']}`", str(before), after, p,
                                     str(new["family"])))  # fmt: skip
-    floor = report.load_floor(RESULTS / folder)
+    floor = load_floor(RESULTS / folder)
     if floor is not None:
         floor_seeds = {v: s for v, s in seeds.items()
                        if rewards[v] == report._floor_reward(floor)}  # fmt: skip
@@ -154,17 +158,17 @@ def go1_suite() -> tuple[list[str], list[tuple[str, ...]]]:
     runs, pair = data["runs"], ("cpg-actor", "untrained")
     scores = {name: [retention_scores(runs, v, name) for v in pair]
               for name in data["perturbations"]}  # fmt: skip
-    claims = [m.verdict_more_robust(*scores[name], pair) for name in data["perturbations"]]
+    claims = [verdict_more_robust(*scores[name], pair) for name in data["perturbations"]]
     family = sum(len(claim.tests) for claim in claims)
     rows, old = [], {}
-    for name, claim, (verdict, why) in zip(data["perturbations"], claims, m.decide(claims),
+    for name, claim, (verdict, why) in zip(data["perturbations"], claims, st.decide(claims),
                                            strict=True):  # fmt: skip
         (test,) = claim.tests
         rows.append({"claim": "cpg-actor more robust than untrained", "perturbation": name,
                      "verdict": verdict, "why": why, "family": family, "p": test.p,
                      "p_holm": test.adjusted})  # fmt: skip
-        interval = m.bootstrap_difference(*scores[name])
-        old[(rows[-1]["claim"], name)] = m.SUPPORTED if interval.low > 0 else m.NOT_SUPPORTED
+        interval = st.bootstrap_difference(*scores[name])
+        old[(rows[-1]["claim"], name)] = st.SUPPORTED if interval.low > 0 else st.NOT_SUPPORTED
     lines, changed = suite_lines(GO1_SUITE, rows, old, "the bootstrap rule of the README")
     lines[-1:] = ["", paired_note(runs, pair, data["perturbations"]), ""]
     return lines, changed
@@ -179,19 +183,19 @@ def paired_note(runs: list[dict[str, Any]], pair: tuple[str, str], names: list[s
     for name in names:
         first, second = ([retention_scores([by_seed[v][s]], v, name)[0] for s in seeds]
                          for v in pair)  # fmt: skip
-        tests.append((name, *m.paired_t_test(first, second)))
-    adjusted = m.holm([p for *_, p in tests])
+        tests.append((name, *st.paired_t_test(first, second)))
+    adjusted = st.holm([p for *_, p in tests])
     shown = ", ".join(f"{name} {d:+.3g} ({h:.2g})"
                       for (name, d, _), h in zip(tests, adjusted, strict=True))  # fmt: skip
-    minimum = m.MINIMUM_EFFECT["retention"].threshold(1.0)
+    minimum = st.MINIMUM_EFFECT["retention"].threshold(1.0)
     passing = [name for (name, d, _), h in zip(tests, adjusted, strict=True)
-               if h < m.ALPHA and d >= minimum and d > 0]  # fmt: skip
+               if h < st.ALPHA and d >= minimum and d > 0]  # fmt: skip
     outcome = (f"by it \"more robust\" would hold under {', '.join(passing)}" if passing else
                "no verdict turns on the choice: no positive difference reaches the minimum "
-               f"effect of {m.MINIMUM_EFFECT['retention']}")  # fmt: skip
-    return (f"`untrained` is each run's own start (iteration 0), so a {m.PAIRED} over the "
-            f"{len(seeds)} seeds fits better than the suite's {m.WELCH}: difference (its "
-            f"{m.HOLM} p over the {len(tests)} perturbations) {shown}; {outcome}.")  # fmt: skip
+               f"effect of {st.MINIMUM_EFFECT['retention']}")  # fmt: skip
+    return (f"`untrained` is each run's own start (iteration 0), so a {st.PAIRED} over the "
+            f"{len(seeds)} seeds fits better than the suite's {st.WELCH}: difference (its "
+            f"{st.HOLM} p over the {len(tests)} perturbations) {shown}; {outcome}.")  # fmt: skip
 
 
 def suite_lines(folder: str, rows: list[dict[str, Any]], old: dict[tuple[str, str], str],
@@ -199,9 +203,9 @@ def suite_lines(folder: str, rows: list[dict[str, Any]], old: dict[tuple[str, st
     family = rows[0]["family"] if rows else 0
     lines = [f"## {folder}: robustness suite", "",
              f"[`{folder}/`]({folder}/README.md). Per perturbation and seed, the return retained "
-             f"(mean over the levels); \"more robust\" by {m.WELCH}, {m.family_text(family)} "
+             f"(mean over the levels); \"more robust\" by {st.WELCH}, {st.family_text(family)} "
              f"(every claim and perturbation of the suite), minimum effect "
-             f"{m.MINIMUM_EFFECT['retention']} (retention). Old: {source}.", "",
+             f"{st.MINIMUM_EFFECT['retention']} (retention). Old: {source}.", "",
              "| claim | perturbation | old | new | difference [95 % CI] | p / Holm p |",
              "| --- | --- | --- | --- | --- | --- |"]  # fmt: skip
     changed = []
@@ -219,17 +223,17 @@ def suite_lines(folder: str, rows: list[dict[str, Any]], old: dict[tuple[str, st
 
 
 # -- targets ------------------------------------------------------------------------------------
-def target_verdict(test: m.Test) -> str:
+def target_verdict(test: st.Test) -> str:
     """Met: the test passes (:meth:`metrics.Test.passed`); missed: it passes the other way;
     otherwise not resolved."""
     if test.passed():
         return MET
-    if test.adjusted < m.ALPHA and test.difference < 0 and -test.difference >= test.minimum:
+    if test.adjusted < st.ALPHA and test.difference < 0 and -test.difference >= test.minimum:
         return MISSED
     return NOT_RESOLVED
 
 
-def ci_verdict(interval: m.Interval | None, at_least: float, sign: int = 1) -> str:
+def ci_verdict(interval: st.Interval | None, at_least: float, sign: int = 1) -> str:
     """The rule of the targets' day: the whole bootstrap CI on the target's side."""
     if interval is None:
         return "not tested"
@@ -237,21 +241,21 @@ def ci_verdict(interval: m.Interval | None, at_least: float, sign: int = 1) -> s
     return MET if low >= sign * at_least else MISSED if high < sign * at_least else NOT_RESOLVED
 
 
-def at_most(values: Sequence[float], bound: float, label: str) -> m.Test:
+def at_most(values: Sequence[float], bound: float, label: str) -> st.Test:
     """``mean(values) <= bound`` by a one-sample t-test, oriented (positive: below)."""
-    difference, p = m.one_sample_t_test(values, bound)
-    return m.Test(ONE_SAMPLE, label, -difference, p)
+    difference, p = st.one_sample_t_test(values, bound)
+    return st.Test(ONE_SAMPLE, label, -difference, p)
 
 
-def at_least(values: Sequence[float], bound: float, label: str) -> m.Test:
-    return m.Test(ONE_SAMPLE, label, *m.one_sample_t_test(values, bound))
+def at_least(values: Sequence[float], bound: float, label: str) -> st.Test:
+    return st.Test(ONE_SAMPLE, label, *st.one_sample_t_test(values, bound))
 
 
-def targets_lines(title: str, targets: list[tuple[str, m.Interval | None, str, m.Test]],
+def targets_lines(title: str, targets: list[tuple[str, st.Interval | None, str, st.Test]],
                   note: str) -> tuple[list[str], list[tuple[str, str, str, str, str]]]:  # fmt: skip
     """Rows (target, bootstrap CI, old verdict, its test) judged as one family."""
     tests = [test for *_, test in targets]
-    for test, adjusted in zip(tests, m.holm([t.p for t in tests]), strict=True):
+    for test, adjusted in zip(tests, st.holm([t.p for t in tests]), strict=True):
         test.adjusted = adjusted
     lines = [title, "", note, "",
              "| target | estimate [95 % CI] | old | new | test | p / Holm p |",
@@ -274,38 +278,38 @@ def decisive_targets() -> tuple[list[str], list[tuple[str, ...]]]:
         v: row["per_seed"] for v, row in read("decisive-2M", "summary.json")["variants"].items()
     }
     cpg, mlp, cho, es = (seeds[v] for v in ("cpg-actor", "mlp", "cho2019-warm", "open-loop-es"))
-    smooth = m.bootstrap_ratio(mlp["smoothness"], cpg["smoothness"], statistic="median")
-    rows: list[tuple[str, m.Interval | None, float, int, Callable[[], m.Test]]] = [
+    smooth = st.bootstrap_ratio(mlp["smoothness"], cpg["smoothness"], statistic="median")
+    rows: list[tuple[str, st.Interval | None, float, int, Callable[[], st.Test]]] = [
         ("hop height >= 2x `mlp`'s (ratio of means)",
-         m.bootstrap_ratio(cpg["hop_height"], mlp["hop_height"]), 2.0, 1,
-         lambda: m.ratio_test(cpg["hop_height"], mlp["hop_height"], 2.0,
+         st.bootstrap_ratio(cpg["hop_height"], mlp["hop_height"]), 2.0, 1,
+         lambda: st.ratio_test(cpg["hop_height"], mlp["hop_height"], 2.0,
                               "mean cpg-actor - 2 x mean mlp (m)")),
         ("hop height >= `cho2019-warm`'s (difference of means, m)",
-         m.bootstrap_difference(cpg["hop_height"], cho["hop_height"]), 0.0, 1,
-         lambda: m.better_test(cpg["hop_height"], cho["hop_height"], "hop_height",
+         st.bootstrap_difference(cpg["hop_height"], cho["hop_height"]), 0.0, 1,
+         lambda: st.better_test(cpg["hop_height"], cho["hop_height"], "hop_height",
                                "cpg-actor - cho2019-warm (m)")),
         ("p99 desired velocity <= 15 rad/s (median over seeds)",
-         m.bootstrap(cpg["velocity_p99"], "median"), 15.0, -1,
+         st.bootstrap(cpg["velocity_p99"], "median"), 15.0, -1,
          lambda: at_most(cpg["velocity_p99"], 15.0, "15 - mean p99 (rad/s)")),
         (">= 10x smoother than `mlp` (ratio of medians)", smooth, 10.0, 1,
-         lambda: m.ratio_test(mlp["smoothness"], cpg["smoothness"], 10.0,
+         lambda: st.ratio_test(mlp["smoothness"], cpg["smoothness"], 10.0,
                               "mean mlp - 10 x mean cpg-actor (rad^2)")),
         ("return >= `mlp`'s (difference of means)",
-         m.bootstrap_difference(cpg["final_return"], mlp["final_return"]), 0.0, 1,
-         lambda: m.better_test(cpg["final_return"], mlp["final_return"], "return",
+         st.bootstrap_difference(cpg["final_return"], mlp["final_return"]), 0.0, 1,
+         lambda: st.better_test(cpg["final_return"], mlp["final_return"], "return",
                                "cpg-actor - mlp")),
         ("return > `open-loop-es`'s (difference of means)",
-         m.bootstrap_difference(cpg["final_return"], es["final_return"]), 0.0, 1,
-         lambda: m.better_test(cpg["final_return"], es["final_return"], "return",
+         st.bootstrap_difference(cpg["final_return"], es["final_return"]), 0.0, 1,
+         lambda: st.better_test(cpg["final_return"], es["final_return"], "return",
                                "cpg-actor - open-loop-es")),
     ]  # fmt: skip
     targets = [(name, interval, ci_verdict(interval, bound, sign), make())
                for name, interval, bound, sign, make in rows]  # fmt: skip
     note = (
         f"Old: `targets.py`'s rule (the whole bootstrap CI on the target's side). New: met "
-        f"when the test's {m.HOLM} p < {m.ALPHA:g} over this table's family of "
+        f"when the test's {st.HOLM} p < {st.ALPHA:g} over this table's family of "
         f"{len(targets)} tests with the difference on the target's side and at least its "
-        f"minimum effect ({m.MINIMUM_EFFECT['return']} for returns and hop heights against "
+        f"minimum effect ({st.MINIMUM_EFFECT['return']} for returns and hop heights against "
         "a variant; a target against a fixed number or a factor has the target as its "
         "margin); missed when it passes the other way; otherwise not resolved."
     )
@@ -324,14 +328,14 @@ def randomized_targets() -> tuple[list[str], list[tuple[str, ...]]]:
             level = runs[0]["perturbations"][name]["levels"][index]["level"]
             kept = [run["perturbations"][name]["levels"][index]["hop_height"]
                     / run["nominal"]["hop_height"] for run in runs]  # fmt: skip
-            interval = m.bootstrap(kept, "mean")
+            interval = st.bootstrap(kept, "mean")
             targets.append((f"{name} at {level:g}", interval, ci_verdict(interval, HOP_TARGET),
                             at_least(kept, HOP_TARGET, "mean kept - 0.8")))  # fmt: skip
     note = (
         f"`cpg-actor-randomized` keeps >= 80 % of its nominal hop height (per seed: hop "
         f"height at the level / the run's nominal), at the 2nd and 3rd of each "
         f"perturbation's 4 levels. Old: `targets.py`'s rule (the whole bootstrap CI at or "
-        f"above 0.8). New: a one-sample t-test against 0.8, {m.HOLM} over the table's "
+        f"above 0.8). New: a one-sample t-test against 0.8, {st.HOLM} over the table's "
         f"{len(targets)} tests; the 80 % target is its own margin (no further minimum)."
     )
     lines, changed = targets_lines("## randomized-2M: hop height kept at the middle levels",
@@ -379,8 +383,8 @@ def main() -> str:
         lines, rows = make()
         sections += lines
         changed += rows
-    header = HEADER.format(holm=m.HOLM, alpha=m.ALPHA, returns=m.MINIMUM_EFFECT["return"],
-                           retention=m.MINIMUM_EFFECT["retention"])  # fmt: skip
+    header = HEADER.format(holm=st.HOLM, alpha=st.ALPHA, returns=st.MINIMUM_EFFECT["return"],
+                           retention=st.MINIMUM_EFFECT["retention"])  # fmt: skip
     summary = ["## What changed", "",
                f"{len(changed)} verdicts changed (old: the stored or bootstrap verdict; p: the "
                "test's p / its Holm p; family: the number of tests corrected together):", "",

@@ -40,12 +40,12 @@ import tempfile
 import zlib
 from pathlib import Path
 
-from cpg_actor.config import TrainConfig
-from cpg_actor.experiments.execute import list_checkpoints, select_stage_checkpoints
-from cpg_actor.experiments.plan import STAGE_FRACTIONS
-from cpg_actor.experiments.results import Results
+from cpg_actor.api import TrainConfig
 from cpg_actor.files import MARKER, SWEEP, describe_os_error, marker_kind
 from cpg_actor.safe_yaml import read_yaml
+from cpg_actor_studies.reproduction.execute import list_checkpoints, select_stage_checkpoints
+from cpg_actor_studies.reproduction.plan import STAGE_FRACTIONS
+from cpg_actor_studies.reproduction.results import Results
 
 SKIPPED = {"checkpoints", "tensorboard", ".lock"}
 FILES = ("reproduce.yaml", "transfer.json", MARKER)  # the last: the project's marker

@@ -1,4 +1,6 @@
-"""The `cpg-actor` command line: one sub-command per module in `cpg_actor.commands`.
+"""The `cpg-actor` command line: one sub-command per module in `cpg_actor.commands`, then the
+commands of the packages in :data:`PLUGINS` that are installed (the studies' commands:
+``cpg_actor_studies.commands``), then the robots' own.
 
 Each command module defines `HELP` (one line), `add_arguments(parser)` and `run(args) -> int`.
 Only the module of the command being run is imported (its arguments are added to that
@@ -11,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import importlib.util
 import os
 import sys
 
@@ -21,7 +24,8 @@ brief_openmp_spinning(os.environ)  # before anything imports torch
 from cpg_actor.errors import MjxUnavailable, RenderingUnavailable  # noqa: E402
 from cpg_actor.files import describe_os_error  # noqa: E402
 
-# command name -> (its module, its HELP); the robots' own commands follow (commands())
+# command name -> (its module, its HELP); the plugins' and the robots' commands follow
+# (commands())
 COMMANDS: dict[str, tuple[str, str]] = {
     "gaits": (
         "cpg_actor.commands.gaits",
@@ -40,30 +44,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
         "cpg_actor.commands.export",
         "export a trained policy (normaliser, networks, CPG step) as TorchScript or ONNX",
     ),
-    "reproduce": (
-        "cpg_actor.commands.reproduce",
-        "reproduce the paper: train variants x seeds in parallel (or on Ray), figures and a report",
-    ),
-    "sweep": (
-        "cpg_actor.commands.sweep",
-        "sensitivity study: train variants x seeds for the defaults and each --vary setting",
-    ),
-    "figures": (
-        "cpg_actor.commands.figures",
-        "redraw the paper's figures and report.md from a `cpg-actor reproduce` results directory",
-    ),
-    "curves": (
-        "cpg_actor.commands.curves",
-        "draw the learning curves of several runs (grouped by agent and settings) in one figure",
-    ),
-    "gradient": (
-        "cpg_actor.commands.gradient",
-        "measure the k-step (truncated) CPG gradient against the full-trajectory one",
-    ),
-    "transfer": (
-        "cpg_actor.commands.transfer",
-        "evaluate a reproduction's final policies in both simulators (cross-simulator transfer)",
-    ),
     "robustness": (
         "cpg_actor.commands.robustness",
         "evaluate trained runs under perturbations (pushes, payload, friction, latency, ...)",
@@ -71,12 +51,22 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+# modules that add commands: each holds a table ``COMMANDS`` like :data:`COMMANDS`, and is
+# imported only when its package is installed (by name here, never by an import statement: the
+# studies sit above the library, tests/test_layers.py)
+PLUGINS = ("cpg_actor_studies.commands",)
+
+
 def commands() -> dict[str, tuple[str, str]]:
-    """Every command: the generic ones (:data:`COMMANDS`), then those the robots bring
-    (``Robot.commands``, in the registry's order)."""
+    """Every command: the generic ones (:data:`COMMANDS`), then those of the installed
+    :data:`PLUGINS`, then those the robots bring (``Robot.commands``, in the registry's
+    order)."""
     from cpg_actor.robots.registry import ROBOTS
 
     merged = dict(COMMANDS)
+    for plugin in PLUGINS:
+        if importlib.util.find_spec(plugin.split(".")[0]) is not None:
+            merged.update(importlib.import_module(plugin).COMMANDS)
     for robot in ROBOTS.values():
         merged.update(robot.commands)
     return merged

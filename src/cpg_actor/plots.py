@@ -1,7 +1,8 @@
 """Drawing shared by the commands that write figures: the gait diagram (which foot is on the
 ground, per leg, over time) of ``cpg-actor gaits`` and ``cpg-actor eval``, how an env's episode
 metrics are named on an axis, the unit of a steps axis, step counts as legend labels, the
-motor's velocity limit on a velocity axis, and an atomic ``savefig``."""
+motor's velocity limit on a velocity axis, an agent's (or a study's variant's) name and colour
+in a legend, and an atomic ``savefig``."""
 
 from __future__ import annotations
 
@@ -14,6 +15,48 @@ import numpy as np
 from cpg_actor.robots.registry import all_metrics
 
 GAIT_WINDOW = 2.0  # s: the last seconds a gait diagram shows
+# an agent's (or a variant's) name in a legend, and its colour
+LABELS = {
+    "cpg-actor": "CPG-Actor",
+    "cpg-actor-open-loop": "CPG-Actor (open loop)",
+    "cpg-actor-unbounded": "CPG-Actor (unbounded feedback)",
+    "cho2019-warm": "Cho et al. (warm)",
+    "cho2019": "Cho et al.",
+    "cho2019-paper": "Cho et al. (paper's, warm)",
+    "mlp": "MLP actor",
+    "cpg-actor-apex": "CPG-Actor (apex reward)",
+    "mlp-apex": "MLP actor (apex reward)",
+    "cpg-actor-bptt32": "CPG-Actor (32-step gradient)",
+    "cpg-actor-feedback-noise": "CPG-Actor (feedback noise)",
+    "cpg-actor-paper": "CPG-Actor (paper's form)",
+    "open-loop-es": "open-loop CPG (CMA-ES)",
+    "mlp-warm": "MLP actor (warm)",
+}
+# the paper's colours: CPG-Actor green, open loop orange, Cho et al. warm red, cold blue
+COLORS = {
+    "cpg-actor": "tab:green",
+    "cpg-actor-open-loop": "tab:orange",
+    "cpg-actor-unbounded": "tab:olive",
+    "cho2019-warm": "tab:red",
+    "cho2019": "tab:blue",
+    "cho2019-paper": "tab:pink",
+    "mlp": "tab:purple",
+    "cpg-actor-apex": "darkgreen",
+    "mlp-apex": "indigo",
+    "cpg-actor-bptt32": "tab:cyan",
+    "cpg-actor-feedback-noise": "tab:brown",
+    "cpg-actor-paper": "limegreen",
+    "open-loop-es": "goldenrod",
+    "mlp-warm": "mediumpurple",
+}
+
+
+def label(variant: str) -> str:
+    return LABELS.get(variant, variant)
+
+
+def color(variant: str) -> str | None:
+    return COLORS.get(variant)
 
 
 def metric_label(name: str) -> str:

@@ -619,7 +619,11 @@ def test_eval_export_and_load_policy_work_on_a_search_run(tmp_path, capsys):
 
 
 def test_reproduce_plans_a_search_run_in_generations(tmp_path):
-    from cpg_actor.experiments.plan import ReproduceSettings, build_tasks, planned_iterations
+    from cpg_actor_studies.reproduction.plan import (
+        ReproduceSettings,
+        build_tasks,
+        planned_iterations,
+    )
 
     settings = ReproduceSettings(
         variants=["open-loop-es"], seeds=1, total_steps=100_000, overrides=["es.popsize=10"]

@@ -7,10 +7,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from cpg_actor.experiments import metrics as m
-from cpg_actor.experiments.results import sent_velocity
+from cpg_actor.metrics import signals
 from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.training.evaluation import evaluate
+from cpg_actor_studies.reproduction.results import sent_velocity
 
 
 class ScriptedPolicy:
@@ -54,7 +54,7 @@ def test_joint_commands_are_traced_as_sent_and_differenced_by_hand():
     assert traces["action_high"] == pytest.approx([1.3, 0.1])
     # the report computes the same from the positions, and the time at a stop from the bounds
     assert np.allclose(sent_velocity(traces), traces["desired_velocity"], equal_nan=True)
-    share = m.joint_stop_share(traces["desired_position"], traces["action_low"],
+    share = signals.joint_stop_share(traces["desired_position"], traces["action_low"],
                                traces["action_high"])  # fmt: skip
     assert share == pytest.approx(2 / 4)
 

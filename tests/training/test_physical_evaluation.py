@@ -4,7 +4,7 @@ the same return, lengths and env metrics either way (the time-to-quality benchma
 import pytest
 
 from cpg_actor.config import compose_config
-from cpg_actor.experiments.physical import episode_metrics
+from cpg_actor.metrics.physical import episode_metrics
 from cpg_actor.training.runner import Runner
 
 

@@ -4,14 +4,14 @@
 
 Per-seed numbers are the final deterministic evaluation's (``eval_return`` and ``hop_height``
 from the evaluation traces, ``final_return`` from the logged evaluations), with percentile
-bootstrap CIs over the 5 report seeds (`cpg_actor.experiments.metrics`).
+bootstrap CIs over the 5 report seeds (`cpg_actor.statistics`).
 """
 
 from __future__ import annotations
 
 import sys
 
-from cpg_actor.experiments import metrics as m
+from cpg_actor.api import statistics as st
 from cpg_actor.inputs import read_json, run_script
 
 SUMMARY = "the summary.json cpg-actor reproduce writes"
@@ -22,7 +22,7 @@ def main(path: str) -> None:
     cpg, mlp, cho, es = (seeds[v] for v in ("cpg-actor", "mlp", "cho2019-warm", "open-loop-es"))
     rows = []
 
-    def judge(target: str, interval: m.Interval | None, at_least: float, sign: int = 1) -> None:
+    def judge(target: str, interval: st.Interval | None, at_least: float, sign: int = 1) -> None:
         """met: the whole CI on the target's side of ``at_least`` (``sign`` -1: at most);
         missed: the whole CI on the other side; otherwise not resolved."""
         if interval is None:
@@ -36,18 +36,18 @@ def main(path: str) -> None:
         rows.append(f"| {target} | {interval} | **{verdict}** |")
 
     judge("hop height >= 2x `mlp`'s (ratio of means)",
-          m.bootstrap_ratio(cpg["hop_height"], mlp["hop_height"]), 2.0)  # fmt: skip
+          st.bootstrap_ratio(cpg["hop_height"], mlp["hop_height"]), 2.0)  # fmt: skip
     judge("hop height >= `cho2019-warm`'s (difference of means, m)",
-          m.bootstrap_difference(cpg["hop_height"], cho["hop_height"]), 0.0)  # fmt: skip
+          st.bootstrap_difference(cpg["hop_height"], cho["hop_height"]), 0.0)  # fmt: skip
     judge("p99 desired velocity <= 15 rad/s (median over seeds)",
-          m.bootstrap(cpg["velocity_p99"], "median"), 15.0, sign=-1)  # fmt: skip
-    smooth = m.bootstrap_ratio(mlp["smoothness"], cpg["smoothness"], statistic="median")
+          st.bootstrap(cpg["velocity_p99"], "median"), 15.0, sign=-1)  # fmt: skip
+    smooth = st.bootstrap_ratio(mlp["smoothness"], cpg["smoothness"], statistic="median")
     judge(">= 10x smoother than `mlp` (ratio of medians, mean squared 2nd difference)",
           smooth, 10.0)  # fmt: skip
     judge("return >= `mlp`'s (difference of means)",
-          m.bootstrap_difference(cpg["final_return"], mlp["final_return"]), 0.0)  # fmt: skip
+          st.bootstrap_difference(cpg["final_return"], mlp["final_return"]), 0.0)  # fmt: skip
     judge("return > `open-loop-es`'s by its CI (difference of means)",
-          m.bootstrap_difference(cpg["final_return"], es["final_return"]), 0.0)  # fmt: skip
+          st.bootstrap_difference(cpg["final_return"], es["final_return"]), 0.0)  # fmt: skip
     print("| target | estimate [95 % CI] | verdict |\n| --- | --- | --- |")
     print("\n".join(rows))
     print(

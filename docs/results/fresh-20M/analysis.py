@@ -22,10 +22,10 @@ from typing import Any
 
 import numpy as np
 
-from cpg_actor.experiments import family as f
-from cpg_actor.experiments import metrics as m
-from cpg_actor.files import atomic_write_text
+from cpg_actor.api import atomic_write_text
+from cpg_actor.api import statistics as st
 from cpg_actor.inputs import InputError, read_json, run_script
+from cpg_actor_studies import family as f
 
 HERE = Path(__file__).resolve().parent
 AT_2M = HERE.parent / "fresh-2M" / "summary.json"
@@ -77,10 +77,10 @@ def analyse(summary: dict[str, Any]) -> dict[str, Any]:
         best[name], group = f.best_against_others(data[name], name, higher, log, minimum(log))
         tests += group
     cpg, cho = data["return"]["cpg-actor"], data["return"]["cho2019-warm"]
-    difference, p = m.welch_test(cpg, cho)
+    difference, p = st.welch_test(cpg, cho)
     ratio = float(np.nanmean(cpg) / np.nanmean(cho))
     tests.append({"group": "the paper's claim", "label": "cpg-actor - cho2019-warm, return",
-                  "test": m.WELCH, "difference": difference, "log": False, "p": p,
+                  "test": st.WELCH, "difference": difference, "log": False, "p": p,
                   "minimum": RELATIVE_EFFECT * abs(float(np.nanmean(cho)))})  # fmt: skip
     f.judge(tests)
     low, high = CLAIMED_RATIO
@@ -110,7 +110,7 @@ def report(result: dict[str, Any], summary: dict[str, Any], at_2m: dict[str, Any
         + ".\n"
     )
     print(
-        f"One family of {len(tests)} tests, {m.family_text(len(tests))}; a difference counts "
+        f"One family of {len(tests)} tests, {st.family_text(len(tests))}; a difference counts "
         f"when its Holm p < 0.05 and it is at least its minimum effect (return and hop apex "
         f"{RELATIVE_EFFECT:.0%} of the other side's mean, smoothness and torque rate a factor "
         f"{RATIO_EFFECT}, tested on the logarithm, so ranked and shown by their geometric "
@@ -123,7 +123,7 @@ def report(result: dict[str, Any], summary: dict[str, Any], at_2m: dict[str, Any
         print(f"| variant | {kind} at 20M [95 % CI] | per seed | at 2M (fresh-2M) |")
         print("| --- | ---: | --- | ---: |")
         for v in VARIANTS:
-            seeds = ", ".join(m.three_figures(x) for x in data[name][v])
+            seeds = ", ".join(st.three_figures(x) for x in data[name][v])
             earlier = f.mean_ci(per_seed(at_2m, v, key), log) if at_2m else None
             print(f"| `{v}`{' (best)' if v == best[name] else ''} | "
                   f"{f.mean_ci(data[name][v], log)} | {seeds} | {earlier or '-'} |")  # fmt: skip
@@ -153,7 +153,7 @@ def figure(data: dict[str, dict[str, list[float]]], path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from cpg_actor.plots import save_figure
+    from cpg_actor.api import save_figure
 
     fig, axes = plt.subplots(1, len(METRICS), figsize=(15, 3.6), constrained_layout=True)
     for ax, (name, (_, higher, log)) in zip(axes, METRICS.items(), strict=True):

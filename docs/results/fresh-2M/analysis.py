@@ -25,10 +25,10 @@ from typing import Any
 
 import numpy as np
 
-from cpg_actor.experiments import family as f
-from cpg_actor.experiments import metrics as m
-from cpg_actor.files import atomic_write_text
+from cpg_actor.api import atomic_write_text
+from cpg_actor.api import statistics as st
 from cpg_actor.inputs import load_npz, read_json, read_yaml, run_script
+from cpg_actor_studies import family as f
 
 VARIANTS = ("cpg-actor", "cpg-actor-open-loop", "open-loop-es", "mlp", "mlp-warm",
             "cho2019-warm")  # fmt: skip
@@ -112,12 +112,12 @@ def matched_smoothness(cpg: dict[str, Any], folders: list[Path]) -> list[dict[st
             scale = np.log if log else np.asarray
             mlp, actor = per_seed(summary, "mlp-warm", key), per_seed(cpg, "cpg-actor", key)
             a, b = scale(mlp), scale(actor)
-            difference, p = m.welch_test(a if higher else b, b if higher else a)
+            difference, p = st.welch_test(a if higher else b, b if higher else a)
             tests.append(
                 {
                     "group": name,
                     "label": f"strength {strength} ({alpha})",
-                    "test": m.WELCH,
+                    "test": st.WELCH,
                     "difference": difference,
                     "log": log,
                     "p": p,
@@ -133,7 +133,7 @@ def print_matched(tests: list[dict[str, Any]]) -> None:
     print("\n## The matched-smoothness MLP against the CPG-Actor\n")
     print(
         f"`mlp-warm` behind a low-pass on its command, each strength against `cpg-actor`; "
-        f"a family of its own of {len(tests)} tests, {m.family_text(len(tests))}, the same "
+        f"a family of its own of {len(tests)} tests, {st.family_text(len(tests))}, the same "
         "minimum effects. *Difference*: the filtered MLP's side minus the CPG-Actor's, "
         "oriented so that > 0 favours the MLP (for smoothness and torque rate the factor "
         "by which the MLP's is lower). *Verdict*: MLP ahead, CPG-Actor ahead, or not "
@@ -165,7 +165,7 @@ def figure(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from cpg_actor.plots import save_figure
+    from cpg_actor.api import save_figure
 
     fig, axes = plt.subplots(2, 3, figsize=(13, 7), constrained_layout=True)
     for ax, (name, (_, higher, log)) in zip(axes.flat, METRICS.items(), strict=True):
@@ -211,12 +211,12 @@ def main() -> None:
     starts = start_values(args.out, args.evaluate_starts)
     for what, end, start in (("return", "end_return", "start_return"),
                              ("hop apex (m)", "end_apex", "start_apex")):  # fmt: skip
-        difference, p = m.paired_t_test(starts[end], starts[start])
+        difference, p = st.paired_t_test(starts[end], starts[start])
         tests.append(
             {
                 "group": "cpg-actor beyond its start",
                 "label": f"{what}: end - start",
-                "test": m.PAIRED,
+                "test": st.PAIRED,
                 "difference": difference,
                 "log": False,
                 "p": p,
@@ -224,9 +224,9 @@ def main() -> None:
             }
         )
     open_loop, cho = data["return"]["cpg-actor-open-loop"], data["return"]["cho2019-warm"]
-    difference, p = m.welch_test(open_loop, cho)
+    difference, p = st.welch_test(open_loop, cho)
     tests.append({"group": "the paper's claim", "label": "cpg-actor-open-loop - cho2019-warm, "
-                  "return", "test": m.WELCH, "difference": difference, "log": False, "p": p,
+                  "return", "test": st.WELCH, "difference": difference, "log": False, "p": p,
                   "minimum": RELATIVE_EFFECT * abs(float(np.nanmean(cho)))})  # fmt: skip
     f.judge(tests)
 
@@ -239,7 +239,7 @@ def main() -> None:
         + ".\n"
     )
     print(
-        f"One family of {len(tests)} tests, {m.family_text(len(tests))}; a difference "
+        f"One family of {len(tests)} tests, {st.family_text(len(tests))}; a difference "
         "counts when its Holm p < 0.05 and it is at least its minimum effect (return and "
         f"hop apex {RELATIVE_EFFECT:.0%} of the other side's mean, retention "
         f"{RETENTION_EFFECT}, smoothness and torque rate a factor {RATIO_EFFECT}, tested on "
@@ -252,7 +252,7 @@ def main() -> None:
         print(f"| variant | {kind} [95 % CI] | per seed |\n| --- | ---: | --- |")
         for v in VARIANTS:
             ci = f.mean_ci(data[name][v], log)
-            seeds = ", ".join(m.three_figures(x) for x in data[name][v])
+            seeds = ", ".join(st.three_figures(x) for x in data[name][v])
             print(f"| `{v}`{' (best)' if v == best[name] else ''} | {ci} | {seeds} |")
         group = [t for t in tests if t["group"] == name]
         beaten = [t for t in group if t["passed"]]

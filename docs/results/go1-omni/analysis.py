@@ -24,10 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from cpg_actor.experiments import family as f
-from cpg_actor.experiments import metrics as m
-from cpg_actor.files import atomic_write_text
+from cpg_actor.api import atomic_write_text
+from cpg_actor.api import statistics as st
 from cpg_actor.inputs import parse_json, read_json, read_text, run_script
+from cpg_actor_studies import family as f
 
 VARIANTS = ("cpg-actor", "mlp-field", "mlp-warm-field")
 GRID_FILE = "cpg-actor eval --grid's output"  # what a grid.json is, for a message
@@ -108,8 +108,8 @@ def tests_of(data: dict[str, dict[str, list[float]]]) -> tuple[list[dict[str, An
         tests += group
     for name in list(METRICS)[:2]:
         end, start = np.log(data[name]["cpg-actor"]), np.log(data[name][START])
-        difference, p = m.paired_t_test(start, end)  # > 0: the trained CPG-Actor is lower
-        tests.append({"group": "cpg-actor beyond its start", "label": name, "test": m.PAIRED,
+        difference, p = st.paired_t_test(start, end)  # > 0: the trained CPG-Actor is lower
+        tests.append({"group": "cpg-actor beyond its start", "label": name, "test": st.PAIRED,
                       "difference": difference, "log": True, "p": p,
                       "minimum": math.log(RATIO_EFFECT)})  # fmt: skip
     return f.judge(tests), best
@@ -190,12 +190,12 @@ def time_to_walk(paths: list[Path]) -> dict[str, Any] | None:
     if any(len(times[a]["wall"]) < 2 for a in TIMED):
         sys.exit(f"{', '.join(map(str, paths))}: 2 or more runs of each of {TIMED} needed")
     cpg, mlp = (np.log(times[a]["wall"]) for a in TIMED)
-    difference, p = m.welch_test(mlp, cpg + math.log(TIME_TO_WALK_FACTOR))
+    difference, p = st.welch_test(mlp, cpg + math.log(TIME_TO_WALK_FACTOR))
     label = f"mlp-field / cpg-actor wall time above {TIME_TO_WALK_FACTOR:g}x"
     test = {
         "group": "time to walk",
         "label": label,
-        "test": m.WELCH,
+        "test": st.WELCH,
         "difference": difference,
         "log": True,
         "p": p,
@@ -207,7 +207,7 @@ def time_to_walk(paths: list[Path]) -> dict[str, Any] | None:
 
 
 def shown(values: list[float]) -> str:
-    return ", ".join(m.three_figures(x) for x in values)
+    return ", ".join(st.three_figures(x) for x in values)
 
 
 def report(data, offsets, tests, best, goals, walk, seeds, name: str) -> None:
@@ -215,7 +215,7 @@ def report(data, offsets, tests, best, goals, walk, seeds, name: str) -> None:
     print("Made by `PYTHONPATH=src python docs/results/go1-omni/analysis.py "
           f"{' '.join(sys.argv[1:])}`. Seeds: " + ", ".join(f"`{v}` {seeds[v]}" for v in seeds)
           + ".\n")  # fmt: skip
-    print(f"One family of {len(tests)} tests, {m.family_text(len(tests))}; a difference "
+    print(f"One family of {len(tests)} tests, {st.family_text(len(tests))}; a difference "
           f"counts when its Holm p < 0.05 and it is at least a factor {RATIO_EFFECT} (tested on "
           "the logarithm, so ranked and shown by geometric means). Means with 95 % "
           "percentile-bootstrap CIs over seeds (display only).\n")  # fmt: skip

@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 from analysis import GRID_FILE, START, TARGETS, VARIANTS  # this folder's analysis: names, targets
 
+from cpg_actor.api import save_figure
 from cpg_actor.inputs import read_json, run_script
-from cpg_actor.plots import save_figure
 from cpg_actor.robustness import protocol
 
 ORDER = (VARIANTS[0], START, *VARIANTS[1:])  # the CPG-Actor beside its start

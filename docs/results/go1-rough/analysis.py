@@ -24,10 +24,10 @@ from typing import Any
 
 import numpy as np
 
-from cpg_actor.experiments import family as f
-from cpg_actor.experiments import metrics as m
-from cpg_actor.files import atomic_write_text
+from cpg_actor.api import atomic_write_text
+from cpg_actor.api import statistics as st
 from cpg_actor.inputs import read_json, read_jsonl, run_script
+from cpg_actor_studies import family as f
 
 ROLES = ("cpg-actor", "mlp-field")
 GRID_FILE = "cpg-actor eval --grid's output"  # what a grid.json is, for a message
@@ -173,13 +173,13 @@ def tests_of(data: dict[str, dict[str, list[float]]]) -> list[dict[str, Any]]:
     for name, (_, _, log, effect) in {**METRICS, REACHED: ("", "", False, LEVEL_EFFECT)}.items():
         higher = name == REACHED
         a, b = (np.log(data[name][r]) if log else np.asarray(data[name][r]) for r in (cpg, mlp))
-        difference, p = m.welch_test(a, b) if higher else m.welch_test(b, a)
-        tests.append({"group": name, "label": f"{cpg} vs {mlp}", "test": m.WELCH,
+        difference, p = st.welch_test(a, b) if higher else st.welch_test(b, a)
+        tests.append({"group": name, "label": f"{cpg} vs {mlp}", "test": st.WELCH,
                       "difference": difference, "log": log, "p": p,
                       "minimum": math.log(effect) if log else effect})  # fmt: skip
     falls = next(iter(METRICS))
-    difference, p = m.paired_t_test(data[falls][START], data[falls][cpg])  # > 0: falls less
-    tests.append({"group": falls, "label": f"{cpg} vs its start", "test": m.PAIRED,
+    difference, p = st.paired_t_test(data[falls][START], data[falls][cpg])  # > 0: falls less
+    tests.append({"group": falls, "label": f"{cpg} vs its start", "test": st.PAIRED,
                   "difference": difference, "log": False, "p": p,
                   "minimum": FALL_EFFECT})  # fmt: skip
     return f.judge(tests)
@@ -217,7 +217,7 @@ def report(data, checks, tests, goals, seeds, variants) -> None:
     print("Made by `PYTHONPATH=src python docs/results/go1-rough/analysis.py "
           f"{' '.join(sys.argv[1:])}`. Seeds {seeds}; runs of the variants "
           f"`{variants[0]}` (CPG-Actor) and `{variants[1]}` (MLP).\n")  # fmt: skip
-    print(f"One family of {len(tests)} tests, {m.family_text(len(tests))}; a difference counts "
+    print(f"One family of {len(tests)} tests, {st.family_text(len(tests))}; a difference counts "
           f"when its Holm p < 0.05 and it is at least its minimum effect (falls {FALL_EFFECT}, "
           f"errors a factor {RATIO_EFFECT} on the logarithm, the level reached {LEVEL_EFFECT:g} "
           "level). Means with 95 % percentile-bootstrap CIs over seeds (display only; geometric "
@@ -230,7 +230,7 @@ def report(data, checks, tests, goals, seeds, variants) -> None:
         print(f"## {name} ({better} is better{tested})\n")
         print("| agent | mean [95 % CI] | per seed |\n| --- | ---: | --- |")
         for role, per_seed in values.items():
-            shown = ", ".join(m.three_figures(x) for x in per_seed)
+            shown = ", ".join(st.three_figures(x) for x in per_seed)
             print(f"| {label(role)} | {f.mean_ci(per_seed, log)} | {shown} |")
         print()
     print(f"## The issue's target on rough ground (level {LEVEL})\n")

@@ -28,8 +28,8 @@ from analysis import (  # this folder's analysis: its names, targets and reader
     read_curricula,
 )
 
+from cpg_actor.api import save_figure
 from cpg_actor.inputs import read_json, run_script
-from cpg_actor.plots import save_figure
 from cpg_actor.robustness import protocol
 
 ORDER = (ROLES[0], START, *ROLES[1:])  # the CPG-Actor beside its start

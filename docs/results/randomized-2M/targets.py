@@ -8,7 +8,7 @@ Prints two tables (Markdown):
    hop height at the middle level of every perturbation. The suite runs 4 levels, so both
    middle ones (the 2nd and the 3rd) are judged. Per seed, the retention is the hop height at
    the level over the same run's nominal hop height; the estimate is the mean over seeds with a
-   percentile bootstrap 95 % CI (`cpg_actor.experiments.metrics`). Met: the whole CI at or
+   percentile bootstrap 95 % CI (`cpg_actor.statistics`). Met: the whole CI at or
    above 0.8; missed: the whole CI below; otherwise not resolved.
 2. The nominal cost of randomising: nominal return and hop height of ``NAME-randomized``
    minus ``NAME``'s, difference of means with its CI.
@@ -18,22 +18,22 @@ from __future__ import annotations
 
 import sys
 
-from cpg_actor.experiments import metrics as m
+from cpg_actor.api import statistics as st
 from cpg_actor.inputs import read_json, run_script
 
 TARGET = 0.8
 MIDDLE = (1, 2)  # indices of the 2nd and 3rd of the suite's 4 levels
 
 
-def judge(values: list[float]) -> tuple[m.Interval | None, str]:
+def judge(values: list[float]) -> tuple[st.Interval | None, str]:
     """The mean retention over seeds, its CI, and the verdict against the 80 % target."""
-    interval = m.bootstrap(values, "mean")
-    if interval is None or not m.enough_seeds(values):
+    interval = st.bootstrap(values, "mean")
+    if interval is None or not st.enough_seeds(values):
         return interval, "not tested"
     return interval, verdict(interval)
 
 
-def verdict(interval: m.Interval) -> str:
+def verdict(interval: st.Interval) -> str:
     if interval.low >= TARGET:
         return "met"
     if interval.high < TARGET:
@@ -75,7 +75,7 @@ def main(path: str) -> None:
         for key in ("return", "hop_height"):
             mine = [run["nominal"][key] for run in by_variant[variant]]
             theirs = [run["nominal"][key] for run in by_variant.get(base, [])]
-            row.append((sum(mine) / len(mine), m.bootstrap_difference(mine, theirs)))
+            row.append((sum(mine) / len(mine), st.bootstrap_difference(mine, theirs)))
         print(f"| `{variant}` | {row[0][0]:.0f} | {row[1][0]:.3f} | {row[0][1]} | {row[1][1]} |")
 
 

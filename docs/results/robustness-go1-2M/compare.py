@@ -5,7 +5,7 @@
 Prints (Markdown) per perturbation and level the mean over seeds of the speed error (m/s) and
 the share of episodes that fell, for ``cpg-actor`` and ``untrained``, then the verdict
 "cpg-actor more robust than untrained" per perturbation, judged as the suite judges its
-claims (`cpg_actor.experiments.metrics.verdict_more_robust`: the return retained, averaged
+claims (`cpg_actor.robustness.verdicts.verdict_more_robust`: the return retained, averaged
 over the levels, per seed; Welch's t-test, Holm-corrected over the perturbations, and the
 minimum effect of retention).
 """
@@ -16,9 +16,10 @@ import sys
 
 import numpy as np
 
-from cpg_actor.experiments.metrics import decide, verdict_more_robust
 from cpg_actor.inputs import read_json, run_script
 from cpg_actor.robustness.summary import retention_scores
+from cpg_actor.robustness.verdicts import verdict_more_robust
+from cpg_actor.statistics import decide
 
 VARIANTS = ("cpg-actor", "untrained")
 

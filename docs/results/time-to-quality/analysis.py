@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from cpg_actor.experiments import family as f
-from cpg_actor.experiments import metrics as m
+from cpg_actor.api import statistics as st
 from cpg_actor.inputs import read_json as read_file
 from cpg_actor.inputs import run_script
+from cpg_actor_studies import family as f
 
 CPG = "`cpg-actor`"
 SWEPT = ("`cpg-actor`", "`mlp-warm`", "`cho2019-warm`")
@@ -56,9 +56,9 @@ def time_tests(runs: dict[str, list[dict[str, Any]]]) -> list[dict[str, Any]]:
             if label == CPG:
                 continue
             other = np.log([time_to_target(r, key) for r in others])
-            difference, p = m.welch_test(other, cpg)
+            difference, p = st.welch_test(other, cpg)
             tests.append({"group": f"{key} to the target", "label": f"{CPG} vs {label}",
-                          "test": m.WELCH, "difference": difference, "p": p, "log": True,
+                          "test": st.WELCH, "difference": difference, "p": p, "log": True,
                           "minimum": math.log(RATIO_EFFECT)})  # fmt: skip
     f.judge(tests)
     return tests
@@ -70,15 +70,15 @@ def sweep_tests(runs: dict[str, list[dict[str, Any]]], budgets: list[str]) -> li
         cpg = runs[f"{CPG} (search {budget})"]
         end = [final(r, "return") for r in cpg]
         start = [float(r["curve"][0]["return"]) for r in cpg]
-        difference, p = m.paired_t_test(end, start)
+        difference, p = st.paired_t_test(end, start)
         tests.append({"group": f"search {budget}", "label": f"{CPG}: final - start",
-                      "test": m.PAIRED, "difference": difference, "p": p, "log": False,
+                      "test": st.PAIRED, "difference": difference, "p": p, "log": False,
                       "minimum": RELATIVE_EFFECT * abs(float(np.mean(start)))})  # fmt: skip
         for other in SWEPT[1:]:
             values = [final(r, "return") for r in runs[f"{other} (search {budget})"]]
-            difference, p = m.welch_test(end, values)
+            difference, p = st.welch_test(end, values)
             tests.append({"group": f"search {budget}", "label": f"{CPG} - {other}",
-                          "test": m.WELCH, "difference": difference, "p": p, "log": False,
+                          "test": st.WELCH, "difference": difference, "p": p, "log": False,
                           "minimum": RELATIVE_EFFECT * abs(float(np.mean(values)))})  # fmt: skip
     f.judge(tests)
     return tests
@@ -123,7 +123,7 @@ def main() -> None:
               f"{shown_ci([final(r, 'return') for r in runs], False)} | "
               f"{shown_ci([final(r, 'apex') for r in runs], False)} |")  # fmt: skip
     times = time_tests(quality)
-    print(f"\n{len(times)} tests, {m.family_text(len(times))}; the difference is the factor by "
+    print(f"\n{len(times)} tests, {st.family_text(len(times))}; the difference is the factor by "
           "which `cpg-actor` is faster (> 1: faster), the minimum a factor "
           f"{RATIO_EFFECT}.\n")  # fmt: skip
     print("\n".join(f.table(times)))
@@ -139,7 +139,7 @@ def main() -> None:
               f"{shown_ci([final(r, 'apex') for r in runs], False)} | "
               f"{sum(r['hit'] is not None for r in runs)}/{len(runs)} |")  # fmt: skip
     tests = sweep_tests(sweep, budgets)
-    print(f"\n{len(tests)} tests, {m.family_text(len(tests))}; minimum effect 5 % of the start "
+    print(f"\n{len(tests)} tests, {st.family_text(len(tests))}; minimum effect 5 % of the start "
           "or of the other agent's mean.\n")  # fmt: skip
     print("\n".join(f.table(tests)))
 

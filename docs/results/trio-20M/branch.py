@@ -17,9 +17,9 @@ from pathlib import Path
 
 import yaml
 
-from cpg_actor.config import parse_override, read_config_file
+from cpg_actor.api import load_checkpoint, parse_override, read_config_file
 from cpg_actor.files import RUN, write_marker
-from cpg_actor.training.checkpoint import atomic_save, load_checkpoint
+from cpg_actor.training.checkpoint import atomic_save
 
 USAGE = "usage: branch.py RUN ITERATION OUT KEY=VALUE [KEY=VALUE ...]"
 

@@ -1,6 +1,7 @@
 """Peak and final evaluation return of every run of a reproduction, finished or not: the
 "no collapse" check (final >= 0.95 x peak), with the report's own definitions
-(``cpg_actor.experiments.metrics``: the mean of the last evaluations, the best moving mean).
+(``cpg_actor_studies.reproduction.numbers``: the mean of the last evaluations, the best moving
+mean).
 
     python docs/results/trio-20M/progress.py results/trio-20M
     python docs/results/trio-20M/progress.py --curves curves.png RUN [RUN ...]   # eval curves
@@ -16,9 +17,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from cpg_actor.config.train_config import parse_steps
-from cpg_actor.experiments.metrics import final_return, peak_return
+from cpg_actor.api import parse_steps
 from cpg_actor.inputs import InputError, read_jsonl, run_script
+from cpg_actor_studies.reproduction.numbers import final_return, peak_return
 
 
 def evaluations(run: Path) -> tuple[list[float], list[float]]:

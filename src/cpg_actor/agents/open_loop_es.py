@@ -36,9 +36,8 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
+from cpg_actor.agents.cma_state import restore_search_state, search_state
 from cpg_actor.limits import MAX_ENVS, MAX_EPISODES, MAX_POPSIZE, brief, check_int
-
-from .cma_state import restore_search_state, search_state
 
 ES_EPISODE_SEED_KEY = 2**31 + 2  # SeedSequence([seed, this, generation]): reset seeds
 ES_SEARCH_SEED_KEY = 2**31 + 3  # SeedSequence([seed, this]): CMA-ES's normal draws

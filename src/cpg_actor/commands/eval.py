@@ -238,10 +238,10 @@ def run_grid(args: argparse.Namespace, config, checkpoint: Path, output: Path) -
 
 
 def physical_traces(traces: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """The physical metrics (:mod:`cpg_actor.experiments.physical`) of every episode the
+    """The physical metrics (:mod:`cpg_actor.metrics.physical`) of every episode the
     traces define them for, saved with the traces: ``physical_NAME`` ``(E,)`` each, their
     names in ``physical_names``."""
-    from cpg_actor.experiments.physical import episode_metrics
+    from cpg_actor.metrics.physical import episode_metrics
 
     values = episode_metrics(traces)
     out = {f"physical_{name}": value for name, value in values.items()}
@@ -252,7 +252,7 @@ def physical_traces(traces: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
 def physical_line(traces: dict[str, np.ndarray]) -> str | None:
     """The physical metrics' means over the episodes that define them, with their units, as
     one printed line (docs/reproduction.md: their definitions); None where the traces have none."""
-    from cpg_actor.experiments.physical import METRICS
+    from cpg_actor.metrics.physical import METRICS
     from cpg_actor.training.evaluation import finite_mean
 
     names = [str(name) for name in traces.get("physical_names", ())]

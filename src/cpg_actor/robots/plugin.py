@@ -81,7 +81,7 @@ class Paper:
 
     reward_terms: tuple[str, ...]  # eq. 4's terms, as its envs log them (reward_terms/NAME)
     # (env config, grid or None: the default) -> the open-loop grid floor: the best constant
-    # CPG parameters by episode return and by hop height (cpg_actor.experiments.floor)
+    # CPG parameters by episode return and by hop height (cpg_actor_studies.hopper_paper.floor)
     open_loop_floor: Callable[[Any, dict | None], dict[str, Any]]
     # (joint names of traces saved without their action bounds, None where they name none) ->
     # those joints' (low, high) limits (rad), None where the traces are not this robot's

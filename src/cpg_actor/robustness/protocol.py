@@ -14,7 +14,7 @@ sees) and their offsets (the errors of the episode's mean velocity: the gait's s
 stride averaged out, which a trot's yaw rocking otherwise dominates), falls, the planar
 cost of transport (for the commands that ask the base to travel: turning on the spot or
 standing has no distance to divide by, only drift), foot slip and the duty factor; the
-torque rate comes from the traces (:mod:`cpg_actor.experiments.physical`).
+torque rate comes from the traces (:mod:`cpg_actor.metrics.physical`).
 
 The checks (CPG-RL's payload, legged_gym's pushes) run at the slow forward command on MuJoCo
 (where perturbations run): a payload of :data:`PAYLOAD_SHARE` of the moving mass on the
@@ -186,7 +186,7 @@ def checks(moving_mass: float, episode_seconds: float) -> list[tuple[str, dict[s
 def row_of(traces: dict[str, np.ndarray]) -> dict[str, float]:
     """One row of the table from an evaluation's traces: each column's mean over the episodes
     that define it (NaN where none does; ``fell``: the share of episodes that fell)."""
-    from cpg_actor.experiments.physical import torque_rate
+    from cpg_actor.metrics.physical import torque_rate
     from cpg_actor.training.evaluation import finite_mean
 
     row = {key: finite_mean(traces[key]) if key in traces else math.nan for key, _ in COLUMNS}

@@ -25,21 +25,19 @@ def find_runs(paths: list[str | Path]) -> list[RunRef]:
     reproduction directory (one with ``runs/``) is each of its runs that has a final
     checkpoint. FileNotFoundError for a path that is neither; ValueError for a run named
     twice (it would count as two seeds)."""
-    from cpg_actor.experiments.results import Results, read_config, run_robot
+    from cpg_actor.config.saved import read_config, run_robot
 
     found: list[RunRef] = []
     for given in paths:
         path = Path(given)
         if (path / "runs").is_dir():
-            results = Results.load(path)
-            runs = [run for variant_runs in results.runs.values() for run in variant_runs]
-            runs = [run for run in runs if (run.path / CHECKPOINT).is_file()]
+            runs = [run for run in reproduction_runs(path) if (run[2] / CHECKPOINT).is_file()]
             if not runs:
                 raise FileNotFoundError(f"{path}: a reproduction directory without a finished "
                                         f"run ({CHECKPOINT} in runs/VARIANT/seedS)")  # fmt: skip
-            for run in runs:
-                robot = run_robot(read_config(run.path)).name
-                found.append(RunRef(run.variant, run.seed, run.path, robot))
+            for variant, seed, run_dir in runs:
+                robot = run_robot(read_config(run_dir)).name
+                found.append(RunRef(variant, seed, run_dir, robot))
             continue
         if not (path / "config.yaml").is_file():
             raise FileNotFoundError(f"{path} is neither a run directory (config.yaml) nor a "
@@ -66,4 +64,15 @@ def find_runs(paths: list[str | Path]) -> list[RunRef]:
     if len(robots) > 1:
         raise ValueError(f"the runs are of several robots ({', '.join(robots)}), whose "
                          "perturbations differ: run the suite once per robot")  # fmt: skip
+    return found
+
+
+def reproduction_runs(out: Path) -> list[tuple[str, int, Path]]:
+    """``(variant, seed, run directory)`` of every ``OUT/runs/VARIANT/seedS`` of a reproduction
+    directory, by variant name then seed."""
+    found = []
+    for variant in sorted(p for p in (Path(out) / "runs").iterdir() if p.is_dir()):
+        seeds = [(int(p.name[4:]), p) for p in variant.iterdir()
+                 if p.is_dir() and re.fullmatch(r"seed\d+", p.name)]  # fmt: skip
+        found += [(variant.name, seed, path) for seed, path in sorted(seeds)]
     return found

@@ -4,7 +4,7 @@ every level) nominally and at each level of each perturbation.
 
 Per level: the mean return and its fraction of the nominal one (*retention*), the robot's
 metrics (``PerturbationTable.metrics``: the hopper's hop height, a quadruped's speed error and
-falls), the physical metrics (:mod:`cpg_actor.experiments.physical`: the hopper's hop apex,
+falls), the physical metrics (:mod:`cpg_actor.metrics.physical`: the hopper's hop apex,
 which a push does not raise as it does the episode's highest hip, and its fraction of the
 nominal one, *apex kept*; joint smoothness, torque rate, power, foot slip, time at a joint
 stop), the 99th percentile of |desired velocity| and, for a push, each episode's recovery
@@ -34,8 +34,8 @@ def level_row(traces: dict[str, np.ndarray], metrics: tuple[str, ...],
     """What the suite keeps of one evaluation: mean return (and retention against
     ``nominal_return``), the metrics' means, the physical metrics the traces define (means
     over episodes), the p99 |desired velocity|, the mean length."""
-    from cpg_actor.experiments.metrics import velocity_p99
-    from cpg_actor.experiments.physical import run_metrics
+    from cpg_actor.metrics.physical import run_metrics
+    from cpg_actor.metrics.signals import velocity_p99
     from cpg_actor.training.evaluation import finite_mean
 
     mean_return = float(np.mean(traces["episode_return"]))

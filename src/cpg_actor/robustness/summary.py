@@ -7,8 +7,8 @@ The physical metrics (:data:`PHYSICAL_COLUMNS`) appear where the runs' traces de
 ``robustness.json`` written before them has none: its tables show none).
 
 Over seeds (as the reproduction report): the mean of the per-seed values, with a percentile
-bootstrap CI from :data:`~cpg_actor.experiments.metrics.MIN_SEEDS` seeds on
-(:func:`cpg_actor.experiments.metrics.bootstrap`); a push's recovery as the share of episodes
+bootstrap CI from :data:`~cpg_actor.statistics.MIN_SEEDS` seeds on
+(:func:`cpg_actor.statistics.bootstrap`); a push's recovery as the share of episodes
 that recovered and the median steps of those that did.
 """
 
@@ -21,19 +21,20 @@ from typing import Any
 
 import numpy as np
 
-from cpg_actor.experiments import metrics as m
-from cpg_actor.experiments.robustness_report import (
+from cpg_actor import statistics as st
+from cpg_actor.robustness.suite import NO_GAIT, NOT_RECOVERED
+from cpg_actor.robustness.verdicts import (
     JSON_FILE,
     MARKDOWN_FILE,
     verdict_lines,
+    verdict_more_robust,
     verdict_rule,
 )
-from cpg_actor.robustness.suite import NO_GAIT, NOT_RECOVERED
 
 # a variant trained with env.randomize is named as the nominal one with this suffix: the
 # verdicts compare the two
 RANDOMIZED = "-randomized"
-# the physical metrics a level's table shows (:mod:`cpg_actor.experiments.physical`), where
+# the physical metrics a level's table shows (:mod:`cpg_actor.metrics.physical`), where
 # a run has them; the hop apex's fraction of the nominal one first
 PHYSICAL_COLUMNS = ("apex_retention", "hop_apex", "joint_smoothness", "torque_rate",
                     "mechanical_power", "foot_slip", "time_at_joint_stop")  # fmt: skip
@@ -46,12 +47,12 @@ def figure_name(perturbation: str) -> str:
 def interval(values: list[float]) -> dict[str, float] | None:
     """Mean over seeds with its bootstrap 95% CI (``low``, ``high`` NaN below MIN_SEEDS
     seeds); None without a finite value."""
-    finite = m.finite(values)
+    finite = st.finite(values)
     if finite.size == 0:
         return None
-    if finite.size < m.MIN_SEEDS:
+    if finite.size < st.MIN_SEEDS:
         return {"estimate": float(finite.mean()), "low": math.nan, "high": math.nan}
-    ci = m.bootstrap(finite, "mean")
+    ci = st.bootstrap(finite, "mean")
     return {"estimate": ci.estimate, "low": ci.low, "high": ci.high}
 
 
@@ -107,7 +108,7 @@ def retention_scores(runs: list[dict[str, Any]], variant: str, name: str) -> lis
         if run["variant"] != variant or name not in run["perturbations"]:
             continue
         values = [level.get("retention") for level in run["perturbations"][name]["levels"]]
-        finite = m.finite([math.nan if v is None else v for v in values])
+        finite = st.finite([math.nan if v is None else v for v in values])
         scores.append(float(finite.mean()) if finite.size else math.nan)
     return scores
 
@@ -123,19 +124,19 @@ def verdict_pairs(variants: list[str]) -> list[tuple[str, str]]:
 
 def verdicts(runs: list[dict[str, Any]], names: list[str]) -> list[dict[str, Any]]:
     """Per claim (:func:`verdict_pairs`) and perturbation: its verdict and explanation
-    (:func:`cpg_actor.experiments.metrics.verdict_more_robust`), all of them one family
-    (:func:`cpg_actor.experiments.metrics.decide`: Welch's t-tests, Holm-corrected), with the
+    (:func:`cpg_actor.robustness.verdicts.verdict_more_robust`), all of them one family
+    (:func:`cpg_actor.statistics.decide`: Welch's t-tests, Holm-corrected), with the
     test, its p, its Holm p and the family's size."""
     variants = list(dict.fromkeys(run["variant"] for run in runs))
     rows, claims = [], []
     for first, second in verdict_pairs(variants):
         for name in names:
-            claims.append(m.verdict_more_robust(retention_scores(runs, first, name),
-                                                retention_scores(runs, second, name),
-                                                (first, second)))  # fmt: skip
+            claims.append(verdict_more_robust(retention_scores(runs, first, name),
+                                              retention_scores(runs, second, name),
+                                              (first, second)))  # fmt: skip
             rows.append({"claim": f"{first} more robust than {second}", "perturbation": name})
     family = sum(len(claim.tests) for claim in claims if claim.fixed is None)
-    for row, claim, (verdict, why) in zip(rows, claims, m.decide(claims), strict=True):
+    for row, claim, (verdict, why) in zip(rows, claims, st.decide(claims), strict=True):
         row.update(verdict=verdict, why=why, family=family)
         if claim.fixed is None:
             (test,) = claim.tests
@@ -176,7 +177,7 @@ def _text(entry: dict[str, float] | None, digits: str = ".3g", scale: float = 1.
 
 def markdown(data: dict[str, Any]) -> str:
     """``robustness.md``: what was run, then one table per perturbation."""
-    from cpg_actor.experiments.results import label
+    from cpg_actor.plots import label
     from cpg_actor.robots.registry import all_metrics
 
     info = all_metrics()
@@ -190,7 +191,7 @@ def markdown(data: dict[str, Any]) -> str:
         "episodes at every level) nominally and under each perturbation (`cpg-actor "
         "robustness`, docs/robustness.md). *Retention*: mean return / nominal mean return, per "
         "run; per variant the mean over its seeds with a bootstrap 95% CI (from "
-        f"{m.MIN_SEEDS} seeds on). *Recovery* (pushes): the share of episodes whose gait "
+        f"{st.MIN_SEEDS} seeds on). *Recovery* (pushes): the share of episodes whose gait "
         f"cycle ({data['cycle']}) came back within 10% of the same episode's without the push, "
         "and the median control steps it took.",
         "",
@@ -256,7 +257,7 @@ def _physical_text(row: dict[str, Any], key: str) -> str:
 
 
 def info_column(key: str) -> str:
-    from cpg_actor.experiments.physical import METRICS
+    from cpg_actor.metrics.physical import METRICS
 
     return METRICS[key].column if key in METRICS else key
 
@@ -284,8 +285,7 @@ def draw(data: dict[str, Any], out: Path) -> list[Path]:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from cpg_actor.experiments.results import color, label
-    from cpg_actor.plots import save_figure
+    from cpg_actor.plots import color, label, save_figure
 
     variants = data["variants"]
     paths = []

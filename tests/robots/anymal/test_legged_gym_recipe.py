@@ -13,11 +13,11 @@ import torch
 from cpg_actor.agents.base import AgentConfig, observation_scale
 from cpg_actor.agents.mlp import MLPAgent
 from cpg_actor.config import compose_config
-from cpg_actor.experiments import plan
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.common.quadruped.vector import draw_command
 from cpg_actor.robots.registry import get_robot
 from cpg_actor.tasks import velocity as task
+from cpg_actor_studies.reproduction import plan
 
 LEGGED_GYM = "legged_gym 8fa29ac "
 BASE = LEGGED_GYM + "envs/base/legged_robot_config.py LeggedRobotCfg"

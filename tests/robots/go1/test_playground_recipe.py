@@ -11,11 +11,11 @@ import torch
 
 from cpg_actor.agents.base import AgentConfig
 from cpg_actor.agents.mlp import MLPAgent
-from cpg_actor.experiments import plan
 from cpg_actor.robots.common.quadruped.vector import hold_command, resample_command
 from cpg_actor.robots.go1.config import Go1Config
 from cpg_actor.robots.registry import get_robot
 from cpg_actor.tasks import velocity as task
+from cpg_actor_studies.reproduction import plan
 
 JOYSTICK = "playground 0.2.0 go1/joystick.py default_config"
 STEP = "playground 0.2.0 go1/joystick.py Joystick.step / _get_obs / sample_command"

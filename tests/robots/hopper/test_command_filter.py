@@ -9,7 +9,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from cpg_actor.experiments import metrics
+from cpg_actor.metrics import signals
 from cpg_actor.robots.hopper import task
 from cpg_actor.robots.hopper.config import HopperConfig
 from cpg_actor.robots.hopper.env import HopperEnv
@@ -96,7 +96,7 @@ def test_a_filtered_command_is_smoother_for_the_same_rough_commands():
     rough = drive(commands, 2)[0]
     smooth = drive(commands, 2, command_filter=0.2)[0]
     # the power gain of a first-order low-pass at the highest frequency: (a / (2 - a))^2
-    assert metrics.smoothness(smooth[:, 0]) < 0.1 * metrics.smoothness(rough[:, 0])
+    assert signals.smoothness(smooth[:, 0]) < 0.1 * signals.smoothness(rough[:, 0])
 
 
 def test_every_reset_restarts_the_filter():
@@ -141,7 +141,7 @@ def test_the_smoothness_metric_reads_the_filtered_command():
         previous = previous + 0.2 * (command - previous)
         expected.append(previous)
     np.testing.assert_allclose(found[0.2], np.array(expected), rtol=1e-12)
-    assert metrics.smoothness(found[0.2]) < 0.1 * metrics.smoothness(found[1.0])
+    assert signals.smoothness(found[0.2]) < 0.1 * signals.smoothness(found[1.0])
 
 
 @pytest.mark.parametrize("bad", [0, 0.0, -0.5, 1.01, float("nan"), "0.5", True, None])
