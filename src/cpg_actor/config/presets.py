@@ -65,7 +65,20 @@ from __future__ import annotations
 from typing import Any
 
 from cpg_actor.limits import brief
-from cpg_actor.robots.anymal.legged_gym import OBSERVATION_SCALES as ANYMAL_OBSERVATION_SCALES
+
+# the observation's fixed scales (LeggedRobotCfg.normalization.obs_scales: lin_vel 2, ang_vel
+# 0.25, dof_pos 1, dof_vel 0.05; the commands x (2, 2, 0.25), commands_scale) as entry-name
+# patterns of the velocity task's observation (agent_config.observation_scales; rsl_rl v1 normalises
+# nothing). legged_gym observes the action a itself, this env the target's offset 0.5 a: x 2
+LEGGED_GYM_OBSERVATION_SCALES: dict[str, float] = {
+    "base_lin_vel_*": 2.0,
+    "base_ang_vel_*": 0.25,
+    "command_vx": 2.0,
+    "command_vy": 2.0,
+    "command_yaw": 0.25,
+    "*_vel": 0.05,  # the joints' speeds
+    "*_last_action": 2.0,  # 1 / action_scale
+}
 
 # the fixed learning rate of what acts through the CPG (ppo.cpg_learning_rate): the paper's
 CPG_LEARNING_RATE = 3e-4
@@ -145,8 +158,8 @@ LEGGED_GYM: dict[str, Any] = {
         "activation": "elu",
         "init_std": 1.0,  # init_noise_std, in units of a (0.5 rad: env.action_scale)
         "action_std_floor": 0.0,  # none in rsl_rl
-        # normalization.obs_scales (robots/anymal/legged_gym.py): rsl_rl v1 normalises nothing
-        "observation_scales": ANYMAL_OBSERVATION_SCALES,
+        # normalization.obs_scales (above): rsl_rl v1 normalises nothing
+        "observation_scales": LEGGED_GYM_OBSERVATION_SCALES,
     },
     "ppo": {
         "num_steps": 24,  # runner.num_steps_per_env

@@ -69,7 +69,7 @@ CHECK_EVERY = 50
 # the step info an env may report -> its trace: feet on the ground (E, feet) as 1 or 0, the
 # base's forward speed (m/s), the velocity command (E, 3: forward, lateral, yaw), under a
 # perturbation's push 1 at the step it came, and the physical metrics' inputs
-# (:mod:`cpg_actor.experiments.physical`): the joint torques (E, J; N m), the feet's positions
+# (:mod:`cpg_actor.metrics.physical`): the joint torques (E, J; N m), the feet's positions
 # in the world (E, feet, 3; m) and the joints' true positions and velocities (E, J; rad,
 # rad/s: what the robot did, without the sensor noise a perturbation adds to the observation)
 TRACED_INFO = {"contact": "foot_contact", "forward_speed": "base_forward_speed",
@@ -303,7 +303,7 @@ def evaluation_row(
     and worst return, the mean length and the mean of each of the env's own metrics.
 
     ``traced_metrics``: a function of the traces giving per-episode metrics (e.g.
-    :func:`cpg_actor.experiments.physical.episode_metrics`: the hopper's ``eval/hop_apex``,
+    :func:`cpg_actor.metrics.physical.episode_metrics`: the hopper's ``eval/hop_apex``,
     ...); the episodes are then traced and its metrics added, the mean over the episodes that
     define them. None by default: traces cost each evaluation a copy of every step to the host
     (the time-to-quality benchmark asks for them)."""

@@ -1,5 +1,5 @@
 """legged_gym's ANYmal B recipe, its env side: the values of ANYmal B's env config
-(``QuadrupedConfig.LEGGED_GYM``) that ``--preset legged_gym`` sets (the PPO side is the
+(``AnymalConfig.LEGGED_GYM``, robots/anymal/config.py) that ``--preset legged_gym`` sets (the PPO side is the
 preset's, :data:`cpg_actor.config.presets.LEGGED_GYM`).
 
 Source: leggedrobotics/legged_gym (commit 8fa29ac), ``legged_gym/envs/base/legged_robot.py``
@@ -64,20 +64,6 @@ REWARD_SCALES: dict[str, float] = {
     "action_rate": -0.01,
     "feet_air_time": 1.0,  # (air time - 0.5 s) at touchdown, under |command_xy| > 0.1
     "feet_slip": 0.0,  # not a legged_gym term
-}
-
-# the observation's fixed scales (LeggedRobotCfg.normalization.obs_scales: lin_vel 2, ang_vel
-# 0.25, dof_pos 1, dof_vel 0.05; the commands x (2, 2, 0.25), commands_scale) as entry-name
-# patterns of this env's observation (agent_config.observation_scales; rsl_rl v1 normalises
-# nothing). legged_gym observes the action a itself, this env the target's offset 0.5 a: x 2
-OBSERVATION_SCALES: dict[str, float] = {
-    "base_lin_vel_*": 2.0,
-    "base_ang_vel_*": 0.25,
-    "command_vx": 2.0,
-    "command_vy": 2.0,
-    "command_yaw": 0.25,
-    "*_vel": 0.05,  # the joints' speeds
-    "*_last_action": 2.0,  # 1 / action_scale
 }
 
 LEGGED_GYM: dict[str, Any] = {

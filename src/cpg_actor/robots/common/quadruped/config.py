@@ -18,7 +18,6 @@ from cpg_actor.limits import (
     brief,
     shorten,
 )
-from cpg_actor.robots.anymal.legged_gym import LEGGED_GYM
 from cpg_actor.robots.common.checks import check_episode_steps, check_simulation_counts
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 from cpg_actor.robots.common.perturbation.values import RANDOMIZED, TRAINING_PUSHES
@@ -317,9 +316,9 @@ class QuadrupedConfig:
     # the body these numbers are for (its QuadrupedModel's name): a subclass for another body
     # names its own, one that changes only numbers (a variant of the robot) keeps it
     body = "anymal-b"
-    # legged_gym's ANYmal B recipe, its env values (--preset legged_gym; robots/anymal/
-    # legged_gym.py gives each its source and the departures); a body without it sets None
-    LEGGED_GYM: ClassVar[dict[str, Any] | None] = LEGGED_GYM
+    # legged_gym's recipe, its env values (--preset legged_gym): a body's subclass that has
+    # one sets it (ANYmal B's: robots/anymal/config.py)
+    LEGGED_GYM: ClassVar[dict[str, Any] | None] = None
 
     @classmethod
     def perturbation_table(cls):
