@@ -11,9 +11,9 @@ import pytest
 
 from cpg_actor.agents.base import observation_scale
 from cpg_actor.cli import main
+from cpg_actor.config.presets import LEGGED_GYM_OBSERVATION_SCALES as OBSERVATION_SCALES
 from cpg_actor.deploy import load_policy
 from cpg_actor.deploy.export import OBSERVATION_SOURCES, export_policy, read_metadata
-from cpg_actor.config.presets import LEGGED_GYM_OBSERVATION_SCALES as OBSERVATION_SCALES
 from cpg_actor.robots.registry import get_robot
 from cpg_actor.tasks import velocity as task
 from cpg_actor.training.build import make_env
