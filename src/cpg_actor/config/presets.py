@@ -46,10 +46,10 @@ follow when none is given (``Robot.recipe``: the hopper ``paper``, the quadruped
 
 * ``legged_gym``: legged_gym's ANYmal B recipe as its source runs it (leggedrobotics/
   legged_gym, ``AnymalBRoughCfg`` on flat ground, trained by rsl_rl v1.0.2): the env's values
-  are the robot's ``LEGGED_GYM`` (ANYmal B's: ``robots/anymal/legged_gym.py``, each with its
-  source: PD 80 / 2, actions default + 0.5 a, 5 ms x 4, the reward's scales clipped at 0, the
-  base's linear velocity and uniform noise in the observation, the heading command, the
-  start, the randomisation); the PPO's are rsl_rl's as legged_gym runs ANYmal
+  are the robot's ``LEGGED_GYM`` (ANYmal B's: ``robots/common/quadruped/legged_gym.py``,
+  each with its source: PD 80 / 2, actions default + 0.5 a, 5 ms x 4, the reward's scales
+  clipped at 0, the base's linear velocity and uniform noise in the observation, the heading
+  command, the start, the randomisation); the PPO's are rsl_rl's as legged_gym runs ANYmal
   (:data:`LEGGED_GYM`), its scaled, unnormalised observation included
   (``agent_config.observation_scales``). For the ``mlp`` agents; ``docs/quadruped.md``,
   "legged_gym's recipe". A robot without ``LEGGED_GYM`` (the Go1, the hopper): ValueError.

@@ -13,7 +13,6 @@ import torch
 from cpg_actor.agents.base import AgentConfig, observation_scale
 from cpg_actor.agents.mlp import MLPAgent
 from cpg_actor.config import compose_config
-from cpg_actor.robots.anymal.config import AnymalConfig
 from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.common.quadruped.vector import draw_command
 from cpg_actor.robots.registry import get_robot
@@ -199,8 +198,8 @@ def test_a_robot_without_the_recipe_and_an_agent_without_scales_are_refused_in_o
 
 def recipe_env(num_envs: int, **changes):
     """ANYmal B's env under the recipe (without its randomisation), ``changes`` made."""
-    values = {k: v for k, v in AnymalConfig.LEGGED_GYM.items() if k != "randomize"}
-    return get_robot("anymal").make(num_envs, AnymalConfig.from_dict({**values, **changes}), 1)
+    values = {k: v for k, v in QuadrupedConfig.LEGGED_GYM.items() if k != "randomize"}
+    return get_robot("anymal").make(num_envs, QuadrupedConfig.from_dict({**values, **changes}), 1)
 
 
 def test_the_heading_command_turns_the_base_toward_its_heading():
@@ -310,7 +309,7 @@ def test_the_observation_noise_is_uniform_of_the_stated_half_widths():
             for group, entries in groups.items():
                 columns = [names.index(n) for n in entries]
                 noise[group].append(obs[:, columns] - truth[:, columns])
-        for group, width in AnymalConfig.LEGGED_GYM["observation_noise"].items():
+        for group, width in QuadrupedConfig.LEGGED_GYM["observation_noise"].items():
             drawn = np.concatenate(noise[group]).ravel()
             assert np.abs(drawn).max() <= width * (1 + 1e-4) + 1e-5, group
             assert drawn.std() == pytest.approx(width / math.sqrt(3), rel=0.15), group

@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from cpg_actor.robots.anymal.config import AnymalConfig
+from cpg_actor.robots.common.quadruped.config import QuadrupedConfig
 from cpg_actor.robots.common.quadruped.plugin import quadruped_robot
 
 ENV_ID = "cpg_actor/AnymalB-v0"  # gymnasium.make or make_vec
@@ -12,7 +12,7 @@ MJX_ENV_ID = "cpg_actor/AnymalB-mjx-v0"  # on MJX, batched only
 ROBOT = quadruped_robot(
     name="anymal",
     model="anymal-b",
-    config_class=AnymalConfig,
+    config_class=QuadrupedConfig,
     env_ids=(ENV_ID, MJX_ENV_ID),
     env="cpg_actor.robots.anymal.env:AnymalEnv",
     vector_env="cpg_actor.robots.anymal.vector:AnymalVectorEnv",

@@ -83,3 +83,4 @@ class Go1Config(QuadrupedConfig):
     # MuJoCo Playground's Go1 joystick recipe, its env values (--preset playground;
     # robots/go1/playground.py gives each its source and the departures)
     PLAYGROUND = PLAYGROUND
+    LEGGED_GYM = None  # legged_gym's recipe here is ANYmal B's (QuadrupedConfig's)

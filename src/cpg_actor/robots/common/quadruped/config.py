@@ -21,6 +21,7 @@ from cpg_actor.limits import (
 from cpg_actor.robots.common.checks import check_episode_steps, check_simulation_counts
 from cpg_actor.robots.common.perturbation import Perturbation, Randomization, check_perturbations
 from cpg_actor.robots.common.perturbation.values import RANDOMIZED, TRAINING_PUSHES
+from cpg_actor.robots.common.quadruped.legged_gym import LEGGED_GYM
 from cpg_actor.tasks.velocity import NOISE_GROUPS, TERMS
 from cpg_actor.terrain.config import Terrain, check_terrain
 
@@ -316,9 +317,9 @@ class QuadrupedConfig:
     # the body these numbers are for (its QuadrupedModel's name): a subclass for another body
     # names its own, one that changes only numbers (a variant of the robot) keeps it
     body = "anymal-b"
-    # legged_gym's recipe, its env values (--preset legged_gym): a body's subclass that has
-    # one sets it (ANYmal B's: robots/anymal/config.py)
-    LEGGED_GYM: ClassVar[dict[str, Any] | None] = None
+    # legged_gym's ANYmal B recipe, its env values (--preset legged_gym; legged_gym.py beside
+    # this file gives each its source and the departures); a body without it sets None
+    LEGGED_GYM: ClassVar[dict[str, Any] | None] = LEGGED_GYM
 
     @classmethod
     def perturbation_table(cls):

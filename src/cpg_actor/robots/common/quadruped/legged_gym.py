@@ -1,5 +1,5 @@
 """legged_gym's ANYmal B recipe, its env side: the values of ANYmal B's env config
-(``AnymalConfig.LEGGED_GYM``, robots/anymal/config.py) that ``--preset legged_gym`` sets
+(``QuadrupedConfig.LEGGED_GYM``, whose numbers are ANYmal B's) that ``--preset legged_gym`` sets
 (the PPO side is the preset's, :data:`cpg_actor.config.presets.LEGGED_GYM`).
 
 Source: leggedrobotics/legged_gym (commit 8fa29ac), ``legged_gym/envs/base/legged_robot.py``
