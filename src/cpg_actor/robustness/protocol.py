@@ -154,13 +154,22 @@ def flat_ground(env_config: Any) -> dict[str, Any]:
     return {} if terrain is None else {"terrain": type(terrain)()}
 
 
+# a recipe's command process switched off, so that the grid's command is held as given (the
+# field's recipes zero entries, keep them by chance, draw exponential times, or turn a heading
+# into the yaw rate): each field's value that does nothing, where the config has the field
+HELD_COMMAND = {"command_interval": "fixed", "command_nonzero": None, "command_hold": 0.0,
+                "heading_gain": 0.0, "min_command_speed": 0.0}  # fmt: skip
+
+
 def command_env(env_config: Any, command: GridCommand, ground: dict | None = None, **changes):
     """``env_config`` holding ``command`` for whole episodes on ``ground`` (env changes; None:
-    the config's own): point ranges, no resampling, no standing draws."""
+    the config's own): point ranges, no resampling, no standing draws, no recipe's command
+    process (:data:`HELD_COMMAND`)."""
     vx, vy, yaw = command.values
+    held = {name: value for name, value in HELD_COMMAND.items() if hasattr(env_config, name)}
     return env_config.replace(
         command_range=(vx, vx), lateral_range=(vy, vy), yaw_range=(yaw, yaw),
-        command_resample_seconds=0.0, standing_share=0.0, **(ground or {}), **changes,
+        command_resample_seconds=0.0, standing_share=0.0, **held, **(ground or {}), **changes,
     )  # fmt: skip
 
 

@@ -107,6 +107,24 @@ def test_a_grid_command_is_held_for_the_whole_episode():
     env.close()
 
 
+@pytest.mark.parametrize("robot_name, recipe", [("go1", "PLAYGROUND"), ("anymal", "LEGGED_GYM")])
+def test_a_grid_command_is_held_under_the_field_recipes(robot_name, recipe):
+    """The recipes' own command processes (Playground's exponential times, zeroed and kept
+    entries; legged_gym's heading command and small commands zeroed) are off in a grid row:
+    its command, a yaw rate and a slow lateral one among them, is held from reset to the end."""
+    robot = get_robot(robot_name)
+    values = {k: v for k, v in getattr(robot.config_class, recipe).items() if k != "randomize"}
+    config = robot.config_class.from_dict({**values, "episode_seconds": 0.3})
+    for command in (protocol.GRID[10], protocol.GridCommand("slow", 0.0, 0.15, 0.8)):
+        env = robot.make(3, protocol.command_env(config, command), num_threads=1)
+        _, info = env.reset(seed=3)
+        pose = np.tile(np.asarray(env.quadruped.nominal_pose), (3, 1))
+        for _ in range(14):
+            np.testing.assert_allclose(info["command"], np.tile(command.values, (3, 1)))
+            _, _, _, _, info = env.step(pose)
+        env.close()
+
+
 def test_the_grid_and_its_checks():
     """Every direction, both signs, standing; within the field's ranges; the checks sized by
     the moving mass (the Go1's 12.74 kg: 14.65 kg of payload, 12.74 N s pushes), the push
