@@ -662,3 +662,37 @@ def test_the_cli_shortens_openmp_spinning_before_torch_loads_unless_the_user_set
         capture_output=True, text=True, env=env, check=True, timeout=120,
     )  # fmt: skip
     assert result.stdout.strip() == expected
+
+
+def test_sigterm_stops_training_as_ctrl_c_does_and_the_run_resumes(tmp_path, capsys, monkeypatch):
+    """A run started in the background by a script ignores SIGINT; SIGTERM stops it the same
+    way (the resume hint, exit 143), the run resumes to its end, and the process's own SIGTERM
+    handler is back afterwards."""
+    import signal
+
+    from cpg_actor.training.runner import Runner
+
+    run = tmp_path / "run"
+    args = ["train", "--run-dir", str(run), "--total-steps", "64", *TINY]
+    collect = Runner.collect
+
+    def terminated_at_the_third(self):
+        if self.iteration == 2:
+            os.kill(os.getpid(), signal.SIGTERM)
+        return collect(self)
+
+    def ignored(signum, frame):  # the test's own: a missing handler fails, never kills pytest
+        pass
+
+    previous = signal.signal(signal.SIGTERM, ignored)
+    try:
+        monkeypatch.setattr(Runner, "collect", terminated_at_the_third)
+        assert main(args) == 143
+        assert "--resume" in capsys.readouterr().err
+        assert signal.getsignal(signal.SIGTERM) is ignored
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert load_checkpoint(run / "checkpoints" / "last.pt")["iteration"] == 2
+    monkeypatch.setattr(Runner, "collect", collect)
+    assert main(["train", "--run-dir", str(run), "--resume", "--no-progress"]) == 0
+    assert load_checkpoint(run / "checkpoints" / "last.pt")["iteration"] == 4

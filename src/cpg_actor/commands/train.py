@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import argparse
 import shlex
+import signal
 import sys
+import threading
 from pathlib import Path
 
 from cpg_actor.commands import add_set_option
@@ -586,21 +588,34 @@ def _start_text(config: TrainConfig, run_dir: Path, args: argparse.Namespace) ->
     return "\n".join(lines)
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM during training: stopped as Ctrl-C stops it (a run started in the background
+    by a script ignores SIGINT, so SIGTERM is how it is stopped)."""
+
+
+def _raise_terminated(signum, frame):
+    raise Terminated
+
+
 def _learn(runner, interrupted) -> int | None:
     """Train ``runner`` (a run, or a group of seeds: anything with ``learn`` and ``close``);
     the exit status of a run that stopped early (None: it ran to its end). ``interrupted()``:
-    what Ctrl-C leaves and how to continue."""
+    what Ctrl-C (or SIGTERM: exit 143) leaves and how to continue."""
     from cpg_actor.training.runner import TrainingDiverged
 
+    main = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _raise_terminated) if main else None
     try:
         runner.learn()
     except TrainingDiverged as error:
         print(f"cpg-actor train: training stopped: {error}", file=sys.stderr)
         return 1
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as stop:
         print(f"cpg-actor train: {interrupted()}", file=sys.stderr)
-        return 130
+        return 143 if isinstance(stop, Terminated) else 130
     finally:
+        if main:  # None: a handler not installed from Python, taken as the default
+            signal.signal(signal.SIGTERM, signal.SIG_DFL if previous is None else previous)
         runner.close()
     return None
 
