@@ -179,7 +179,12 @@ def check_hidden(sizes: Any, name: str) -> None:
 
 def observation_scale(names: Sequence[str], scales: dict[str, float]) -> list[float]:
     """Each observation entry's factor (``agent_config.observation_scales``): that of the first
-    pattern (fnmatch, case-sensitive) its name matches, 1 where none does."""
+    pattern (fnmatch, case-sensitive) its name matches, 1 where none does. A pattern that
+    matches no entry (a misspelling would scale nothing): ValueError naming the entries."""
+    unmatched = [p for p in scales if not any(fnmatchcase(name, p) for name in names)]
+    if unmatched:
+        raise ValueError(f"agent_config.observation_scales: {brief(unmatched)} match no entry of "
+                         f"the observation; its entries are {brief(list(names))}")  # fmt: skip
     return [next((float(f) for pattern, f in scales.items() if fnmatchcase(name, pattern)), 1.0)
             for name in names]  # fmt: skip
 

@@ -333,6 +333,9 @@ def test_the_mlp_reads_the_scaled_observation_and_keeps_its_checkpoint_keys():
         0.5, 2.0, 1.0]  # fmt: skip
     with pytest.raises(ValueError, match="input_scale"):
         MLPAgent(4, [0.5, 0.5], config, [0.0, 0.0], input_scale=[1.0])
+    # a misspelled pattern scales nothing: refused, naming the entries
+    with pytest.raises(ValueError, match=r"\['base_vel'\] match no entry.*'a_vel'"):
+        observation_scale(["a_vel", "base_vel_x"], {"base_vel": 2.0, "*_vel": 0.5})
 
 
 def test_a_saved_state_resumes_the_heading_command_exactly():
